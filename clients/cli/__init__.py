@@ -1,0 +1,1 @@
+"""The `mani` command line: one entry point, subcommands registered as plugins."""
