@@ -1,0 +1,92 @@
+"""Wire contract v1, shared by the service, the workers and the SDK (pydantic v2 only).
+
+Conventions: metres, seconds, newtons; right-handed frames; quaternions (w, x, y, z); outward unit normals;
+arrays as nested lists in JSON and typed binary in msgpack (`clients.arrays`). Schemas are named by role:
+``...In`` (part of a request), ``...Create`` / ``...Register`` (a POST body), ``...Public`` (what we answer).
+"""
+
+from clients.schemas.common import MAX_POINTS, MIN_POINTS, SCHEMA_VERSION, WireModel
+from clients.schemas.jobs import (
+    MAX_BATCH_SIZE,
+    BatchCreate,
+    BatchItem,
+    BatchPublic,
+    DeadLetter,
+    ErrorBody,
+    FieldError,
+    JobCreated,
+    JobProgress,
+    JobPublic,
+    JobState,
+    ReadyPublic,
+    Stage,
+    WorkerPublic,
+)
+from clients.schemas.objects import (
+    MATERIAL_PROPERTIES,
+    PROPERTY_NAMES,
+    ArticulationJoint,
+    Material,
+    MeshIn,
+    ObjectIn,
+    PhysicalProperties,
+)
+from clients.schemas.requests import ContactsIn, Method, SynthesisOptions, SynthesisRequest
+from clients.schemas.results import IterationRecord, Proposal, Quality, SynthesisResult
+from clients.schemas.robots import MAX_URDF_BYTES, RobotIn, RobotPublic, RobotRegister
+from clients.schemas.tasks import (
+    DeltaPoseTask,
+    ForceClosureTask,
+    JointMotionTask,
+    PointMotionTask,
+    TargetPointsTask,
+    TaskIn,
+    WrenchTask,
+)
+
+__all__ = [
+    "MATERIAL_PROPERTIES",
+    "MAX_BATCH_SIZE",
+    "MAX_POINTS",
+    "MAX_URDF_BYTES",
+    "MIN_POINTS",
+    "PROPERTY_NAMES",
+    "SCHEMA_VERSION",
+    "ArticulationJoint",
+    "BatchCreate",
+    "BatchItem",
+    "BatchPublic",
+    "ContactsIn",
+    "DeadLetter",
+    "DeltaPoseTask",
+    "ErrorBody",
+    "FieldError",
+    "ForceClosureTask",
+    "IterationRecord",
+    "JobCreated",
+    "JobProgress",
+    "JobPublic",
+    "JobState",
+    "JointMotionTask",
+    "Material",
+    "MeshIn",
+    "Method",
+    "ObjectIn",
+    "PhysicalProperties",
+    "PointMotionTask",
+    "Proposal",
+    "Quality",
+    "ReadyPublic",
+    "RobotIn",
+    "RobotPublic",
+    "RobotRegister",
+    "Stage",
+    "SynthesisOptions",
+    "SynthesisRequest",
+    "SynthesisResult",
+    "TargetPointsTask",
+    "TaskIn",
+    "WireModel",
+    "WorkerPublic",
+    "WrenchTask",
+]

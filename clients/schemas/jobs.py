@@ -1,0 +1,152 @@
+"""Jobs, batches, workers and errors: the asynchronous side of the API."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+
+from pydantic import Field
+
+from clients.schemas.common import WireModel
+from clients.schemas.requests import SynthesisRequest
+from clients.schemas.results import SynthesisResult
+
+MAX_BATCH_SIZE = 1000
+
+
+class JobState(StrEnum):
+    """Where a job is in its life. Terminal: succeeded, failed, cancelled, expired."""
+
+    QUEUED = "queued"
+    RUNNING = "running"
+    SUCCEEDED = "succeeded"
+    FAILED = "failed"
+    CANCELLED = "cancelled"
+    EXPIRED = "expired"
+
+    @property
+    def terminal(self) -> bool:
+        """Whether the job will not change any more."""
+        return self not in (JobState.QUEUED, JobState.RUNNING)
+
+
+class Stage(StrEnum):
+    """Pipeline stage of a running job."""
+
+    QUEUED = "queued"
+    NETWORK = "network"
+    INITIALISATION = "initialisation"
+    REFINEMENT = "refinement"
+    VERIFICATION = "verification"
+    DONE = "done"
+
+
+class FieldError(WireModel):
+    """One problem with one field of the input."""
+
+    field: str = Field(..., examples=["object.points"])
+    problem: str
+
+
+class ErrorBody(WireModel):
+    """The one error shape of every non-2xx answer (and of a failed job)."""
+
+    error: str = Field(..., description="Human-readable message naming the problem.")
+    type: str = Field(..., description="Machine-readable class, e.g. ValidationError, NotFound, RateLimited.")
+    detail: list[FieldError] | None = None
+
+
+class JobProgress(WireModel):
+    """Progress of a job: its stage, and the refinement iteration when refining."""
+
+    stage: Stage = Stage.QUEUED
+    fraction: float = Field(0.0, ge=0, le=1)
+    iteration: int | None = None
+    max_iterations: int | None = None
+
+
+class JobPublic(WireModel):
+    """A job as the API shows it."""
+
+    id: str
+    state: JobState
+    progress: JobProgress = Field(default_factory=JobProgress)
+    created_at: float = Field(..., description="Unix time, seconds.")
+    started_at: float | None = None
+    finished_at: float | None = None
+    deadline: float | None = Field(None, description="Unix time after which the job is dropped.")
+    deliveries: int = Field(0, ge=0, description="Times a worker took the job.")
+    worker: str | None = None
+    batch_id: str | None = None
+    timings: dict[str, float] = Field(default_factory=dict)
+    result: SynthesisResult | None = None
+    error: ErrorBody | None = None
+
+
+class JobCreated(WireModel):
+    """Answer of ``POST /v1/jobs`` (and of a synthesize call that outlived its wait): 202."""
+
+    id: str
+    state: JobState
+    url: str
+
+
+class BatchCreate(WireModel):
+    """Body of ``POST /v1/batches``."""
+
+    requests: list[SynthesisRequest] = Field(..., min_length=1, max_length=MAX_BATCH_SIZE)
+
+
+class BatchItem(WireModel):
+    """One request of a batch."""
+
+    index: int
+    job_id: str
+    state: JobState
+    result: SynthesisResult | None = None
+    error: ErrorBody | None = None
+
+
+class BatchPublic(WireModel):
+    """A batch: counts by state, and one page of its items in request order."""
+
+    id: str
+    total: int
+    counts: dict[JobState, int]
+    done: bool
+    items: list[BatchItem]
+    offset: int = 0
+    limit: int = 100
+    created_at: float
+
+
+class WorkerPublic(WireModel):
+    """A worker process as seen through its heartbeats."""
+
+    id: str
+    host: str
+    pid: int
+    started_at: float
+    last_heartbeat: float
+    current_job: str | None = None
+    jobs_done: int = 0
+    model_loaded: bool = False
+    model_version: str | None = None
+
+
+class DeadLetter(WireModel):
+    """A job that failed on every delivery and was set aside with its last error."""
+
+    job_id: str
+    deliveries: int
+    error: ErrorBody
+    failed_at: float
+
+
+class ReadyPublic(WireModel):
+    """Answer of ``GET /readyz``."""
+
+    ready: bool
+    queue: bool
+    workers: int
+    model_loaded: bool
+    detail: str | None = None

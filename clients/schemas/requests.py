@@ -1,0 +1,76 @@
+"""A synthesis request: object + task + robot + options (+ optional given contacts)."""
+
+from __future__ import annotations
+
+from enum import StrEnum
+
+from pydantic import Field, model_validator
+
+from clients.schemas.common import Rows3, WireModel
+from clients.schemas.objects import Material, ObjectIn
+from clients.schemas.robots import RobotIn
+from clients.schemas.tasks import JointMotionTask, PointMotionTask, TargetPointsTask, TaskIn
+
+MAX_TIMEOUT_S = 600.0
+
+
+class Method(StrEnum):
+    """How contacts are found before refinement."""
+
+    AUTO = "auto"  # given contacts when present, else the network
+    NETWORK = "network"  # the CVAE's heatmap + NMS (paper §III-A)
+    CONTACTS = "contacts"  # the request's own contacts
+    DIRECT_GRASP = "direct_grasp"  # baseline: open hand, approach the centre, close on contact
+    RANDOM_CONTACTS = "random_contacts"  # baseline: random surface points in the allowed region
+
+
+class SynthesisOptions(WireModel):
+    """How to run the synthesis."""
+
+    method: Method = Method.AUTO
+    num_proposals: int = Field(1, ge=1, le=16, description="Hand proposals to return (K latent samples).")
+    refine: bool = Field(True, description="Run the SOCP pose refinement (off: initial pose only).")
+    max_iterations: int = Field(100, ge=1, le=500)
+    seed: int = Field(0, ge=0, le=2**31 - 1, description="Seeds sampling; same seed, same answer.")
+    timeout: float = Field(30.0, gt=0, le=MAX_TIMEOUT_S, description="Seconds the caller will wait.")
+    return_heatmap: bool = False
+    return_force_map: bool = False
+    return_history: bool = False
+
+
+class ContactsIn(WireModel):
+    """Contacts chosen by the caller (method "contacts"): H points on the object, optional forces."""
+
+    points: Rows3
+    forces: Rows3 | None = None
+
+    @model_validator(mode="after")
+    def _sizes(self) -> ContactsIn:
+        if not 1 <= len(self.points) <= 8:
+            raise ValueError(f"contacts.points: {len(self.points)} contacts, need 1..8")
+        if self.forces is not None and self.forces.shape != self.points.shape:
+            raise ValueError("contacts.forces: one row per contact point")
+        return self
+
+
+class SynthesisRequest(WireModel):
+    """Body of ``POST /v1/synthesize`` and ``POST /v1/jobs``."""
+
+    object: ObjectIn
+    task: TaskIn
+    robot: RobotIn
+    options: SynthesisOptions = Field(default_factory=SynthesisOptions)
+    contacts: ContactsIn | None = None
+
+    @model_validator(mode="after")
+    def _consistent(self) -> SynthesisRequest:
+        n = self.object.num_points
+        if isinstance(self.task, PointMotionTask) and self.task.motion.shape != (n, 3):
+            raise ValueError(f"task.motion: shape {self.task.motion.shape} does not match points ({n}, 3)")
+        if isinstance(self.task, TargetPointsTask) and self.task.targets.shape != (n, 3):
+            raise ValueError(f"task.targets: shape {self.task.targets.shape} does not match points ({n}, 3)")
+        if isinstance(self.task, JointMotionTask) and self.object.material is not Material.ARTICULATED:
+            raise ValueError("task: joint_motion needs an articulated object")
+        if self.options.method is Method.CONTACTS and self.contacts is None:
+            raise ValueError("contacts: required with options.method 'contacts'")
+        return self

@@ -1,0 +1,60 @@
+"""What the service answers: hand proposals with contacts, forces, pose and quality figures."""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from clients.schemas.common import PerPoint, Points, Quaternion, Rows3, Vec3, Vector, WireModel
+
+
+class Quality(WireModel):
+    """Verification figures of one proposal (DESIGN.md §5)."""
+
+    success: bool = Field(..., description="All criteria below met.")
+    converged: bool
+    reason: str = Field(..., description="Why refinement stopped: converged, max_iterations, deadline, ...")
+    iterations: int = Field(..., ge=0)
+    wrench_residual: float = Field(..., ge=0, description="‖Σ G f − w‖² for the normalised target.")
+    max_tip_distance: float = Field(..., ge=0, description="Largest |Φ(p_tip)| of a contact fingertip, m.")
+    penetration_depth: float = Field(..., ge=0, description="Deepest hand–object penetration (exact), m.")
+    self_collision_depth: float = Field(..., ge=0, description="Deepest hand self-penetration, m.")
+    epsilon: float | None = Field(None, description="Ferrari–Canny ε (force closure), > 0 when closed.")
+
+
+class IterationRecord(WireModel):
+    """One SOCP iteration (returned with ``options.return_history``)."""
+
+    residual: float
+    tip_distance: float
+    step: float
+
+
+class Proposal(WireModel):
+    """One solution: H contacts, their forces, and the hand configuration that makes them."""
+
+    contact_points: Rows3
+    contact_normals: Rows3
+    forces: Rows3
+    fingertips: list[str] = Field(..., description="The fingertip link at each contact.")
+    palm_position: Vec3
+    palm_quaternion: Quaternion
+    joint_names: list[str]
+    joint_values: Vector
+    quality: Quality
+    history: list[IterationRecord] | None = None
+
+
+class SynthesisResult(WireModel):
+    """The answer to one request."""
+
+    hand: str
+    model_version: str
+    proposals: list[Proposal]
+    heatmap: PerPoint | None = None
+    force_map: Points | None = None
+    timings: dict[str, float] = Field(default_factory=dict, description="Seconds per stage.")
+
+    @property
+    def best(self) -> Proposal | None:
+        """The first successful proposal, else the first one."""
+        return next((p for p in self.proposals if p.quality.success), self.proposals[0] if self.proposals else None)

@@ -1,0 +1,77 @@
+"""What the manipulation should achieve: a motion, a wrench, or "hold it" (force closure)."""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from clients.schemas.common import Points, Quaternion, Vec3, Vec6, WireModel
+
+
+class DeltaPoseTask(WireModel):
+    """Move the object rigidly: translate by ``translation`` (m) and rotate by ``rotation`` about its centre."""
+
+    kind: Literal["delta_pose"] = "delta_pose"
+    translation: Vec3 = Field(default_factory=lambda: np.zeros(3))
+    rotation: Quaternion = Field(default_factory=lambda: np.array([1.0, 0, 0, 0]))
+
+    @model_validator(mode="after")
+    def _moves(self) -> DeltaPoseTask:
+        still = np.linalg.norm(self.translation) < 1e-9 and abs(abs(self.rotation[0]) - 1) < 1e-12
+        if still:
+            raise ValueError("delta pose is the identity: nothing to do (use force_closure to hold the object)")
+        return self
+
+
+class PointMotionTask(WireModel):
+    """Per-point target motion M (N, 3), metres; for deformables the motion each point should make."""
+
+    kind: Literal["point_motion"] = "point_motion"
+    motion: Points
+
+
+class TargetPointsTask(WireModel):
+    """The object's target point cloud (N, 3), point-to-point with the input points."""
+
+    kind: Literal["target_points"] = "target_points"
+    targets: Points
+
+
+class WrenchTask(WireModel):
+    """A target wrench (force N, torque N·m) about the object's centre of mass, world frame."""
+
+    kind: Literal["wrench"] = "wrench"
+    wrench: Vec6
+
+    @model_validator(mode="after")
+    def _nonzero(self) -> WrenchTask:
+        if np.linalg.norm(self.wrench) < 1e-12:
+            raise ValueError("wrench: zero wrench; use force_closure to hold the object")
+        return self
+
+
+class ForceClosureTask(WireModel):
+    """Hold the object: a grasp that can resist any wrench (w = 0, f ≠ 0)."""
+
+    kind: Literal["force_closure"] = "force_closure"
+
+
+class JointMotionTask(WireModel):
+    """Articulated objects: move the joint by ``delta`` (rad for revolute, m for prismatic)."""
+
+    kind: Literal["joint_motion"] = "joint_motion"
+    delta: float = Field(..., description="Signed joint displacement.")
+
+    @model_validator(mode="after")
+    def _nonzero(self) -> JointMotionTask:
+        if self.delta == 0 or not np.isfinite(self.delta):
+            raise ValueError("delta: must be finite and non-zero")
+        return self
+
+
+TaskIn = Annotated[
+    DeltaPoseTask | PointMotionTask | TargetPointsTask | WrenchTask | ForceClosureTask | JointMotionTask,
+    Field(discriminator="kind"),
+]

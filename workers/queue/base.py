@@ -1,0 +1,159 @@
+"""The queue interface that the service talks to and both backends implement.
+
+Two backends (DESIGN.md §3): embedded (in-process queue feeding spawned worker processes; the default, not
+durable) and Redis Streams (a consumer group; durable, scale-out). The service only ever sees `JobQueue`.
+Everything here is torch-free.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import AsyncIterator
+
+from pydantic import Field
+
+from clients.schemas import (
+    DeadLetter,
+    JobPublic,
+    JobState,
+    RobotPublic,
+    RobotRegister,
+    SynthesisRequest,
+    WireModel,
+    WorkerPublic,
+)
+
+
+class QueueError(Exception):
+    """Base of the queue's errors."""
+
+
+class QueueFull(QueueError):
+    """The queue holds its maximum number of pending jobs; try again after ``retry_after`` seconds."""
+
+    def __init__(self, message: str, retry_after: float = 1.0) -> None:
+        super().__init__(message)
+        self.retry_after = retry_after
+
+
+class JobNotFound(QueueError):
+    """No job (or batch) with this id, or its record expired and was removed."""
+
+
+class RobotInvalid(QueueError):
+    """A worker rejected a robot description (hardened URDF loader); the message says why."""
+
+
+class QueueUnavailable(QueueError):
+    """The backend cannot be reached (e.g. Redis down) or is shutting down."""
+
+
+class QueueStats(WireModel):
+    """Counters for the dashboard and `/metrics`."""
+
+    depth: int = Field(..., description="Jobs waiting to be picked up.")
+    running: int
+    by_state: dict[JobState, int]
+    completed_total: int
+    failed_total: int
+    dead_letters: int
+    workers: int
+
+
+class JobQueue(ABC):
+    """Submit, observe and cancel synthesis jobs; the service's only way to get work done."""
+
+    backend: str = "abstract"
+
+    @abstractmethod
+    async def start(self) -> None:
+        """Connect / start workers. Called once in the service's lifespan."""
+
+    @abstractmethod
+    async def close(self) -> None:
+        """Release connections; embedded backend: stop its workers gracefully."""
+
+    @abstractmethod
+    async def ping(self) -> bool:
+        """Whether the backend answers."""
+
+    @abstractmethod
+    async def submit(
+        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None
+    ) -> list[str]:
+        """Enqueue jobs atomically (all or none); returns their ids in order.
+
+        Raises:
+            QueueFull: accepting them would exceed the queue's bound.
+        """
+
+    @abstractmethod
+    async def get(self, job_id: str, *, with_result: bool = True) -> JobPublic:
+        """The job's state, progress, timings, and result or error.
+
+        Raises:
+            JobNotFound: unknown id. An expired result still reports state ``expired``.
+        """
+
+    @abstractmethod
+    async def wait(self, job_id: str, timeout: float) -> JobPublic:
+        """Wait until the job is terminal or ``timeout`` seconds pass; returns its latest state either way."""
+
+    def events(self, job_id: str, interval: float = 0.25) -> AsyncIterator[JobPublic]:
+        """Progress updates of one job until it is terminal (default: polling `get`)."""
+        return _poll_events(self, job_id, interval)
+
+    @abstractmethod
+    async def cancel(self, job_id: str) -> JobPublic:
+        """Cancel a queued or running job (honoured between pipeline stages); no-op when terminal."""
+
+    @abstractmethod
+    async def list_recent(self, limit: int = 50) -> list[JobPublic]:
+        """The most recently submitted jobs, newest first, without results."""
+
+    @abstractmethod
+    async def create_batch(self, requests: list[SynthesisRequest], deadline: float | None = None) -> str:
+        """Submit a batch of requests; returns the batch id."""
+
+    @abstractmethod
+    async def batch_job_ids(self, batch_id: str) -> list[str]:
+        """The job ids of a batch in request order. Raises `JobNotFound`."""
+
+    @abstractmethod
+    async def stats(self) -> QueueStats:
+        """Queue depth, jobs by state, totals."""
+
+    @abstractmethod
+    async def workers(self) -> list[WorkerPublic]:
+        """Live workers with their last heartbeat and current job."""
+
+    @abstractmethod
+    async def dead_letters(self, limit: int = 50) -> list[DeadLetter]:
+        """Jobs that failed on every delivery, newest first."""
+
+    @abstractmethod
+    async def list_robots(self) -> list[RobotPublic]:
+        """Built-in hands (published by the workers at start-up) and registered ones."""
+
+    @abstractmethod
+    async def register_robot(self, robot: RobotRegister, timeout: float = 30.0) -> RobotPublic:
+        """Have a worker validate the URDF with the hardened loader, then store it for every worker.
+
+        Raises:
+            RobotInvalid: the description was rejected (message says why).
+        """
+
+
+async def _poll_events(queue: JobQueue, job_id: str, interval: float) -> AsyncIterator[JobPublic]:
+    import asyncio
+
+    last: tuple[object, ...] | None = None
+    while True:
+        job = await queue.get(job_id, with_result=False)
+        key = (job.state, job.progress.stage, job.progress.iteration)
+        if key != last:
+            last = key
+            yield job
+        if job.state.terminal:
+            return
+        await asyncio.sleep(interval)
