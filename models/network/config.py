@@ -1,0 +1,170 @@
+"""Network configurations: one frozen dataclass per variant, kept in a small registry (timm style).
+
+``paper`` reproduces the size the paper reports (about 5 M parameters); ``cpu`` is the smaller shipped default,
+sized by measurement with ``mani bench network`` (see the README for the figures). Look a configuration up
+with :func:`get_config`; build a model with :func:`models.network.model.create_model`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+
+@dataclass(frozen=True)
+class LevelConfig:
+    """One set-abstraction level of the shared point hierarchy.
+
+    Attributes:
+        npoint: centroids kept by farthest point sampling at this level.
+        radius: ball-query radius in the normalised frame (the object spans the unit box).
+        nsample: neighbours grouped per centroid (the nearest ``nsample`` inside ``radius``).
+    """
+
+    npoint: int
+    radius: float
+    nsample: int
+
+
+@dataclass(frozen=True)
+class NetworkConfig:
+    """All sizes of the ManiFoundation network (paper §III-A).
+
+    Channel tuples list hidden and output widths of shared MLPs; the input width is implied.
+    """
+
+    name: str
+    # --- input ---
+    num_points: int = 2048  # every object is resampled to this many points (see inference.py)
+    hand_scale_m: float = 0.2  # hand point clouds (palm frame, metres) are divided by this constant
+    # --- shared point hierarchy (object encoder φ_o and posterior φ_q) ---
+    levels: tuple[LevelConfig, ...] = (
+        LevelConfig(512, 0.1, 32),
+        LevelConfig(128, 0.2, 32),
+        LevelConfig(32, 0.4, 16),
+    )
+    # --- physical-property encoder ψ_i: R → R^property_dim ---
+    property_hidden: int = 32
+    property_dim: int = 10
+    # --- object encoder φ_o (PointNet++) ---
+    sa_mlps: tuple[tuple[int, ...], ...] = ((32, 32, 64), (64, 64, 128), (128, 128, 256))
+    fp_mlps: tuple[tuple[int, ...], ...] = ((256, 256), (128, 128), (128, 128))  # coarse → fine
+    # --- hand encoder φ_h (PointNet, max-pooled) ---
+    hand_mlp: tuple[int, ...] = (64, 128, 128)
+    # --- CVAE ---
+    latent_dim: int = 64
+    posterior_in: int = 64  # per-point projection of (ε^oh, heatmap, force map) before the SA levels
+    posterior_sa_mlps: tuple[tuple[int, ...], ...] = ((64, 64), (128, 128), (128, 256))
+    posterior_head: tuple[int, ...] = (256,)
+    decoder_local: tuple[int, ...] = (128, 128)  # per-point MLP of φ_c / φ_f before the global max-pool
+    decoder_head: tuple[int, ...] = (128, 64)  # after concatenating the global feature
+    # --- loss of Eq. (3) ---
+    # The paper does not state λ_C, λ_S, λ_KL; these defaults are ours (heatmap and force map weighted
+    # equally, a small KL weight as usual for CVAEs) and are recorded in every model card.
+    lambda_c: float = 1.0
+    lambda_s: float = 1.0
+    lambda_kl: float = 1e-3
+
+    def __post_init__(self) -> None:
+        if len(self.sa_mlps) != len(self.levels) or len(self.fp_mlps) != len(self.levels):
+            raise ValueError(f"config {self.name!r}: sa_mlps, fp_mlps and levels must have the same length")
+        if len(self.posterior_sa_mlps) > len(self.levels):
+            raise ValueError(f"config {self.name!r}: the posterior uses at most {len(self.levels)} levels")
+        npoints = [lv.npoint for lv in self.levels]
+        if npoints != sorted(npoints, reverse=True) or npoints[0] > self.num_points:
+            raise ValueError(f"config {self.name!r}: level npoints must decrease and not exceed num_points")
+
+    @property
+    def object_feature_dim(self) -> int:
+        """Width of the per-point object feature ε^o."""
+        return self.fp_mlps[-1][-1]
+
+    @property
+    def hand_feature_dim(self) -> int:
+        """Width of the global hand feature ε^h."""
+        return self.hand_mlp[-1]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain-JSON form (tuples become lists), as stored in model cards."""
+        return json_ready(dataclasses.asdict(self))
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> NetworkConfig:
+        """Inverse of :meth:`to_dict`."""
+        d = dict(data)
+        d["levels"] = tuple(LevelConfig(**lv) for lv in d["levels"])
+        for key in ("sa_mlps", "fp_mlps", "posterior_sa_mlps"):
+            d[key] = tuple(tuple(m) for m in d[key])
+        for key in ("hand_mlp", "posterior_head", "decoder_local", "decoder_head"):
+            d[key] = tuple(d[key])
+        return cls(**d)
+
+
+def json_ready(value: Any) -> Any:
+    """Turn tuples into lists recursively so that a config compares equal to its JSON round trip."""
+    if isinstance(value, dict):
+        return {k: json_ready(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [json_ready(v) for v in value]
+    return value
+
+
+_REGISTRY: dict[str, Callable[[], NetworkConfig]] = {}
+
+
+def register_config(fn: Callable[[], NetworkConfig]) -> Callable[[], NetworkConfig]:
+    """Register a zero-argument factory under the name of the configuration it returns."""
+    name = fn().name
+    if name in _REGISTRY:
+        raise ValueError(f"network config {name!r} registered twice")
+    _REGISTRY[name] = fn
+    return fn
+
+
+def list_configs() -> list[str]:
+    """Names of every registered configuration, sorted."""
+    return sorted(_REGISTRY)
+
+
+def get_config(name: str) -> NetworkConfig:
+    """The configuration registered as ``name``.
+
+    Raises:
+        KeyError: ``name`` is not registered (the message lists the known names).
+    """
+    if name not in _REGISTRY:
+        raise KeyError(f"unknown network config {name!r}; known: {', '.join(list_configs())}")
+    return _REGISTRY[name]()
+
+
+@register_config
+def paper() -> NetworkConfig:
+    """The paper's size: about 5 M parameters (paper §VI: "about 5 million parameters")."""
+    return NetworkConfig(
+        name="paper",
+        levels=(
+            LevelConfig(512, 0.1, 32),
+            LevelConfig(256, 0.2, 32),
+            LevelConfig(64, 0.4, 32),
+            LevelConfig(16, 0.8, 16),
+        ),
+        sa_mlps=((64, 64, 128), (128, 128, 256), (256, 256, 512), (512, 512, 1024)),
+        fp_mlps=((512, 512), (512, 256), (256, 256), (256, 256)),
+        hand_mlp=(64, 128, 256),
+        posterior_in=128,
+        posterior_sa_mlps=((128, 128), (256, 256), (256, 512)),
+        posterior_head=(512, 256),
+        decoder_local=(256, 256),
+        decoder_head=(256, 128),
+    )
+
+
+@register_config
+def cpu() -> NetworkConfig:
+    """The shipped default: small enough for the latency goals on 2 CPU cores (see ``mani bench network``)."""
+    return NetworkConfig(name="cpu")
+
+
+__all__ = ["LevelConfig", "NetworkConfig", "get_config", "list_configs", "register_config"]

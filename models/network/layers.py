@@ -1,0 +1,136 @@
+"""Building blocks: shared MLPs, set abstraction, feature propagation, PointNet pooling.
+
+Tensors are channels-last, batch first: per-point features are (B, N, C). Every hidden layer is
+Linear → LayerNorm → ReLU; LayerNorm (per point, over channels) keeps outputs independent of batch
+composition and of point order, unlike BatchNorm.
+
+A layer whose input is a concatenation ``[a, b, ...]`` is written as a sum of projections ``W_a a + W_b b``
+(:class:`SplitLinear`): the same function, but a term that is shared (the hand feature across points, the
+encoder features across K latent samples) is projected once and broadcast.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import torch
+from torch import nn
+
+from models.network.point_ops import gather_points, interpolate
+
+
+def norm_act(width: int) -> nn.Sequential:
+    """LayerNorm followed by ReLU."""
+    return nn.Sequential(nn.LayerNorm(width), nn.ReLU())
+
+
+class MLP(nn.Module):
+    """Shared (per-point) MLP over the last dimension.
+
+    Args:
+        in_dim: input channels.
+        widths: output width of each layer.
+        last_act: apply norm + ReLU after the last layer too (``False`` for output heads).
+    """
+
+    def __init__(self, in_dim: int, widths: Sequence[int], last_act: bool = True) -> None:
+        super().__init__()
+        layers: list[nn.Module] = []
+        for i, w in enumerate(widths):
+            layers.append(nn.Linear(in_dim, w))
+            if last_act or i < len(widths) - 1:
+                layers.append(norm_act(w))
+            in_dim = w
+        self.net = nn.Sequential(*layers)
+        self.out_dim = in_dim
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.net(x)
+
+
+class SplitLinear(nn.Module):
+    """``Linear(concat(x_1, ..., x_n))`` computed as a broadcast sum of per-input projections.
+
+    Args:
+        in_dims: width of each input.
+        out_dim: output width.
+    """
+
+    def __init__(self, in_dims: Sequence[int], out_dim: int) -> None:
+        super().__init__()
+        self.parts = nn.ModuleList(nn.Linear(d, out_dim, bias=(i == 0)) for i, d in enumerate(in_dims))
+
+    def forward(self, *xs: torch.Tensor) -> torch.Tensor:
+        out = self.parts[0](xs[0])
+        for lin, x in zip(list(self.parts)[1:], xs[1:], strict=True):
+            out = out + lin(x)
+        return out
+
+
+class SetAbstraction(nn.Module):
+    """PointNet++ set abstraction: group neighbours of each centroid, shared MLP, max-pool.
+
+    The first layer's feature projection runs on the source points before grouping (each point belongs to
+    several groups, so this is cheaper and gives the same result).
+
+    Args:
+        in_dim: per-point feature channels of the source level.
+        widths: MLP widths; the first layer also sees the neighbour offset divided by the radius.
+    """
+
+    def __init__(self, in_dim: int, widths: Sequence[int]) -> None:
+        super().__init__()
+        self.first = SplitLinear([3, in_dim], widths[0])
+        self.act = norm_act(widths[0])
+        self.rest = MLP(widths[0], widths[1:]) if len(widths) > 1 else nn.Identity()
+        self.out_dim = widths[-1]
+
+    def forward(
+        self,
+        xyz: torch.Tensor,
+        feats: torch.Tensor,
+        new_xyz: torch.Tensor,
+        group: torch.Tensor,
+        radius: float,
+    ) -> torch.Tensor:
+        """Args: xyz (B, N, 3), feats (B, N, C), new_xyz (B, M, 3), group (B, M, k). Returns (B, M, C')."""
+        offsets = (gather_points(xyz, group) - new_xyz.unsqueeze(2)) / radius
+        projected = self.first.parts[1](feats)
+        h = self.first.parts[0](offsets) + gather_points(projected, group)
+        return self.rest(self.act(h)).amax(dim=2)
+
+
+class FeaturePropagation(nn.Module):
+    """PointNet++ feature propagation: 3-NN interpolation of coarse features, concatenated with skip features.
+
+    Args:
+        coarse_dim: channels of the coarse level.
+        skip_dim: channels of the fine level's skip features.
+        widths: MLP widths.
+    """
+
+    def __init__(self, coarse_dim: int, skip_dim: int, widths: Sequence[int]) -> None:
+        super().__init__()
+        self.first = SplitLinear([skip_dim, coarse_dim], widths[0])
+        self.act = norm_act(widths[0])
+        self.rest = MLP(widths[0], widths[1:]) if len(widths) > 1 else nn.Identity()
+        self.out_dim = widths[-1]
+
+    def forward(
+        self, coarse: torch.Tensor, skip: torch.Tensor, idx: torch.Tensor, weights: torch.Tensor
+    ) -> torch.Tensor:
+        """Args: coarse (B, M, C), skip (B, N, C_s), idx/weights (B, N, 3). Returns (B, N, C')."""
+        h = self.first(skip, interpolate(coarse, idx, weights))
+        return self.rest(self.act(h))
+
+
+class PointNetGlobal(nn.Module):
+    """PointNet: shared MLP then max-pool over points, (B, N, C) → (B, C')."""
+
+    def __init__(self, in_dim: int, widths: Sequence[int]) -> None:
+        super().__init__()
+        self.mlp = MLP(in_dim, widths)
+        self.out_dim = self.mlp.out_dim
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.mlp(x).amax(dim=-2)

@@ -1,0 +1,43 @@
+"""The training objective of Eq. (3): λ_C·MSE(heatmap) + λ_S·MSE(force map) + λ_KL·KL(φ_q ‖ N(0, I))."""
+
+from __future__ import annotations
+
+import torch
+import torch.nn.functional as F
+
+from models.network.config import NetworkConfig
+
+
+def kl_to_standard_normal(mu: torch.Tensor, logvar: torch.Tensor) -> torch.Tensor:
+    """KL(N(μ, diag σ²) ‖ N(0, I)), summed over latent dims and averaged over the batch."""
+    return (0.5 * (mu.square() + logvar.exp() - 1.0 - logvar).sum(dim=-1)).mean()
+
+
+def cvae_loss(
+    out: dict[str, torch.Tensor],
+    heat_gt: torch.Tensor,
+    force_gt: torch.Tensor,
+    config: NetworkConfig,
+    *,
+    lambda_c: float | None = None,
+    lambda_s: float | None = None,
+    lambda_kl: float | None = None,
+) -> dict[str, torch.Tensor]:
+    """Eq. (3) with the configuration's weights (overridable per call).
+
+    Args:
+        out: the model's training output (``heat`` (B, N), ``force`` (B, N, 3), ``mu``, ``logvar``).
+        heat_gt: (B, N) ground-truth heatmap.
+        force_gt: (B, N, 3) ground-truth force/motion map (normalised units).
+        config: supplies the default λ_C, λ_S, λ_KL.
+
+    Returns:
+        ``loss`` (the weighted sum, differentiable) and its terms ``heat``, ``force``, ``kl``.
+    """
+    lc = config.lambda_c if lambda_c is None else lambda_c
+    ls = config.lambda_s if lambda_s is None else lambda_s
+    lk = config.lambda_kl if lambda_kl is None else lambda_kl
+    heat = F.mse_loss(out["heat"], heat_gt)
+    force = F.mse_loss(out["force"], force_gt)
+    kl = kl_to_standard_normal(out["mu"], out["logvar"])
+    return {"loss": lc * heat + ls * force + lk * kl, "heat": heat, "force": force, "kl": kl}

@@ -1,0 +1,150 @@
+"""The ManiFoundation CVAE (paper §III-A) and :func:`create_model`.
+
+Training: ``forward(obj, hand, heat_gt, force_gt)`` encodes, draws z from the posterior φ_q and decodes.
+Inference: :meth:`ManiFoundationNet.encode` once, then :meth:`ManiFoundationNet.decode` with K prior samples.
+All inputs are already normalised (see normalize.py and inference.py).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import nn
+
+from models.network.config import NetworkConfig, get_config
+from models.network.encoders import Decoder, HandEncoder, ObjectEncoder, Posterior
+from models.network.hierarchy import PointHierarchy, build_hierarchy
+from models.network.properties import PropertyEncoder
+
+SCALE_REFERENCE_M = 0.1  # the log-scale input channel is log(scale / SCALE_REFERENCE_M)
+
+
+@dataclass
+class ObjectTensors:
+    """A batch of normalised objects, all with the same point count N.
+
+    Attributes:
+        xyz: (B, N, 3) points in the unit box.
+        normals: (B, N, 3) unit normals.
+        motion: (B, N, 3) target motion in normalised units.
+        mask: (B, N) region mask, 1 = contact allowed.
+        prop_values: (B, 6) transformed property values (properties.property_tensors).
+        prop_mask: (B, 6) bool, which properties are present.
+        scale: (B,) metres per normalised unit.
+    """
+
+    xyz: torch.Tensor
+    normals: torch.Tensor
+    motion: torch.Tensor
+    mask: torch.Tensor
+    prop_values: torch.Tensor
+    prop_mask: torch.Tensor
+    scale: torch.Tensor
+
+    def to(self, device: torch.device | str) -> ObjectTensors:
+        """A copy on ``device``."""
+        return ObjectTensors(**{k: v.to(device) for k, v in self.__dict__.items()})
+
+
+@dataclass
+class Encoded:
+    """The condition ε^oh of a batch: hierarchy, per-point ε^o (B, N, C_o) and global ε^h (B, C_h)."""
+
+    hierarchy: PointHierarchy
+    eo: torch.Tensor
+    eh: torch.Tensor
+
+
+class ManiFoundationNet(nn.Module):
+    """Property encoder, φ_o, φ_h, φ_q and the decoders φ_c, φ_f; every part is a registered sub-module."""
+
+    def __init__(self, config: NetworkConfig) -> None:
+        super().__init__()
+        self.config = config
+        self.properties = PropertyEncoder(config.property_hidden, config.property_dim)
+        self.object_encoder = ObjectEncoder(config)
+        self.hand_encoder = HandEncoder(config)
+        self.posterior = Posterior(config)
+        self.contact_decoder = Decoder(config, out_dim=1, with_heatmap=False)
+        self.force_decoder = Decoder(config, out_dim=3, with_heatmap=True)
+
+    def encode_hand(self, hand: torch.Tensor) -> torch.Tensor:
+        """φ_h: hand clouds (B, M_h, 6) = (x / hand_scale_m, n) → ε^h (B, C_h)."""
+        return self.hand_encoder(hand)
+
+    def encode(self, obj: ObjectTensors, eh: torch.Tensor) -> Encoded:
+        """φ_o over (x, n, m, r, Γ, log-scale) → the condition ε^oh (kept as ε^o and ε^h)."""
+        hierarchy = build_hierarchy(obj.xyz, self.config.levels)
+        gamma = self.properties(obj.prop_values, obj.prop_mask)
+        n = obj.xyz.shape[1]
+        log_scale = torch.log(obj.scale / SCALE_REFERENCE_M).to(obj.xyz.dtype)
+        feats = torch.cat(
+            [
+                obj.xyz,
+                obj.normals,
+                obj.motion,
+                obj.mask.to(obj.xyz.dtype).unsqueeze(-1),
+                gamma.unsqueeze(1).expand(-1, n, -1),
+                log_scale.view(-1, 1, 1).expand(-1, n, 1),
+            ],
+            dim=-1,
+        )
+        return Encoded(hierarchy, self.object_encoder(hierarchy, feats), eh)
+
+    def decode(self, enc: Encoded, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+        """φ_c then φ_f (fed the heatmap) for z (B, K, latent) → heatmap (B, K, N) in [0, 1], force (B, K, N, 3)."""
+        heat = torch.sigmoid(self.contact_decoder(enc.eo, enc.eh, z).squeeze(-1))
+        force = self.force_decoder(enc.eo, enc.eh, z, heat)
+        return heat, force
+
+    def forward(
+        self,
+        obj: ObjectTensors,
+        hand: torch.Tensor,
+        heat_gt: torch.Tensor,
+        force_gt: torch.Tensor,
+        generator: torch.Generator | None = None,
+    ) -> dict[str, torch.Tensor]:
+        """Training pass with the posterior.
+
+        Args:
+            obj: normalised objects.
+            hand: (B, M_h, 6) hand clouds.
+            heat_gt: (B, N) ground-truth heatmap M_C'.
+            force_gt: (B, N, 3) ground-truth force/motion map M_S' in normalised units.
+            generator: for the reparameterisation noise.
+
+        Returns:
+            ``heat`` (B, N), ``force`` (B, N, 3), ``mu`` and ``logvar`` (B, latent).
+        """
+        enc = self.encode(obj, self.encode_hand(hand))
+        mu, logvar = self.posterior(enc.hierarchy, enc.eo, enc.eh, heat_gt, force_gt)
+        eps = torch.randn(mu.shape, generator=generator, device=mu.device, dtype=mu.dtype)
+        z = mu + eps * torch.exp(0.5 * logvar)
+        heat, force = self.decode(enc, z.unsqueeze(1))
+        return {"heat": heat[:, 0], "force": force[:, 0], "mu": mu, "logvar": logvar}
+
+
+def count_parameters(model: nn.Module) -> int:
+    """Number of trainable scalars."""
+    return sum(p.numel() for p in model.parameters() if p.requires_grad)
+
+
+def create_model(config: str | NetworkConfig, seed: int | None = None) -> ManiFoundationNet:
+    """Build an (untrained, randomly initialised) network.
+
+    Args:
+        config: a registered name (``"paper"``, ``"cpu"``) or a :class:`NetworkConfig`.
+        seed: seeds the initialisation when given (the global RNG state is restored afterwards).
+
+    Raises:
+        KeyError: unknown configuration name.
+    """
+    cfg = get_config(config) if isinstance(config, str) else config
+    if seed is None:
+        return ManiFoundationNet(cfg)
+    with torch.random.fork_rng(devices=[]):
+        torch.manual_seed(seed)
+        return ManiFoundationNet(cfg)
+
