@@ -24,14 +24,14 @@ def _unit_quaternion(q: np.ndarray) -> np.ndarray:
     norm = float(np.linalg.norm(q))
     if norm < 1e-9:
         raise ValueError("quaternion has zero norm")
-    return q / norm
+    return q if abs(norm - 1) < 1e-12 else q / norm
 
 
 def _nonzero_vector(v: np.ndarray) -> np.ndarray:
     norm = float(np.linalg.norm(v))
     if norm < 1e-9:
         raise ValueError("vector has zero length")
-    return v / norm
+    return v if abs(norm - 1) < 1e-12 else v / norm
 
 
 Vec3 = Annotated[np.ndarray, spec(3)]

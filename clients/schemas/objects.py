@@ -111,7 +111,8 @@ class ObjectIn(WireModel):
             lengths = np.linalg.norm(self.normals, axis=1)
             if np.any(lengths < 1e-6):
                 raise ValueError(f"normals: zero-length normal at index {int(np.argmax(lengths < 1e-6))}")
-            self.normals = self.normals / lengths[:, None]
+            if np.any(np.abs(lengths - 1) > 1e-9):  # normalise once; a round trip changes nothing
+                self.normals = self.normals / lengths[:, None]
         if self.region_mask is not None:
             if self.region_mask.shape != (n,):
                 raise ValueError(f"region_mask: shape {self.region_mask.shape}, expected ({n},)")
