@@ -1,0 +1,98 @@
+"""A parsed robot description: links with collision meshes and the joints between them.
+
+Both the URDF and the MJCF readers produce a :class:`RobotDescription`; :mod:`models.robots.kinematics` turns it
+into a tree of moving bodies (fixed joints collapsed) for batched forward kinematics.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import trimesh
+
+JOINT_TYPES = ("fixed", "revolute", "continuous", "prismatic")
+
+
+class HandLoadError(ValueError):
+    """A robot description is malformed, unsafe or inconsistent (the message says which and where)."""
+
+
+@dataclass
+class JointSpec:
+    """One joint: ``child`` pose = ``parent`` pose @ ``origin`` @ motion(value about/along ``axis``).
+
+    ``mimic`` = (source joint name, multiplier, offset): value = multiplier * source + offset.
+    """
+
+    name: str
+    type: str
+    parent: str
+    child: str
+    origin: np.ndarray  # (4, 4) parent link frame -> joint frame
+    axis: np.ndarray  # (3,) unit, in the joint frame
+    lower: float = 0.0
+    upper: float = 0.0
+    mimic: tuple[str, float, float] | None = None
+
+
+@dataclass
+class RobotDescription:
+    """Links (each with its collision meshes, in the link frame) and joints, rooted at ``root``."""
+
+    name: str
+    root: str
+    links: dict[str, list[trimesh.Trimesh]] = field(default_factory=dict)
+    joints: list[JointSpec] = field(default_factory=list)
+
+    def subtree(self, root: str) -> RobotDescription:
+        """The description restricted to ``root`` and its descendants (e.g. the hand of an arm)."""
+        if root not in self.links:
+            raise HandLoadError(f"root link {root!r} is not a link of {self.name!r}")
+        children: dict[str, list[JointSpec]] = {}
+        for j in self.joints:
+            children.setdefault(j.parent, []).append(j)
+        keep_links = [root]
+        keep_joints: list[JointSpec] = []
+        stack = [root]
+        while stack:
+            for j in children.get(stack.pop(), []):
+                keep_links.append(j.child)
+                keep_joints.append(j)
+                stack.append(j.child)
+        return RobotDescription(self.name, root, {k: self.links[k] for k in keep_links}, keep_joints)
+
+
+def transform(xyz: np.ndarray | None = None, rpy: np.ndarray | None = None) -> np.ndarray:
+    """A 4x4 transform from a translation and URDF roll-pitch-yaw (R = Rz(yaw) Ry(pitch) Rx(roll))."""
+    T = np.eye(4)
+    if rpy is not None:
+        r, p, y = (float(v) for v in rpy)
+        cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+        T[:3, :3] = np.array(
+            [
+                [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                [-sp, cp * sr, cp * cr],
+            ]
+        )
+    if xyz is not None:
+        T[:3, 3] = xyz
+    return T
+
+
+def primitive_mesh(kind: str, size: np.ndarray) -> trimesh.Trimesh:
+    """A watertight mesh for a primitive centred at the origin (z the axis of cylinders and capsules).
+
+    ``size``: box (3,) full extents; sphere (1,) radius; cylinder/capsule (2,) radius, full length of the
+    straight part.
+    """
+    if kind == "box":
+        return trimesh.creation.box(extents=size[:3])
+    if kind == "sphere":
+        return trimesh.creation.icosphere(subdivisions=2, radius=float(size[0]))
+    if kind == "cylinder":
+        return trimesh.creation.cylinder(radius=float(size[0]), height=float(size[1]), sections=24)
+    if kind == "capsule":
+        return trimesh.creation.capsule(radius=float(size[0]), height=float(size[1]), count=[16, 16])
+    raise HandLoadError(f"unknown primitive {kind!r}")

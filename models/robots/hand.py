@@ -1,0 +1,265 @@
+"""`Hand`: a robot hand with a floating 6-DoF palm in front of its finger joints.
+
+Conventions (shared with refinement and verification):
+
+- palm pose: position (B, 3) and quaternion (B, 4) wxyz, world frame; finger joints q (B, D) free joints (mimic /
+  coupled joints tied to them).
+- Jacobian columns (6 + D): 0:3 palm translation (world), 3:6 a small world-frame rotation ω about the palm origin
+  (a point p moves by ω × (p − palm_pos)), 6: the finger joints; :meth:`Hand.apply_delta` applies exactly that
+  step (palm_pos += δt, palm_quat = quat(exp(δω)) ⊗ palm_quat, q += δq, no clamping).
+- All methods take torch tensors, batch first; dtype and device follow the inputs (float64 supported).
+"""
+
+from __future__ import annotations
+
+from functools import cached_property
+
+import numpy as np
+import torch
+import trimesh
+
+from models.robots.description import HandLoadError, RobotDescription
+from models.robots.kinematics import KinematicTree, quat_exp, quat_multiply
+from models.robots.spheres import fit_spheres, sample_surface
+
+SURFACE_POINTS = 1024
+ADJACENT_HOPS = 2
+"""Body pairs at most this many tree edges apart along one branch are never checked for self-collision."""
+
+
+class Hand:
+    """Kinematics, collision spheres and geometry of one hand (see module doc for conventions).
+
+    Attributes:
+        name: registry name.
+        joint_names: (D,) free finger joints; lower, upper, rest: (D,) float64.
+        fingertip_links: (m,) link names; tip_offsets: (m, 3) contact points in those link frames.
+        approach_axis: (3,) unit, palm frame: the direction the palm faces / the fingers close towards.
+        sphere_links: (S,) body link names; sphere_centres (S, 3) in those link frames; sphere_radii (S,).
+        sphere_fingertip: (S,) index of the fingertip whose link body carries the sphere, else -1.
+        self_collision_pairs: (P, 2) sphere index pairs that must not overlap.
+        surface_points, surface_normals: (1024, 3) palm frame, rest pose, outward unit normals.
+        collision_meshes: body link name -> mesh in that link's frame (fixed children merged in).
+    """
+
+    def __init__(
+        self,
+        desc: RobotDescription,
+        *,
+        name: str,
+        fingertips: list[str],
+        tip_offsets: np.ndarray | None = None,
+        palm: str | None = None,
+        rest: np.ndarray | dict[str, float] | None = None,
+        approach_axis: np.ndarray | None = None,
+    ) -> None:
+        self.name = name
+        self.tree = tree = KinematicTree(desc, palm)
+        self.joint_names = list(tree.joint_names)
+        self.lower, self.upper = tree.lower.copy(), tree.upper.copy()
+        if not np.all(np.isfinite(self.lower)) or not np.all(np.isfinite(self.upper)):
+            raise HandLoadError("joint limits must be finite")
+        unknown = [f for f in fingertips if f not in tree.link_body]
+        if not fingertips or unknown:
+            raise HandLoadError(
+                f"unknown fingertip links {unknown} (links below the palm: {sorted(tree.link_body)[:40]})"
+                if unknown
+                else "at least one fingertip link is required"
+            )
+        self.fingertip_links = list(fingertips)
+        m = len(fingertips)
+        offs = np.zeros((m, 3)) if tip_offsets is None else np.asarray(tip_offsets, dtype=np.float64)
+        if offs.shape != (m, 3) or not np.all(np.isfinite(offs)):
+            raise HandLoadError(f"tip_offsets must be finite with shape ({m}, 3), got {offs.shape}")
+        self.tip_offsets = offs
+        self.rest = self._rest(rest)
+        axis = np.array([0.0, 0.0, 1.0]) if approach_axis is None else np.asarray(approach_axis, float)
+        self.approach_axis = axis / np.linalg.norm(axis)
+
+        # geometry of each body, in the body frame
+        self.collision_meshes: dict[str, trimesh.Trimesh] = {}
+        per_body: dict[int, list[trimesh.Trimesh]] = {}
+        for link, (b, T) in tree.link_body.items():
+            for mesh in desc.links.get(link, []):
+                mm = mesh.copy()
+                mm.apply_transform(T)
+                per_body.setdefault(b, []).append(mm)
+        for b, meshes in sorted(per_body.items()):
+            self.collision_meshes[tree.body_names[b]] = trimesh.util.concatenate(meshes)
+        # fingertip points in their bodies
+        tip_body, tip_local = [], []
+        for link, off in zip(self.fingertip_links, self.tip_offsets, strict=True):
+            b, T = tree.link_body[link]
+            tip_body.append(b)
+            tip_local.append(T[:3, :3] @ off + T[:3, 3])
+        self._tip_body = np.asarray(tip_body, dtype=np.int64)
+        self._tip_local = np.asarray(tip_local)
+        self._cache: dict[tuple[str, torch.dtype, torch.device], torch.Tensor] = {}
+        self._fit_spheres()
+
+    # ------------------------------------------------------------------ construction helpers
+    def _rest(self, rest: np.ndarray | dict[str, float] | None) -> np.ndarray:
+        D = len(self.joint_names)
+        if rest is None:
+            r = np.zeros(D)
+        elif isinstance(rest, dict):
+            r = np.zeros(D)
+            for k, v in rest.items():
+                r[self.joint_names.index(k)] = v
+        else:
+            r = np.asarray(rest, dtype=np.float64).reshape(D)
+        return np.clip(r, self.lower, self.upper)
+
+    def _fit_spheres(self) -> None:
+        tree = self.tree
+        links, centres, radii, bodies = [], [], [], []
+        for link, mesh in self.collision_meshes.items():
+            c, r = fit_spheres(mesh)
+            b = tree.body_names.index(link)
+            links += [link] * len(r)
+            centres.append(c)
+            radii.append(r)
+            bodies += [b] * len(r)
+        self.sphere_links: list[str] = links
+        self.sphere_centres = np.vstack(centres) if centres else np.zeros((0, 3))
+        self.sphere_radii = np.concatenate(radii) if radii else np.zeros(0)
+        self._sphere_body = np.asarray(bodies, dtype=np.int64)
+        self.sphere_fingertip = np.full(len(links), -1, dtype=np.int64)
+        for i, b in enumerate(self._tip_body):
+            self.sphere_fingertip[self._sphere_body == b] = i
+        self.self_collision_pairs = self._pairs()
+
+    def _pairs(self) -> np.ndarray:
+        """Sphere pairs on bodies more than ADJACENT_HOPS apart (or on different branches) that do not already
+        overlap at the rest pose."""
+        n = len(self.sphere_radii)
+        if n < 2:
+            return np.zeros((0, 2), dtype=np.int64)
+        depth = self.tree.ancestors.sum(1)
+        ab = self._sphere_body
+        anc = self.tree.ancestors
+        i, j = np.triu_indices(n, 1)
+        bi, bj = ab[i], ab[j]
+        related = anc[bi, bj] | anc[bj, bi]
+        close = related & (np.abs(depth[bi] - depth[bj]) <= ADJACENT_HOPS)
+        dtype = torch.float64
+        pos, quat = torch.zeros(1, 3, dtype=dtype), torch.tensor([[1.0, 0, 0, 0]], dtype=dtype)
+        c, _ = self.spheres(pos, quat, torch.as_tensor(self.rest[None]), jacobian=False)
+        c = c[0].numpy()
+        overlap = np.linalg.norm(c[i] - c[j], axis=1) < self.sphere_radii[i] + self.sphere_radii[j]
+        keep = (bi != bj) & ~close & ~overlap
+        return np.stack([i[keep], j[keep]], axis=1).astype(np.int64)
+
+    @cached_property
+    def _surface(self) -> tuple[np.ndarray, np.ndarray]:
+        dtype = torch.float64
+        pos, quat = torch.zeros(1, 3, dtype=dtype), torch.tensor([[1.0, 0, 0, 0]], dtype=dtype)
+        poses = self.link_poses(pos, quat, torch.as_tensor(self.rest[None]))
+        meshes = []
+        for link, mesh in self.collision_meshes.items():
+            mm = mesh.copy()
+            mm.apply_transform(poses[link][0].numpy())
+            meshes.append(mm)
+        return sample_surface(meshes, SURFACE_POINTS)
+
+    @property
+    def surface_points(self) -> np.ndarray:
+        return self._surface[0]
+
+    @property
+    def surface_normals(self) -> np.ndarray:
+        return self._surface[1]
+
+    # ------------------------------------------------------------------ sizes
+    @property
+    def dof(self) -> int:
+        return len(self.joint_names)
+
+    @property
+    def num_fingertips(self) -> int:
+        return len(self.fingertip_links)
+
+    def __repr__(self) -> str:
+        return (
+            f"Hand({self.name!r}, dof={self.dof}, fingertips={self.num_fingertips}, spheres={len(self.sphere_radii)})"
+        )
+
+    # ------------------------------------------------------------------ kinematics
+    def _const(self, key: str, like: torch.Tensor) -> torch.Tensor:
+        k = (key, like.dtype, like.device)
+        if k not in self._cache:
+            if key == "tip_local":
+                v = torch.as_tensor(self._tip_local, dtype=like.dtype, device=like.device)
+            elif key == "sphere_local":
+                v = torch.as_tensor(self.sphere_centres, dtype=like.dtype, device=like.device)
+            elif key == "tip_w":
+                v = self.tree.point_weights(self._tip_body, like.dtype, like.device)
+            else:
+                v = self.tree.point_weights(self._sphere_body, like.dtype, like.device)
+            self._cache[k] = v
+        return self._cache[k]
+
+    def _check(self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor) -> None:
+        B = palm_pos.shape[0]
+        if palm_pos.shape != (B, 3) or palm_quat.shape != (B, 4) or q.shape != (B, self.dof):
+            raise ValueError(
+                f"expected palm_pos (B,3), palm_quat (B,4), q (B,{self.dof}); got "
+                f"{tuple(palm_pos.shape)}, {tuple(palm_quat.shape)}, {tuple(q.shape)}"
+            )
+
+    def _points(
+        self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor, which: str, jacobian: bool
+    ) -> tuple[torch.Tensor, torch.Tensor | None]:
+        self._check(palm_pos, palm_quat, q)
+        T = self.tree.body_poses(palm_pos, palm_quat, q)
+        bodies = self._tip_body if which == "tip" else self._sphere_body
+        local = self._const("tip_local" if which == "tip" else "sphere_local", q)
+        Tb = T[:, torch.as_tensor(bodies, device=q.device)]  # (B, n, 4, 4)
+        pts = (Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]
+        if not jacobian:
+            return pts, None
+        w = self._const("tip_w" if which == "tip" else "sphere_w", q)
+        return pts, self.tree.point_jacobian(T, bodies, pts, palm_pos, w)
+
+    def link_poses(self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor) -> dict[str, torch.Tensor]:
+        """World pose (B, 4, 4) of every link below the palm (including fixed ones)."""
+        self._check(palm_pos, palm_quat, q)
+        T = self.tree.body_poses(palm_pos, palm_quat, q)
+        out = {}
+        for link, (b, Tbl) in self.tree.link_body.items():
+            out[link] = (
+                T[:, b]
+                if np.allclose(Tbl, np.eye(4))
+                else T[:, b] @ torch.as_tensor(Tbl, dtype=q.dtype, device=q.device)
+            )
+        return out
+
+    def fingertips(self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor) -> torch.Tensor:
+        """World fingertip contact points (B, m, 3)."""
+        return self._points(palm_pos, palm_quat, q, "tip", False)[0]
+
+    def fingertip_jacobians(
+        self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Fingertip points (B, m, 3) and their Jacobians (B, m, 3, 6 + D)."""
+        p, J = self._points(palm_pos, palm_quat, q, "tip", True)
+        assert J is not None
+        return p, J
+
+    def spheres(
+        self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor, jacobian: bool = True
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """World sphere centres (B, S, 3) and their Jacobians (B, S, 3, 6 + D) (radii: ``sphere_radii``).
+
+        With ``jacobian=False`` the second item is an empty tensor.
+        """
+        p, J = self._points(palm_pos, palm_quat, q, "sphere", jacobian)
+        return p, (J if J is not None else p.new_zeros(0))
+
+    def apply_delta(
+        self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor, delta: torch.Tensor
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """One step (B, 6 + D) in Jacobian-column order; returns the new (palm_pos, palm_quat, q), no clamping."""
+        new_quat = quat_multiply(quat_exp(delta[:, 3:6]), palm_quat)
+        new_quat = new_quat / new_quat.norm(dim=-1, keepdim=True)
+        return palm_pos + delta[:, :3], new_quat, q + delta[:, 6:]

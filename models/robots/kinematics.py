@@ -1,0 +1,235 @@
+"""Batched forward kinematics and point Jacobians of a hand with a floating palm.
+
+Fixed joints are collapsed: a *body* is the palm (root) or the child link of a moving joint; every other link is
+rigidly attached to a body with a constant transform. Mimic/coupled joints become a free joint times a multiplier
+plus an offset, so the free joint vector q (D,) drives all moving joints.
+
+Jacobian columns (6 + D): 0:3 palm translation (world), 3:6 a small world-frame rotation ω about the palm origin
+(a point p moves by ω × (p − palm_pos)), 6: the free finger joints.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from models.robots.description import HandLoadError, JointSpec, RobotDescription
+
+FIXED, REVOLUTE, PRISMATIC = 0, 1, 2
+
+
+def skew_np(v: np.ndarray) -> np.ndarray:
+    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+
+
+def quat_to_matrix(quat: torch.Tensor) -> torch.Tensor:
+    """(B, 4) wxyz (normalised here) -> (B, 3, 3)."""
+    q = quat / quat.norm(dim=-1, keepdim=True)
+    w, x, y, z = q.unbind(-1)
+    return torch.stack(
+        [
+            1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+            2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+            2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
+        ],
+        dim=-1,
+    ).reshape(*quat.shape[:-1], 3, 3)  # fmt: skip
+
+
+def quat_multiply(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """Hamilton product a ⊗ b of (..., 4) wxyz quaternions."""
+    aw, ax, ay, az = a.unbind(-1)
+    bw, bx, by, bz = b.unbind(-1)
+    return torch.stack(
+        [
+            aw * bw - ax * bx - ay * by - az * bz,
+            aw * bx + ax * bw + ay * bz - az * by,
+            aw * by - ax * bz + ay * bw + az * bx,
+            aw * bz + ax * by - ay * bx + az * bw,
+        ],
+        dim=-1,
+    )
+
+
+def quat_exp(omega: torch.Tensor) -> torch.Tensor:
+    """Rotation vector (..., 3) -> unit quaternion (..., 4) wxyz (exact, smooth at 0)."""
+    angle = omega.norm(dim=-1, keepdim=True)
+    half = 0.5 * angle
+    # sin(half)/angle with its Taylor series near 0
+    small = angle < 1e-8
+    k = torch.where(small, 0.5 - angle * angle / 48.0, torch.sin(half) / torch.where(small, 1.0, angle))
+    return torch.cat([torch.cos(half), omega * k], dim=-1)
+
+
+@dataclass
+class _Consts:
+    origin: torch.Tensor  # (nb, 4, 4)
+    K: torch.Tensor  # (nb, 3, 3) skew(axis)
+    K2: torch.Tensor  # (nb, 3, 3)
+    axis: torch.Tensor  # (nb, 3)
+    rev: torch.Tensor  # (nb,)
+    pris: torch.Tensor  # (nb,)
+    mult: torch.Tensor  # (nb,)
+    offset: torch.Tensor  # (nb,)
+    coupling: torch.Tensor  # (nb, D): d theta_b / d q_d
+
+
+class KinematicTree:
+    """The moving-body tree of a :class:`RobotDescription` rooted at the palm link.
+
+    Attributes:
+        body_names: (nb,) body link names, body 0 = palm, parents before children.
+        parent: (nb,) parent body index (-1 for the palm).
+        link_body: link name -> (body index, (4, 4) transform body -> link).
+        joint_names: (D,) free joints; lower/upper (D,) their limits (tightened so tied joints stay in range).
+        ancestors: (nb, nb) bool, ancestors[b, a] = a is b or an ancestor of b.
+    """
+
+    def __init__(self, desc: RobotDescription, palm: str | None = None) -> None:
+        desc = desc.subtree(palm) if palm is not None and palm != desc.root else desc
+        children: dict[str, list[JointSpec]] = {}
+        for j in desc.joints:
+            children.setdefault(j.parent, []).append(j)
+        self.body_names: list[str] = [desc.root]
+        self.link_body: dict[str, tuple[int, np.ndarray]] = {desc.root: (0, np.eye(4))}
+        parent: list[int] = [-1]
+        origins: list[np.ndarray] = [np.eye(4)]
+        axes: list[np.ndarray] = [np.zeros(3)]
+        kinds: list[int] = [FIXED]
+        moving: list[JointSpec | None] = [None]
+        stack = list(children.get(desc.root, []))
+        while stack:  # depth-first in document order: a body's index follows its parent's
+            j = stack.pop(0)
+            body, T_bl = self.link_body[j.parent]
+            if j.type == "fixed":
+                self.link_body[j.child] = (body, T_bl @ j.origin)
+            else:
+                self.body_names.append(j.child)
+                self.link_body[j.child] = (len(self.body_names) - 1, np.eye(4))
+                parent.append(body)
+                origins.append(T_bl @ j.origin)
+                axes.append(j.axis)
+                kinds.append(PRISMATIC if j.type == "prismatic" else REVOLUTE)
+                moving.append(j)
+            stack[0:0] = children.get(j.child, [])
+        self.parent = np.asarray(parent)
+        free = [j for j in moving if j is not None and j.mimic is None]
+        self.joint_names = [j.name for j in free]
+        index = {n: i for i, n in enumerate(self.joint_names)}
+        lower = np.array([j.lower for j in free], dtype=np.float64)
+        upper = np.array([j.upper for j in free], dtype=np.float64)
+        nb, D = len(self.body_names), len(free)
+        coupling = np.zeros((nb, D))
+        offset = np.zeros(nb)
+        mult = np.zeros(nb)
+        for b, j in enumerate(moving):
+            if j is None:
+                continue
+            src, m, off = j.mimic if j.mimic is not None else (j.name, 1.0, 0.0)
+            if src not in index:
+                raise HandLoadError(f"joint {j.name!r}: mimic source {src!r} is not a joint of this hand")
+            d = index[src]
+            coupling[b, d], mult[b], offset[b] = m, m, off
+            if j.mimic is not None and abs(m) > 1e-12:  # keep the tied joint inside its own limits
+                lo, hi = sorted(((j.lower - off) / m, (j.upper - off) / m))
+                lower[d], upper[d] = max(lower[d], lo), min(upper[d], hi)
+        if np.any(lower > upper):
+            raise HandLoadError("mimic joints leave an empty range for their source joint")
+        self.lower, self.upper = lower, upper
+        self._src = np.array([int(np.argmax(np.abs(coupling[b]))) if mult[b] != 0 else 0 for b in range(nb)])
+        anc = np.zeros((nb, nb), dtype=bool)
+        for b in range(nb):
+            a = b
+            while a >= 0:
+                anc[b, a] = True
+                a = int(self.parent[a])
+        self.ancestors = anc
+        depth = anc.sum(1) - 1
+        self._levels = [np.nonzero(depth == d)[0] for d in range(1, int(depth.max()) + 1)] if nb > 1 else []
+        kinds_a = np.asarray(kinds)
+        self._np = {
+            "origin": np.stack(origins),
+            "K": np.stack([skew_np(a) for a in axes]),
+            "axis": np.stack(axes),
+            "rev": (kinds_a == REVOLUTE).astype(np.float64),
+            "pris": (kinds_a == PRISMATIC).astype(np.float64),
+            "mult": mult,
+            "offset": offset,
+            "coupling": coupling,
+        }
+        self._cache: dict[tuple[torch.dtype, torch.device], _Consts] = {}
+
+    @property
+    def dof(self) -> int:
+        return len(self.joint_names)
+
+    def consts(self, dtype: torch.dtype, device: torch.device) -> _Consts:
+        key = (dtype, device)
+        if key not in self._cache:
+            t = {k: torch.as_tensor(v, dtype=dtype, device=device) for k, v in self._np.items()}
+            self._cache[key] = _Consts(
+                t["origin"], t["K"], t["K"] @ t["K"], t["axis"], t["rev"], t["pris"], t["mult"], t["offset"],
+                t["coupling"],
+            )  # fmt: skip
+        return self._cache[key]
+
+    def body_poses(self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor) -> torch.Tensor:
+        """World poses of every body: (B, 3), (B, 4) wxyz, (B, D) -> (B, nb, 4, 4)."""
+        c = self.consts(q.dtype, q.device)
+        B, nb = q.shape[0], len(self.body_names)
+        src = torch.as_tensor(self._src, device=q.device)
+        theta = q[:, src] * c.mult + c.offset  # (B, nb)
+        s = (torch.sin(theta) * c.rev)[..., None, None]
+        cm = ((1 - torch.cos(theta)) * c.rev)[..., None, None]
+        eye3 = torch.eye(3, dtype=q.dtype, device=q.device)
+        R = eye3 + s * c.K + cm * c.K2  # (B, nb, 3, 3)
+        t = (theta * c.pris)[..., None] * c.axis  # (B, nb, 3)
+        local = torch.empty(B, nb, 4, 4, dtype=q.dtype, device=q.device)
+        local[..., :3, :3] = c.origin[:, :3, :3] @ R
+        local[..., :3, 3] = c.origin[:, :3, 3] + (c.origin[:, :3, :3] @ t[..., None])[..., 0]
+        local[..., 3, :3] = 0
+        local[..., 3, 3] = 1
+        palm = torch.zeros(B, 4, 4, dtype=q.dtype, device=q.device)
+        palm[:, :3, :3] = quat_to_matrix(palm_quat)
+        palm[:, :3, 3] = palm_pos
+        palm[:, 3, 3] = 1
+        out = [palm] + [palm] * (nb - 1)
+        T = torch.stack(out, dim=1).clone() if nb > 1 else palm[:, None].clone()
+        for idx in self._levels:
+            idx_t = torch.as_tensor(idx, device=q.device)
+            par_t = torch.as_tensor(self.parent[idx], device=q.device)
+            T[:, idx_t] = T[:, par_t] @ local[:, idx_t]
+        return T
+
+    def point_weights(self, bodies: np.ndarray, dtype: torch.dtype, device: torch.device) -> torch.Tensor:
+        """(n, nb, D): how much each body's joint moves a point on ``bodies[i]`` per unit free joint."""
+        w = self.ancestors[bodies][:, :, None] * self._np["coupling"][None]
+        return torch.as_tensor(w, dtype=dtype, device=device)
+
+    def point_jacobian(
+        self, T: torch.Tensor, bodies: np.ndarray, points: torch.Tensor, palm_pos: torch.Tensor,
+        weights: torch.Tensor | None = None,
+    ) -> torch.Tensor:  # fmt: skip
+        """Jacobian (B, n, 3, 6 + D) of world points (B, n, 3) rigidly attached to ``bodies`` (n,)."""
+        c = self.consts(points.dtype, points.device)
+        if weights is None:
+            weights = self.point_weights(bodies, points.dtype, points.device)
+        B, n = points.shape[:2]
+        D = self.dof
+        axis_w = (T[..., :3, :3] @ c.axis[..., None])[..., 0]  # (B, nb, 3)
+        o_w = T[..., :3, 3]
+        r = points[:, :, None, :] - o_w[:, None]  # (B, n, nb, 3)
+        v = torch.linalg.cross(axis_w[:, None].expand_as(r), r, dim=-1) * c.rev[:, None]
+        v = v + axis_w[:, None] * c.pris[:, None]
+        J = points.new_zeros(B, n, 3, 6 + D)
+        J[..., 0, 0] = J[..., 1, 1] = J[..., 2, 2] = 1.0
+        rp = points - palm_pos[:, None]
+        # ω × rp = -[rp]x ω
+        J[..., 0, 4], J[..., 0, 5] = rp[..., 2], -rp[..., 1]
+        J[..., 1, 3], J[..., 1, 5] = -rp[..., 2], rp[..., 0]
+        J[..., 2, 3], J[..., 2, 4] = rp[..., 1], -rp[..., 0]
+        if D:
+            J[..., 6:] = torch.einsum("bnkc,nkd->bncd", v, weights)
+        return J

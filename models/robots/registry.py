@@ -1,0 +1,153 @@
+"""The hand registry: built-in hands by name (cached) and hardened loading of a user's URDF.
+
+Built-ins and their palm frames (``approach_axis`` is the palm-frame direction the palm faces / fingers close
+towards):
+
+====================  ======================================  ==========  =========================================
+name                  source                                  free DoF    palm frame, approach
+====================  ======================================  ==========  =========================================
+``allegro``           example-robot-data, right hand          16          ``palm_link``; fingers along +z, +x
+``leap``              ghand ``ghand_right.urdf`` (LEAP-style)  16          ``palm_lower_right``; see ``_leap``
+``shadow``            gymnasium-robotics ``hand/reach.xml``    18 (22)     ``robot0:palm``; fingers +z, palm −y
+``panda_gripper``     example-robot-data ``panda.urdf``        1           ``panda_hand``; fingers along +z
+``barrett``           our ``descriptions/barrett_bh8.urdf``    4 (7)       ``bh_palm``; fingers along +z
+``kinova3f``          our ``descriptions/kinova_3f.urdf``      3 (6)       ``k3f_palm``; fingers along +z
+====================  ======================================  ==========  =========================================
+
+Numbers in parentheses count the moving joints before tying: Shadow's distal joints J0 follow J1 through the
+MJCF's coupling tendon (J0 = 0.00805/0.00705 · J1), the Panda's second finger mimics the first, the Barrett and
+Kinova distal joints are coupled to their proximal joints (see the URDFs).
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import sysconfig
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from models.robots.description import HandLoadError
+from models.robots.hand import Hand
+from models.robots.urdf import MAX_URDF_BYTES, MeshLoader, parse_urdf
+
+
+class UnknownHand(KeyError):
+    """No built-in hand of that name (the message lists the names)."""
+
+
+DESCRIPTIONS = Path(__file__).parent / "descriptions"
+
+
+def _site_packages() -> Path:
+    return Path(sysconfig.get_paths()["purelib"])
+
+
+def _erd(*parts: str) -> Path:
+    return _site_packages() / "cmeel.prefix" / "share" / "example-robot-data" / "robots" / Path(*parts)
+
+
+def _package_loader(urdf_dir: Path, package_root: Path) -> MeshLoader:
+    """Resolve ``package://<pkg>/...`` against ``package_root`` and relative paths against ``urdf_dir``;
+    refuses anything that leaves those directories (built-ins only)."""
+    roots = [urdf_dir.resolve(), package_root.resolve()]
+
+    def load(filename: str, scale: np.ndarray) -> trimesh.Trimesh | None:
+        if filename.startswith("package://"):
+            rel = filename[len("package://") :].split("/", 1)[1]
+            path = (package_root / rel).resolve()
+        else:
+            path = (urdf_dir / filename).resolve()
+        if not any(str(path).startswith(str(r) + os.sep) for r in roots):
+            raise HandLoadError(f"mesh path {filename!r} leaves the package directory")
+        mesh = trimesh.load(str(path), force="mesh")
+        assert isinstance(mesh, trimesh.Trimesh)
+        mesh.apply_scale(scale)
+        return mesh
+
+    return load
+
+
+def _allegro() -> Hand:
+    path = _erd("allegro_hand_description", "urdf", "allegro_right_hand.urdf")
+    desc = parse_urdf(path.read_bytes())
+    tips = ["link_3.0_tip", "link_7.0_tip", "link_11.0_tip", "link_15.0_tip"]
+    # tip spheres (r = 12 mm) sit on the tip link origins: contact on the pad side (+x after flexion about y)
+    offsets = np.tile([0.012 * np.sqrt(0.5), 0.0, 0.012 * np.sqrt(0.5)], (4, 1))
+    rest = np.array([0.0, 0.3, 0.3, 0.3] * 3 + [1.0, 0.4, 0.3, 0.3])
+    return Hand(desc, name="allegro", fingertips=tips, tip_offsets=offsets, rest=rest, approach_axis=[1.0, 0, 0])
+
+
+def _panda_gripper() -> Hand:
+    path = _erd("panda_description", "urdf", "panda.urdf")
+    desc = parse_urdf(path.read_bytes(), mesh_loader=_package_loader(path.parent, _erd().parent))
+    # rubber pads: 17.5 x 15.2 x 18.5 mm boxes centred 45.25 mm up the finger, inner face on the finger plane
+    offsets = np.array([[0.0, 0.0, 0.04525], [0.0, 0.0, 0.04525]])
+    return Hand(
+        desc, name="panda_gripper", palm="panda_hand", fingertips=["panda_leftfinger", "panda_rightfinger"],
+        tip_offsets=offsets, rest=np.array([0.04]), approach_axis=[0, 0, 1.0],
+    )  # fmt: skip
+
+
+BUILTINS: dict[str, Callable[[], Hand]] = {
+    "allegro": _allegro,
+    "panda_gripper": _panda_gripper,
+}
+
+
+def list_hands() -> list[str]:
+    """Names of the built-in hands."""
+    return sorted(BUILTINS)
+
+
+@functools.cache
+def get_hand(name: str) -> Hand:
+    """The built-in hand ``name`` (built once per process).
+
+    Raises:
+        UnknownHand: ``name`` is not a built-in (the message lists them).
+    """
+    if name not in BUILTINS:
+        raise UnknownHand(f"unknown hand {name!r}; built-in hands: {', '.join(list_hands())}")
+    return BUILTINS[name]()
+
+
+def load_hand(
+    urdf: bytes,
+    fingertips: list[str],
+    tip_offsets: np.ndarray | list[list[float]] | None = None,
+    name: str = "custom",
+    *,
+    palm: str | None = None,
+    rest: np.ndarray | list[float] | None = None,
+    approach_axis: np.ndarray | list[float] | None = None,
+    max_bytes: int = MAX_URDF_BYTES,
+) -> Hand:
+    """A hand from a user's (untrusted) URDF: hardened parse, mesh filenames ignored (primitives only).
+
+    Args:
+        urdf: the URDF document (bytes).
+        fingertips: fingertip link names (must exist below the palm).
+        tip_offsets: (m, 3) contact points in the fingertip link frames (default zeros).
+        name: the hand's name.
+        palm: palm link (default: the URDF root).
+        rest: (D,) rest joint values (default: 0 clipped into the limits).
+        approach_axis: (3,) palm-frame approach direction (default +z).
+        max_bytes: size cap.
+
+    Raises:
+        HandLoadError: unsafe, oversized, malformed or inconsistent input (the message says what).
+    """
+    desc = parse_urdf(urdf, mesh_loader=None, max_bytes=max_bytes)
+    return Hand(
+        desc,
+        name=name,
+        fingertips=list(fingertips),
+        tip_offsets=None if tip_offsets is None else np.asarray(tip_offsets, dtype=np.float64),
+        palm=palm,
+        rest=None if rest is None else np.asarray(rest, dtype=np.float64),
+        approach_axis=None if approach_axis is None else np.asarray(approach_axis, dtype=np.float64),
+    )
