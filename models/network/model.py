@@ -147,4 +147,3 @@ def create_model(config: str | NetworkConfig, seed: int | None = None) -> ManiFo
     with torch.random.fork_rng(devices=[]):
         torch.manual_seed(seed)
         return ManiFoundationNet(cfg)
-

@@ -1,0 +1,109 @@
+"""Contact selection: non-maximum suppression on the heatmap over the point cloud (paper §III-A).
+
+Greedy NMS in the request's frame:
+
+1. Candidates are the points whose heatmap value is ≥ ``threshold`` *and* whose region-mask entry is True.
+   The mask is a hard constraint: a masked-out point is never a contact, whatever the network predicted.
+2. Take the highest remaining candidate as a peak. Its group is the remaining candidates within ``radius``
+   of it (the peak included). If the group has fewer than ``min_group_size`` points the peak is an isolated
+   spike: drop it alone and go on. Otherwise accept the peak as a contact and remove its whole group.
+3. Stop after ``max_contacts`` contacts (H ≤ the hand's fingertip count) or when no candidate is left.
+
+The contact's force/motion is the force map's vector at the peak point (the paper selects "the forces/motions
+on the chosen contact points"). ``radius`` defaults to :data:`DEFAULT_RADIUS_FRACTION` of the cloud's longest
+bounding-box side, so it scales with the object; pass an absolute radius (request units) to override.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+DEFAULT_THRESHOLD = 0.5
+DEFAULT_RADIUS_FRACTION = 0.1
+DEFAULT_MIN_GROUP_SIZE = 3
+
+
+@dataclass(frozen=True)
+class ContactSelection:
+    """Up to H contacts, best first.
+
+    Attributes:
+        indices: (H,) int64 point indices into the request's cloud.
+        points: (H, 3) contact positions.
+        forces: (H, 3) force/motion vectors at the contacts (request units).
+        scores: (H,) heatmap values at the contacts.
+    """
+
+    indices: np.ndarray
+    points: np.ndarray
+    forces: np.ndarray
+    scores: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.indices.shape[0])
+
+
+def select_contacts(
+    points: np.ndarray,
+    heatmap: np.ndarray,
+    forces: np.ndarray,
+    mask: np.ndarray | None,
+    max_contacts: int,
+    *,
+    radius: float | None = None,
+    threshold: float = DEFAULT_THRESHOLD,
+    min_group_size: int = DEFAULT_MIN_GROUP_SIZE,
+) -> ContactSelection:
+    """Select at most ``max_contacts`` contacts by NMS (see the module docstring).
+
+    Args:
+        points: (N, 3) object points.
+        heatmap: (N,) contact heatmap (one latent sample).
+        forces: (N, 3) force/motion map of the same sample.
+        mask: (N,) bool region mask (True = allowed), or None for no constraint.
+        max_contacts: H, at most the number of fingertips; 0 gives an empty selection.
+        radius: suppression radius in the cloud's units; default 0.1 × the longest bounding-box side.
+        threshold: minimum heatmap value of a contact.
+        min_group_size: minimum number of candidates within ``radius`` of a peak (peak included).
+
+    Returns:
+        The selection (possibly empty).
+    """
+    pts = np.asarray(points, dtype=np.float64)
+    heat = np.asarray(heatmap, dtype=np.float64)
+    n = pts.shape[0]
+    if heat.shape != (n,) or np.shape(forces) != (n, 3):
+        raise ValueError(f"heatmap must be ({n},) and forces ({n}, 3), got {heat.shape} and {np.shape(forces)}")
+    if max_contacts < 0 or min_group_size < 1:
+        raise ValueError("max_contacts must be ≥ 0 and min_group_size ≥ 1")
+    allowed = np.ones(n, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+    if allowed.shape != (n,):
+        raise ValueError(f"mask must be ({n},), got {allowed.shape}")
+    if radius is None:
+        radius = DEFAULT_RADIUS_FRACTION * float(np.ptp(pts, axis=0).max()) if n else 0.0
+    cand = np.flatnonzero(allowed & (heat >= threshold))
+    chosen: list[int] = []
+    if cand.size and max_contacts > 0:
+        tree = cKDTree(pts[cand])
+        alive = np.ones(cand.size, dtype=bool)
+        for local in np.argsort(-heat[cand], kind="stable"):
+            if not alive[local]:
+                continue
+            group = [g for g in tree.query_ball_point(pts[cand[local]], r=radius) if alive[g]]
+            if len(group) < min_group_size:
+                alive[local] = False
+                continue
+            chosen.append(int(cand[local]))
+            alive[group] = False
+            if len(chosen) == max_contacts:
+                break
+    idx = np.asarray(chosen, dtype=np.int64)
+    return ContactSelection(
+        indices=idx,
+        points=pts[idx].reshape(-1, 3),
+        forces=np.asarray(forces, dtype=np.float64)[idx].reshape(-1, 3),
+        scores=heat[idx],
+    )
