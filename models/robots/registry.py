@@ -32,6 +32,8 @@ import trimesh
 
 from models.robots.description import HandLoadError
 from models.robots.hand import Hand
+from models.robots.meshcache import hull_loader
+from models.robots.mjcf import parse_mjcf
 from models.robots.urdf import MAX_URDF_BYTES, MeshLoader, parse_urdf
 
 
@@ -77,7 +79,7 @@ def _allegro() -> Hand:
     tips = ["link_3.0_tip", "link_7.0_tip", "link_11.0_tip", "link_15.0_tip"]
     # tip spheres (r = 12 mm) sit on the tip link origins: contact on the pad side (+x after flexion about y)
     offsets = np.tile([0.012 * np.sqrt(0.5), 0.0, 0.012 * np.sqrt(0.5)], (4, 1))
-    rest = np.array([0.0, 0.3, 0.3, 0.3] * 3 + [1.0, 0.4, 0.3, 0.3])
+    rest = np.array([0.0, 0.3, 0.3, 0.3] * 3 + [1.3, 0.37, 0.95, 0.0])  # thumb opposing the fingers
     return Hand(desc, name="allegro", fingertips=tips, tip_offsets=offsets, rest=rest, approach_axis=[1.0, 0, 0])
 
 
@@ -92,9 +94,39 @@ def _panda_gripper() -> Hand:
     )  # fmt: skip
 
 
+def _leap() -> Hand:
+    path = _site_packages() / "ghand" / "assets" / "models" / "urdf" / "ghand_right.urdf"
+    # the URDF has visual meshes only: each mesh file is replaced by its cached convex hull (meshcache.py)
+    desc = parse_urdf(path.read_bytes(), mesh_loader=hull_loader(DESCRIPTIONS / "leap_hulls.npz"), use_visual=True)
+    tips = ["tip_soft", "tip_soft_1", "tip_soft_2", "tip_soft__thumb"]
+    # pad points of the soft tips (link y runs along the finger, the pad bulges towards link +x; thumb -x)
+    offsets = np.array([[0.017, 0.025, 0.0]] * 3 + [[-0.0155, 0.026, 0.0]])
+    # palm frame = URDF root: fingers along +x, flexion (negative joint values) curls them towards -z
+    rest = {"id9": -0.4, "id10": -0.4, "id11": -0.3, "id5": -0.4, "id6": -0.4, "id7": -0.3, "id1": -0.4}
+    rest |= {"id2": -0.4, "id3": -0.3, "id12": -1.5, "id13": -0.18, "id14": -1.4, "id15": 0.3}
+    return Hand(desc, name="leap", fingertips=tips, tip_offsets=offsets, rest=rest, approach_axis=[0.0, 0.0, -1.0])
+
+
+def _shadow() -> Hand:
+    path = _site_packages() / "gymnasium_robotics" / "envs" / "assets" / "hand" / "reach.xml"
+    desc = parse_mjcf(str(path), name="shadow")
+    fingers = ["ff", "mf", "rf", "lf"]
+    tips = [f"robot0:{f}distal" for f in fingers] + ["robot0:thdistal"]
+    # distal capsules end 31 mm up the link; pads face the flexion side (-y for the fingers, thumb: see MJCF)
+    offsets = np.array([[0.0, -0.006, 0.022]] * 4 + [[-0.008, 0.0, 0.022]])
+    rest = {f"robot0:{f.upper()}J{k}": v for f in fingers for k, v in ((3, 0.0), (2, 0.3), (1, 0.3))}
+    rest |= {"robot0:THJ4": 0.95, "robot0:THJ3": 1.0, "robot0:THJ2": 0.07, "robot0:THJ1": 0.35}  # opposing
+    return Hand(
+        desc, name="shadow", palm="robot0:palm", fingertips=tips, tip_offsets=offsets, rest=rest,
+        approach_axis=[0.0, -1.0, 0.0],
+    )  # fmt: skip
+
+
 BUILTINS: dict[str, Callable[[], Hand]] = {
     "allegro": _allegro,
     "panda_gripper": _panda_gripper,
+    "leap": _leap,
+    "shadow": _shadow,
 }
 
 
