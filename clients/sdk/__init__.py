@@ -1,0 +1,87 @@
+"""The ManiFoundation Python SDK: contact synthesis from a planner or a robot program.
+
+Quick start::
+
+    from clients.sdk import Client, delta_pose, object_from_file
+
+    with Client("http://127.0.0.1:8000") as client:
+        obj = object_from_file("examples/data/box.npz")
+        result = client.synthesize(obj, delta_pose([0, 0, 0.05]), "leap", method="direct_grasp")
+        print(result.best.palm_position, result.best.quality.success)
+
+Public names:
+
+- clients: `Client`, `AsyncClient` (same calls, awaited), `RetryPolicy`; handles `Job`, `AsyncJob`, `Batch`,
+  `AsyncBatch`.
+- inputs: `object_from_points`, `object_from_mesh`, `object_from_file`, `save_object`, `delta_pose`,
+  `target_points`, `force_closure`, `wrench`, `make_request`, `robot_registration`.
+- outputs: `result_to_dict`, `result_to_json`, `load_result`, `result_figure`.
+- errors: `ManiError` › `RequestError` › (`ValidationError`, `Unauthorized`, `NotFound`, `RateLimited`,
+  `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed`.
+
+The wire models (`SynthesisRequest`, `SynthesisResult`, `JobPublic`, ...) live in `clients.schemas`. The SDK
+never imports torch or server code.
+"""
+
+from clients.sdk._core import RetryPolicy
+from clients.sdk.async_client import AsyncBatch, AsyncClient, AsyncJob
+from clients.sdk.client import Batch, Client, Job
+from clients.sdk.errors import (
+    JobFailed,
+    ManiError,
+    NotFound,
+    RateLimited,
+    RequestError,
+    ServerError,
+    TimeoutError,
+    Unauthorized,
+    Unreachable,
+    ValidationError,
+)
+from clients.sdk.inputs import (
+    delta_pose,
+    force_closure,
+    make_request,
+    object_from_file,
+    object_from_mesh,
+    object_from_points,
+    robot_registration,
+    save_object,
+    target_points,
+    wrench,
+)
+from clients.sdk.outputs import load_result, result_figure, result_to_dict, result_to_json
+
+__all__ = [
+    "AsyncBatch",
+    "AsyncClient",
+    "AsyncJob",
+    "Batch",
+    "Client",
+    "Job",
+    "JobFailed",
+    "ManiError",
+    "NotFound",
+    "RateLimited",
+    "RequestError",
+    "RetryPolicy",
+    "ServerError",
+    "TimeoutError",
+    "Unauthorized",
+    "Unreachable",
+    "ValidationError",
+    "delta_pose",
+    "force_closure",
+    "load_result",
+    "make_request",
+    "object_from_file",
+    "object_from_mesh",
+    "object_from_points",
+    "result_figure",
+    "result_to_dict",
+    "result_to_json",
+    "robot_registration",
+    "save_object",
+    "target_points",
+    "wrench",
+]

@@ -1,0 +1,487 @@
+"""The I/O-free half of the SDK: building requests, reading answers, deciding retries, tracking batches.
+
+`Client` and `AsyncClient` share everything here and differ only in how they send (the httpx pattern). Nothing
+in this module opens a connection or sleeps, so all of it is testable with plain values.
+"""
+
+from __future__ import annotations
+
+import email.utils
+import random
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from typing import Any, Generic, Literal, TypeVar
+
+import httpx
+import pydantic
+from pydantic import BaseModel
+
+from clients.codec import JSON, MSGPACK, DecodeError, decode_body, dump_model, media_type
+from clients.schemas import (
+    BatchCreate,
+    BatchItem,
+    BatchPublic,
+    ErrorBody,
+    JobCreated,
+    JobPublic,
+    JobState,
+    ReadyPublic,
+    RobotPublic,
+    RobotRegister,
+    SynthesisRequest,
+    SynthesisResult,
+)
+from clients.sdk.errors import JobFailed, ServerError, TimeoutError, Unreachable, ValidationError, error_for
+from clients.validation import field_errors, summary
+
+T = TypeVar("T")
+ModelT = TypeVar("ModelT", bound=BaseModel)
+Encoding = Literal["msgpack", "json"]
+
+DEFAULT_BASE_URL = "http://127.0.0.1:8000"
+USER_AGENT = "manifoundation-sdk/0.1"
+# Seconds added to the server-side wait of /v1/synthesize before the HTTP read gives up.
+READ_MARGIN_S = 10.0
+_RETRY_STATUSES = frozenset({429, 503})
+_RETRY_STATUSES_IDEMPOTENT = frozenset({429, 502, 503, 504})
+_IDEMPOTENT = frozenset({"GET", "HEAD", "DELETE", "OPTIONS"})
+# Transport errors where the request surely did not reach the service: safe to retry any method.
+_NOT_SENT = (httpx.ConnectError, httpx.ConnectTimeout, httpx.PoolTimeout)
+# Transport errors after sending: retried only for idempotent methods.
+_MAYBE_SENT = (httpx.ReadError, httpx.WriteError, httpx.RemoteProtocolError)
+
+
+@dataclass(frozen=True)
+class RetryPolicy:
+    """Retries with exponential backoff and jitter on 429/503 and connection errors.
+
+    The n-th retry waits ``min(max_backoff, backoff * 2**n)`` scaled by a random factor in
+    ``[1 - jitter, 1]``, or the service's Retry-After when that is longer (capped at ``max_retry_after``).
+
+    Attributes:
+        max_retries: retries after the first attempt (0 disables retrying).
+        backoff: first delay, seconds.
+        max_backoff: largest computed delay, seconds.
+        jitter: fraction of the delay drawn at random (0: none, 1: "full jitter").
+        max_retry_after: largest Retry-After honoured, seconds.
+    """
+
+    max_retries: int = 3
+    backoff: float = 0.25
+    max_backoff: float = 8.0
+    jitter: float = 0.5
+    max_retry_after: float = 60.0
+
+    def delay(self, retry: int, retry_after: float | None = None, rng: random.Random | None = None) -> float:
+        """Seconds to wait before retry number ``retry`` (0-based)."""
+        base = min(self.max_backoff, self.backoff * (2**retry))
+        draw = (rng or random).random()
+        wait = base * (1.0 - self.jitter * draw)
+        if retry_after is not None:
+            wait = max(wait, min(retry_after, self.max_retry_after))
+        return wait
+
+
+def parse_retry_after(value: str | None, now: float | None = None) -> float | None:
+    """Seconds from a Retry-After header (delta-seconds or an HTTP date); None when absent or unreadable."""
+    if not value:
+        return None
+    value = value.strip()
+    try:
+        return max(0.0, float(value))
+    except ValueError:
+        pass
+    try:
+        when = email.utils.parsedate_to_datetime(value)
+    except (TypeError, ValueError):
+        return None
+    return max(0.0, when.timestamp() - (time.time() if now is None else now))
+
+
+def poll_delays(first: float = 0.05, factor: float = 1.5, cap: float = 1.0) -> Iterator[float]:
+    """Growing pause between two status polls: fast for quick jobs, gentle for long ones."""
+    delay = first
+    while True:
+        yield delay
+        delay = min(cap, delay * factor)
+
+
+@dataclass
+class Call(Generic[T]):
+    """One API call: the request to send and how to read its answer."""
+
+    request: httpx.Request
+    parse: Callable[[httpx.Response], T]
+    retry: bool = True
+
+
+def local_validation_error(exc: pydantic.ValidationError, what: str = "request") -> ValidationError:
+    """The SDK's `ValidationError` for input that failed the contract before it was sent."""
+    detail = field_errors(exc)
+    return ValidationError(f"invalid {what}: {summary(detail)}", type="ValidationError", detail=detail)
+
+
+class BaseClient:
+    """Configuration and all the I/O-free logic of `Client` and `AsyncClient`.
+
+    Args:
+        base_url: where the service listens, e.g. ``"http://127.0.0.1:8000"``; ``MANI_URL`` by default in the CLI.
+        api_key: bearer token sent as ``Authorization: Bearer ...`` (None: no auth).
+        timeout: default timeout for one HTTP exchange, seconds (or an ``httpx.Timeout``).
+        retries: a `RetryPolicy`, or the number of retries with the default backoff.
+        encoding: ``"msgpack"`` (default: typed binary arrays, smaller and faster) or ``"json"``.
+        headers: extra headers sent with every request.
+        poll_interval: largest pause between two status polls when waiting on a job or batch, seconds.
+    """
+
+    def __init__(
+        self,
+        base_url: str = DEFAULT_BASE_URL,
+        api_key: str | None = None,
+        *,
+        timeout: float | httpx.Timeout = 30.0,
+        retries: RetryPolicy | int = RetryPolicy(),
+        encoding: Encoding = "msgpack",
+        headers: dict[str, str] | None = None,
+        poll_interval: float = 1.0,
+    ) -> None:
+        if encoding not in ("msgpack", "json"):
+            raise ValueError(f"encoding must be 'msgpack' or 'json', not {encoding!r}")
+        self.base_url = str(base_url).rstrip("/")
+        self.api_key = api_key
+        self.timeout = timeout if isinstance(timeout, httpx.Timeout) else httpx.Timeout(timeout)
+        self.retry_policy = retries if isinstance(retries, RetryPolicy) else RetryPolicy(max_retries=int(retries))
+        self.encoding: Encoding = encoding
+        self.poll_interval = poll_interval
+        self._media = MSGPACK if encoding == "msgpack" else JSON
+        self._headers = {"User-Agent": USER_AGENT, "Accept": self._media, **(headers or {})}
+        if api_key:
+            self._headers["Authorization"] = f"Bearer {api_key}"
+        self._rng = random.Random()
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(base_url={self.base_url!r}, encoding={self.encoding!r})"
+
+    # ---- requests -------------------------------------------------------------------------------------------
+
+    def build_request(
+        self,
+        method: str,
+        path: str,
+        *,
+        body: BaseModel | None = None,
+        params: dict[str, Any] | None = None,
+        read_timeout: float | None = None,
+        accept: str | None = None,
+    ) -> httpx.Request:
+        """An ``httpx.Request`` to ``base_url + path`` with our headers, body encoding and timeouts."""
+        headers = dict(self._headers)
+        content = None
+        if body is not None:
+            content = dump_model(body, self._media)
+            headers["Content-Type"] = self._media
+        if accept is not None:
+            headers["Accept"] = accept
+        timeout = self.timeout
+        if read_timeout is not None:
+            timeout = httpx.Timeout(
+                connect=self.timeout.connect, read=read_timeout, write=self.timeout.write, pool=self.timeout.pool
+            )
+        clean = {k: v for k, v in (params or {}).items() if v is not None}
+        return httpx.Request(
+            method,
+            self.base_url + path,
+            params=clean or None,
+            headers=headers,
+            content=content,
+            extensions={"timeout": timeout.as_dict()},
+        )
+
+    # ---- answers --------------------------------------------------------------------------------------------
+
+    def parse(self, response: httpx.Response, model: type[ModelT]) -> ModelT:
+        """Validate a 2xx answer into ``model``; raise the matching `RequestError` for any other."""
+        self.raise_for_status(response)
+        try:
+            return model.model_validate(decode_body(response.content, response.headers.get("content-type")))
+        except (DecodeError, pydantic.ValidationError) as exc:
+            raise ServerError(
+                f"unreadable {model.__name__} from {response.request.url.path}: {exc}",
+                type="ProtocolError",
+                status_code=response.status_code,
+            ) from exc
+
+    def raise_for_status(self, response: httpx.Response) -> None:
+        """Raise the SDK error for a non-2xx answer, built from its ``{error, type, detail}`` body."""
+        if response.is_success:
+            return
+        body: ErrorBody | None = None
+        try:
+            body = ErrorBody.model_validate(decode_body(response.content, response.headers.get("content-type")))
+        except (DecodeError, pydantic.ValidationError):
+            body = _fastapi_detail(response)
+        retry_after = parse_retry_after(response.headers.get("retry-after"))
+        raise error_for(response.status_code, body, _text(response), retry_after)
+
+    # ---- retries --------------------------------------------------------------------------------------------
+
+    def retry_delay(
+        self, retry: int, request: httpx.Request, response: httpx.Response | None = None, exc: Exception | None = None
+    ) -> float | None:
+        """Seconds to wait before retrying, or None to stop (then the answer or error stands).
+
+        Args:
+            retry: retries done so far.
+            request: the request that was sent.
+            response: its answer, when one came.
+            exc: the transport error, when none came.
+        """
+        if retry >= self.retry_policy.max_retries:
+            return None
+        idempotent = request.method in _IDEMPOTENT
+        if response is not None:
+            statuses = _RETRY_STATUSES_IDEMPOTENT if idempotent else _RETRY_STATUSES
+            if response.status_code not in statuses:
+                return None
+            return self.retry_policy.delay(retry, parse_retry_after(response.headers.get("retry-after")), self._rng)
+        if isinstance(exc, _NOT_SENT) or (idempotent and isinstance(exc, _MAYBE_SENT)):
+            return self.retry_policy.delay(retry, None, self._rng)
+        return None
+
+    def transport_error(self, request: httpx.Request, exc: Exception) -> Exception:
+        """The SDK error for a transport failure that is not retried any more."""
+        if isinstance(exc, httpx.TimeoutException) and not isinstance(exc, httpx.ConnectTimeout | httpx.PoolTimeout):
+            return TimeoutError(f"{request.method} {request.url.path}: no answer in time ({exc})")
+        return Unreachable(f"cannot reach {self.base_url} ({type(exc).__name__}: {exc})")
+
+    # ---- the calls ------------------------------------------------------------------------------------------
+
+    def _call_synthesize(self, request: SynthesisRequest) -> Call[SynthesisResult | JobCreated]:
+        http = self.build_request(
+            "POST", "/v1/synthesize", body=request, read_timeout=request.options.timeout + READ_MARGIN_S
+        )
+
+        def parse(response: httpx.Response) -> SynthesisResult | JobCreated:
+            if response.status_code == 202:
+                return self.parse(response, JobCreated)
+            return self.parse(response, SynthesisResult)
+
+        return Call(http, parse)
+
+    def _call_submit(self, request: SynthesisRequest) -> Call[JobCreated]:
+        return self._model_call("POST", "/v1/jobs", JobCreated, body=request)
+
+    def _call_job(self, job_id: str) -> Call[JobPublic]:
+        return self._model_call("GET", f"/v1/jobs/{job_id}", JobPublic)
+
+    def _call_cancel(self, job_id: str) -> Call[JobPublic]:
+        return self._model_call("DELETE", f"/v1/jobs/{job_id}", JobPublic)
+
+    def _call_submit_batch(self, requests: list[SynthesisRequest]) -> Call[str]:
+        try:
+            body = BatchCreate(requests=requests)
+        except pydantic.ValidationError as exc:
+            raise local_validation_error(exc, "batch") from exc
+        http = self.build_request("POST", "/v1/batches", body=body)
+
+        def parse(response: httpx.Response) -> str:
+            data = self._plain(response)
+            batch_id = data.get("id", data.get("batch_id")) if isinstance(data, dict) else None
+            if not isinstance(batch_id, str):
+                raise ServerError("batch answer carries no id", type="ProtocolError", status_code=response.status_code)
+            return batch_id
+
+        return Call(http, parse)
+
+    def _call_batch(self, batch_id: str, offset: int = 0, limit: int = 100) -> Call[BatchPublic]:
+        params = {"offset": offset, "limit": limit}
+        return self._model_call("GET", f"/v1/batches/{batch_id}", BatchPublic, params=params)
+
+    def _call_jobs(self, limit: int = 50) -> Call[list[JobPublic]]:
+        return self._list_call("/v1/jobs", JobPublic, "jobs", {"limit": limit})
+
+    def _call_robots(self) -> Call[list[RobotPublic]]:
+        return self._list_call("/v1/robots", RobotPublic, "robots")
+
+    def _list_call(
+        self, path: str, model: type[ModelT], key: str, params: dict[str, Any] | None = None
+    ) -> Call[list[ModelT]]:
+        http = self.build_request("GET", path, params=params)
+        adapter = pydantic.TypeAdapter(list[model])  # type: ignore[valid-type]
+
+        def parse(response: httpx.Response) -> list[ModelT]:
+            data = self._plain(response)
+            if isinstance(data, dict):  # {"robots": [...]} / {"items": [...]} as well as a bare list
+                data = data.get(key, data.get("items", data))
+            try:
+                return list(adapter.validate_python(data))
+            except pydantic.ValidationError as exc:
+                raise ServerError(f"unreadable {key} list: {exc}", type="ProtocolError") from exc
+
+        return Call(http, parse)
+
+    def _plain(self, response: httpx.Response) -> Any:
+        """The decoded (not validated) content of a 2xx answer."""
+        self.raise_for_status(response)
+        try:
+            return decode_body(response.content, response.headers.get("content-type"))
+        except DecodeError as exc:
+            raise ServerError(f"unreadable answer: {exc}", type="ProtocolError") from exc
+
+    def _call_robot(self, name: str) -> Call[RobotPublic]:
+        return self._model_call("GET", f"/v1/robots/{name}", RobotPublic)
+
+    def _call_register_robot(self, body: RobotRegister) -> Call[RobotPublic]:
+        return self._model_call("POST", "/v1/robots", RobotPublic, body=body)
+
+    def _call_health(self) -> Call[dict[str, Any]]:
+        http = self.build_request("GET", "/healthz", accept=JSON)
+
+        def parse(response: httpx.Response) -> dict[str, Any]:
+            self.raise_for_status(response)
+            try:
+                data = decode_body(response.content, response.headers.get("content-type"))
+            except DecodeError:
+                data = None
+            return data if isinstance(data, dict) else {"status": "ok"}
+
+        return Call(http, parse)
+
+    def _call_ready(self) -> Call[ReadyPublic]:
+        http = self.build_request("GET", "/readyz")
+
+        def parse(response: httpx.Response) -> ReadyPublic:
+            if response.status_code == 503:  # not ready is an answer, not an error, when it has the shape
+                try:
+                    data = decode_body(response.content, response.headers.get("content-type"))
+                    return ReadyPublic.model_validate(data)
+                except (DecodeError, pydantic.ValidationError):
+                    pass
+            return self.parse(response, ReadyPublic)
+
+        return Call(http, parse, retry=False)
+
+    def _model_call(
+        self,
+        method: str,
+        path: str,
+        model: type[ModelT],
+        *,
+        body: BaseModel | None = None,
+        params: dict[str, Any] | None = None,
+    ) -> Call[ModelT]:
+        return Call(self.build_request(method, path, body=body, params=params), lambda r: self.parse(r, model))
+
+
+def _text(response: httpx.Response) -> str:
+    try:
+        return response.text
+    except (UnicodeDecodeError, httpx.ResponseNotRead):
+        return ""
+
+
+def _fastapi_detail(response: httpx.Response) -> ErrorBody | None:
+    """Read FastAPI's own ``{"detail": ...}`` shape (e.g. a 405 from the framework) as an `ErrorBody`."""
+    if media_type(response.headers.get("content-type")) != JSON:
+        return None
+    try:
+        data = response.json()
+    except ValueError:
+        return None
+    if isinstance(data, dict) and isinstance(data.get("detail"), str):
+        return ErrorBody(error=data["detail"], type=f"HTTP{response.status_code}")
+    return None
+
+
+@dataclass
+class BatchTracker:
+    """Which items of a batch are finished, fed one `BatchPublic` page at a time (no I/O).
+
+    The client fetches `pages_to_fetch()` each round, feeds every page to `update`, and reports the items it
+    returns; `missing_results()` lists succeeded items whose page carried no result (the client then reads
+    the job itself).
+    """
+
+    batch_id: str
+    total: int
+    page_size: int = 100
+    items: list[BatchItem | None] = field(init=False)
+    reported: set[int] = field(default_factory=set)
+    server_terminal: int = 0
+
+    def __post_init__(self) -> None:
+        self.items = [None] * self.total
+
+    @property
+    def done(self) -> bool:
+        """Whether every item was reported."""
+        return len(self.reported) == self.total
+
+    def pending_pages(self) -> list[int]:
+        """Offsets of the pages that hold an item not yet reported, lowest first."""
+        pending = (i for i in range(self.total) if i not in self.reported)
+        return sorted({(i // self.page_size) * self.page_size for i in pending})
+
+    def worth_more_pages(self) -> bool:
+        """After the first page of a round: whether the other pages can hold news (counts say so)."""
+        return self.server_terminal > len(self.reported)
+
+    def update(self, page: BatchPublic) -> list[BatchItem]:
+        """Record a page; return its items that just finished (with a result or an error)."""
+        self.server_terminal = sum(n for state, n in page.counts.items() if JobState(state).terminal)
+        fresh = []
+        for item in page.items:
+            if not 0 <= item.index < self.total:
+                continue
+            self.items[item.index] = item
+            if item.index in self.reported or not item.state.terminal:
+                continue
+            if item.state is JobState.SUCCEEDED and item.result is None:
+                continue  # its result comes from the job itself: see missing_results
+            self.reported.add(item.index)
+            fresh.append(item)
+        return fresh
+
+    def missing_results(self) -> list[BatchItem]:
+        """Succeeded items whose result was not in their page."""
+        return [
+            item
+            for item in self.items
+            if item is not None
+            and item.index not in self.reported
+            and item.state is JobState.SUCCEEDED
+            and item.result is None
+        ]
+
+    def fill(self, index: int, job: JobPublic) -> BatchItem:
+        """Complete an item from its job (read separately) and mark it reported."""
+        item = BatchItem(index=index, job_id=job.id, state=job.state, result=job.result, error=job.error)
+        self.items[index] = item
+        self.reported.add(index)
+        return item
+
+
+def job_result(job: JobPublic) -> SynthesisResult:
+    """The result of a finished job, or `JobFailed` when it has none."""
+    if job.state is JobState.SUCCEEDED and job.result is not None:
+        return job.result
+    raise JobFailed.from_job(job)
+
+
+def item_result(item: BatchItem) -> SynthesisResult:
+    """The result of a finished batch item, or `JobFailed` when it has none."""
+    if item.state is JobState.SUCCEEDED and item.result is not None:
+        return item.result
+    raise JobFailed(item.job_id, item.state, item.error)
+
+
+def parse_event(data: str) -> JobPublic:
+    """One SSE ``data`` payload: a `JobPublic` in JSON."""
+    try:
+        return JobPublic.model_validate_json(data)
+    except pydantic.ValidationError as exc:
+        raise ServerError(f"unreadable job event: {exc}", type="ProtocolError") from exc
+
+
+JOB_EVENT_TYPES = frozenset({"message", "progress", "end"})
