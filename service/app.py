@@ -1,0 +1,106 @@
+"""The FastAPI application: `create_app(settings)`; the queue and friends live on ``app.state`` (lifespan)."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import AsyncIterator
+from typing import Any
+
+from fastapi import FastAPI
+from fastapi.openapi.utils import get_openapi
+from pydantic.json_schema import models_json_schema
+
+from clients.schemas import BatchCreate, RobotRegister, SynthesisRequest
+from service import errors, logs
+from service.dashboard import History
+from service.metrics import Metrics
+from service.middleware import RequestContext
+from service.robots import RobotCatalog
+from service.routes import batches, health, jobs, pages, robots, synthesis
+from service.scenes import SceneStore
+from service.security import RateLimiter
+from service.settings import Settings
+from workers.queue import JobQueue
+
+log = logging.getLogger("service.app")
+API_DESCRIPTION = """Contact synthesis for robot manipulation (ManiFoundation).
+
+Every body may be JSON or msgpack (`Content-Type` / `Accept`: `application/json`, `application/msgpack`); in
+msgpack, arrays travel as typed binary (`{dtype, shape, data}`). Every error is `{error, type, detail}`.
+With API keys configured, `/v1` needs `Authorization: Bearer <key>`."""
+
+
+def build_queue(settings: Settings) -> JobQueue:
+    """The queue the settings ask for: Redis Streams with ``redis_url``, else embedded workers."""
+    from workers.queue import create_queue  # type: ignore[attr-defined]
+
+    return create_queue(settings.queue_settings())  # type: ignore[no-any-return]
+
+
+def create_app(settings: Settings | None = None, *, queue: JobQueue | None = None) -> FastAPI:
+    """The app. ``queue``: an already-built queue (tests); the lifespan starts and closes it either way."""
+    settings = settings or Settings()
+    metrics = Metrics()
+
+    @contextlib.asynccontextmanager
+    async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+        the_queue = queue or build_queue(settings)
+        await the_queue.start()
+        history = History(the_queue, settings.dashboard_sample_s, settings.dashboard_history)
+        app.state.queue = the_queue
+        app.state.robots = RobotCatalog(the_queue, settings.robots_cache_s)
+        app.state.history = history
+        sampler = asyncio.create_task(history.run(), name="dashboard-sampler")
+        log.info("service started", extra={"backend": the_queue.backend})
+        try:
+            yield
+        finally:
+            app.state.shutting_down = True
+            sampler.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await sampler
+            await the_queue.close()
+            log.info("service stopped")
+
+    app = FastAPI(
+        title="ManiFoundation Service",
+        version=health.VERSION,
+        description=API_DESCRIPTION,
+        lifespan=lifespan,
+    )
+    app.state.settings = settings
+    app.state.metrics = metrics
+    app.state.limiter = RateLimiter(settings.rate_limit_per_s, settings.rate_limit_burst)
+    app.state.scenes = SceneStore()
+    app.state.shutting_down = False
+    errors.install(app)
+    for router in (
+        health.router, synthesis.router, jobs.router, batches.router, robots.router, pages.data, pages.pages
+    ):
+        app.include_router(router)
+    app.add_middleware(RequestContext, metrics=metrics, state=app.state)
+    app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]
+    return app
+
+
+def _openapi(app: FastAPI) -> dict[str, Any]:
+    """FastAPI's schema plus the body schemas that routes read themselves (JSON or msgpack)."""
+    if app.openapi_schema:
+        return app.openapi_schema
+    schema = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
+    _, defs = models_json_schema(
+        [(m, "validation") for m in (SynthesisRequest, BatchCreate, RobotRegister)],
+        ref_template="#/components/schemas/{model}",
+    )
+    components = schema.setdefault("components", {}).setdefault("schemas", {})
+    for name, definition in defs.get("$defs", {}).items():
+        components.setdefault(name, definition)
+    app.openapi_schema = schema
+    return schema
+
+
+def configure_logging(settings: Settings) -> None:
+    """JSON (or text) logs at the configured level (the CLI calls this once per process)."""
+    logs.configure(settings.log_level, settings.log_format == "json")

@@ -1,0 +1,63 @@
+"""Dependencies of the routes: ``Annotated`` aliases over what the lifespan put on ``app.state``."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from fastapi import Depends, Request
+
+from service.dashboard import History
+from service.errors import Unavailable
+from service.metrics import Metrics
+from service.robots import RobotCatalog
+from service.security import RateLimiter, check_key
+from service.settings import Settings
+from workers.queue import JobQueue
+
+
+def get_settings(request: Request) -> Settings:
+    return request.app.state.settings  # type: ignore[no-any-return]
+
+
+def get_queue(request: Request) -> JobQueue:
+    queue = getattr(request.app.state, "queue", None)
+    if queue is None:
+        raise Unavailable("the queue is not running")
+    return queue  # type: ignore[no-any-return]
+
+
+def get_metrics(request: Request) -> Metrics:
+    return request.app.state.metrics  # type: ignore[no-any-return]
+
+
+def get_robots(request: Request) -> RobotCatalog:
+    return request.app.state.robots  # type: ignore[no-any-return]
+
+
+def get_history(request: Request) -> History:
+    return request.app.state.history  # type: ignore[no-any-return]
+
+
+def get_request_id(request: Request) -> str:
+    return str(request.state.request_id)
+
+
+SettingsDep = Annotated[Settings, Depends(get_settings)]
+QueueDep = Annotated[JobQueue, Depends(get_queue)]
+MetricsDep = Annotated[Metrics, Depends(get_metrics)]
+RobotsDep = Annotated[RobotCatalog, Depends(get_robots)]
+HistoryDep = Annotated[History, Depends(get_history)]
+RequestIdDep = Annotated[str, Depends(get_request_id)]
+
+
+def authorize(request: Request, settings: SettingsDep) -> None:
+    """Bearer key when keys are configured (except on ``open_paths``), then the caller's token bucket."""
+    identity = request.client.host if request.client else "unknown"
+    if settings.auth_enabled and request.url.path not in settings.open_paths:
+        key = check_key(request.headers.get("authorization"), settings.api_keys)
+        identity = "key:" + key
+    limiter: RateLimiter = request.app.state.limiter
+    limiter.take(identity)
+
+
+Authorized = Depends(authorize)

@@ -1,0 +1,173 @@
+"""The service's errors and their one translation into ``{error, type, detail}`` (and a status code).
+
+    ApiError                      status + type + message (+ field errors, + headers)
+    ├── BadRequest          400   malformed body (not JSON/msgpack), bad query parameter
+    ├── Unauthorized        401   missing or unknown API key
+    ├── NotFound            404   unknown job, batch or hand
+    ├── Conflict            409   e.g. registering a built-in hand's name
+    ├── PayloadTooLarge     413   body over the limit (the message gives the limit)
+    ├── UnsupportedMediaType 415  a body that is neither JSON nor msgpack
+    ├── InvalidInput        422   schema validation failed (detail names each field and problem)
+    ├── RateLimited         429   per-key token bucket empty (Retry-After)
+    └── Unavailable         503   shutting down / queue unreachable (Retry-After)
+
+Queue errors (`QueueFull`, `JobNotFound`, `RobotInvalid`, `QueueUnavailable`), pydantic's `ValidationError`
+and FastAPI's own request validation are mapped here too, so routes raise and never build error bodies.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from pydantic import ValidationError
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.responses import Response
+
+from clients.schemas import ErrorBody, FieldError
+from clients.validation import field_errors, summary
+from service.negotiation import respond
+from workers.queue import JobNotFound, QueueFull, QueueUnavailable, RobotInvalid
+
+log = logging.getLogger("service.errors")
+
+
+class ApiError(Exception):
+    """An answer other than 2xx."""
+
+    status = 500
+    type = "InternalError"
+
+    def __init__(
+        self, message: str, *, detail: list[FieldError] | None = None, headers: dict[str, str] | None = None
+    ) -> None:
+        super().__init__(message)
+        self.message = message
+        self.detail = detail
+        self.headers = headers or {}
+
+    def body(self) -> ErrorBody:
+        """The wire form."""
+        return ErrorBody(error=self.message, type=self.type, detail=self.detail)
+
+
+class BadRequest(ApiError):
+    status, type = 400, "BadRequest"
+
+
+class Unauthorized(ApiError):
+    status, type = 401, "Unauthorized"
+
+    def __init__(self, message: str) -> None:
+        super().__init__(message, headers={"WWW-Authenticate": "Bearer"})
+
+
+class NotFound(ApiError):
+    status, type = 404, "NotFound"
+
+
+class Conflict(ApiError):
+    status, type = 409, "Conflict"
+
+
+class PayloadTooLarge(ApiError):
+    status, type = 413, "PayloadTooLarge"
+
+
+class UnsupportedMediaType(ApiError):
+    status, type = 415, "UnsupportedMediaType"
+
+
+class InvalidInput(ApiError):
+    status, type = 422, "ValidationError"
+
+    @classmethod
+    def from_pydantic(cls, exc: ValidationError, root: str = "") -> InvalidInput:
+        """One `FieldError` per problem, message = the first problem."""
+        errors = field_errors(exc, root=root)
+        return cls(summary(errors), detail=errors)
+
+
+class RateLimited(ApiError):
+    status, type = 429, "RateLimited"
+
+    def __init__(self, message: str, retry_after: float) -> None:
+        super().__init__(message, headers={"Retry-After": retry_after_header(retry_after)})
+
+
+class QueueFullError(ApiError):
+    status, type = 429, "QueueFull"
+
+    def __init__(self, message: str, retry_after: float) -> None:
+        super().__init__(message, headers={"Retry-After": retry_after_header(retry_after)})
+
+
+class Unavailable(ApiError):
+    status, type = 503, "Unavailable"
+
+    def __init__(self, message: str, retry_after: float = 5.0) -> None:
+        super().__init__(message, headers={"Retry-After": retry_after_header(retry_after)})
+
+
+def retry_after_header(seconds: float) -> str:
+    """Retry-After takes whole seconds; round up, at least 1."""
+    return str(max(1, math.ceil(seconds))) if math.isfinite(seconds) else "60"
+
+
+def from_exception(exc: Exception) -> ApiError:
+    """Translate any exception a route can raise into an `ApiError`."""
+    if isinstance(exc, ApiError):
+        return exc
+    if isinstance(exc, ValidationError):
+        return InvalidInput.from_pydantic(exc)
+    if isinstance(exc, RequestValidationError):
+        errors = [
+            FieldError(field=".".join(str(p) for p in e["loc"]) or "request", problem=str(e["msg"]))
+            for e in exc.errors()
+        ]
+        return InvalidInput(summary(errors), detail=errors)
+    if isinstance(exc, QueueFull):
+        return QueueFullError(str(exc) or "queue is full", exc.retry_after)
+    if isinstance(exc, JobNotFound):
+        return NotFound(str(exc) or "not found")
+    if isinstance(exc, RobotInvalid):
+        message = str(exc) or "robot description rejected"
+        return InvalidInput(f"urdf: {message}", detail=[FieldError(field="urdf", problem=message)])
+    if isinstance(exc, QueueUnavailable):
+        return Unavailable(str(exc) or "queue unavailable")
+    if isinstance(exc, StarletteHTTPException):
+        names = {404: NotFound, 405: ApiError, 400: BadRequest, 401: Unauthorized, 413: PayloadTooLarge}
+        err = ApiError(str(exc.detail))
+        err.status = exc.status_code
+        err.type = names.get(exc.status_code, ApiError).type if exc.status_code != 405 else "MethodNotAllowed"
+        err.headers = dict(exc.headers or {})
+        return err
+    error = ApiError("internal error")
+    return error
+
+
+async def handle(request: Request, exc: Exception) -> Response:
+    """The one exception handler: every error becomes ``ErrorBody`` in the negotiated encoding."""
+    error = from_exception(exc)
+    if error.status >= 500 and not isinstance(error, Unavailable):
+        log.error("unhandled error", exc_info=exc)
+    request.state.error_type = error.type
+    return respond(request, error.body(), status=error.status, headers=error.headers)
+
+
+def install(app: FastAPI) -> None:
+    """Register the handler for every exception class a route may raise."""
+    for cls in (
+        ApiError,
+        ValidationError,
+        RequestValidationError,
+        StarletteHTTPException,
+        QueueFull,
+        JobNotFound,
+        RobotInvalid,
+        QueueUnavailable,
+        Exception,
+    ):
+        app.add_exception_handler(cls, handle)

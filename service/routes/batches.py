@@ -1,0 +1,78 @@
+"""`/v1/batches`: many requests in one call, then counts by state and pages of items."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+
+from fastapi import APIRouter, Query, Request
+from starlette.responses import Response
+
+from clients.schemas import BatchCreate, BatchItem, BatchPublic, JobPublic, JobState
+from service.deps import Authorized, MetricsDep, QueueDep, RobotsDep, SettingsDep
+from service.errors import InvalidInput
+from service.negotiation import body_openapi, read_model, respond
+from service.responses import ERRORS, READ_ERRORS
+
+router = APIRouter(prefix="/v1/batches", tags=["batches"], dependencies=[Authorized])
+
+
+@router.post(
+    "",
+    status_code=202,
+    summary="Submit up to 1000 requests at once",
+    openapi_extra=body_openapi("BatchCreate", "`{requests: [SynthesisRequest, ...]}` (1 to 1000 of them)."),
+    responses={202: {"model": BatchPublic}, **ERRORS},
+)
+async def create_batch(
+    request: Request, queue: QueueDep, robots: RobotsDep, metrics: MetricsDep, settings: SettingsDep
+) -> Response:
+    """All or none are enqueued; 202 with the batch and its first page of job ids."""
+    body = await read_model(request, BatchCreate, settings.max_body_bytes)
+    if len(body.requests) > settings.max_batch_size:
+        raise InvalidInput(f"requests: {len(body.requests)} requests, at most {settings.max_batch_size} per batch")
+    for index, item in enumerate(body.requests):
+        await robots.check(item, field=f"requests.{index}.robot.name")
+    batch_id = await queue.create_batch(body.requests)
+    metrics.batch_size.observe(len(body.requests))
+    metrics.jobs_submitted.labels(kind="batch").inc(len(body.requests))
+    job_ids = await queue.batch_job_ids(batch_id)
+    limit = min(100, len(job_ids))
+    items = [BatchItem(index=i, job_id=j, state=JobState.QUEUED) for i, j in enumerate(job_ids[:limit])]
+    batch = BatchPublic(
+        id=batch_id, total=len(job_ids), counts={JobState.QUEUED: len(job_ids)}, done=False, items=items,
+        offset=0, limit=limit, created_at=time.time(),
+    )
+    url = str(request.url_for("get_batch", batch_id=batch_id))
+    return respond(request, batch, status=202, headers={"Location": url})
+
+
+@router.get("/{batch_id}", summary="Counts by state and one page of items (results when done)",
+            responses={200: {"model": BatchPublic}, **READ_ERRORS})
+async def get_batch(
+    request: Request, batch_id: str, queue: QueueDep, settings: SettingsDep,
+    offset: int = Query(0, ge=0), limit: int = Query(100, ge=1, le=1000),
+) -> Response:
+    job_ids = await queue.batch_job_ids(batch_id)
+    limit = min(limit, settings.batch_page_max)
+    states = await asyncio.gather(*(queue.get(j, with_result=False) for j in job_ids))
+    page_ids = job_ids[offset : offset + limit]
+    page = await asyncio.gather(*(queue.get(j) for j in page_ids))
+    counts: dict[JobState, int] = {}
+    for job in states:
+        counts[job.state] = counts.get(job.state, 0) + 1
+    batch = BatchPublic(
+        id=batch_id,
+        total=len(job_ids),
+        counts=counts,
+        done=all(j.state.terminal for j in states),
+        items=[_item(offset + i, job) for i, job in enumerate(page)],
+        offset=offset,
+        limit=limit,
+        created_at=min((j.created_at for j in states), default=time.time()),
+    )
+    return respond(request, batch)
+
+
+def _item(index: int, job: JobPublic) -> BatchItem:
+    return BatchItem(index=index, job_id=job.id, state=job.state, result=job.result, error=job.error)

@@ -1,0 +1,91 @@
+"""`/v1/jobs`: list, get, cancel, and stream a job's progress (Server-Sent Events)."""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterator
+
+from fastapi import APIRouter, Query, Request
+from starlette.responses import Response, StreamingResponse
+
+from clients.schemas import JobPublic, WireModel
+from service.deps import Authorized, MetricsDep, QueueDep, SettingsDep
+from service.negotiation import respond
+from service.responses import READ_ERRORS
+
+router = APIRouter(prefix="/v1/jobs", tags=["jobs"], dependencies=[Authorized])
+
+SSE_KEEPALIVE_S = 15.0
+JOB_ID = r"^[A-Za-z0-9_\-:.]{1,128}$"
+
+
+class JobList(WireModel):
+    """Answer of ``GET /v1/jobs``: the most recent jobs, newest first, without results (service-local)."""
+
+    jobs: list[JobPublic]
+
+
+@router.get("", summary="Recent jobs, newest first", responses={200: {"model": JobList}, **READ_ERRORS})
+async def list_jobs(request: Request, queue: QueueDep, limit: int = Query(50, ge=1, le=500)) -> Response:
+    return respond(request, JobList(jobs=await queue.list_recent(limit=limit)))
+
+
+@router.get("/{job_id}", summary="A job: state, stage, progress, timings, result or error",
+            responses={200: {"model": JobPublic}, **READ_ERRORS})
+async def get_job(request: Request, job_id: str, queue: QueueDep, metrics: MetricsDep) -> Response:
+    job = await queue.get(job_id)
+    metrics.observe_job(job)
+    return respond(request, job)
+
+
+@router.delete("/{job_id}", summary="Cancel a queued or running job (no-op when it has ended)",
+               responses={200: {"model": JobPublic}, **READ_ERRORS})
+async def cancel_job(request: Request, job_id: str, queue: QueueDep) -> Response:
+    return respond(request, await queue.cancel(job_id))
+
+
+@router.get(
+    "/{job_id}/events",
+    summary="Progress as Server-Sent Events until the job ends",
+    response_class=StreamingResponse,
+    responses={200: {"content": {"text/event-stream": {}}, "description": "`progress` events, then one `end`"},
+               **READ_ERRORS},
+)
+async def job_events(request: Request, job_id: str, queue: QueueDep, settings: SettingsDep) -> StreamingResponse:
+    """``event: progress`` with the job (no result) on every change, then ``event: end`` with the full job."""
+    await queue.get(job_id, with_result=False)  # 404 before the stream starts
+    return StreamingResponse(
+        _stream(request, queue, job_id, settings.sse_interval),
+        media_type="text/event-stream",
+        headers={"Cache-Control": "no-cache", "X-Accel-Buffering": "no"},
+    )
+
+
+def _event(name: str, job: JobPublic) -> bytes:
+    return f"event: {name}\ndata: {job.model_dump_json(exclude_none=True)}\n\n".encode()
+
+
+async def _stream(request: Request, queue: QueueDep, job_id: str, interval: float) -> AsyncIterator[bytes]:
+    events = queue.events(job_id, interval=interval).__aiter__()
+    pending: asyncio.Task[JobPublic] | None = None
+    try:
+        while True:
+            if getattr(request.app.state, "shutting_down", False):
+                return
+            pending = pending or asyncio.ensure_future(events.__anext__())
+            done, _ = await asyncio.wait({pending}, timeout=SSE_KEEPALIVE_S)
+            if not done:
+                yield b": keep-alive\n\n"
+                continue
+            try:
+                job = pending.result()
+            except StopAsyncIteration:
+                break
+            pending = None
+            if job.state.terminal:
+                break
+            yield _event("progress", job)
+        yield _event("end", await queue.get(job_id))
+    finally:
+        if pending is not None and not pending.done():
+            pending.cancel()

@@ -1,0 +1,73 @@
+"""The operator's dashboard (`GET /`) and the result viewer (`GET /v1/jobs/{id}/view`), offline: plotly's
+bundle is served from the installed package (`/static/plotly.min.js`), never from a CDN.
+
+The HTML shells carry no data and are open; the data they fetch (`/dashboard/data`, `/v1/jobs/{id}/scene`)
+needs a key when keys are set; the pages read it from the URL fragment (``#key=...``, never sent to a server).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+from fastapi import APIRouter, Request
+from starlette.responses import FileResponse, HTMLResponse, Response
+
+from service.dashboard import DashboardPublic
+from service.deps import Authorized, HistoryDep, QueueDep
+from service.errors import NotFound
+from service.negotiation import respond
+from service.responses import READ_ERRORS
+from service.scenes import ScenePublic
+
+STATIC = Path(__file__).resolve().parent.parent / "static"
+
+pages = APIRouter(include_in_schema=False)
+data = APIRouter(tags=["dashboard"], dependencies=[Authorized])
+
+
+def plotly_bundle() -> Path:
+    """The plotly.min.js shipped inside the plotly wheel (found without importing plotly)."""
+    spec = importlib.util.find_spec("plotly")
+    for root in (spec.submodule_search_locations or []) if spec else []:
+        path = Path(root) / "package_data" / "plotly.min.js"
+        if path.is_file():
+            return path
+    raise NotFound("plotly's offline bundle is not installed (pip install plotly)")
+
+
+@pages.get("/")
+async def dashboard() -> HTMLResponse:
+    return HTMLResponse((STATIC / "dashboard.html").read_text())
+
+
+@pages.get("/v1/jobs/{job_id}/view")
+async def viewer(job_id: str) -> HTMLResponse:
+    return HTMLResponse((STATIC / "viewer.html").read_text())
+
+
+@pages.get("/static/plotly.min.js")
+async def plotly_js() -> FileResponse:
+    return FileResponse(plotly_bundle(), media_type="text/javascript", headers={"Cache-Control": "max-age=86400"})
+
+
+@pages.get("/static/{name}")
+async def static(name: str) -> Response:
+    path = STATIC / name
+    if name.startswith(".") or "/" in name or not path.is_file():
+        raise NotFound(f"no static file {name!r}")
+    kinds = {".js": "text/javascript", ".css": "text/css", ".html": "text/html"}
+    return FileResponse(path, media_type=kinds.get(path.suffix, "application/octet-stream"))
+
+
+@data.get("/dashboard/data", summary="What the dashboard draws",
+          responses={200: {"model": DashboardPublic}, **READ_ERRORS})
+async def dashboard_data(request: Request, history: HistoryDep) -> Response:
+    return respond(request, await history.snapshot())
+
+
+@data.get("/v1/jobs/{job_id}/scene", summary="A job with its object, for the viewer",
+          responses={200: {"model": ScenePublic}, **READ_ERRORS})
+async def scene(request: Request, job_id: str, queue: QueueDep) -> Response:
+    job = await queue.get(job_id)
+    return respond(request, request.app.state.scenes.view(job))

@@ -1,0 +1,52 @@
+"""`/v1/robots`: the hands workers can use; register a URDF (validated by a worker, stored in the queue)."""
+
+from __future__ import annotations
+
+from fastapi import APIRouter, Request
+from starlette.responses import Response
+
+from clients.schemas import ErrorBody, RobotPublic, RobotRegister, WireModel
+from service.deps import Authorized, QueueDep, RobotsDep, SettingsDep
+from service.errors import Conflict
+from service.negotiation import body_openapi, read_model, respond
+from service.responses import ERRORS, READ_ERRORS
+
+router = APIRouter(prefix="/v1/robots", tags=["robots"], dependencies=[Authorized])
+
+
+class RobotList(WireModel):
+    """Answer of ``GET /v1/robots`` (service-local wrapper)."""
+
+    robots: list[RobotPublic]
+
+
+@router.get("", summary="Built-in and registered hands", responses={200: {"model": RobotList}, **READ_ERRORS})
+async def list_robots(request: Request, robots: RobotsDep) -> Response:
+    return respond(request, RobotList(robots=await robots.all(fresh=True)))
+
+
+@router.get("/{name}", summary="One hand: DoF, joints, limits, fingertips",
+            responses={200: {"model": RobotPublic}, **READ_ERRORS})
+async def get_robot(request: Request, name: str, robots: RobotsDep) -> Response:
+    return respond(request, await robots.get(name))
+
+
+@router.post(
+    "",
+    status_code=201,
+    summary="Register a URDF hand (validated with the hardened loader by a worker)",
+    openapi_extra=body_openapi("RobotRegister"),
+    responses={201: {"model": RobotPublic}, 409: {"model": ErrorBody, "description": "A built-in name"},
+               **ERRORS},
+)
+async def register_robot(
+    request: Request, queue: QueueDep, robots: RobotsDep, settings: SettingsDep
+) -> Response:
+    body = await read_model(request, RobotRegister, settings.max_robot_bytes)
+    existing = await robots.find(body.name)
+    if existing is not None and existing.builtin:
+        raise Conflict(f"name: {body.name!r} is a built-in hand; choose another name")
+    robot = await queue.register_robot(body, timeout=settings.robot_register_timeout)
+    robots.forget()
+    url = str(request.url_for("get_robot", name=robot.name))
+    return respond(request, robot, status=201, headers={"Location": url})

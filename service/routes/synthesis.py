@@ -1,0 +1,116 @@
+"""`POST /v1/synthesize` (wait, then 200 or 202) and `POST /v1/jobs` (202 at once)."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import time
+
+from fastapi import APIRouter, Request
+from starlette.responses import Response
+
+from clients.schemas import ErrorBody, JobCreated, JobPublic, SynthesisRequest, SynthesisResult
+from service.deps import Authorized, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
+from service.errors import Unavailable
+from service.negotiation import body_openapi, read_model, respond
+from service.responses import ERRORS
+
+router = APIRouter(prefix="/v1", tags=["synthesis"], dependencies=[Authorized])
+log = logging.getLogger("service.synthesis")
+
+# A failed job's error type → the status of a synchronous answer (anything else: 500, the worker's fault).
+JOB_ERROR_STATUS = {
+    "ValidationError": 422,
+    "InvalidInput": 422,
+    "InvalidPointCloud": 422,
+    "InfeasibleTask": 422,
+    "RobotInvalid": 422,
+    "UnknownHand": 404,
+    "UnknownRobot": 404,
+    "NotFound": 404,
+    "Cancelled": 409,
+    "DeadlineExceeded": 504,
+    "ResultExpired": 410,
+    "QueueShutdown": 503,
+    "ModelUnavailable": 503,
+}
+
+
+def job_created(request: Request, job_id: str, job: JobPublic | None = None) -> Response:
+    """202 with the job's URL (in the body and in Location)."""
+    url = str(request.url_for("get_job", job_id=job_id))
+    body = JobCreated(id=job_id, state=job.state if job else "queued", url=url)  # type: ignore[arg-type]
+    return respond(request, body, status=202, headers={"Location": url, "X-Job-ID": job_id})
+
+
+async def enqueue(
+    request: Request, queue: QueueDep, robots: RobotsDep, metrics: MetricsDep, request_id: str, kind: str,
+    settings: SettingsDep, deadline_from_timeout: bool,
+) -> tuple[SynthesisRequest, str]:
+    """Read + validate the body, check the hand, submit; returns the request and its job id."""
+    body = await read_model(request, SynthesisRequest, settings.max_body_bytes)
+    await robots.check(body)
+    deadline = time.time() + body.options.timeout if deadline_from_timeout else None
+    (job_id,) = await queue.submit([body], deadline=deadline)
+    request.state.job_id = job_id
+    request.app.state.scenes.put(job_id, body)
+    metrics.jobs_submitted.labels(kind=kind).inc()
+    log.info("job submitted", extra={"job_id": job_id, "kind": kind, "request_id": request_id})
+    return body, job_id
+
+
+@router.post(
+    "/synthesize",
+    summary="Synthesise contacts, forces and a hand pose; wait for the answer",
+    openapi_extra=body_openapi("SynthesisRequest"),
+    responses={200: {"model": SynthesisResult}, 202: {"model": JobCreated}, **ERRORS},
+)
+async def synthesize(
+    request: Request, queue: QueueDep, robots: RobotsDep, metrics: MetricsDep, settings: SettingsDep,
+    request_id: RequestIdDep,
+) -> Response:
+    """Enqueue, wait up to ``options.timeout`` (capped by the server's ``sync_wait_max``): 200 with the result
+    when it finishes in time, else 202 with the job's URL. The job's deadline is ``options.timeout`` from now."""
+    body, job_id = await enqueue(request, queue, robots, metrics, request_id, "sync", settings, True)
+    wait = min(body.options.timeout, settings.sync_wait_max)
+    job = await wait_for(request, queue, job_id, wait)
+    if not job.state.terminal:
+        return job_created(request, job_id, job)
+    metrics.observe_job(job)
+    headers = {"X-Job-ID": job_id}
+    if job.result is not None:
+        return respond(request, job.result, headers=headers)
+    error = job.error or ErrorBody(error=f"job ended {job.state.value}", type=job.state.value.capitalize())
+    status = JOB_ERROR_STATUS.get(error.type, 500)
+    if status >= 500:
+        log.warning("job failed", extra={"job_id": job_id, "type": error.type, "error": error.error})
+    return respond(request, error, status=status, headers=headers)
+
+
+async def wait_for(request: Request, queue: QueueDep, job_id: str, timeout: float) -> JobPublic:
+    """`queue.wait` in slices, giving up early (503) when the service starts shutting down."""
+    end = time.monotonic() + timeout
+    while True:
+        left = end - time.monotonic()
+        job = await queue.wait(job_id, max(0.0, min(left, 1.0)))
+        if job.state.terminal or left <= 1.0:
+            return job
+        if getattr(request.app.state, "shutting_down", False):
+            raise Unavailable(f"the service is shutting down; job {job_id} may be fetched from another replica")
+        await asyncio.sleep(0)
+
+
+@router.post(
+    "/jobs",
+    status_code=202,
+    summary="Submit a job; poll it or stream its events",
+    openapi_extra=body_openapi("SynthesisRequest"),
+    responses={202: {"model": JobCreated}, **ERRORS},
+)
+async def create_job(
+    request: Request, queue: QueueDep, robots: RobotsDep, metrics: MetricsDep, settings: SettingsDep,
+    request_id: RequestIdDep,
+) -> Response:
+    """202 with the job's URL at once (no deadline: an asynchronous caller comes back for it)."""
+    _, job_id = await enqueue(request, queue, robots, metrics, request_id, "async", settings, False)
+    return job_created(request, job_id)

@@ -1,0 +1,74 @@
+"""What the result viewer draws besides the result: the object's points, kept by the API that took the request.
+
+The queue contract returns results, not requests, so the API keeps a bounded, subsampled copy of each object
+it enqueued (at most ``MAX_VIEW_POINTS`` points, float32; least recently submitted dropped first). A job
+submitted through another API replica, or forgotten, is drawn from its result alone (contacts, forces, hand).
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from dataclasses import dataclass
+
+import numpy as np
+from pydantic import BaseModel, Field
+
+from clients.schemas import JobPublic, SynthesisRequest
+
+MAX_VIEW_POINTS = 4096
+MAX_SCENES = 256
+
+
+@dataclass
+class _Scene:
+    index: np.ndarray  # which of the request's points were kept
+    points: np.ndarray
+    normals: np.ndarray | None
+    region_mask: np.ndarray | None
+
+
+class SceneStore:
+    """job id → subsampled object, LRU-bounded (≈ 256 × 4096 × 3 × 4 B ≈ 12 MB at most)."""
+
+    def __init__(self, size: int = MAX_SCENES) -> None:
+        self.size = size
+        self._scenes: OrderedDict[str, _Scene] = OrderedDict()
+
+    def put(self, job_id: str, request: SynthesisRequest) -> None:
+        obj = request.object
+        n = obj.num_points
+        index = np.arange(n) if n <= MAX_VIEW_POINTS else np.linspace(0, n - 1, MAX_VIEW_POINTS).astype(np.int64)
+        self._scenes[job_id] = _Scene(
+            index=index,
+            points=obj.points[index].astype(np.float32),
+            normals=None if obj.normals is None else obj.normals[index].astype(np.float32),
+            region_mask=None if obj.region_mask is None else obj.region_mask[index],
+        )
+        while len(self._scenes) > self.size:
+            self._scenes.popitem(last=False)
+
+    def view(self, job: JobPublic) -> ScenePublic:
+        """The job with its object (when known) and the heatmap at the kept points."""
+        scene = self._scenes.get(job.id)
+        if scene is None:
+            return ScenePublic(job=job)
+        heatmap = None
+        if job.result is not None and job.result.heatmap is not None and len(job.result.heatmap) > scene.index.max():
+            heatmap = job.result.heatmap[scene.index].round(5).tolist()
+        return ScenePublic(
+            job=job,
+            points=scene.points.round(5).tolist(),
+            normals=None if scene.normals is None else scene.normals.round(4).tolist(),
+            region_mask=None if scene.region_mask is None else scene.region_mask.astype(int).tolist(),
+            heatmap=heatmap,
+        )
+
+
+class ScenePublic(BaseModel):
+    """Answer of ``GET /v1/jobs/{id}/scene``: the job (with result) and the object to draw it on."""
+
+    job: JobPublic
+    points: list[list[float]] | None = Field(None, description="Subsampled object points (≤ 4096), m.")
+    normals: list[list[float]] | None = None
+    region_mask: list[int] | None = None
+    heatmap: list[float] | None = Field(None, description="Contact heatmap at those points (return_heatmap).")

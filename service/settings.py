@@ -1,0 +1,92 @@
+"""The service's one settings object (pydantic-settings, env prefix ``MANI_``), validated at start-up.
+
+Lists (``MANI_API_KEYS``, ``MANI_OPEN_PATHS``) are comma-separated. Nothing here reads the environment after
+`Settings()` is built: the app, the queue and the CLI take this object explicitly.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Annotated, Literal
+
+from pydantic import Field, field_validator
+from pydantic_settings import BaseSettings, NoDecode, SettingsConfigDict
+
+from clients.codec import MAX_BODY_BYTES
+from clients.schemas import MAX_BATCH_SIZE
+
+if TYPE_CHECKING:
+    from workers.settings import QueueSettings
+
+
+class Settings(BaseSettings):
+    """Everything the HTTP service can be configured with (env ``MANI_<FIELD>``)."""
+
+    model_config = SettingsConfigDict(env_prefix="MANI_", extra="ignore", validate_default=True)
+
+    # --- where to listen
+    host: str = "127.0.0.1"
+    port: int = Field(8000, ge=0, le=65535)
+
+    # --- queue: embedded workers (default) or Redis Streams (scale-out; workers run as `mani worker`)
+    redis_url: str | None = Field(None, description="Redis URL; unset: in-process queue + embedded workers.")
+    workers: int = Field(2, ge=1, le=64, description="Embedded worker processes (ignored with Redis).")
+    # Other queue/worker knobs (MANI_MAX_QUEUE, MANI_BATCH_SIZE, MANI_RESULT_TTL, ...) are read by
+    # `workers.settings.QueueSettings`; `queue_settings()` hands it the two above.
+
+    # --- auth and rate limits
+    api_keys: Annotated[list[str], NoDecode] = Field(
+        default_factory=list, description="Bearer tokens; empty: no auth. Comma-separated in the env."
+    )
+    open_paths: Annotated[list[str], NoDecode] = Field(
+        default_factory=lambda: ["/healthz", "/readyz", "/metrics"],
+        description="Paths served without a key when keys are set (the HTML shells are always open).",
+    )
+    rate_limit_per_s: float = Field(100.0, ge=0, description="Token refill per key (or client IP); 0: off.")
+    rate_limit_burst: int = Field(200, ge=1, description="Token bucket size.")
+
+    # --- request handling
+    sync_wait_max: float = Field(30.0, gt=0, le=600, description="Cap on how long /v1/synthesize waits.")
+    max_body_bytes: int = Field(MAX_BODY_BYTES, ge=1024, le=MAX_BODY_BYTES, description="Request body limit.")
+    max_robot_bytes: int = Field(4 * 1024 * 1024, ge=1024, description="Body limit of POST /v1/robots.")
+    max_batch_size: int = Field(MAX_BATCH_SIZE, ge=1, le=MAX_BATCH_SIZE)
+    batch_page_max: int = Field(1000, ge=1, le=MAX_BATCH_SIZE, description="Largest page of GET /v1/batches.")
+    robots_cache_s: float = Field(5.0, ge=0, description="How long the hand list is cached for 404 checks.")
+    sse_interval: float = Field(0.25, gt=0, le=10, description="Polling interval of the events stream, s.")
+    robot_register_timeout: float = Field(30.0, gt=0, le=600)
+
+    # --- observability
+    log_level: str = Field("INFO", pattern=r"^(DEBUG|INFO|WARNING|ERROR|CRITICAL)$")
+    log_format: Literal["json", "text"] = "json"
+    dashboard_sample_s: float = Field(2.0, gt=0, le=60, description="Dashboard time-series sampling period.")
+    dashboard_history: int = Field(900, ge=10, le=100_000, description="Samples kept for the dashboard.")
+
+    @field_validator("api_keys", "open_paths", mode="before")
+    @classmethod
+    def _split_csv(cls, value: object) -> object:
+        if isinstance(value, str):
+            return [part.strip() for part in value.split(",") if part.strip()]
+        return value
+
+    @field_validator("api_keys")
+    @classmethod
+    def _keys_are_long_enough(cls, value: list[str]) -> list[str]:
+        short = [k for k in value if len(k) < 8]
+        if short:
+            raise ValueError(f"{len(short)} API key(s) shorter than 8 characters")
+        return value
+
+    @field_validator("log_level", mode="before")
+    @classmethod
+    def _upper(cls, value: object) -> object:
+        return value.upper() if isinstance(value, str) else value
+
+    @property
+    def auth_enabled(self) -> bool:
+        """Whether `/v1` routes need a bearer key."""
+        return bool(self.api_keys)
+
+    def queue_settings(self) -> QueueSettings:
+        """The queue's settings: env ``MANI_*`` for its own knobs, our Redis URL and worker count on top."""
+        from workers.settings import QueueSettings
+
+        return QueueSettings(redis_url=self.redis_url, concurrency=self.workers)
