@@ -122,11 +122,29 @@ def _shadow() -> Hand:
     )  # fmt: skip
 
 
+def _barrett() -> Hand:
+    desc = parse_urdf((DESCRIPTIONS / "barrett_bh8.urdf").read_bytes())
+    tips = ["bh_f1_distal", "bh_f2_distal", "bh_f3_distal"]
+    offsets = np.array([[0.0, -0.009, 0.045]] * 3)  # pads: flexion side of the distal links, near the tip
+    rest = {"bh_j11": 0.0, "bh_j12": 0.05, "bh_j22": 0.05, "bh_j32": 0.05}
+    return Hand(desc, name="barrett", fingertips=tips, tip_offsets=offsets, rest=rest, approach_axis=[0, 0, 1.0])
+
+
+def _kinova3f() -> Hand:
+    desc = parse_urdf((DESCRIPTIONS / "kinova_3f.urdf").read_bytes())
+    tips = ["k3f_f1_distal", "k3f_f2_distal", "k3f_f3_distal"]
+    offsets = np.array([[0.0, -0.005, 0.036]] * 3)
+    rest = {"k3f_j11": 0.1, "k3f_j21": 0.1, "k3f_j31": 0.1}
+    return Hand(desc, name="kinova3f", fingertips=tips, tip_offsets=offsets, rest=rest, approach_axis=[0, 0, 1.0])
+
+
 BUILTINS: dict[str, Callable[[], Hand]] = {
     "allegro": _allegro,
     "panda_gripper": _panda_gripper,
     "leap": _leap,
     "shadow": _shadow,
+    "barrett": _barrett,
+    "kinova3f": _kinova3f,
 }
 
 
