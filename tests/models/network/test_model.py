@@ -1,0 +1,94 @@
+"""Configs, the CVAE's parameters and gradients, the loss of Eq. (3)."""
+
+from __future__ import annotations
+
+import pytest
+import torch
+
+from models.network import (
+    PROPERTY_NAMES,
+    NetworkConfig,
+    ObjectTensors,
+    count_parameters,
+    create_model,
+    cvae_loss,
+    get_config,
+    list_configs,
+)
+from models.network.loss import kl_to_standard_normal
+from models.network.properties import PropertyEncoder, property_tensors
+
+
+def random_batch(b: int, n: int, seed: int = 0) -> tuple[ObjectTensors, torch.Tensor, torch.Tensor, torch.Tensor]:
+    g = torch.Generator().manual_seed(seed)
+    normals = torch.nn.functional.normalize(torch.randn(b, n, 3, generator=g), dim=-1)
+    obj = ObjectTensors(
+        xyz=torch.rand(b, n, 3, generator=g) - 0.5,
+        normals=normals,
+        motion=0.1 * torch.randn(b, n, 3, generator=g),
+        mask=(torch.rand(b, n, generator=g) > 0.3).float(),
+        prop_values=torch.randn(b, len(PROPERTY_NAMES), generator=g),
+        prop_mask=torch.ones(b, len(PROPERTY_NAMES), dtype=torch.bool),
+        scale=torch.full((b,), 0.2),
+    )
+    hand = torch.randn(b, 128, 6, generator=g)
+    return obj, hand, torch.rand(b, n, generator=g), 0.1 * torch.randn(b, n, 3, generator=g)
+
+
+def test_registry() -> None:
+    assert {"paper", "cpu"} <= set(list_configs())
+    with pytest.raises(KeyError, match="unknown network config 'nope'"):
+        create_model("nope")
+    for name in list_configs():
+        cfg = get_config(name)
+        assert NetworkConfig.from_dict(cfg.to_dict()) == cfg
+
+
+def test_parameter_counts() -> None:
+    paper, cpu = count_parameters(create_model("paper")), count_parameters(create_model("cpu"))
+    assert 4.5e6 <= paper <= 5.5e6  # "about 5 million parameters"
+    assert cpu < paper / 3
+
+
+def test_create_model_is_seeded() -> None:
+    a, b = create_model("cpu", seed=3), create_model("cpu", seed=3)
+    for (ka, va), (_, vb) in zip(a.state_dict().items(), b.state_dict().items(), strict=True):
+        assert torch.equal(va, vb), ka
+
+
+def test_training_forward_and_gradients_reach_every_parameter() -> None:
+    model = create_model("cpu", seed=0)
+    obj, hand, heat, force = random_batch(2, 600)
+    out = model(obj, hand, heat, force, generator=torch.Generator().manual_seed(0))
+    assert out["heat"].shape == (2, 600) and out["force"].shape == (2, 600, 3)
+    assert out["mu"].shape == (2, 64) and out["logvar"].shape == (2, 64)
+    loss = cvae_loss(out, heat, force, model.config)["loss"]
+    loss.backward()
+    for name, p in model.named_parameters():
+        assert p.grad is not None, f"no gradient reaches {name}"
+        assert torch.isfinite(p.grad).all(), name
+        assert p.grad.abs().sum() > 0, f"zero gradient for {name}"
+
+
+def test_property_encoder_masks_missing_properties() -> None:
+    enc = PropertyEncoder()
+    values, mask = property_tensors([{"friction": 0.3}, {"friction": 0.3, "youngs_modulus": 1e5}])
+    gamma = enc(values, mask)
+    assert gamma.shape == (2, 10)
+    only_friction = enc.mlps[0](values[:1, :1])
+    torch.testing.assert_close(gamma[0], only_friction[0])
+    # a missing property's value does not matter
+    values2 = values.clone()
+    values2[0, 4] = 123.0
+    torch.testing.assert_close(enc(values2, mask)[0], gamma[0])
+    empty_v, empty_m = property_tensors([{}])
+    assert torch.equal(enc(empty_v, empty_m), torch.zeros(1, 10))
+
+
+def test_loss_weights_and_kl() -> None:
+    mu, logvar = torch.zeros(3, 64), torch.zeros(3, 64)
+    assert kl_to_standard_normal(mu, logvar).item() == 0.0
+    out = {"heat": torch.ones(1, 4), "force": torch.zeros(1, 4, 3), "mu": mu[:1] + 1.0, "logvar": logvar[:1]}
+    terms = cvae_loss(out, torch.zeros(1, 4), torch.ones(1, 4, 3), get_config("cpu"), lambda_kl=0.5)
+    assert terms["heat"].item() == 1.0 and terms["force"].item() == 1.0 and terms["kl"].item() == 32.0
+    assert terms["loss"].item() == pytest.approx(1.0 + 1.0 + 16.0)
