@@ -1,0 +1,17 @@
+"""Object geometry: KD-tree signed distance, mass properties, rigid fits, fcl verification of hand poses."""
+
+from models.geometry.collision import hand_object_penetration, hand_self_collision
+from models.geometry.object import DEFAULT_DENSITY, InvalidPointCloud, MassProperties, ObjectGeometry
+from models.geometry.rigid import RigidFit, fit_rigid_motion, rotation_vector
+
+__all__ = [
+    "DEFAULT_DENSITY",
+    "InvalidPointCloud",
+    "MassProperties",
+    "ObjectGeometry",
+    "RigidFit",
+    "fit_rigid_motion",
+    "hand_object_penetration",
+    "hand_self_collision",
+    "rotation_vector",
+]

@@ -1,0 +1,159 @@
+"""Exact(er) verification: hand–object penetration depth and hand self-collision depth, with python-fcl.
+
+fcl answers *whether* two BVH meshes intersect (its distance query returns 0 for penetrating BVH pairs, so it
+gives no depth). We use it as the narrow-phase test per hand body, then measure depth on the bodies that hit:
+
+- hand → object: the largest depth of the hand body's surface samples (its vertices + ``BODY_SAMPLES`` area
+  samples, seed 0) inside the object's watertight mesh (exact mesh signed distance, trimesh);
+- object → hand: the largest depth of object points (cloud + mesh vertices) inside the body's convex hull
+  (half-space distance, exact for a convex body, an over-estimate for a non-convex one).
+
+Depth = the larger of the two. Its error is bounded by the sample spacing (a few mm² per sample on our hands):
+e.g. a sphere of radius r pushed d into a box face reads d within ~s²/(2r) (test: < 0.5 mm).
+Self-collision: body pairs on different branches or more than ``ADJACENT_HOPS`` apart, not already touching at
+the rest pose; depth = the larger depth of either body's samples inside the other's convex hull.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import fcl
+import numpy as np
+import torch
+import trimesh
+
+from models.geometry.object import ObjectGeometry
+from models.robots.hand import ADJACENT_HOPS, Hand
+
+BODY_SAMPLES = 600
+
+
+@dataclass
+class _BodyGeom:
+    name: str
+    bvh: fcl.BVHModel
+    samples: np.ndarray  # (k, 3) body frame
+    planes: np.ndarray  # (f, 4) hull half-spaces n·x <= d, body frame
+
+
+def _bvh(mesh: trimesh.Trimesh) -> fcl.BVHModel:
+    m = fcl.BVHModel()
+    m.beginModel(len(mesh.vertices), len(mesh.faces))
+    m.addSubModel(np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int32))
+    m.endModel()
+    return m
+
+
+def _planes(mesh: trimesh.Trimesh) -> np.ndarray:
+    hull = mesh.convex_hull
+    n = np.asarray(hull.face_normals)
+    d = np.einsum("ij,ij->i", n, np.asarray(hull.triangles_center))
+    return np.hstack([n, d[:, None]])
+
+
+def _inside_depth(planes: np.ndarray, x: np.ndarray) -> float:
+    """Largest depth (≥ 0) of points x (k, 3) inside the convex region n·x <= d."""
+    if len(x) == 0:
+        return 0.0
+    slack = planes[:, 3][None] - x @ planes[:, :3].T  # (k, f) > 0 inside each half-space
+    depth = slack.min(axis=1)
+    return float(max(depth.max(), 0.0))
+
+
+def _bodies(hand: Hand) -> list[_BodyGeom]:
+    cache = hand.__dict__.setdefault("_verify_cache", {})
+    if "bodies" not in cache:
+        out = []
+        for name, mesh in hand.collision_meshes.items():
+            if len(mesh.faces) == 0:
+                continue
+            samples, _ = trimesh.sample.sample_surface(mesh, BODY_SAMPLES, seed=0)
+            pts = np.vstack([np.asarray(mesh.vertices), samples])
+            out.append(_BodyGeom(name, _bvh(mesh), pts, _planes(mesh)))
+        cache["bodies"] = out
+    return cache["bodies"]
+
+
+def _poses(hand: Hand, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
+    d = torch.float64
+    poses = hand.link_poses(
+        torch.as_tensor(np.asarray(palm_pos, dtype=np.float64).reshape(1, 3), dtype=d),
+        torch.as_tensor(np.asarray(palm_quat, dtype=np.float64).reshape(1, 4), dtype=d),
+        torch.as_tensor(np.asarray(q, dtype=np.float64).reshape(1, hand.dof), dtype=d),
+    )
+    return {k: v[0].numpy() for k, v in poses.items()}
+
+
+def _obj(geom: fcl.CollisionGeometry, T: np.ndarray) -> fcl.CollisionObject:
+    return fcl.CollisionObject(geom, fcl.Transform(T[:3, :3], T[:3, 3]))
+
+
+def _hits(a: fcl.CollisionObject, b: fcl.CollisionObject) -> bool:
+    return bool(fcl.collide(a, b, fcl.CollisionRequest(), fcl.CollisionResult()))
+
+
+def hand_object_penetration(
+    hand: Hand, geometry: ObjectGeometry, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray
+) -> float:
+    """Penetration depth (m, ≥ 0) between the hand's collision meshes and the object's watertight mesh."""
+    poses = _poses(hand, palm_pos, palm_quat, q)
+    mesh = geometry.mesh
+    obj = _obj(_bvh(mesh), np.eye(4))
+    obj_pts = np.vstack([geometry.points, np.asarray(mesh.vertices)])
+    depth = 0.0
+    for body in _bodies(hand):
+        T = poses[body.name]
+        if not _hits(_obj(body.bvh, T), obj):
+            continue
+        world = body.samples @ T[:3, :3].T + T[:3, 3]
+        sd = trimesh.proximity.signed_distance(mesh, world)  # positive inside
+        depth = max(depth, float(max(sd.max(), 0.0)))
+        local = (obj_pts - T[:3, 3]) @ T[:3, :3]
+        depth = max(depth, _inside_depth(body.planes, local))
+    return depth
+
+
+def self_collision_body_pairs(hand: Hand) -> list[tuple[int, int]]:
+    """Index pairs into the verification bodies that are checked for self-collision (see module doc)."""
+    cache = hand.__dict__.setdefault("_verify_cache", {})
+    if "pairs" not in cache:
+        bodies = _bodies(hand)
+        tree = hand.tree
+        idx = [tree.body_names.index(b.name) for b in bodies]
+        depth = tree.ancestors.sum(1)
+        rest = _poses(hand, np.zeros(3), np.array([1.0, 0, 0, 0]), hand.rest)
+        pairs = []
+        for i in range(len(bodies)):
+            for j in range(i + 1, len(bodies)):
+                a, b = idx[i], idx[j]
+                related = tree.ancestors[a, b] or tree.ancestors[b, a]
+                if related and abs(int(depth[a]) - int(depth[b])) <= ADJACENT_HOPS:
+                    continue
+                if _pair_depth(bodies[i], bodies[j], rest) > 0:
+                    continue  # touching at rest by design (e.g. neighbouring knuckles)
+                pairs.append((i, j))
+        cache["pairs"] = pairs
+    return cache["pairs"]
+
+
+def _pair_depth(a: _BodyGeom, b: _BodyGeom, poses: dict[str, np.ndarray]) -> float:
+    Ta, Tb = poses[a.name], poses[b.name]
+    if not _hits(_obj(a.bvh, Ta), _obj(b.bvh, Tb)):
+        return 0.0
+    T_ba = np.linalg.inv(Tb) @ Ta  # a's frame -> b's frame
+    T_ab = np.linalg.inv(T_ba)
+    d1 = _inside_depth(b.planes, a.samples @ T_ba[:3, :3].T + T_ba[:3, 3])
+    d2 = _inside_depth(a.planes, b.samples @ T_ab[:3, :3].T + T_ab[:3, 3])
+    return max(d1, d2, 1e-9)
+
+
+def hand_self_collision(hand: Hand, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray) -> float:
+    """Self-collision depth (m, 0 if none) over the checked body pairs."""
+    bodies = _bodies(hand)
+    poses = _poses(hand, palm_pos, palm_quat, q)
+    depth = 0.0
+    for i, j in self_collision_body_pairs(hand):
+        d = _pair_depth(bodies[i], bodies[j], poses)
+        depth = max(depth, d if d > 1e-9 else 0.0)
+    return depth
