@@ -77,7 +77,13 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
     app.state.shutting_down = False
     errors.install(app)
     for router in (
-        health.router, synthesis.router, jobs.router, batches.router, robots.router, pages.data, pages.pages
+        health.router,
+        synthesis.router,
+        jobs.router,
+        batches.router,
+        robots.router,
+        pages.data,
+        pages.pages,
     ):
         app.include_router(router)
     app.add_middleware(RequestContext, metrics=metrics, state=app.state)

@@ -138,14 +138,19 @@ def from_exception(exc: Exception) -> ApiError:
     if isinstance(exc, QueueUnavailable):
         return Unavailable(str(exc) or "queue unavailable")
     if isinstance(exc, StarletteHTTPException):
-        names = {404: NotFound, 405: ApiError, 400: BadRequest, 401: Unauthorized, 413: PayloadTooLarge}
-        err = ApiError(str(exc.detail))
+        names: dict[int, str] = {
+            400: "BadRequest",
+            401: "Unauthorized",
+            404: "NotFound",
+            405: "MethodNotAllowed",
+            413: "PayloadTooLarge",
+            415: "UnsupportedMediaType",
+        }
+        err = ApiError(str(exc.detail), headers=dict(exc.headers or {}))
         err.status = exc.status_code
-        err.type = names.get(exc.status_code, ApiError).type if exc.status_code != 405 else "MethodNotAllowed"
-        err.headers = dict(exc.headers or {})
+        err.type = names.get(exc.status_code, "HTTPError")
         return err
-    error = ApiError("internal error")
-    return error
+    return ApiError("internal error")
 
 
 async def handle(request: Request, exc: Exception) -> Response:

@@ -40,18 +40,31 @@ async def create_batch(
     limit = min(100, len(job_ids))
     items = [BatchItem(index=i, job_id=j, state=JobState.QUEUED) for i, j in enumerate(job_ids[:limit])]
     batch = BatchPublic(
-        id=batch_id, total=len(job_ids), counts={JobState.QUEUED: len(job_ids)}, done=False, items=items,
-        offset=0, limit=limit, created_at=time.time(),
+        id=batch_id,
+        total=len(job_ids),
+        counts={JobState.QUEUED: len(job_ids)},
+        done=False,
+        items=items,
+        offset=0,
+        limit=limit,
+        created_at=time.time(),
     )
     url = str(request.url_for("get_batch", batch_id=batch_id))
     return respond(request, batch, status=202, headers={"Location": url})
 
 
-@router.get("/{batch_id}", summary="Counts by state and one page of items (results when done)",
-            responses={200: {"model": BatchPublic}, **READ_ERRORS})
+@router.get(
+    "/{batch_id}",
+    summary="Counts by state and one page of items (results when done)",
+    responses={200: {"model": BatchPublic}, **READ_ERRORS},
+)
 async def get_batch(
-    request: Request, batch_id: str, queue: QueueDep, settings: SettingsDep,
-    offset: int = Query(0, ge=0), limit: int = Query(100, ge=1, le=1000),
+    request: Request,
+    batch_id: str,
+    queue: QueueDep,
+    settings: SettingsDep,
+    offset: int = Query(0, ge=0),
+    limit: int = Query(100, ge=1, le=1000),
 ) -> Response:
     job_ids = await queue.batch_job_ids(batch_id)
     limit = min(limit, settings.batch_page_max)

@@ -21,8 +21,11 @@ async def healthz(request: Request) -> Response:
     return respond(request, HealthPublic(backend=getattr(queue, "backend", "none"), version=VERSION))
 
 
-@router.get("/readyz", summary="Readiness: queue answers, a live worker has its model loaded",
-            responses={200: {"model": ReadyPublic}, 503: {"model": ReadyPublic, "description": "Not ready"}})
+@router.get(
+    "/readyz",
+    summary="Readiness: queue answers, a live worker has its model loaded",
+    responses={200: {"model": ReadyPublic}, 503: {"model": ReadyPublic, "description": "Not ready"}},
+)
 async def readyz(request: Request, queue: QueueDep) -> Response:
     try:
         up = await queue.ping()
@@ -32,14 +35,27 @@ async def readyz(request: Request, queue: QueueDep) -> Response:
         return respond(request, body, status=503)
     loaded = any(w.model_loaded for w in workers)
     ready = up and loaded
-    detail = None if ready else ("queue does not answer" if not up else
-                                 "no live worker" if not workers else "no live worker has its model loaded")
+    detail = (
+        None
+        if ready
+        else (
+            "queue does not answer"
+            if not up
+            else "no live worker"
+            if not workers
+            else "no live worker has its model loaded"
+        )
+    )
     body = ReadyPublic(ready=ready, queue=up, workers=len(workers), model_loaded=loaded, detail=detail)
     return respond(request, body, status=200 if ready else 503, headers=None if ready else {"Retry-After": "5"})
 
 
-@router.get("/metrics", summary="Prometheus metrics", response_class=Response,
-            responses={200: {"content": {CONTENT_TYPE_LATEST: {}}}, **errors(401)})
+@router.get(
+    "/metrics",
+    summary="Prometheus metrics",
+    response_class=Response,
+    responses={200: {"content": {CONTENT_TYPE_LATEST: {}}}, **errors(401)},
+)
 async def metrics(queue: QueueDep, collectors: MetricsDep) -> Response:
     await collectors.refresh(queue)
     return Response(collectors.render(), media_type=CONTENT_TYPE_LATEST)

@@ -30,16 +30,22 @@ async def list_jobs(request: Request, queue: QueueDep, limit: int = Query(50, ge
     return respond(request, JobList(jobs=await queue.list_recent(limit=limit)))
 
 
-@router.get("/{job_id}", summary="A job: state, stage, progress, timings, result or error",
-            responses={200: {"model": JobPublic}, **READ_ERRORS})
+@router.get(
+    "/{job_id}",
+    summary="A job: state, stage, progress, timings, result or error",
+    responses={200: {"model": JobPublic}, **READ_ERRORS},
+)
 async def get_job(request: Request, job_id: str, queue: QueueDep, metrics: MetricsDep) -> Response:
     job = await queue.get(job_id)
     metrics.observe_job(job)
     return respond(request, job)
 
 
-@router.delete("/{job_id}", summary="Cancel a queued or running job (no-op when it has ended)",
-               responses={200: {"model": JobPublic}, **READ_ERRORS})
+@router.delete(
+    "/{job_id}",
+    summary="Cancel a queued or running job (no-op when it has ended)",
+    responses={200: {"model": JobPublic}, **READ_ERRORS},
+)
 async def cancel_job(request: Request, job_id: str, queue: QueueDep) -> Response:
     return respond(request, await queue.cancel(job_id))
 
@@ -48,8 +54,10 @@ async def cancel_job(request: Request, job_id: str, queue: QueueDep) -> Response
     "/{job_id}/events",
     summary="Progress as Server-Sent Events until the job ends",
     response_class=StreamingResponse,
-    responses={200: {"content": {"text/event-stream": {}}, "description": "`progress` events, then one `end`"},
-               **READ_ERRORS},
+    responses={
+        200: {"content": {"text/event-stream": {}}, "description": "`progress` events, then one `end`"},
+        **READ_ERRORS,
+    },
 )
 async def job_events(request: Request, job_id: str, queue: QueueDep, settings: SettingsDep) -> StreamingResponse:
     """``event: progress`` with the job (no result) on every change, then ``event: end`` with the full job."""

@@ -60,14 +60,18 @@ async def static(name: str) -> Response:
     return FileResponse(path, media_type=kinds.get(path.suffix, "application/octet-stream"))
 
 
-@data.get("/dashboard/data", summary="What the dashboard draws",
-          responses={200: {"model": DashboardPublic}, **READ_ERRORS})
+@data.get(
+    "/dashboard/data", summary="What the dashboard draws", responses={200: {"model": DashboardPublic}, **READ_ERRORS}
+)
 async def dashboard_data(request: Request, history: HistoryDep) -> Response:
     return respond(request, await history.snapshot())
 
 
-@data.get("/v1/jobs/{job_id}/scene", summary="A job with its object, for the viewer",
-          responses={200: {"model": ScenePublic}, **READ_ERRORS})
+@data.get(
+    "/v1/jobs/{job_id}/scene",
+    summary="A job with its object, for the viewer",
+    responses={200: {"model": ScenePublic}, **READ_ERRORS},
+)
 async def scene(request: Request, job_id: str, queue: QueueDep) -> Response:
     job = await queue.get(job_id)
     return respond(request, request.app.state.scenes.view(job))

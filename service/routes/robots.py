@@ -25,8 +25,11 @@ async def list_robots(request: Request, robots: RobotsDep) -> Response:
     return respond(request, RobotList(robots=await robots.all(fresh=True)))
 
 
-@router.get("/{name}", summary="One hand: DoF, joints, limits, fingertips",
-            responses={200: {"model": RobotPublic}, **READ_ERRORS})
+@router.get(
+    "/{name}",
+    summary="One hand: DoF, joints, limits, fingertips",
+    responses={200: {"model": RobotPublic}, **READ_ERRORS},
+)
 async def get_robot(request: Request, name: str, robots: RobotsDep) -> Response:
     return respond(request, await robots.get(name))
 
@@ -36,12 +39,9 @@ async def get_robot(request: Request, name: str, robots: RobotsDep) -> Response:
     status_code=201,
     summary="Register a URDF hand (validated with the hardened loader by a worker)",
     openapi_extra=body_openapi("RobotRegister"),
-    responses={201: {"model": RobotPublic}, 409: {"model": ErrorBody, "description": "A built-in name"},
-               **ERRORS},
+    responses={201: {"model": RobotPublic}, 409: {"model": ErrorBody, "description": "A built-in name"}, **ERRORS},
 )
-async def register_robot(
-    request: Request, queue: QueueDep, robots: RobotsDep, settings: SettingsDep
-) -> Response:
+async def register_robot(request: Request, queue: QueueDep, robots: RobotsDep, settings: SettingsDep) -> Response:
     body = await read_model(request, RobotRegister, settings.max_robot_bytes)
     existing = await robots.find(body.name)
     if existing is not None and existing.builtin:

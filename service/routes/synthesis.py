@@ -44,8 +44,14 @@ def job_created(request: Request, job_id: str, job: JobPublic | None = None) -> 
 
 
 async def enqueue(
-    request: Request, queue: QueueDep, robots: RobotsDep, metrics: MetricsDep, request_id: str, kind: str,
-    settings: SettingsDep, deadline_from_timeout: bool,
+    request: Request,
+    queue: QueueDep,
+    robots: RobotsDep,
+    metrics: MetricsDep,
+    request_id: str,
+    kind: str,
+    settings: SettingsDep,
+    deadline_from_timeout: bool,
 ) -> tuple[SynthesisRequest, str]:
     """Read + validate the body, check the hand, submit; returns the request and its job id."""
     body = await read_model(request, SynthesisRequest, settings.max_body_bytes)
@@ -66,7 +72,11 @@ async def enqueue(
     responses={200: {"model": SynthesisResult}, 202: {"model": JobCreated}, **ERRORS},
 )
 async def synthesize(
-    request: Request, queue: QueueDep, robots: RobotsDep, metrics: MetricsDep, settings: SettingsDep,
+    request: Request,
+    queue: QueueDep,
+    robots: RobotsDep,
+    metrics: MetricsDep,
+    settings: SettingsDep,
     request_id: RequestIdDep,
 ) -> Response:
     """Enqueue, wait up to ``options.timeout`` (capped by the server's ``sync_wait_max``): 200 with the result
@@ -108,7 +118,11 @@ async def wait_for(request: Request, queue: QueueDep, job_id: str, timeout: floa
     responses={202: {"model": JobCreated}, **ERRORS},
 )
 async def create_job(
-    request: Request, queue: QueueDep, robots: RobotsDep, metrics: MetricsDep, settings: SettingsDep,
+    request: Request,
+    queue: QueueDep,
+    robots: RobotsDep,
+    metrics: MetricsDep,
+    settings: SettingsDep,
     request_id: RequestIdDep,
 ) -> Response:
     """202 with the job's URL at once (no deadline: an asynchronous caller comes back for it)."""

@@ -30,8 +30,14 @@ from clients.schemas import (
 from workers.queue import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
 
 HAND = RobotPublic(
-    name="fake_hand", builtin=True, dof=2, joint_names=["a", "b"], lower=[0.0, 0.0], upper=[1.0, 1.0],
-    fingertips=["tip_a", "tip_b"], source="tests",
+    name="fake_hand",
+    builtin=True,
+    dof=2,
+    joint_names=["a", "b"],
+    lower=[0.0, 0.0],
+    upper=[1.0, 1.0],
+    fingertips=["tip_a", "tip_b"],
+    source="tests",
 )
 
 
@@ -40,15 +46,34 @@ def fake_result(request: SynthesisRequest) -> SynthesisResult:
     contacts = points[[0, len(points) // 2]]
     normals = np.tile([0.0, 0.0, 1.0], (2, 1))
     proposal = Proposal(
-        contact_points=contacts, contact_normals=normals, forces=-normals, fingertips=list(HAND.fingertips),
-        palm_position=points.mean(axis=0) + [0, 0, 0.1], palm_quaternion=np.array([1.0, 0, 0, 0]),
-        joint_names=list(HAND.joint_names), joint_values=np.array([0.1, 0.2]),
-        quality=Quality(success=True, converged=True, reason="converged", iterations=3, wrench_residual=1e-8,
-                        max_tip_distance=0.001, penetration_depth=0.0, self_collision_depth=0.0, epsilon=0.1),
+        contact_points=contacts,
+        contact_normals=normals,
+        forces=-normals,
+        fingertips=list(HAND.fingertips),
+        palm_position=points.mean(axis=0) + np.array([0, 0, 0.1]),
+        palm_quaternion=np.array([1.0, 0, 0, 0]),
+        joint_names=list(HAND.joint_names),
+        joint_values=np.array([0.1, 0.2]),
+        quality=Quality(
+            success=True,
+            converged=True,
+            reason="converged",
+            iterations=3,
+            wrench_residual=1e-8,
+            max_tip_distance=0.001,
+            penetration_depth=0.0,
+            self_collision_depth=0.0,
+            epsilon=0.1,
+        ),
     )
     heatmap = np.linspace(0, 1, len(points)) if request.options.return_heatmap else None
-    return SynthesisResult(hand=request.robot.name or "inline", model_version="fake", proposals=[proposal],
-                           heatmap=heatmap, timings={"network": 0.01, "refinement": 0.02})
+    return SynthesisResult(
+        hand=request.robot.name or "inline",
+        model_version="fake",
+        proposals=[proposal],
+        heatmap=heatmap,
+        timings={"network": 0.01, "refinement": 0.02},
+    )
 
 
 class FakeQueue(JobQueue):
@@ -77,16 +102,18 @@ class FakeQueue(JobQueue):
     async def ping(self) -> bool:
         return not self.down
 
-    async def submit(self, requests: list[SynthesisRequest], *, batch_id: str | None = None,
-                     deadline: float | None = None) -> list[str]:
+    async def submit(
+        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None
+    ) -> list[str]:
         self._check()
         if self.full:
             raise QueueFull("fake queue is full", retry_after=2.5)
         ids = []
         for request in requests:
             job_id = uuid.uuid4().hex
-            self.jobs[job_id] = JobPublic(id=job_id, state=JobState.QUEUED, created_at=time.time(),
-                                          deadline=deadline, batch_id=batch_id)
+            self.jobs[job_id] = JobPublic(
+                id=job_id, state=JobState.QUEUED, created_at=time.time(), deadline=deadline, batch_id=batch_id
+            )
             self.requests[job_id] = request
             ids.append(job_id)
             if not self.hold:
@@ -145,15 +172,30 @@ class FakeQueue(JobQueue):
     async def stats(self) -> QueueStats:
         self._check()
         by_state = {s: sum(1 for j in self.jobs.values() if j.state is s) for s in JobState}
-        return QueueStats(depth=by_state[JobState.QUEUED], running=by_state[JobState.RUNNING], by_state=by_state,
-                          completed_total=by_state[JobState.SUCCEEDED], failed_total=by_state[JobState.FAILED],
-                          dead_letters=0, workers=1)
+        return QueueStats(
+            depth=by_state[JobState.QUEUED],
+            running=by_state[JobState.RUNNING],
+            by_state=by_state,
+            completed_total=by_state[JobState.SUCCEEDED],
+            failed_total=by_state[JobState.FAILED],
+            dead_letters=0,
+            workers=1,
+        )
 
     async def workers(self) -> list[WorkerPublic]:
         self._check()
         now = time.time()
-        return [WorkerPublic(id="w1", host="localhost", pid=1, started_at=now, last_heartbeat=now,
-                             model_loaded=True, model_version="fake")]
+        return [
+            WorkerPublic(
+                id="w1",
+                host="localhost",
+                pid=1,
+                started_at=now,
+                last_heartbeat=now,
+                model_loaded=True,
+                model_version="fake",
+            )
+        ]
 
     async def dead_letters(self, limit: int = 50) -> list[DeadLetter]:
         return []
@@ -165,7 +207,15 @@ class FakeQueue(JobQueue):
     async def register_robot(self, robot: RobotRegister, timeout: float = 30.0) -> RobotPublic:
         if "<robot" not in robot.urdf:
             raise RobotInvalid("malformed URDF: no <robot> element")
-        public = RobotPublic(name=robot.name, builtin=False, dof=0, joint_names=[], lower=[], upper=[],
-                             fingertips=list(robot.fingertips), source="user")
+        public = RobotPublic(
+            name=robot.name,
+            builtin=False,
+            dof=0,
+            joint_names=[],
+            lower=[],
+            upper=[],
+            fingertips=list(robot.fingertips),
+            source="user",
+        )
         self.robots.append(public)
         return public

@@ -1,0 +1,82 @@
+"""`mani serve`: the HTTP API, with embedded workers (default) or in front of a Redis Streams queue.
+
+Kept light at import time: FastAPI, uvicorn and the queue are imported when the command runs.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+EXAMPLE = """examples:
+  mani serve                                  # API + 2 embedded worker processes on 127.0.0.1:8000
+  mani serve --port 9000 --workers 4
+  mani serve --redis redis://localhost:6379/0 # API only; run `mani worker --redis ...` elsewhere
+environment: MANI_HOST, MANI_PORT, MANI_WORKERS, MANI_REDIS_URL, MANI_API_KEYS, MANI_RATE_LIMIT_PER_S, ..."""
+
+
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add the ``serve`` sub-command."""
+    parser = subparsers.add_parser(
+        "serve",
+        help="run the HTTP service",
+        description=__doc__.splitlines()[0] if __doc__ else None,
+        epilog=EXAMPLE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--host", help="address to listen on (MANI_HOST, default 127.0.0.1)")
+    parser.add_argument("--port", type=int, help="port (MANI_PORT, default 8000)")
+    parser.add_argument("--workers", type=int, help="embedded worker processes (MANI_WORKERS, default 2)")
+    parser.add_argument("--redis", metavar="URL", help="Redis URL: API only, workers run as `mani worker`")
+    parser.add_argument("--log-level", help="DEBUG, INFO, WARNING, ... (MANI_LOG_LEVEL)")
+    parser.set_defaults(func=serve)
+
+
+def settings_from(args: argparse.Namespace) -> Any:
+    """`Settings` from the environment with the command line on top."""
+    from service.settings import Settings
+
+    given = {
+        "host": args.host,
+        "port": args.port,
+        "workers": args.workers,
+        "redis_url": args.redis,
+        "log_level": getattr(args, "log_level", None),
+    }
+    return Settings(**{k: v for k, v in given.items() if v is not None})
+
+
+def serve(args: argparse.Namespace) -> int:
+    """Run uvicorn until SIGINT/SIGTERM; new `/v1` requests get 503 as soon as shutdown starts."""
+    import sys
+
+    import uvicorn
+    from pydantic import ValidationError
+
+    from service.app import configure_logging, create_app
+
+    try:
+        settings = settings_from(args)
+    except ValidationError as exc:
+        print(f"mani serve: invalid settings:\n{exc}", file=sys.stderr)
+        return 2
+    configure_logging(settings)
+    app = create_app(settings)
+
+    class Server(uvicorn.Server):
+        def handle_exit(self, sig: int, frame: Any) -> None:
+            app.state.shutting_down = True
+            super().handle_exit(sig, frame)
+
+    config = uvicorn.Config(
+        app,
+        host=settings.host,
+        port=settings.port,
+        access_log=False,
+        log_config=None,
+        timeout_graceful_shutdown=10,
+        lifespan="on",
+    )
+    server = Server(config)
+    server.run()
+    return 0 if server.started else 1

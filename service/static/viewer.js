@@ -1,0 +1,120 @@
+"use strict";
+// Draws one job's result: the object's points coloured by the contact heatmap, the contacts, the force arrows,
+// and the hand at its solved pose (palm frame from palm_position + palm_quaternion, a link from the palm to
+// each fingertip at its contact, fingertip spheres); with the proposal's quality figures.
+const jobId = decodeURIComponent(window.location.pathname.split("/")[3]);
+document.getElementById("job-id").textContent = jobId;
+document.getElementById("back").href = "/" + mani.suffix;
+
+function rotation(q) {  // (w, x, y, z) → 3×3 rows
+  const [w, x, y, z] = q;
+  return [
+    [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+    [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+    [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+  ];
+}
+const col = (rows, i) => rows.map((r) => r[i]);
+
+function extent(points) {
+  if (!points || !points.length) return 0.1;
+  let lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
+  for (const p of points) for (let i = 0; i < 3; i++) { lo[i] = Math.min(lo[i], p[i]); hi[i] = Math.max(hi[i], p[i]); }
+  return Math.max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]) || 0.1;
+}
+
+function rows(tableId, pairs) {
+  const body = document.querySelector("#" + tableId + " tbody");
+  body.replaceChildren();
+  for (const [k, v] of pairs) { const tr = document.createElement("tr"); mani.cell(tr, k); mani.cell(tr, v, "mono"); body.appendChild(tr); }
+}
+
+function fmt(v) {
+  if (typeof v === "number") return Math.abs(v) > 0 && (Math.abs(v) < 1e-3 || Math.abs(v) > 1e4) ? v.toExponential(2) : v.toFixed(4);
+  return mani.text(v);
+}
+
+function traces(scene, proposal) {
+  const out = [];
+  const pts = scene.points;
+  const size = extent(pts || (proposal ? proposal.contact_points : null));
+  if (pts) {
+    const colour = scene.heatmap || (scene.region_mask ? scene.region_mask : pts.map((p) => p[2]));
+    out.push({ type: "scatter3d", mode: "markers", name: scene.heatmap ? "object (heatmap)" : "object",
+      x: col(pts, 0), y: col(pts, 1), z: col(pts, 2),
+      marker: { size: 2, color: colour, colorscale: scene.heatmap ? "Hot" : "Greys", reversescale: !!scene.heatmap,
+                showscale: !!scene.heatmap, colorbar: { title: "heat", len: 0.5 } } });
+  }
+  if (!proposal) return out;
+  const c = proposal.contact_points, f = proposal.forces;
+  out.push({ type: "scatter3d", mode: "markers+text", name: "contacts", x: col(c, 0), y: col(c, 1), z: col(c, 2),
+    text: proposal.fingertips, textposition: "top center", marker: { size: 7, color: "#d62728" } });
+  const fmax = Math.max(1e-9, ...f.map((v) => Math.hypot(...v)));
+  const scale = 0.35 * size / fmax;
+  const lx = [], ly = [], lz = [];
+  const tips = f.map((v, i) => c[i].map((ci, k) => ci + v[k] * scale));
+  c.forEach((p, i) => { lx.push(p[0], tips[i][0], null); ly.push(p[1], tips[i][1], null); lz.push(p[2], tips[i][2], null); });
+  out.push({ type: "scatter3d", mode: "lines", name: "forces", x: lx, y: ly, z: lz, line: { color: "#1f77b4", width: 6 } });
+  out.push({ type: "cone", name: "force heads", showscale: false, anchor: "tip", sizemode: "absolute", sizeref: 0.08 * size,
+    x: col(tips, 0), y: col(tips, 1), z: col(tips, 2), u: col(f, 0), v: col(f, 1), w: col(f, 2),
+    colorscale: [[0, "#1f77b4"], [1, "#1f77b4"]] });
+  // The hand: palm frame, palm→fingertip links, fingertip spheres at the contacts.
+  const palm = proposal.palm_position, R = rotation(proposal.palm_quaternion), a = 0.4 * size;
+  ["#e41a1c", "#4daf4a", "#377eb8"].forEach((colour, k) => {
+    out.push({ type: "scatter3d", mode: "lines", showlegend: k === 0, name: "palm frame", legendgroup: "palm",
+      x: [palm[0], palm[0] + a * R[0][k]], y: [palm[1], palm[1] + a * R[1][k]], z: [palm[2], palm[2] + a * R[2][k]],
+      line: { color: colour, width: 8 } });
+  });
+  const hx = [], hy = [], hz = [];
+  c.forEach((p) => { hx.push(palm[0], p[0], null); hy.push(palm[1], p[1], null); hz.push(palm[2], p[2], null); });
+  out.push({ type: "scatter3d", mode: "lines", name: "hand (palm → fingertips)", x: hx, y: hy, z: hz,
+    line: { color: "#8c564b", width: 10 }, opacity: 0.6 });
+  out.push({ type: "scatter3d", mode: "markers", name: "palm", x: [palm[0]], y: [palm[1]], z: [palm[2]],
+    marker: { size: 14, color: "#8c564b", symbol: "square" } });
+  out.push({ type: "scatter3d", mode: "markers", name: "fingertips", x: col(c, 0), y: col(c, 1), z: col(c, 2),
+    marker: { size: 12, color: "#ff7f0e", opacity: 0.35 } });
+  return out;
+}
+
+function draw(scene, index) {
+  const job = scene.job, result = job.result;
+  const proposal = result && result.proposals.length ? result.proposals[index] : null;
+  Plotly.react("scene", traces(scene, proposal), {
+    margin: { l: 0, r: 0, t: 0, b: 0 }, legend: { x: 0, y: 1 },
+    scene: { aspectmode: "data", xaxis: { title: "x (m)" }, yaxis: { title: "y (m)" }, zaxis: { title: "z (m)" } },
+  }, { responsive: true });
+  if (proposal) {
+    const q = proposal.quality;
+    rows("quality", [["success", q.success], ["converged", q.converged], ["reason", q.reason],
+      ["iterations", q.iterations], ["wrench residual", fmt(q.wrench_residual)],
+      ["max tip distance (m)", fmt(q.max_tip_distance)], ["penetration (m)", fmt(q.penetration_depth)],
+      ["self-collision (m)", fmt(q.self_collision_depth)], ["Ferrari–Canny ε", fmt(q.epsilon)]]);
+    rows("hand", [["hand", result.hand], ["palm position", proposal.palm_position.map(fmt).join(", ")],
+      ["palm quaternion", proposal.palm_quaternion.map(fmt).join(", ")],
+      ...proposal.joint_names.map((n, i) => [n, fmt(proposal.joint_values[i])])]);
+  } else {
+    rows("quality", [["proposals", "none"], ...(job.error ? [["error", job.error.type + ": " + job.error.error]] : [])]);
+    rows("hand", []);
+  }
+  rows("timings", Object.entries({ ...(result ? result.timings : {}), ...job.timings }).map(([k, v]) => [k, mani.seconds(v)]));
+  document.getElementById("note").textContent = scene.points ? "" :
+    "The object's points are not known to this API process; showing the result only.";
+}
+
+async function load() {
+  try {
+    const scene = await mani.fetchJson("/v1/jobs/" + encodeURIComponent(jobId) + "/scene");
+    const job = scene.job;
+    document.getElementById("status").textContent = job.state + (job.state === "running" ? " · " + job.progress.stage : "");
+    document.getElementById("status").className = "state-" + job.state;
+    const select = document.getElementById("proposal");
+    const n = job.result ? job.result.proposals.length : 0;
+    select.replaceChildren(...Array.from({ length: n }, (_, i) => new Option("proposal " + (i + 1), String(i))));
+    select.onchange = () => draw(scene, Number(select.value));
+    draw(scene, 0);
+    if (!["succeeded", "failed", "cancelled", "expired"].includes(job.state)) setTimeout(load, 1000);
+  } catch (err) {
+    document.getElementById("error").textContent = "could not load the job: " + err.message;
+  }
+}
+load();
