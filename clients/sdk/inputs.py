@@ -141,10 +141,14 @@ def _object_from_npz(path: Path, **fields: Any) -> ObjectIn:
 
 
 def _ply_normals(cloud: Any) -> np.ndarray | None:
+    """The ``nx, ny, nz`` vertex properties of a point-cloud ``.ply`` (trimesh keeps them in its raw data)."""
     raw = getattr(cloud, "metadata", {}).get("_ply_raw", {}).get("vertex", {}).get("data")
-    if raw is not None and raw.dtype.names and {"nx", "ny", "nz"} <= set(raw.dtype.names):
-        return np.stack([raw["nx"], raw["ny"], raw["nz"]], axis=-1).reshape(-1, 3).astype(np.float64)
-    return None
+    if raw is None:
+        return None
+    names = set(raw) if isinstance(raw, dict) else set(getattr(raw.dtype, "names", None) or ())
+    if not {"nx", "ny", "nz"} <= names:
+        return None
+    return np.stack([np.asarray(raw[k]).reshape(-1) for k in ("nx", "ny", "nz")], axis=-1).astype(np.float64)
 
 
 def save_object(obj: ObjectIn, path: str | os.PathLike[str]) -> Path:
