@@ -4,7 +4,8 @@ fcl answers *whether* two BVH meshes intersect (its distance query returns 0 for
 gives no depth). We use it as the narrow-phase test per hand body, then measure depth on the bodies that hit:
 
 - hand → object: the largest depth of the hand body's surface samples (its vertices + ``BODY_SAMPLES`` area
-  samples, seed 0) inside the object's watertight mesh (exact mesh signed distance, trimesh);
+  samples, seed 0) inside the object's watertight mesh (exact mesh signed distance, trimesh, evaluated only on
+  samples whose KD-tree Φ is below ``PREFILTER``);
 - object → hand: the largest depth of object points (cloud + mesh vertices) inside the body's convex hull
   (half-space distance, exact for a convex body, an over-estimate for a non-convex one).
 
@@ -27,6 +28,8 @@ from models.geometry.object import ObjectGeometry
 from models.robots.hand import ADJACENT_HOPS, Hand
 
 BODY_SAMPLES = 600
+PREFILTER = 0.01
+"""Only hand samples with KD-tree Φ below this (m) get the exact (slow) mesh signed distance."""
 
 
 @dataclass
@@ -107,8 +110,11 @@ def hand_object_penetration(
         if not _hits(_obj(body.bvh, T), obj):
             continue
         world = body.samples @ T[:3, :3].T + T[:3, 3]
-        sd = trimesh.proximity.signed_distance(mesh, world)  # positive inside
-        depth = max(depth, float(max(sd.max(), 0.0)))
+        phi, _, _ = geometry.signed_distance(world)  # cheap KD-tree pre-filter
+        near = world[phi < PREFILTER]
+        if len(near):
+            sd = trimesh.proximity.signed_distance(mesh, near)  # exact, positive inside
+            depth = max(depth, float(max(sd.max(), 0.0)))
         local = (obj_pts - T[:3, 3]) @ T[:3, :3]
         depth = max(depth, _inside_depth(body.planes, local))
     return depth
