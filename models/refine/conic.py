@@ -52,9 +52,9 @@ class ConicProblem:
         cones += [clarabel.SecondOrderConeT(blk[3]) for blk in blocks if blk[0] == "soc"]
         if settings is None:
             settings = default_settings()
-        solver = clarabel.DefaultSolver(
-            sp.diags(self.p_diag, format="csc"), self.q, sp.csc_matrix(a), b, cones, settings
-        )
+        n = self.n
+        p_mat = sp.csc_matrix((self.p_diag, np.arange(n), np.arange(n + 1)), shape=(n, n))
+        solver = clarabel.DefaultSolver(p_mat, self.q, sp.csc_matrix(a), b, cones, settings)
         sol = solver.solve()
         status = str(sol.status).split(".")[-1]
         if status not in _OK:

@@ -1,0 +1,77 @@
+"""Point-cloud distance fields: a continuous variant of the paper's Φ(x) = n̄·(x − p̄), and Φ^R(x) = |x − p̄^R|.
+
+A KD-tree over the oriented points (≈50× faster than mesh queries). The paper's Φ = n̄·(x − p̄) jumps where the
+nearest sample switches between faces (outside a box's edge it measures the distance to the wrong face's plane
+and jumped by 3 cm in our runs, which stalls the trust region). We treat each sample as a disc of radius h (0.75 ×
+the mean sample spacing) with normal n̄: with a = n̄·(x − p̄) and b the tangential offset, Φ = a while b ≤ h (the
+paper's value) and Φ = sign(a)·√(a² + (b − h)²), the distance to the disc, beyond it. Near the surface this is the
+paper's Φ; away from it the Euclidean distance to the samples, without jumps larger than the sample spacing.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+
+class PointCloudField:
+    """Signed distance to an oriented point cloud, and unsigned distance to a masked region of it.
+
+    Args:
+        points: (N, 3). normals: (N, 3) outward unit normals. mask: (N,) bool region allowed for fingertips.
+    """
+
+    def __init__(self, points: np.ndarray, normals: np.ndarray, mask: np.ndarray | None = None) -> None:
+        self.points = np.asarray(points, dtype=np.float64)
+        n = np.asarray(normals, dtype=np.float64)
+        self.normals = n / np.linalg.norm(n, axis=1, keepdims=True)
+        self._tree = cKDTree(self.points)
+        self.mask = None if mask is None else np.asarray(mask, dtype=bool)
+        if self.mask is not None:
+            if self.mask.shape != (len(self.points),) or not self.mask.any():
+                raise ValueError("mask must be (N,) bool with at least one allowed point")
+            self._region = np.flatnonzero(self.mask)
+            self._region_tree = cKDTree(self.points[self._region])
+        spacing = self._tree.query(self.points[: min(len(self.points), 512)], k=2)[0][:, 1]
+        self.disc_radius = 0.75 * float(np.mean(spacing))
+
+    def signed_distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Φ (M,), ∇Φ (M, 3) (= n̄ near the surface), nearest sample p̄ (M, 3)."""
+        x = np.asarray(x, dtype=np.float64)
+        _, idx = self._tree.query(x)
+        near, nrm = self.points[idx], self.normals[idx]
+        d = x - near
+        a = np.einsum("ij,ij->i", d, nrm)
+        tang = d - a[:, None] * nrm
+        b = np.linalg.norm(tang, axis=1)
+        excess = np.maximum(b - self.disc_radius, 0.0)
+        sign = np.where(a < 0, -1.0, 1.0)
+        radial = np.sqrt(a**2 + excess**2)
+        phi = np.where(excess > 0, sign * radial, a)
+        t_hat = tang / np.maximum(b, 1e-12)[:, None]
+        far = sign[:, None] * (a[:, None] * nrm + excess[:, None] * t_hat) / np.maximum(radial, 1e-12)[:, None]
+        grad = np.where((excess > 0)[:, None], far, nrm)
+        return phi, grad, near
+
+    def surface_normal(self, x: np.ndarray) -> np.ndarray:
+        """n̄ (M, 3): the normal of the nearest sample (grasp maps and friction cones use it)."""
+        return self.normals[self.nearest_index(x)]
+
+    def region_distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Φ^R (M,) = |x − p̄^R| and its gradient (unit, towards x; the outward normal when x is on the point).
+
+        Without a mask this is |Φ| with gradient sign(Φ) n̄.
+        """
+        x = np.asarray(x, dtype=np.float64)
+        if self.mask is None:
+            phi, grad, _ = self.signed_distance(x)
+            return np.abs(phi), grad * np.where(phi < 0, -1.0, 1.0)[:, None]
+        dist, idx = self._region_tree.query(x)
+        j = self._region[idx]
+        d = x - self.points[j]
+        grad = np.where(dist[:, None] > 1e-9, d / np.maximum(dist, 1e-12)[:, None], self.normals[j])
+        return dist, grad
+
+    def nearest_index(self, x: np.ndarray) -> np.ndarray:
+        """Index of the nearest cloud point for each x."""
+        return np.asarray(self._tree.query(np.asarray(x, dtype=np.float64))[1])

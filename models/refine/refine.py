@@ -1,0 +1,259 @@
+"""The iterative SOCP refinement loop (paper §III-B) with an adaptive trust region.
+
+Each iteration: linearise at q (kinematics, Φ, optimal forces f* → r*), solve the step of `models.refine.step`,
+evaluate the true merit ``‖r*‖² + λ Σ Φ(p_i)² + ρ (Σ penetration + Σ self-overlap)`` at q + δq, accept the step
+if it lowers the merit, grow the trust region after good agreement with the model (ratio > 0.75) and shrink it
+after a rejection or poor agreement (ratio < 0.25). Adaptive steps are measured better than fixed ones in
+`mani bench refine` (fewer iterations, more successes). Convergence (paper): ‖r*‖ < 1e-6 and every |Φ(p_i)|
+< 5 mm, and in addition no sphere penetration or self-overlap beyond 1 mm (the step's constraints are only
+linearised, so we check them).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE
+from models.refine.state import DistanceField, HandPose, Linearisation, linearise
+from models.refine.step import StepParams, solve_step, solve_step_cvxpy
+from models.refine.wrench import WrenchTask
+
+
+class Cancelled(Exception):
+    """The caller's ``should_cancel()`` returned true."""
+
+
+@dataclass(frozen=True)
+class RefineConfig:
+    """Refinement settings (defaults are the ones evaluated in the README table).
+
+    Attributes:
+        max_iterations: paper: 100.
+        residual_tol: ‖r*‖ below this counts as producing the wrench (paper: 1e-6).
+        tip_tol: every |Φ(p_i)| below this (m) (paper: 5 mm).
+        penetration_tol: sphere penetration / self-overlap allowed at convergence (m).
+        max_normal_force: bound on each normal force (unit target wrench).
+        tip_weight: λ (1/m²) on the squared tip distances.
+        penalty: ρ on constraint slacks and in the merit.
+        trust_translation, trust_rotation, trust_joint, trust_force: initial trust region s_q, s_f.
+        trust_grow, trust_shrink, trust_max_scale, trust_min_scale: adaptive trust region; ``adaptive=False``
+            keeps the initial region (the paper's fixed s_q, s_f).
+        tip_sphere_allowance: overlap allowed for spheres on fingertip links (m).
+        solver: ``"clarabel"`` (native, default) or ``"cvxpy"`` (the reference, slow).
+        history: keep per-iteration records.
+    """
+
+    max_iterations: int = 100
+    residual_tol: float = 1e-6
+    tip_tol: float = 5e-3
+    penetration_tol: float = 1e-3
+    max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE
+    tip_weight: float = 100.0
+    penalty: float = 10.0
+    trust_translation: float = 0.01
+    trust_rotation: float = 0.1
+    trust_joint: float = 0.15
+    trust_force: float = 0.25
+    adaptive: bool = True
+    trust_grow: float = 2.0
+    trust_shrink: float = 0.4
+    trust_max_scale: float = 4.0
+    trust_min_scale: float = 1.0 / 256
+    tip_sphere_allowance: float = 1e-3
+    solver: str = "clarabel"
+    history: bool = False
+
+
+@dataclass
+class IterationRecord:
+    """One iteration: merit and its parts at the iterate, the trust scale used and whether the step was kept."""
+
+    iteration: int
+    residual_norm: float
+    max_tip_distance: float
+    penetration: float
+    self_overlap: float
+    merit: float
+    trust_scale: float
+    accepted: bool
+    seconds: float
+
+
+@dataclass
+class RefineResult:
+    """Outcome of one refinement.
+
+    Attributes:
+        pose: final hand pose (the best iterate).
+        forces: (m, 3) world-frame fingertip forces at ``pose``.
+        tips: (m, 3) fingertip points; contacts: (m, 3) their nearest surface points; normals: (m, 3).
+        residual_norm: ‖r*‖; max_tip_distance: max |Φ(p_i)| (Φ^R with a mask); penetration, self_overlap:
+            largest sphere violations (m).
+        converged: the convergence test passed. reason: "converged", "max_iterations", "stalled",
+            "deadline" or "solver_failed: ...".
+        iterations: steps attempted. seconds: wall time. history: records when asked for.
+    """
+
+    pose: HandPose
+    forces: np.ndarray
+    tips: np.ndarray
+    contacts: np.ndarray
+    normals: np.ndarray
+    residual_norm: float
+    max_tip_distance: float
+    penetration: float
+    self_overlap: float
+    converged: bool
+    reason: str
+    iterations: int
+    seconds: float
+    history: list[IterationRecord] = field(default_factory=list)
+
+
+def merit(lin: Linearisation, cfg: RefineConfig) -> float:
+    """The true merit the trust region compares against the model's objective."""
+    return float(
+        lin.residual_norm**2
+        + cfg.tip_weight * np.sum(lin.tip_phi**2)
+        + cfg.penalty * (lin.penetration().sum() + lin.self_overlap().sum())
+    )
+
+
+def _converged(lin: Linearisation, cfg: RefineConfig) -> bool:
+    return bool(
+        lin.residual_norm < cfg.residual_tol
+        and np.max(np.abs(lin.tip_phi)) < cfg.tip_tol
+        and lin.penetration().max(initial=0.0) <= cfg.penetration_tol
+        and lin.self_overlap().max(initial=0.0) <= cfg.penetration_tol
+    )
+
+
+def refine(
+    hand: Any,
+    field_: DistanceField,
+    task: WrenchTask,
+    start: HandPose,
+    mu: float,
+    config: RefineConfig | None = None,
+    tip_field: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None,
+    deadline: float | None = None,
+    should_cancel: Callable[[], bool] | None = None,
+    progress: Callable[[int, int], None] | None = None,
+) -> RefineResult:
+    """Refine a hand pose so that its fingertips produce ``task`` (paper Eq. 9-16).
+
+    Args:
+        hand: a `models.robots.Hand`.
+        field_: the object's signed distance (`models.geometry.ObjectGeometry`).
+        task: target (rigid wrench, joint-space, or force closure).
+        start: initial pose.
+        mu: friction coefficient.
+        config: settings.
+        tip_field: Φ^R for masked refinement: ``x (m,3) -> (distance (m,), gradient (m,3))``.
+        deadline: `time.monotonic()` value; when passed, the best iterate is returned, not converged.
+        should_cancel: checked before every iteration; raises `Cancelled` when it returns true.
+        progress: called with (iteration, max_iterations).
+
+    Returns:
+        The result (never raises for an infeasible task: it reports not converged and why).
+    """
+    cfg = config or RefineConfig()
+    t0 = time.perf_counter()
+    n = 6 + len(start.q)
+    base = np.concatenate(
+        [np.full(3, cfg.trust_translation), np.full(3, cfg.trust_rotation), np.full(n - 6, cfg.trust_joint)]
+    )
+    step_fn = solve_step if cfg.solver == "clarabel" else solve_step_cvxpy
+
+    def lin_at(pose: HandPose) -> Linearisation:
+        return linearise(
+            hand, pose, field_, task, mu, cfg.max_normal_force, tip_field, cfg.tip_sphere_allowance
+        )
+
+    pose, lin = start, lin_at(start)
+    value = merit(lin, cfg)
+    scale, history, reason, it = 1.0, [], "max_iterations", 0
+    for it in range(1, cfg.max_iterations + 1):
+        if _converged(lin, cfg):
+            reason, it = "converged", it - 1
+            break
+        if should_cancel is not None and should_cancel():
+            raise Cancelled("refinement cancelled")
+        if deadline is not None and time.monotonic() >= deadline:
+            reason, it = "deadline", it - 1
+            break
+        ti = time.perf_counter()
+        params = StepParams(
+            trust=base * scale, trust_force=cfg.trust_force * scale, tip_weight=cfg.tip_weight, penalty=cfg.penalty
+        )
+        step = step_fn(lin, params)
+        accepted = False
+        if step.delta is None:
+            if scale <= cfg.trust_min_scale:
+                reason = f"solver_failed: {step.status}"
+                break
+            scale = max(scale * cfg.trust_shrink, cfg.trust_min_scale)
+        else:
+            cand_pose = pose.step(hand, step.delta)
+            cand = lin_at(cand_pose)
+            new_value = merit(cand, cfg)
+            predicted = value - step.objective
+            ratio = (value - new_value) / predicted if predicted > 1e-15 else 0.0
+            if new_value < value:
+                pose, lin, value, accepted = cand_pose, cand, new_value, True
+            if cfg.adaptive:
+                if not accepted or ratio < 0.25:
+                    scale = max(scale * cfg.trust_shrink, cfg.trust_min_scale)
+                elif ratio > 0.75:
+                    scale = min(scale * cfg.trust_grow, cfg.trust_max_scale)
+            if not accepted and scale <= cfg.trust_min_scale and predicted <= 1e-12:
+                reason = "stalled"
+                break
+        if cfg.history:
+            history.append(
+                IterationRecord(
+                    it,
+                    lin.residual_norm,
+                    float(np.max(np.abs(lin.tip_phi))),
+                    float(lin.penetration().max(initial=0.0)),
+                    float(lin.self_overlap().max(initial=0.0)),
+                    value,
+                    scale,
+                    accepted,
+                    time.perf_counter() - ti,
+                )
+            )
+        if progress is not None:
+            progress(it, cfg.max_iterations)
+    else:
+        if _converged(lin, cfg):
+            reason = "converged"
+    _, _, nearest = field_.signed_distance(lin.tips)
+    return RefineResult(
+        pose=pose,
+        forces=lin.forces.copy(),
+        tips=lin.tips.copy(),
+        contacts=np.asarray(nearest, dtype=np.float64),
+        normals=lin.normals.copy(),
+        residual_norm=lin.residual_norm,
+        max_tip_distance=float(np.max(np.abs(lin.tip_phi))),
+        penetration=float(lin.penetration().max(initial=0.0)),
+        self_overlap=float(lin.self_overlap().max(initial=0.0)),
+        converged=reason == "converged",
+        reason=reason,
+        iterations=it,
+        seconds=time.perf_counter() - t0,
+        history=history,
+    )
+
+
+def with_solver(config: RefineConfig, solver: str) -> RefineConfig:
+    """A copy of ``config`` using ``solver`` ("clarabel" or "cvxpy")."""
+    if solver not in ("clarabel", "cvxpy"):
+        raise ValueError(f"solver must be 'clarabel' or 'cvxpy', got {solver!r}")
+    return replace(config, solver=solver)

@@ -1,0 +1,192 @@
+"""Hand configuration, the object's distance field protocol, and the local model at one iterate."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+import torch
+
+from models.refine.forces import ForceSolution, solve_forces
+from models.refine.wrench import WrenchTask
+
+
+class DistanceField(Protocol):
+    """What refinement needs from the object (`models.geometry.ObjectGeometry` satisfies it)."""
+
+    def signed_distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(M, 3) → Φ (M,), ∇Φ (M, 3) (outward unit normal at the nearest point), nearest point (M, 3)."""
+        ...
+
+
+@dataclass(frozen=True)
+class HandPose:
+    """Floating palm pose and finger joints (numpy, float64)."""
+
+    palm_pos: np.ndarray  # (3,)
+    palm_quat: np.ndarray  # (4,) wxyz
+    q: np.ndarray  # (D,)
+
+    def tensors(self) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """Batch-of-one float64 tensors for the `Hand` API."""
+        return (
+            torch.as_tensor(self.palm_pos, dtype=torch.float64)[None],
+            torch.as_tensor(self.palm_quat, dtype=torch.float64)[None],
+            torch.as_tensor(self.q, dtype=torch.float64)[None],
+        )
+
+    def step(self, hand: Any, delta: np.ndarray) -> HandPose:
+        """Apply δ (6 + D) with the hand's exponential map (palm rotation in the world frame)."""
+        pos, quat, q = hand.apply_delta(*self.tensors(), torch.as_tensor(delta, dtype=torch.float64)[None])
+        return HandPose(pos[0].numpy().copy(), quat[0].numpy().copy(), q[0].numpy().copy())
+
+
+@dataclass
+class Linearisation:
+    """Everything the SCP step needs at one iterate (all numpy, float64).
+
+    Attributes:
+        tips, tip_jac: (m, 3), (m, 3, n) fingertip points and Jacobians (n = 6 + D).
+        tip_phi, tip_grad: (m,), (m, 3) distance the objective drives to zero (Φ, or Φ^R with a mask) and its
+            gradient.
+        normals: (m, 3) outward normal at each tip's projection on the surface (grasp maps, friction cones).
+        forces: f* (m, 3) and the inner solution.
+        sph, sph_jac, sph_phi, sph_grad, sph_radius, sph_allow: spheres and Φ at their centres; ``sph_allow``
+            is the allowed overlap (m) per sphere (fingertip spheres may touch).
+        pair_idx, pair_dist, pair_dir: self-collision pairs (P, 2), their centre distances and unit directions.
+        q, lower, upper: joint values and limits (D,).
+    """
+
+    task: WrenchTask
+    mu: float
+    max_normal_force: float
+    tips: np.ndarray
+    tip_jac: np.ndarray
+    tip_phi: np.ndarray
+    tip_grad: np.ndarray
+    normals: np.ndarray
+    solution: ForceSolution
+    sph: np.ndarray
+    sph_jac: np.ndarray
+    sph_phi: np.ndarray
+    sph_grad: np.ndarray
+    sph_radius: np.ndarray
+    sph_allow: np.ndarray
+    pair_idx: np.ndarray
+    pair_dist: np.ndarray
+    pair_dir: np.ndarray
+    q: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+
+    @property
+    def forces(self) -> np.ndarray:
+        return self.solution.forces
+
+    @property
+    def residual_norm(self) -> float:
+        return self.solution.residual_norm
+
+    def penetration(self) -> np.ndarray:
+        """Per-sphere penetration beyond the allowance (≥ 0)."""
+        return np.maximum(0.0, self.sph_radius - self.sph_allow - self.sph_phi)
+
+    def self_overlap(self) -> np.ndarray:
+        """Per-pair overlap of self-collision spheres (≥ 0)."""
+        if not len(self.pair_idx):
+            return np.zeros(0)
+        r = self.sph_radius[self.pair_idx].sum(axis=1)
+        return np.maximum(0.0, r - self.pair_dist)
+
+
+_ALLOWANCE: dict[tuple[int, float], np.ndarray] = {}
+
+
+def sphere_allowance(hand: Any, tip_allowance: float) -> np.ndarray:
+    """Per-sphere overlap (m) the non-penetration rows allow.
+
+    A sphere fitted to a fingertip link usually contains that fingertip's contact point (Allegro: the tip point lies
+    10 mm inside its 19 mm tip sphere), so ``Φ(c) ≥ r`` would keep the contact ≥ 10 mm off the surface. Such
+    spheres are shrunk to pass through the contact point, ``Φ(c) ≥ |p − c| − tip_allowance``; other spheres on
+    fingertip links get ``tip_allowance``; all others none. Verification checks the real meshes.
+    """
+    key = (id(hand), tip_allowance)
+    if key not in _ALLOWANCE:
+        pos = torch.zeros(1, 3, dtype=torch.float64)
+        quat = torch.tensor([[1.0, 0.0, 0.0, 0.0]], dtype=torch.float64)
+        q = torch.as_tensor(hand.rest, dtype=torch.float64)[None]
+        with torch.no_grad():
+            tips = hand.fingertips(pos, quat, q)[0].numpy()
+            sph = hand.spheres(pos, quat, q, jacobian=False)[0][0].numpy()
+        radius = np.asarray(hand.sphere_radii, dtype=np.float64)
+        owner = np.asarray(getattr(hand, "sphere_fingertip", np.full(len(radius), -1)))
+        allow = np.zeros(len(radius))
+        for k in np.flatnonzero(owner >= 0):
+            inside = radius[k] - np.linalg.norm(tips[owner[k]] - sph[k])
+            allow[k] = max(inside, 0.0) + tip_allowance
+        _ALLOWANCE[key] = allow
+    return _ALLOWANCE[key]
+
+
+def linearise(
+    hand: Any,
+    pose: HandPose,
+    field: DistanceField,
+    task: WrenchTask,
+    mu: float,
+    max_normal_force: float,
+    tip_field: Any | None = None,
+    tip_sphere_allowance: float = 1e-3,
+) -> Linearisation:
+    """Kinematics, distances and optimal forces at ``pose``.
+
+    Args:
+        hand: a `models.robots.Hand`.
+        pose: the iterate.
+        field: object signed distance (penetration, normals).
+        task: residual definition.
+        mu, max_normal_force: friction and force bound.
+        tip_field: optional callable ``x -> (Φ^R, ∇Φ^R)`` used instead of Φ for the tip objective (masks).
+        tip_sphere_allowance: overlap allowed for spheres on fingertip links (they carry the contacts).
+    """
+    pos, quat, q = pose.tensors()
+    with torch.no_grad():
+        tips_t, tip_jac_t = hand.fingertip_jacobians(pos, quat, q)
+        sph_t, sph_jac_t = hand.spheres(pos, quat, q)
+    tips, tip_jac = tips_t[0].numpy(), tip_jac_t[0].numpy()
+    sph, sph_jac = sph_t[0].numpy(), sph_jac_t[0].numpy()
+    phi_all, grad_all, _ = field.signed_distance(np.concatenate([tips, sph]))
+    m = len(tips)
+    tip_phi, tip_grad = phi_all[:m], grad_all[:m]
+    normals = field.surface_normal(tips) if hasattr(field, "surface_normal") else tip_grad
+    if tip_field is not None:
+        tip_phi, tip_grad = tip_field(tips)
+    solution = solve_forces(task, tips, normals, mu, max_normal_force)
+    radius = np.asarray(hand.sphere_radii, dtype=np.float64)
+    pairs = np.asarray(hand.self_collision_pairs, dtype=np.int64).reshape(-1, 2)
+    diff = sph[pairs[:, 0]] - sph[pairs[:, 1]] if len(pairs) else np.zeros((0, 3))
+    dist = np.linalg.norm(diff, axis=1)
+    return Linearisation(
+        task=task,
+        mu=mu,
+        max_normal_force=max_normal_force,
+        tips=tips,
+        tip_jac=tip_jac,
+        tip_phi=np.asarray(tip_phi, dtype=np.float64),
+        tip_grad=np.asarray(tip_grad, dtype=np.float64),
+        normals=np.asarray(normals, dtype=np.float64),
+        solution=solution,
+        sph=sph,
+        sph_jac=sph_jac,
+        sph_phi=np.asarray(phi_all[m:], dtype=np.float64),
+        sph_grad=np.asarray(grad_all[m:], dtype=np.float64),
+        sph_radius=radius,
+        sph_allow=sphere_allowance(hand, tip_sphere_allowance),
+        pair_idx=pairs,
+        pair_dist=dist,
+        pair_dir=diff / np.maximum(dist, 1e-12)[:, None],
+        q=pose.q,
+        lower=np.asarray(hand.lower, dtype=np.float64),
+        upper=np.asarray(hand.upper, dtype=np.float64),
+    )

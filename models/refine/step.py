@@ -1,0 +1,192 @@
+"""One SCP step (paper Eq. 9-16) over (δq, f = f* + δf), with Clarabel's native API or plain CVXPY.
+
+    min  ‖r* + B δq + R G δf‖² + λ Σ_i (Φ_i + ∇Φ_iᵀ J_i δq)² + ρ Σ slacks + ε Σ (δq_j / s_j)²
+    s.t. f_i ∈ FC(μ) (exact SOC), f_i·(−n_i) ≤ f_max, [closure: Σ f_i·(−n_i) = 1]
+         q_min ≤ q + δq ≤ q_max,  |δq| ≤ s_q,  |δf| ≤ s_f
+         Φ(c_k) + ∇Φ(c_k)ᵀ J_k δq + σ_k ≥ ε_k − a_k           (active spheres; a_k: fingertip allowance)
+         ‖c_i − c_j‖ + u_ijᵀ (J_i − J_j) δq + σ_ij ≥ ε_i + ε_j   (active pairs, linearised Eq. 15)
+
+B = R Σ_i [0; −[f_i*]× J_i / ρ] is ∂(R G(p) f*)/∂q. The non-penetration and self-collision rows carry slacks σ ≥ 0
+with an exact-penalty weight ρ, so a step always exists even from a penetrating start. The native build uses
+auxiliary variables for the residual and the tip distances (``P`` diagonal), as the force problem does.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from models.refine.conic import ConicProblem
+from models.refine.forces import wrench_matrix
+from models.refine.grasp import cone_rows, skew
+from models.refine.state import Linearisation
+
+
+@dataclass(frozen=True)
+class StepParams:
+    """Trust region and weights of one step.
+
+    Attributes:
+        trust: (n,) bound on |δq| per column (palm translation m, palm rotation rad, joints rad).
+        trust_force: bound on each |δf| component.
+        tip_weight: λ on the squared tip distances (1/m²).
+        penalty: ρ on the slacks (per metre of violation).
+        active_margin: spheres farther than this from the object are left out (m).
+        pair_margin: self-collision pairs with a larger gap are left out (m).
+        regularisation: ε on (δq_j / s_j)².
+    """
+
+    trust: np.ndarray
+    trust_force: float
+    tip_weight: float = 100.0
+    penalty: float = 10.0
+    active_margin: float = 0.02
+    pair_margin: float = 0.01
+    regularisation: float = 1e-6
+
+
+@dataclass(frozen=True)
+class StepSolution:
+    """δq (n,), the new forces (m, 3), the model's objective value, and the solver status."""
+
+    delta: np.ndarray | None
+    forces: np.ndarray | None
+    objective: float
+    status: str
+
+
+def _model_terms(lin: Linearisation, params: StepParams) -> dict[str, np.ndarray]:
+    """Matrices shared by both builds."""
+    task = lin.task
+    gmat = wrench_matrix(task, lin.tips)  # (k, 3m)
+    # ∂(R G f*)/∂q: torque part of G_i f* changes by δp × f* = −[f*]× J δq, over ρ
+    dtorque = np.einsum("mab,mbn->an", -skew(lin.forces), lin.tip_jac) / task.length
+    bmat = task.projection @ np.vstack([np.zeros((3, dtorque.shape[1])), dtorque])
+    tip_rows = np.einsum("ma,man->mn", lin.tip_grad, lin.tip_jac)
+    active = np.flatnonzero(lin.sph_phi - lin.sph_radius < params.active_margin)
+    sph_rows = np.einsum("sa,san->sn", lin.sph_grad[active], lin.sph_jac[active])
+    sph_rhs = lin.sph_phi[active] - lin.sph_radius[active] + lin.sph_allow[active]  # row·δq + σ ≥ −rhs
+    if len(lin.pair_idx):
+        gap = lin.pair_dist - lin.sph_radius[lin.pair_idx].sum(axis=1)
+        pairs = np.flatnonzero(gap < params.pair_margin)
+        i, j = lin.pair_idx[pairs, 0], lin.pair_idx[pairs, 1]
+        pair_rows = np.einsum("pa,pan->pn", lin.pair_dir[pairs], lin.sph_jac[i] - lin.sph_jac[j])
+        pair_rhs = gap[pairs]
+    else:
+        pair_rows, pair_rhs = np.zeros((0, lin.tip_jac.shape[2])), np.zeros(0)
+    lo = np.maximum(-params.trust, np.concatenate([np.full(6, -np.inf), lin.lower - lin.q]))
+    hi = np.minimum(params.trust, np.concatenate([np.full(6, np.inf), lin.upper - lin.q]))
+    lo = np.minimum(lo, 0.0)  # a start outside the limits may only move back towards them
+    hi = np.maximum(hi, 0.0)
+    return {
+        "G": gmat,
+        "B": bmat,
+        "r0": lin.solution.residual - gmat @ lin.forces.reshape(-1),  # r* − R G f* = −τ (constant part)
+        "tip_rows": tip_rows,
+        "sph_rows": sph_rows,
+        "sph_rhs": sph_rhs,
+        "pair_rows": pair_rows,
+        "pair_rhs": pair_rhs,
+        "lo": lo,
+        "hi": hi,
+    }
+
+
+def solve_step(lin: Linearisation, params: StepParams) -> StepSolution:
+    """The step with Clarabel's native API (the fast path, ~1-2 ms)."""
+    t = _model_terms(lin, params)
+    m, k = len(lin.tips), lin.task.rows
+    n = lin.tip_jac.shape[2]
+    a, b = len(t["sph_rhs"]), len(t["pair_rhs"])
+    iq, iff, ir, ip = 0, n, n + 3 * m, n + 3 * m + k  # offsets: δq, f, t_r, t_φ
+    isl = ip + m
+    nx = isl + a + b
+    prob = ConicProblem(nx)
+    prob.p_diag[iq:iff] = 2 * params.regularisation / np.maximum(params.trust, 1e-9) ** 2
+    prob.p_diag[ir:ip] = 2.0
+    prob.p_diag[ip:isl] = 2.0 * params.tip_weight
+    prob.q[isl:] = params.penalty
+    # t_r = r0 + B δq + G f
+    eq = np.zeros((k, nx))
+    eq[:, iq:iff], eq[:, iff:ir], eq[:, ir:ip] = -t["B"], -t["G"], np.eye(k)
+    prob.zero(eq, t["r0"])
+    # t_φ = Φ + ∇Φᵀ J δq
+    eq = np.zeros((m, nx))
+    eq[:, iq:iff], eq[:, ip:isl] = -t["tip_rows"], np.eye(m)
+    prob.zero(eq, lin.tip_phi)
+    nrow = np.zeros((m, nx))
+    for i in range(m):
+        nrow[i, iff + 3 * i : iff + 3 * i + 3] = -lin.normals[i]
+    if lin.task.closure:
+        prob.zero(nrow.sum(axis=0, keepdims=True), np.ones(1))
+    prob.leq(nrow, np.full(m, lin.max_normal_force))
+    # box: lo ≤ δq ≤ hi, |f − f*| ≤ s_f
+    eye = np.eye(nx)
+    prob.leq(eye[iq:iff], t["hi"])
+    prob.leq(-eye[iq:iff], -t["lo"])
+    f0 = lin.forces.reshape(-1)
+    prob.leq(eye[iff:ir], f0 + params.trust_force)
+    prob.leq(-eye[iff:ir], -(f0 - params.trust_force))
+    # spheres: −row δq − σ ≤ rhs ; pairs likewise ; σ ≥ 0
+    if a:
+        rows = np.zeros((a, nx))
+        rows[:, iq:iff], rows[:, isl : isl + a] = -t["sph_rows"], -np.eye(a)
+        prob.leq(rows, t["sph_rhs"])
+    if b:
+        rows = np.zeros((b, nx))
+        rows[:, iq:iff], rows[:, isl + a :] = -t["pair_rows"], -np.eye(b)
+        prob.leq(rows, t["pair_rhs"])
+    if a + b:
+        prob.leq(-eye[isl:], np.zeros(a + b))
+    cones = cone_rows(lin.normals, lin.mu)
+    for i in range(m):
+        rows = np.zeros((3, nx))
+        rows[:, iff + 3 * i : iff + 3 * i + 3] = -cones[i]
+        prob.soc(rows, np.zeros(3))
+    x, status = prob.solve()
+    if x is None:
+        return StepSolution(None, None, float("inf"), status)
+    obj = float(0.5 * x @ (prob.p_diag * x) + prob.q @ x)
+    return StepSolution(x[iq:iff], x[iff:ir].reshape(m, 3), obj, status)
+
+
+def solve_step_cvxpy(lin: Linearisation, params: StepParams) -> StepSolution:
+    """The same step written plainly in CVXPY and rebuilt every call (the reference; ~10× slower)."""
+    import cvxpy as cp
+
+    t = _model_terms(lin, params)
+    m = len(lin.tips)
+    n = lin.tip_jac.shape[2]
+    dq = cp.Variable(n)
+    f = cp.Variable(3 * m)
+    sig_s = cp.Variable(len(t["sph_rhs"]), nonneg=True)
+    sig_p = cp.Variable(len(t["pair_rhs"]), nonneg=True)
+    residual = t["r0"] + t["B"] @ dq + t["G"] @ f
+    tip = lin.tip_phi + t["tip_rows"] @ dq
+    obj = (
+        cp.sum_squares(residual)
+        + params.tip_weight * cp.sum_squares(tip)
+        + params.regularisation * cp.sum_squares(cp.multiply(1 / np.maximum(params.trust, 1e-9), dq))
+        + params.penalty * (cp.sum(sig_s) + cp.sum(sig_p))
+    )
+    cones = cone_rows(lin.normals, lin.mu)
+    f0 = lin.forces.reshape(-1)
+    cons = [dq >= t["lo"], dq <= t["hi"], cp.abs(f - f0) <= params.trust_force]
+    normal = []
+    for i in range(m):
+        fi = f[3 * i : 3 * i + 3]
+        cons.append(cp.SOC(cones[i][0] @ fi, cones[i][1:] @ fi))
+        normal.append(-lin.normals[i] @ fi)
+        cons.append(-lin.normals[i] @ fi <= lin.max_normal_force)
+    if lin.task.closure:
+        cons.append(cp.sum(cp.hstack(normal)) == 1)
+    if len(t["sph_rhs"]):
+        cons.append(t["sph_rows"] @ dq + sig_s >= -t["sph_rhs"])
+    if len(t["pair_rhs"]):
+        cons.append(t["pair_rows"] @ dq + sig_p >= -t["pair_rhs"])
+    prob = cp.Problem(cp.Minimize(obj), cons)
+    prob.solve(solver=cp.CLARABEL)
+    if dq.value is None:
+        return StepSolution(None, None, float("inf"), str(prob.status))
+    return StepSolution(np.asarray(dq.value), np.asarray(f.value).reshape(m, 3), float(prob.value), str(prob.status))
