@@ -1,0 +1,55 @@
+"""A plotly figure of a hand at its rest pose: collision meshes, collision spheres, surface points + normals."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import torch
+
+from models.robots.hand import Hand
+
+
+def _sphere_mesh(c: np.ndarray, r: float, n: int = 10) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    u, v = np.meshgrid(np.linspace(0, 2 * np.pi, n), np.linspace(0, np.pi, n))
+    return c[0] + r * np.cos(u) * np.sin(v), c[1] + r * np.sin(u) * np.sin(v), c[2] + r * np.cos(v)
+
+
+def hand_figure(hand: Hand, normal_length: float = 0.01) -> Any:
+    """A ``plotly.graph_objects.Figure`` of ``hand`` at rest, palm frame (metres)."""
+    import plotly.graph_objects as go
+
+    d = torch.float64
+    pos, quat, q = torch.zeros(1, 3, dtype=d), torch.tensor([[1.0, 0, 0, 0]], dtype=d), torch.as_tensor(hand.rest[None])
+    poses = {k: v[0].numpy() for k, v in hand.link_poses(pos, quat, q).items()}
+    traces: list[Any] = []
+    for link, mesh in hand.collision_meshes.items():
+        T = poses[link]
+        v = np.asarray(mesh.vertices) @ T[:3, :3].T + T[:3, 3]
+        f = np.asarray(mesh.faces)
+        traces.append(go.Mesh3d(x=v[:, 0], y=v[:, 1], z=v[:, 2], i=f[:, 0], j=f[:, 1], k=f[:, 2], name=link,
+                                color="lightsteelblue", opacity=0.6, legendgroup="meshes", showlegend=False))  # fmt: skip
+    centres, _ = hand.spheres(pos, quat, q, jacobian=False)
+    for c, r in zip(centres[0].numpy(), hand.sphere_radii, strict=True):
+        x, y, z = _sphere_mesh(c, float(r))
+        traces.append(go.Surface(x=x, y=y, z=z, opacity=0.25, showscale=False, colorscale=[[0, "orange"], [1, "orange"]],
+                                 legendgroup="spheres", showlegend=False, hoverinfo="skip"))  # fmt: skip
+    p, n = hand.surface_points, hand.surface_normals
+    traces.append(go.Scatter3d(x=p[:, 0], y=p[:, 1], z=p[:, 2], mode="markers", marker={"size": 2, "color": "black"},
+                               name="surface points"))  # fmt: skip
+    seg = np.full((3 * len(p), 3), np.nan)
+    seg[0::3], seg[1::3] = p, p + normal_length * n
+    traces.append(go.Scatter3d(x=seg[:, 0], y=seg[:, 1], z=seg[:, 2], mode="lines", line={"color": "green", "width": 1},
+                               name="normals"))  # fmt: skip
+    tips = hand.fingertips(pos, quat, q)[0].numpy()
+    traces.append(go.Scatter3d(x=tips[:, 0], y=tips[:, 1], z=tips[:, 2], mode="markers+text", text=hand.fingertip_links,
+                               marker={"size": 6, "color": "red"}, name="fingertips"))  # fmt: skip
+    a = 0.05 * hand.approach_axis
+    traces.append(go.Scatter3d(x=[0, a[0]], y=[0, a[1]], z=[0, a[2]], mode="lines", line={"color": "blue", "width": 6},
+                               name="approach axis"))  # fmt: skip
+    fig = go.Figure(traces)
+    fig.update_layout(
+        title=f"{hand.name}: {hand.dof} DoF, {hand.num_fingertips} fingertips, {len(hand.sphere_radii)} spheres (rest pose)",
+        scene={"aspectmode": "data"},
+    )
+    return fig
