@@ -1,0 +1,136 @@
+"""The client-side `mani` commands through the fake transport: output, --json, files written, exit codes."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import httpx
+import numpy as np
+import pytest
+
+from clients.cli import common
+from clients.cli.main import EXIT_FAILED, EXIT_OK, EXIT_UNREACHABLE, EXIT_USAGE, build_parser, main
+from clients.sdk import Client, make_request, object_from_points, save_object
+
+
+@pytest.fixture
+def cli(fake: Any, monkeypatch: pytest.MonkeyPatch) -> Any:
+    def factory(args: Any) -> Client:
+        return Client(args.url, args.api_key, encoding=args.encoding, retries=args.retries,
+                      transport=fake.transport(), sleep=lambda s: None)  # fmt: skip
+
+    monkeypatch.setattr(common, "client_factory", factory)
+    monkeypatch.setattr("time.sleep", lambda s: None)
+    return main
+
+
+@pytest.fixture
+def object_file(tmp_path: Path, object_points: np.ndarray) -> Path:
+    return save_object(object_from_points(object_points), tmp_path / "ball.npz")
+
+
+def _json(capsys: pytest.CaptureFixture[str]) -> Any:
+    return json.loads(capsys.readouterr().out)
+
+
+def test_every_command_has_help_with_an_example(capsys: pytest.CaptureFixture[str]) -> None:
+    for argv in (["synthesize"], ["batch"], ["batch", "submit"], ["batch", "status"], ["jobs"], ["jobs", "show"],
+                 ["jobs", "cancel"], ["jobs", "list"], ["bench"]):  # fmt: skip
+        with pytest.raises(SystemExit) as info:
+            build_parser().parse_args([*argv, "--help"])
+        assert info.value.code == 0
+        out = capsys.readouterr().out
+        assert "example:" in out and "mani " in out.split("example:")[1], argv
+
+
+def test_synthesize_writes_result_and_view(cli: Any, fake: Any, object_file: Path, tmp_path: Path,
+                                           capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+    fake.polls_to_finish = 2
+    out, view = tmp_path / "r.json", tmp_path / "r.html"
+    code = cli([
+        "synthesize", str(object_file), "--hand", "allegro", "--task", "delta:0,0,0.05", "--method", "direct_grasp",
+        "--seed", "7", "--out", str(out), "--view", str(view), "--json",
+    ])  # fmt: skip
+    assert code == EXIT_OK
+    printed = _json(capsys)
+    assert printed["result"]["hand"] == "allegro" and printed["job_id"] == "job-0"
+    assert json.loads(out.read_text())["hand"] == "allegro"
+    assert "plotly" in view.read_text()[:100_000].lower()
+    sent = fake.jobs["job-0"].request
+    assert sent.options.seed == 7 and sent.task.kind == "delta_pose" and sent.options.method == "direct_grasp"
+
+
+def test_synthesize_human_output_and_task_forms(cli: Any, object_file: Path, tmp_path: Path,
+                                                capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+    assert cli(["synthesize", str(object_file)]) == EXIT_OK
+    assert "leap" in capsys.readouterr().out
+    np.save(tmp_path / "t.npy", np.load(object_file)["points"] + [0, 0, 0.01])
+    for task in ("wrench:0,0,1,0,0,0", f"targets:{tmp_path / 't.npy'}", "delta:0,0,0,0.7071,0,0,0.7071"):
+        assert cli(["synthesize", str(object_file), "--task", task, "--json"]) == EXIT_OK, task
+        capsys.readouterr()
+
+
+def test_synthesize_exit_codes(cli: Any, fake: Any, object_file: Path, tmp_path: Path,
+                               capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+    assert cli(["synthesize", str(tmp_path / "missing.npz")]) == EXIT_USAGE
+    assert cli(["synthesize", str(object_file), "--task", "juggle"]) == EXIT_USAGE
+    assert cli(["synthesize", str(object_file), "--seed", "-3", "--json"]) == EXIT_USAGE
+    assert _json(capsys)["detail"][0]["field"] == "seed"
+    fake.script.append(httpx.Response(404, json={"error": "robot.name: unknown hand 'x'", "type": "NotFound"}))
+    assert cli(["synthesize", str(object_file), "--hand", "x"]) == EXIT_USAGE
+    fake.script += [httpx.ConnectError("refused")] * 4
+    assert cli(["synthesize", str(object_file)]) == EXIT_UNREACHABLE
+    fake.fail = True
+    assert cli(["synthesize", str(object_file), "--json"]) == EXIT_FAILED
+    capsys.readouterr()
+    fake.fail, fake.polls_to_finish = False, 10**6
+    assert cli(["synthesize", str(object_file), "--timeout", "0.01", "--json"]) == EXIT_FAILED
+    assert _json(capsys)["job_id"]
+
+
+def test_batch_submit_dir_and_jsonl_then_status(cli: Any, fake: Any, object_file: Path, tmp_path: Path,
+                                                object_points: np.ndarray,
+                                                capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+    save_object(object_from_points(object_points * 2), tmp_path / "big.npz")
+    assert cli(["batch", "submit", str(tmp_path), "--method", "direct_grasp", "--json"]) == EXIT_OK
+    submitted = _json(capsys)
+    assert submitted["total"] == 2 and len(submitted["batches"]) == 1
+    out = tmp_path / "results.jsonl"
+    assert cli(["batch", "status", submitted["batches"][0], "--wait", "--out", str(out), "--json"]) == EXIT_OK
+    assert _json(capsys)["counts"] == {"succeeded": 2}
+    lines = [json.loads(line) for line in out.read_text().splitlines()]
+    assert [line["index"] for line in lines] == [0, 1] and all("result" in line for line in lines)
+
+    jsonl = tmp_path / "requests.jsonl"
+    jsonl.write_text("\n".join(make_request(object_points, seed=i).model_dump_json() for i in range(3)) + "\n")
+    fake.fail = True
+    assert cli(["batch", "submit", str(jsonl), "--wait", "--json"]) == EXIT_FAILED
+    assert _json(capsys)["failed"] == 3
+    assert cli(["batch", "status", submitted["batches"][0]]) == EXIT_OK
+    assert "succeeded 2" in capsys.readouterr().out
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text('{"object": {}}\n')
+    assert cli(["batch", "submit", str(bad)]) == EXIT_USAGE
+    assert cli(["batch"]) == EXIT_USAGE
+
+
+def test_jobs_list_show_cancel(cli: Any, fake: Any, object_file: Path, tmp_path: Path,
+                               capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+    fake.polls_to_finish = 10**6
+    assert cli(["synthesize", str(object_file), "--timeout", "0.01"]) == EXIT_FAILED
+    assert cli(["jobs", "--json"]) == EXIT_OK
+    assert [j["id"] for j in _json(capsys)] == ["job-0"]
+    assert cli(["jobs", "list", "--state", "running"]) == EXIT_OK
+    assert "job-0" in capsys.readouterr().out
+    assert cli(["jobs", "cancel", "job-0", "--json"]) == EXIT_OK
+    assert _json(capsys)["state"] == "cancelled"
+    assert cli(["jobs", "show", "job-0"]) == EXIT_FAILED  # ended without a result
+    assert cli(["jobs", "show", "nope"]) == EXIT_USAGE
+    fake.polls_to_finish = 0
+    assert cli(["synthesize", str(object_file), "--json"]) == EXIT_OK
+    capsys.readouterr()
+    out = tmp_path / "r.json"
+    assert cli(["jobs", "show", "job-1", "--follow", "--out", str(out), "--json"]) == EXIT_OK
+    assert _json(capsys)["result_summary"]["success"] and out.exists()
