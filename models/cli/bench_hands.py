@@ -53,8 +53,11 @@ def run(args: argparse.Namespace) -> int:
     dtype = torch.float32 if args.float32 else torch.float64
     names = [n for n in args.hands.split(",") if n] or list_hands()
     batches = [int(b) for b in args.batches.split(",") if b]
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, torch "
-          f"{torch.__version__}, threads {torch.get_num_threads()}, dtype {str(dtype).removeprefix('torch.')}")  # fmt: skip
+    kind = str(dtype).removeprefix("torch.")
+    cpu = platform.processor() or platform.machine()
+    print(
+        f"machine: {cpu}, {os.cpu_count()} cores, torch {torch.__version__}, threads {torch.get_num_threads()}, {kind}"
+    )
     header = f"{'hand':<14} {'dof':>4} {'tips':>4} {'spheres':>7} {'batch':>5} {'tips+J ms':>10} {'spheres+J ms':>13}"
     print(header)
     print("-" * len(header))

@@ -39,14 +39,15 @@ def run_list(args: argparse.Namespace) -> int:
     for name in list_hands():
         h = get_hand(name)
         tips = ", ".join(h.fingertip_links)
-        print(f"{name:<14} {h.dof:>4} {h.num_fingertips:>4} {len(h.sphere_radii):>7} {len(h.self_collision_pairs):>6}  {tips}")
+        counts = f"{h.dof:>4} {h.num_fingertips:>4} {len(h.sphere_radii):>7} {len(h.self_collision_pairs):>6}"
+        print(f"{name:<14} {counts}  {tips}")
     return EXIT_OK
 
 
 def run_show(args: argparse.Namespace) -> int:
     """Write ``args.html`` with the hand ``args.name`` at rest."""
-    from models.robots.view import hand_figure
     from models.robots import UnknownHand, get_hand
+    from models.robots.view import hand_figure
 
     try:
         hand = get_hand(args.name)

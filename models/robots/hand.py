@@ -13,6 +13,7 @@ Conventions (shared with refinement and verification):
 from __future__ import annotations
 
 from functools import cached_property
+from typing import cast
 
 import numpy as np
 import torch
@@ -51,7 +52,7 @@ class Hand:
         tip_offsets: np.ndarray | None = None,
         palm: str | None = None,
         rest: np.ndarray | dict[str, float] | None = None,
-        approach_axis: np.ndarray | None = None,
+        approach_axis: np.ndarray | list[float] | None = None,
     ) -> None:
         self.name = name
         self.tree = tree = KinematicTree(desc, palm)
@@ -85,7 +86,7 @@ class Hand:
                 mm.apply_transform(T)
                 per_body.setdefault(b, []).append(mm)
         for b, meshes in sorted(per_body.items()):
-            self.collision_meshes[tree.body_names[b]] = trimesh.util.concatenate(meshes)
+            self.collision_meshes[tree.body_names[b]] = cast(trimesh.Trimesh, trimesh.util.concatenate(meshes))
         # fingertip points in their bodies
         tip_body, tip_local = [], []
         for link, off in zip(self.fingertip_links, self.tip_offsets, strict=True):
@@ -144,8 +145,8 @@ class Hand:
         close = related & (np.abs(depth[bi] - depth[bj]) <= ADJACENT_HOPS)
         dtype = torch.float64
         pos, quat = torch.zeros(1, 3, dtype=dtype), torch.tensor([[1.0, 0, 0, 0]], dtype=dtype)
-        c, _ = self.spheres(pos, quat, torch.as_tensor(self.rest[None]), jacobian=False)
-        c = c[0].numpy()
+        ct, _ = self.spheres(pos, quat, torch.as_tensor(self.rest[None]), jacobian=False)
+        c = ct[0].numpy()
         overlap = np.linalg.norm(c[i] - c[j], axis=1) < self.sphere_radii[i] + self.sphere_radii[j]
         keep = (bi != bj) & ~close & ~overlap
         return np.stack([i[keep], j[keep]], axis=1).astype(np.int64)

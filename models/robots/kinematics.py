@@ -124,16 +124,16 @@ class KinematicTree:
         coupling = np.zeros((nb, D))
         offset = np.zeros(nb)
         mult = np.zeros(nb)
-        for b, j in enumerate(moving):
-            if j is None:
+        for b, mj in enumerate(moving):
+            if mj is None:
                 continue
-            src, m, off = j.mimic if j.mimic is not None else (j.name, 1.0, 0.0)
+            src, m, off = mj.mimic if mj.mimic is not None else (mj.name, 1.0, 0.0)
             if src not in index:
-                raise HandLoadError(f"joint {j.name!r}: mimic source {src!r} is not a joint of this hand")
+                raise HandLoadError(f"joint {mj.name!r}: mimic source {src!r} is not a joint of this hand")
             d = index[src]
             coupling[b, d], mult[b], offset[b] = m, m, off
-            if j.mimic is not None and abs(m) > 1e-12:  # keep the tied joint inside its own limits
-                lo, hi = sorted(((j.lower - off) / m, (j.upper - off) / m))
+            if mj.mimic is not None and abs(m) > 1e-12:  # keep the tied joint inside its own limits
+                lo, hi = sorted(((mj.lower - off) / m, (mj.upper - off) / m))
                 lower[d], upper[d] = max(lower[d], lo), min(upper[d], hi)
         if np.any(lower > upper):
             raise HandLoadError("mimic joints leave an empty range for their source joint")

@@ -22,7 +22,7 @@ def build_hull_cache(mesh_dir: Path, out: Path) -> None:
         if path.suffix.lower() not in {".ply", ".stl", ".obj", ".dae"}:
             continue
         mesh = trimesh.load(str(path), force="mesh")
-        hull = mesh.convex_hull
+        hull = mesh.convex_hull  # type: ignore[attr-defined]
         arrays[f"{path.name}/v"] = np.asarray(hull.vertices, dtype=np.float64)
         arrays[f"{path.name}/f"] = np.asarray(hull.faces, dtype=np.int32)
     np.savez_compressed(out, **arrays)  # type: ignore[arg-type]

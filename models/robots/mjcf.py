@@ -84,7 +84,7 @@ def parse_mjcf(path: str, name: str = "robot") -> RobotDescription:
                     np.asarray(m.jnt_axis[j], dtype=np.float64),
                     lo,
                     hi,
-                )  # fmt: skip
+                )
             )
             prev = child
         correction[b] = np.linalg.inv(total)

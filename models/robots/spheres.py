@@ -15,6 +15,8 @@ gap (< ``MARGIN`` for the meshes we ship: tests check fresh samples with a state
 
 from __future__ import annotations
 
+from typing import cast
+
 import numpy as np
 import trimesh
 
@@ -58,7 +60,7 @@ def sample_surface(meshes: list[trimesh.Trimesh], count: int, oversample: int = 
 
     Samples ``oversample * count`` points by area (seed 0), then keeps ``count`` by farthest-point sampling.
     """
-    mesh = trimesh.util.concatenate([m for m in meshes if len(m.faces)])
+    mesh = cast(trimesh.Trimesh, trimesh.util.concatenate([m for m in meshes if len(m.faces)]))
     pts, face = trimesh.sample.sample_surface(mesh, oversample * count, seed=0)
     normals = np.asarray(mesh.face_normals)[face]
     keep = farthest_points(pts, count)

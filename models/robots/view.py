@@ -27,29 +27,76 @@ def hand_figure(hand: Hand, normal_length: float = 0.01) -> Any:
         T = poses[link]
         v = np.asarray(mesh.vertices) @ T[:3, :3].T + T[:3, 3]
         f = np.asarray(mesh.faces)
-        traces.append(go.Mesh3d(x=v[:, 0], y=v[:, 1], z=v[:, 2], i=f[:, 0], j=f[:, 1], k=f[:, 2], name=link,
-                                color="lightsteelblue", opacity=0.6, legendgroup="meshes", showlegend=False))  # fmt: skip
+        traces.append(
+            go.Mesh3d(
+                x=v[:, 0],
+                y=v[:, 1],
+                z=v[:, 2],
+                i=f[:, 0],
+                j=f[:, 1],
+                k=f[:, 2],
+                name=link,
+                color="lightsteelblue",
+                opacity=0.6,
+                legendgroup="meshes",
+                showlegend=False,
+            )
+        )
     centres, _ = hand.spheres(pos, quat, q, jacobian=False)
     for c, r in zip(centres[0].numpy(), hand.sphere_radii, strict=True):
         x, y, z = _sphere_mesh(c, float(r))
-        traces.append(go.Surface(x=x, y=y, z=z, opacity=0.25, showscale=False, colorscale=[[0, "orange"], [1, "orange"]],
-                                 legendgroup="spheres", showlegend=False, hoverinfo="skip"))  # fmt: skip
+        traces.append(
+            go.Surface(
+                x=x,
+                y=y,
+                z=z,
+                opacity=0.25,
+                showscale=False,
+                colorscale=[[0, "orange"], [1, "orange"]],
+                legendgroup="spheres",
+                showlegend=False,
+                hoverinfo="skip",
+            )
+        )
     p, n = hand.surface_points, hand.surface_normals
-    traces.append(go.Scatter3d(x=p[:, 0], y=p[:, 1], z=p[:, 2], mode="markers", marker={"size": 2, "color": "black"},
-                               name="surface points"))  # fmt: skip
+    traces.append(
+        go.Scatter3d(
+            x=p[:, 0], y=p[:, 1], z=p[:, 2], mode="markers", marker={"size": 2, "color": "black"}, name="surface points"
+        )
+    )
     seg = np.full((3 * len(p), 3), np.nan)
     seg[0::3], seg[1::3] = p, p + normal_length * n
-    traces.append(go.Scatter3d(x=seg[:, 0], y=seg[:, 1], z=seg[:, 2], mode="lines", line={"color": "green", "width": 1},
-                               name="normals"))  # fmt: skip
+    traces.append(
+        go.Scatter3d(
+            x=seg[:, 0], y=seg[:, 1], z=seg[:, 2], mode="lines", line={"color": "green", "width": 1}, name="normals"
+        )
+    )
     tips = hand.fingertips(pos, quat, q)[0].numpy()
-    traces.append(go.Scatter3d(x=tips[:, 0], y=tips[:, 1], z=tips[:, 2], mode="markers+text", text=hand.fingertip_links,
-                               marker={"size": 6, "color": "red"}, name="fingertips"))  # fmt: skip
+    traces.append(
+        go.Scatter3d(
+            x=tips[:, 0],
+            y=tips[:, 1],
+            z=tips[:, 2],
+            mode="markers+text",
+            text=hand.fingertip_links,
+            marker={"size": 6, "color": "red"},
+            name="fingertips",
+        )
+    )
     a = 0.05 * hand.approach_axis
-    traces.append(go.Scatter3d(x=[0, a[0]], y=[0, a[1]], z=[0, a[2]], mode="lines", line={"color": "blue", "width": 6},
-                               name="approach axis"))  # fmt: skip
+    traces.append(
+        go.Scatter3d(
+            x=[0, a[0]],
+            y=[0, a[1]],
+            z=[0, a[2]],
+            mode="lines",
+            line={"color": "blue", "width": 6},
+            name="approach axis",
+        )
+    )
     fig = go.Figure(traces)
     fig.update_layout(
-        title=f"{hand.name}: {hand.dof} DoF, {hand.num_fingertips} fingertips, {len(hand.sphere_radii)} spheres (rest pose)",
+        title=f"{hand.name}: {hand.dof} DoF, {hand.num_fingertips} tips, {len(hand.sphere_radii)} spheres (rest)",
         scene={"aspectmode": "data"},
     )
     return fig

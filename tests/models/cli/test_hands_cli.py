@@ -40,7 +40,10 @@ def test_show_unknown_hand(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
 
 
 def test_bench_runs(capsys: pytest.CaptureFixture[str]) -> None:
-    args = _parse(bench_hands.register, ["hands", "--hands", "panda_gripper", "--batches", "1", "--iters", "2", "--sdf-points", "512"])
+    args = _parse(
+        bench_hands.register,
+        ["hands", "--hands", "panda_gripper", "--batches", "1", "--iters", "2", "--sdf-points", "512"],
+    )
     assert args.func(args) == 0
     out = capsys.readouterr().out
     assert "panda_gripper" in out and "KD-tree" in out

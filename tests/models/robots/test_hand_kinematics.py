@@ -66,7 +66,7 @@ def test_jacobians_match_finite_differences(name: str) -> None:
     J_fd = _fd_jacobian(hand, hand.fingertips, pos, quat, q)
     assert float((J - J_fd).abs().max()) < 1e-6
     c, Jc = hand.spheres(pos, quat, q)
-    Jc_fd = _fd_jacobian(hand, lambda *a: hand.spheres(*a, jacobian=False)[0], pos, quat, q)
+    Jc_fd = _fd_jacobian(hand, lambda p_, q_, j_: hand.spheres(p_, q_, j_, jacobian=False)[0], pos, quat, q)
     assert c.shape == (3, len(hand.sphere_radii), 3)
     assert float((Jc - Jc_fd).abs().max()) < 1e-6
 

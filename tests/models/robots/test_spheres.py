@@ -42,8 +42,8 @@ def test_self_collision_pairs_are_clear_at_rest_and_skip_adjacent(name: str) -> 
         ba, bb = bodies[links[a]], bodies[links[b]]
         assert tree.parent[ba] != bb and tree.parent[bb] != ba
     d = torch.float64
-    c, _ = hand.spheres(torch.zeros(1, 3, dtype=d), torch.tensor([[1.0, 0, 0, 0]], dtype=d),
+    ct, _ = hand.spheres(torch.zeros(1, 3, dtype=d), torch.tensor([[1.0, 0, 0, 0]], dtype=d),
                         torch.as_tensor(hand.rest[None]), jacobian=False)  # fmt: skip
-    c = c[0].numpy()
+    c = ct[0].numpy()
     dist = np.linalg.norm(c[P[:, 0]] - c[P[:, 1]], axis=1)
     assert np.all(dist >= hand.sphere_radii[P[:, 0]] + hand.sphere_radii[P[:, 1]])

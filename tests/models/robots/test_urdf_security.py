@@ -58,8 +58,9 @@ def test_external_entity_is_rejected() -> None:
 
 def test_mesh_filename_is_never_opened() -> None:
     doc = _urdf(geom='<mesh filename="/etc/passwd"/>')
-    with mock.patch("builtins.open", side_effect=AssertionError("opened a file")), mock.patch(
-        "trimesh.load", side_effect=AssertionError("loaded a mesh")
+    with (
+        mock.patch("builtins.open", side_effect=AssertionError("opened a file")),
+        mock.patch("trimesh.load", side_effect=AssertionError("loaded a mesh")),
     ):
         hand = load_hand(doc, fingertips=["finger"])
     assert "finger" not in hand.collision_meshes  # the mesh was ignored, the palm box kept
