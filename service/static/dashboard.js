@@ -21,7 +21,8 @@ function fill(tableId, rows, render) {
 
 function plots(data) {
   const t = data.series.map((s) => new Date(s.t * 1000));
-  const layout = { margin: { l: 40, r: 10, t: 10, b: 30 }, legend: { orientation: "h" }, height: 250 };
+  const layout = { margin: { l: 40, r: 50, t: 10, b: 50 }, legend: { orientation: "h", y: -0.3 }, height: 250,
+                  yaxis: { rangemode: "tozero" } };
   Plotly.react("states-plot", STATES.map((state) => ({
     x: t, y: data.series.map((s) => s.by_state[state] || 0), name: state, mode: "lines",
     line: { color: COLOURS[state] },
@@ -36,7 +37,7 @@ function plots(data) {
     { x: t, y: data.series.map((s) => s.depth), name: "queue depth", mode: "lines" },
     { x: t, y: data.series.map((s) => s.running), name: "running", mode: "lines" },
     { x: t, y: rate, name: "finished/s", mode: "lines", yaxis: "y2" },
-  ], { ...layout, yaxis2: { overlaying: "y", side: "right", title: "jobs/s" } },
+  ], { ...layout, yaxis2: { overlaying: "y", side: "right", title: "jobs/s", rangemode: "tozero" } },
   { displayModeBar: false, responsive: true });
 }
 

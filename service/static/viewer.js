@@ -42,7 +42,7 @@ function traces(scene, proposal) {
     const colour = scene.heatmap || (scene.region_mask ? scene.region_mask : pts.map((p) => p[2]));
     out.push({ type: "scatter3d", mode: "markers", name: scene.heatmap ? "object (heatmap)" : "object",
       x: col(pts, 0), y: col(pts, 1), z: col(pts, 2),
-      marker: { size: 2, color: colour, colorscale: scene.heatmap ? "Hot" : "Greys", reversescale: !!scene.heatmap,
+      marker: { size: 2, color: colour, colorscale: scene.heatmap ? "YlOrRd" : "Greys",
                 showscale: !!scene.heatmap, colorbar: { title: "heat", len: 0.5 } } });
   }
   if (!proposal) return out;
@@ -79,10 +79,6 @@ function traces(scene, proposal) {
 function draw(scene, index) {
   const job = scene.job, result = job.result;
   const proposal = result && result.proposals.length ? result.proposals[index] : null;
-  Plotly.react("scene", traces(scene, proposal), {
-    margin: { l: 0, r: 0, t: 0, b: 0 }, legend: { x: 0, y: 1 },
-    scene: { aspectmode: "data", xaxis: { title: "x (m)" }, yaxis: { title: "y (m)" }, zaxis: { title: "z (m)" } },
-  }, { responsive: true });
   if (proposal) {
     const q = proposal.quality;
     rows("quality", [["success", q.success], ["converged", q.converged], ["reason", q.reason],
@@ -99,6 +95,14 @@ function draw(scene, index) {
   rows("timings", Object.entries({ ...(result ? result.timings : {}), ...job.timings }).map(([k, v]) => [k, mani.seconds(v)]));
   document.getElementById("note").textContent = scene.points ? "" :
     "The object's points are not known to this API process; showing the result only.";
+  try {
+  Plotly.react("scene", traces(scene, proposal), {
+    margin: { l: 0, r: 0, t: 0, b: 0 }, legend: { x: 0, y: 1 },
+    scene: { aspectmode: "data", xaxis: { title: "x (m)" }, yaxis: { title: "y (m)" }, zaxis: { title: "z (m)" } },
+  }, { responsive: true });
+  } catch (err) {
+    document.getElementById("error").textContent = "3D view unavailable (WebGL): " + err.message;
+  }
 }
 
 async function load() {

@@ -1,0 +1,61 @@
+"""Dashboard and result viewer in headless Chromium against a running service (offline: no CDN)."""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterator
+
+import httpx
+import pytest
+
+from service.app import create_app
+from service.settings import Settings
+
+from .browser import chromium, dump_dom, screenshot
+from .fakes import FakeQueue
+from .helpers import request_body
+from .server import serving
+
+KEY = "page-test-key-1"
+
+
+@pytest.fixture(scope="module")
+def service() -> Iterator[str]:
+    chromium()
+    with serving(create_app(Settings(api_keys=[KEY], dashboard_sample_s=0.2), queue=FakeQueue())) as base:
+        yield base
+
+
+def test_pages_load_nothing_from_outside(service: str) -> None:
+    for path in ("/", "/v1/jobs/x/view"):
+        html = httpx.get(service + path).text
+        sources = re.findall(r'(?:src|href)="([^"]+)"', html)
+        assert sources and all(s.startswith("/") for s in sources), sources
+
+
+def test_dashboard_shows_the_submitted_job(service: str) -> None:
+    auth = {"Authorization": f"Bearer {KEY}"}
+    job_id = httpx.post(f"{service}/v1/synthesize", json=request_body(), headers=auth).headers["x-job-id"]
+    dom = dump_dom(f"{service}/#key={KEY}")
+    assert job_id in dom and 'class="state-succeeded"' in dom
+    assert "could not load" not in dom and "main-svg" in dom  # plotly drew the time-series charts
+    png = screenshot(f"{service}/#key={KEY}", "dashboard.png")
+    assert png.stat().st_size > 10_000
+
+
+def test_viewer_draws_the_result(service: str) -> None:
+    auth = {"Authorization": f"Bearer {KEY}"}
+    response = httpx.post(f"{service}/v1/synthesize", json=request_body(return_heatmap=True), headers=auth)
+    job_id = response.headers["x-job-id"]
+    url = f"{service}/v1/jobs/{job_id}/view#key={KEY}"
+    dom = dump_dom(url)
+    assert "could not load" not in dom
+    assert "Ferrari–Canny ε" in dom and "converged" in dom and "fake_hand" in dom
+    assert "gl-container" in dom and "3D view unavailable" not in dom  # plotly's WebGL scene was drawn
+    png = screenshot(url, "viewer.png", budget_ms=8000)
+    assert png.stat().st_size > 10_000
+
+
+def test_viewer_without_key_says_why(service: str) -> None:
+    dom = dump_dom(f"{service}/v1/jobs/whatever/view")
+    assert "could not load the job" in dom and "API key" in dom
