@@ -315,6 +315,8 @@ def robot_registration(
         text = urdf.decode("utf-8")
     elif isinstance(urdf, os.PathLike) or (isinstance(urdf, str) and not urdf.lstrip().startswith("<")):
         path = Path(urdf)
+        if not path.is_file():
+            raise FileNotFoundError(f"urdf: no file {str(path)[:80]!r}; pass URDF text (starting with '<') or a path")
         text = path.read_text(encoding="utf-8")
         name = name or path.stem
     else:
