@@ -68,15 +68,9 @@ def sample_surface(meshes: list[trimesh.Trimesh], count: int, oversample: int = 
 
 
 def farthest_points(points: np.ndarray, count: int) -> np.ndarray:
-    """Indices of ``count`` points by farthest-point sampling starting from index 0 (deterministic)."""
-    n = len(points)
-    if count >= n:
-        return np.arange(n)
-    idx = np.zeros(count, dtype=np.int64)
-    dist = np.full(n, np.inf)
-    cur = 0
-    for i in range(count):
-        idx[i] = cur
-        dist = np.minimum(dist, np.einsum("ij,ij->i", points - points[cur], points - points[cur]))
-        cur = int(np.argmax(dist))
-    return idx
+    """Indices of ``count`` points by exact farthest-point sampling from index 0 (deterministic; fpsample)."""
+    import fpsample
+
+    if count >= len(points):
+        return np.arange(len(points))
+    return np.asarray(fpsample.fps_sampling(np.ascontiguousarray(points, dtype=np.float64), count, start_idx=0))
