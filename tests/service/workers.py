@@ -1,0 +1,53 @@
+"""Real queue backends for the end-to-end tests: embedded (workers spawned by the queue) or Redis Streams
+(workers as separate `mani worker` processes, keys under the test's prefix)."""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from workers.queue import JobQueue, create_queue
+
+STAGED = "workers.testing:StagedPipeline"
+
+
+@contextlib.contextmanager
+def start_queue_and_workers(
+    request: pytest.FixtureRequest, *, pipeline: str = STAGED, max_queue: int = 100, **pipeline_options: Any
+) -> Iterator[JobQueue]:
+    """A queue (not yet started: the app's lifespan starts it) with one worker behind it."""
+    backend = request.param if hasattr(request, "param") else "embedded"
+    options: dict[str, Any] = {"pipeline": pipeline, "pipeline_options": pipeline_options, "max_queue": max_queue}
+    if backend == "embedded":
+        yield create_queue(None, redis_url=None, concurrency=1, **options)
+        return
+    if importlib.util.find_spec("workers.queue.redis") is None or importlib.util.find_spec("workers.cli") is None:
+        pytest.skip("the Redis backend or `mani worker` is not part of this checkout yet")
+    url = request.getfixturevalue("redis_url")
+    prefix = request.getfixturevalue("redis_prefix")
+    env = dict(
+        os.environ,
+        MANI_REDIS_URL=url,
+        MANI_QUEUE_PREFIX=prefix,
+        MANI_PIPELINE=pipeline,
+        MANI_PIPELINE_OPTIONS=json.dumps(pipeline_options),
+        MANI_LOG_LEVEL="WARNING",
+    )
+    cmd = [sys.executable, "-m", "clients.cli.main", "worker", "--redis", url, "--concurrency", "1"]
+    worker = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    try:
+        yield create_queue(url, queue_prefix=prefix, concurrency=0, **options)
+    finally:
+        worker.terminate()
+        try:
+            worker.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            worker.kill()
