@@ -1,0 +1,101 @@
+"""Regenerate the small example inputs in ``examples/data/`` (committed; run this only to change them).
+
+Objects come from the project's own seeded generator (`models.objects`), so they are the same shapes the
+evaluation uses; each is saved with its oriented points and its mesh. Needs the full install (trimesh); the
+other examples need only the SDK.
+
+    .venv/bin/python examples/make_data.py
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+DATA = Path(__file__).resolve().parent / "data"
+NUM_POINTS = 1024
+
+# (file name, kind, largest extent in metres, seed)
+OBJECTS = [
+    ("box.npz", "box", 0.08, 1),
+    ("cylinder.npz", "cylinder", 0.10, 2),
+    ("composite.npz", "composite", 0.09, 3),
+    ("convex.npz", "convex", 0.07, 4),
+]
+MESH_FILES = [("blob.ply", "blob", 0.08, 5)]
+CLOUD_FILES = [("sphere_cloud.ply", "sphere", 0.06, 6)]
+
+TWO_FINGER_URDF = """<?xml version="1.0" encoding="utf-8"?>
+<!-- A minimal two-finger gripper for the "register a custom hand" example: a 60x30x20 mm palm box, two fingers
+     of two revolute joints each (box links), primitive collision geometry only (user URDFs never load meshes).
+     Palm frame: +z is the approach direction; the fingers sit at y = -/+20 mm and close towards each other. -->
+<robot name="two_finger">
+  <link name="palm">
+    <collision><origin xyz="0 0 0.01"/><geometry><box size="0.06 0.03 0.02"/></geometry></collision>
+  </link>
+  <link name="left_proximal">
+    <collision><origin xyz="0 0 0.025"/><geometry><box size="0.018 0.012 0.05"/></geometry></collision>
+  </link>
+  <link name="left_distal">
+    <collision><origin xyz="0 0 0.02"/><geometry><box size="0.016 0.01 0.04"/></geometry></collision>
+  </link>
+  <link name="right_proximal">
+    <collision><origin xyz="0 0 0.025"/><geometry><box size="0.018 0.012 0.05"/></geometry></collision>
+  </link>
+  <link name="right_distal">
+    <collision><origin xyz="0 0 0.02"/><geometry><box size="0.016 0.01 0.04"/></geometry></collision>
+  </link>
+  <joint name="left_base" type="revolute">
+    <parent link="palm"/><child link="left_proximal"/>
+    <origin xyz="0 -0.02 0.02"/><axis xyz="1 0 0"/><limit lower="-0.6" upper="0.6" effort="5" velocity="2"/>
+  </joint>
+  <joint name="left_tip" type="revolute">
+    <parent link="left_proximal"/><child link="left_distal"/>
+    <origin xyz="0 0 0.05"/><axis xyz="1 0 0"/><limit lower="-1.2" upper="0.2" effort="5" velocity="2"/>
+  </joint>
+  <joint name="right_base" type="revolute">
+    <parent link="palm"/><child link="right_proximal"/>
+    <origin xyz="0 0.02 0.02"/><axis xyz="1 0 0"/><limit lower="-0.6" upper="0.6" effort="5" velocity="2"/>
+  </joint>
+  <joint name="right_tip" type="revolute">
+    <parent link="right_proximal"/><child link="right_distal"/>
+    <origin xyz="0 0 0.05"/><axis xyz="1 0 0"/><limit lower="-0.2" upper="1.2" effort="5" velocity="2"/>
+  </joint>
+</robot>
+"""
+
+
+def _make(kind: str, size: float, seed: int):  # type: ignore[no-untyped-def]
+    from models.objects import make_object
+
+    return make_object(kind, size, seed, NUM_POINTS)
+
+
+def main() -> None:
+    DATA.mkdir(exist_ok=True)
+    for name, kind, size, seed in OBJECTS:
+        obj = _make(kind, size, seed)
+        np.savez_compressed(
+            DATA / name,
+            points=obj.points.astype(np.float32),
+            normals=obj.normals.astype(np.float32),
+            vertices=np.asarray(obj.mesh.vertices, dtype=np.float32),
+            faces=np.asarray(obj.mesh.faces, dtype=np.int32),
+        )
+    for name, kind, size, seed in MESH_FILES:
+        _make(kind, size, seed).mesh.export(DATA / name)
+    for name, kind, size, seed in CLOUD_FILES:
+        obj = _make(kind, size, seed)
+        rows = np.hstack([obj.points, obj.normals])
+        header = ["ply", "format ascii 1.0", f"element vertex {len(rows)}"]
+        header += [f"property float {axis}" for axis in ("x", "y", "z", "nx", "ny", "nz")] + ["end_header"]
+        body = [" ".join(f"{v:.6f}" for v in row) for row in rows]
+        (DATA / name).write_text("\n".join(header + body) + "\n")
+    (DATA / "two_finger.urdf").write_text(TWO_FINGER_URDF)
+    for path in sorted(DATA.iterdir()):
+        print(f"{path.relative_to(DATA.parent)}  {path.stat().st_size / 1024:.0f} KiB")
+
+
+if __name__ == "__main__":
+    main()
