@@ -1,0 +1,70 @@
+"""The small interface between a worker and the science it runs (an engine behind a protocol, STYLE.md §4).
+
+A worker hands a `Pipeline` a micro-batch of `JobInput` and gets one outcome per job: a `SynthesisResult`, or an
+`ErrorBody` (``type`` "Cancelled" / "DeadlineExceeded" / the error's class). The default is
+`workers.models_pipeline.ModelsPipeline` (the `models` pipeline); `workers.testing.StagedPipeline` is a small
+real pipeline for queue tests and benchmarks (it walks the stages, does no science). Chosen by
+``QueueSettings.pipeline`` ("module:attr") with ``pipeline_options`` as keyword arguments. This module is
+torch-free; a pipeline imports its heavy dependencies in its own module, in the worker process.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
+
+from clients.schemas import ErrorBody, RobotPublic, RobotRegister, Stage, SynthesisRequest, SynthesisResult
+
+Outcome = SynthesisResult | ErrorBody
+ProgressFn = Callable[[str, Stage, float, int | None, int | None], None]
+"""progress(job_id, stage, fraction, iteration, max_iterations)."""
+CancelFn = Callable[[str], bool]
+"""should_cancel(job_id): whether the job was cancelled (checked between stages)."""
+
+
+@dataclass
+class JobInput:
+    """One job as a pipeline sees it."""
+
+    id: str
+    request: SynthesisRequest
+    deadline: float | None = None  # unix time; the pipeline stops refining when it passes
+    robot: RobotRegister | None = None  # the registered description when the request names a user robot
+
+
+@runtime_checkable
+class Pipeline(Protocol):
+    """What a worker needs from the science."""
+
+    model_loaded: bool
+    model_version: str | None
+
+    def robots(self) -> list[RobotPublic]:
+        """The built-in hands this pipeline can use (published by the worker at start-up)."""
+        ...
+
+    def validate_robot(self, robot: RobotRegister) -> RobotPublic:
+        """Load a user's robot with the hardened loader. Raises ValueError with the reason when invalid."""
+        ...
+
+    def run(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
+        """Run a micro-batch; one outcome per job, in order. May raise (the worker isolates the bad job)."""
+        ...
+
+
+def load_pipeline(spec: str, options: dict[str, Any] | None = None) -> Pipeline:
+    """Instantiate ``"module:attr"`` with ``options`` as keyword arguments."""
+    module_name, _, attr = spec.partition(":")
+    factory = getattr(importlib.import_module(module_name), attr)
+    pipeline = factory(**(options or {}))
+    if not isinstance(pipeline, Pipeline):
+        raise TypeError(f"{spec} does not implement workers.pipeline.Pipeline")
+    return pipeline
+
+
+def error_from_exception(exc: BaseException) -> ErrorBody:
+    """An error body naming the exception's class and message."""
+    message = str(exc) or exc.__class__.__name__
+    return ErrorBody(error=message[:2000], type=exc.__class__.__name__)

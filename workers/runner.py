@@ -1,0 +1,64 @@
+"""Run one micro-batch through a pipeline, backend-agnostic: drop expired and cancelled jobs first, isolate
+failures (a crashing batch is retried job by job so only the bad job fails), never raise."""
+
+from __future__ import annotations
+
+import logging
+import time
+
+from clients.schemas import ErrorBody, SynthesisResult
+from workers.logs import job_context
+from workers.pipeline import CancelFn, JobInput, Outcome, Pipeline, ProgressFn, error_from_exception
+from workers.queue.records import cancelled_error, deadline_error
+
+log = logging.getLogger("workers.runner")
+
+
+def run_batch(
+    pipeline: Pipeline, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn
+) -> dict[str, Outcome]:
+    """Outcome of every job of ``jobs`` by id."""
+    outcomes: dict[str, Outcome] = {}
+    live: list[JobInput] = []
+    now = time.time()
+    for job in jobs:
+        if should_cancel(job.id):
+            outcomes[job.id] = cancelled_error()
+        elif job.deadline is not None and job.deadline <= now:
+            outcomes[job.id] = deadline_error()
+        else:
+            live.append(job)
+    for job_id, outcome in outcomes.items():
+        with job_context(job_id):
+            reason = outcome.type if isinstance(outcome, ErrorBody) else ""
+            log.info("job dropped before start", extra={"reason": reason})
+    if not live:
+        return outcomes
+    try:
+        results = _call(pipeline, live, progress, should_cancel)
+    except Exception as exc:  # a crashed pipeline call fails jobs, never the worker
+        if len(live) == 1:
+            outcomes[live[0].id] = _failed(live[0], exc)
+            return outcomes
+        log.warning("batch of %d failed (%s); retrying one by one", len(live), exc)
+        for job in live:
+            try:
+                outcomes[job.id] = _call(pipeline, [job], progress, should_cancel)[0]
+            except Exception as one:
+                outcomes[job.id] = _failed(job, one)
+        return outcomes
+    outcomes.update({job.id: result for job, result in zip(live, results, strict=True)})
+    return outcomes
+
+
+def _call(pipeline: Pipeline, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
+    results = pipeline.run(jobs, progress, should_cancel)
+    if len(results) != len(jobs) or not all(isinstance(r, SynthesisResult | ErrorBody) for r in results):
+        raise RuntimeError(f"pipeline returned {len(results)} outcomes for {len(jobs)} jobs")
+    return results
+
+
+def _failed(job: JobInput, exc: Exception) -> ErrorBody:
+    with job_context(job.id):
+        log.exception("pipeline failed")
+    return error_from_exception(exc)

@@ -1,0 +1,110 @@
+"""`StagedPipeline`: a small, real, science-free pipeline for queue tests and benchmarks.
+
+It walks a job through the real stage sequence (network for the whole micro-batch at once, then per job:
+initialisation, refinement k/max, verification) sleeping ``stage_seconds`` per stage, honours cancellation
+between stages and deadlines, and answers a `SynthesisResult` with no proposals and ``model_version``
+"staged-test". It is NOT the science: it exists so the queue mechanics can be tested the way arq tests use a burst
+worker. Fault injection for tests: a request whose ``options.seed`` equals ``crash_seed`` kills its worker
+process (SIGKILL), one equal to ``fail_seed`` raises.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+import xml.etree.ElementTree as ET
+
+from clients.schemas import RobotPublic, RobotRegister, Stage, SynthesisResult
+from workers.pipeline import CancelFn, JobInput, Outcome, ProgressFn
+from workers.queue.records import cancelled_error, deadline_error
+
+TEST_HAND = RobotPublic(
+    name="test_gripper",
+    builtin=True,
+    dof=1,
+    joint_names=["finger"],
+    lower=[0.0],
+    upper=[0.04],
+    fingertips=["left_tip", "right_tip"],
+    source="workers.testing",
+)
+
+
+class StagedPipeline:
+    """Stage-walking test pipeline (see module doc)."""
+
+    model_version: str | None = "staged-test"
+
+    def __init__(
+        self,
+        stage_seconds: float = 0.0,
+        batch_seconds: float | None = None,
+        iterations: int = 3,
+        crash_seed: int | None = None,
+        fail_seed: int | None = None,
+        model_loaded: bool = True,
+    ) -> None:
+        self.stage_seconds = stage_seconds
+        self.batch_seconds = stage_seconds if batch_seconds is None else batch_seconds
+        self.iterations = iterations
+        self.crash_seed = crash_seed
+        self.fail_seed = fail_seed
+        self.model_loaded = model_loaded
+
+    def robots(self) -> list[RobotPublic]:
+        return [TEST_HAND]
+
+    def validate_robot(self, robot: RobotRegister) -> RobotPublic:
+        try:
+            root = ET.fromstring(robot.urdf)
+        except ET.ParseError as exc:
+            raise ValueError(f"urdf: malformed XML: {exc}") from exc
+        if root.tag != "robot":
+            raise ValueError("urdf: root element must be <robot>")
+        links = {link.get("name") for link in root.iter("link")}
+        missing = [tip for tip in robot.fingertips if tip not in links]
+        if missing:
+            raise ValueError(f"fingertips: unknown links {missing}")
+        joints = [j.get("name") or "" for j in root.iter("joint") if j.get("type") in ("revolute", "prismatic")]
+        return RobotPublic(
+            name=robot.name,
+            builtin=False,
+            dof=len(joints),
+            joint_names=joints,
+            lower=[0.0] * len(joints),
+            upper=[1.0] * len(joints),
+            fingertips=list(robot.fingertips),
+            source="user",
+        )
+
+    def run(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
+        for job in jobs:
+            seed = job.request.options.seed
+            if self.crash_seed is not None and seed == self.crash_seed:
+                os.kill(os.getpid(), signal.SIGKILL)
+            if self.fail_seed is not None and seed == self.fail_seed:
+                raise RuntimeError(f"injected failure (seed {seed})")
+            progress(job.id, Stage.NETWORK, 0.0, None, None)
+        t0 = time.perf_counter()
+        time.sleep(self.batch_seconds)
+        network = time.perf_counter() - t0
+        return [self._one(job, network, progress, should_cancel) for job in jobs]
+
+    def _one(self, job: JobInput, network: float, progress: ProgressFn, should_cancel: CancelFn) -> Outcome:
+        timings = {"network": network}
+        iterations = min(self.iterations, job.request.options.max_iterations)
+        steps: list[tuple[Stage, int | None]] = [(Stage.INITIALISATION, None)]
+        steps += [(Stage.REFINEMENT, k) for k in range(1, iterations + 1)]
+        steps.append((Stage.VERIFICATION, None))
+        for i, (stage, k) in enumerate(steps):
+            if should_cancel(job.id):
+                return cancelled_error()
+            if job.deadline is not None and time.time() > job.deadline:
+                return deadline_error("while it ran")
+            progress(job.id, stage, i / len(steps), k, iterations if k else None)
+            t0 = time.perf_counter()
+            time.sleep(self.stage_seconds)
+            timings[stage.value] = timings.get(stage.value, 0.0) + time.perf_counter() - t0
+        hand = job.request.robot.name or "inline"
+        return SynthesisResult(hand=hand, model_version=self.model_version or "", proposals=[], timings=timings)
