@@ -47,3 +47,21 @@ def test_self_collision_pairs_are_clear_at_rest_and_skip_adjacent(name: str) -> 
     c = ct[0].numpy()
     dist = np.linalg.norm(c[P[:, 0]] - c[P[:, 1]], axis=1)
     assert np.all(dist >= hand.sphere_radii[P[:, 0]] + hand.sphere_radii[P[:, 1]])
+
+
+@pytest.mark.parametrize("name", list_hands())
+def test_surface_normals_point_outward(name: str) -> None:
+    """Stepping 1 mm against the normal lands inside the hand (some body's convex hull) for nearly all points."""
+    hand = get_hand(name)
+    d = torch.float64
+    poses = hand.link_poses(torch.zeros(1, 3, dtype=d), torch.tensor([[1.0, 0, 0, 0]], dtype=d),
+                            torch.as_tensor(hand.rest[None]))  # fmt: skip
+    inner = hand.surface_points - 1e-3 * hand.surface_normals
+    inside = np.zeros(len(inner), dtype=bool)
+    for link, mesh in hand.collision_meshes.items():
+        T = poses[link][0].numpy()
+        hull = mesh.convex_hull
+        local = (inner - T[:3, 3]) @ T[:3, :3]
+        slack = np.einsum("ij,ij->i", hull.face_normals, hull.triangles_center)[None] - local @ hull.face_normals.T
+        inside |= slack.min(axis=1) > 0
+    assert inside.mean() > 0.95, f"{name}: only {inside.mean():.1%} of inward steps land inside the hand"
