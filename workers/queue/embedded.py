@@ -172,7 +172,6 @@ class EmbeddedQueue(JobQueue):
             workers = list(self._workers.values())
             for job_id in list(self._pending):
                 self._finish(self._jobs[job_id], error=ErrorBody(error="queue shut down", type="QueueShutdown"))
-            self._pending.clear()
         for worker in workers:
             with contextlib.suppress(OSError):
                 worker.send({"op": "stop"})
@@ -482,8 +481,6 @@ class EmbeddedQueue(JobQueue):
                 if job is not None and job.deadline is not None and job.deadline <= now and not job.state.terminal:
                     self._finish(job, error=ErrorBody(error="job deadline passed before it started",
                                                       type="DeadlineExceeded"))  # fmt: skip
-            if len(self._pending) > 64 and any(self._jobs[i].state.terminal for i in list(self._pending)[:64]):
-                self._pending = deque(i for i in self._pending if not self._jobs[i].state.terminal)
             ttl = self.settings.result_ttl
             while self._finished:
                 oldest = next(iter(self._finished))
@@ -498,6 +495,9 @@ class EmbeddedQueue(JobQueue):
 
     def _finish(self, job: _Job, *, result: SynthesisResult | None = None, error: ErrorBody | None = None) -> None:
         """Make ``job`` terminal (caller holds the lock) and wake its waiters."""
+        if job.state is JobState.QUEUED:
+            with contextlib.suppress(ValueError):
+                self._pending.remove(job.id)
         job.finished_at = time.time()
         job.result, job.error, job.payload = result, error, b""
         job.state = JobState.SUCCEEDED if error is None else state_for_error(error)

@@ -1,0 +1,51 @@
+"""Shared helpers of the workers tests: small valid requests and an asyncio runner."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import Awaitable, Callable
+from typing import Any, TypeVar
+
+import numpy as np
+
+from clients.schemas import JobPublic, JobState, SynthesisRequest
+from workers.queue import JobQueue
+
+STAGED = "workers.testing:StagedPipeline"
+T = TypeVar("T")
+
+
+def small_request(seed: int = 0, hand: str = "test_gripper", **options: Any) -> SynthesisRequest:
+    """A valid 64-point sphere request (force closure)."""
+    rng = np.random.default_rng(seed)
+    points = rng.normal(size=(64, 3))
+    points = 0.03 * points / np.linalg.norm(points, axis=1, keepdims=True)
+    return SynthesisRequest.model_validate(
+        {
+            "object": {"points": points, "normals": points / 0.03},
+            "task": {"kind": "force_closure"},
+            "robot": {"name": hand},
+            "options": {"seed": seed, "method": "direct_grasp", **options},
+        }
+    )
+
+
+def run(coro: Awaitable[T]) -> T:
+    return asyncio.run(coro)  # type: ignore[arg-type]
+
+
+async def until(queue: JobQueue, job_id: str, check: Callable[[JobPublic], bool], timeout: float = 20) -> JobPublic:
+    """Poll a job until ``check`` holds (fails the test after ``timeout`` s)."""
+    deadline = time.monotonic() + timeout
+    while True:
+        job = await queue.get(job_id, with_result=False)
+        if check(job):
+            return job
+        if time.monotonic() > deadline:
+            raise AssertionError(f"job {job_id} stuck in {job.state} / {job.progress}")
+        await asyncio.sleep(0.01)
+
+
+def running(job: JobPublic) -> bool:
+    return job.state is JobState.RUNNING and job.progress.stage.value != "queued"
