@@ -46,6 +46,12 @@ READ_MARGIN_S = 10.0
 _RETRY_STATUSES = frozenset({429, 503})
 _RETRY_STATUSES_IDEMPOTENT = frozenset({429, 502, 503, 504})
 _IDEMPOTENT = frozenset({"GET", "HEAD", "DELETE", "OPTIONS"})
+# A finished job's error type → its state (anything else: failed).
+_ERROR_STATES = {
+    "Cancelled": JobState.CANCELLED,
+    "DeadlineExceeded": JobState.EXPIRED,
+    "ResultExpired": JobState.EXPIRED,
+}
 # Transport errors where the request surely did not reach the service: safe to retry any method.
 _NOT_SENT = (httpx.ConnectError, httpx.ConnectTimeout, httpx.PoolTimeout)
 # Transport errors after sending: retried only for idempotent methods.
@@ -249,6 +255,15 @@ class BaseClient:
             return self.retry_policy.delay(retry, None, self._rng)
         return None
 
+    def job_ended(self, job_id: str, response: httpx.Response) -> JobFailed:
+        """`JobFailed` for a synchronous answer that carries a finished job's error (``X-Job-ID`` + error body)."""
+        try:
+            body = ErrorBody.model_validate(decode_body(response.content, response.headers.get("content-type")))
+        except (DecodeError, pydantic.ValidationError):
+            body = ErrorBody(error=_text(response)[:500] or f"HTTP {response.status_code}", type="JobFailed")
+        state = _ERROR_STATES.get(body.type, JobState.FAILED)
+        return JobFailed(job_id, state, body)
+
     def transport_error(self, request: httpx.Request, exc: Exception) -> Exception:
         """The SDK error for a transport failure that is not retried any more."""
         if isinstance(exc, httpx.TimeoutException) and not isinstance(exc, httpx.ConnectTimeout | httpx.PoolTimeout):
@@ -265,6 +280,9 @@ class BaseClient:
         def parse(response: httpx.Response) -> SynthesisResult | JobCreated:
             if response.status_code == 202:
                 return self.parse(response, JobCreated)
+            job_id = response.headers.get("x-job-id")
+            if not response.is_success and job_id and response.status_code not in (429, 503):
+                raise self.job_ended(job_id, response)  # the job ran and ended without a result
             return self.parse(response, SynthesisResult)
 
         return Call(http, parse)

@@ -165,6 +165,10 @@ class FakeService:
                 job = self.advance(fake)
                 if job.result is not None:
                     return self.answer(request, job.result)
+                if job.error is not None:  # the service answers a finished job's error with its id
+                    response = self.answer(request, job.error, 422)
+                    response.headers["X-Job-ID"] = job.id
+                    return response
             url = f"http://testserver/v1/jobs/{fake.job.id}"
             return self.answer(request, JobCreated(id=fake.job.id, state=fake.job.state, url=url), 202)
         if path == "/v1/jobs" and method == "POST":

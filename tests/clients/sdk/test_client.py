@@ -142,11 +142,15 @@ def test_job_status_wait_cancel_and_events(make_client: MakeClient, fake: Any, o
     assert info.value.state is JobState.CANCELLED and info.value.job_id == other.id
 
 
-def test_failed_job_carries_its_error(make_client: MakeClient, fake: Any, object_points: np.ndarray) -> None:
-    fake.fail, fake.sync_finishes = True, False
+@pytest.mark.parametrize("sync", [True, False])
+def test_failed_job_carries_its_error(
+    make_client: MakeClient, fake: Any, object_points: np.ndarray, sync: bool
+) -> None:
+    fake.fail, fake.sync_finishes = True, sync  # sync: an error answer with X-Job-ID; else 202, then polling
     with pytest.raises(JobFailed) as info:
         make_client().synthesize(object_points)
     assert info.value.error is not None and info.value.error.type == "InfeasibleTask"
+    assert info.value.state is JobState.FAILED and info.value.job_id == "job-0"
     assert "InfeasibleTask" in str(info.value)
 
 
