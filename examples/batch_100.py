@@ -57,7 +57,7 @@ def main() -> int:
                 items[item.index] = item
                 states[item.state.value] += 1
                 bar.update(1)
-                bar.set_postfix(states)
+                bar.set_postfix(states, refresh=False)
 
     successes: Counter[str] = Counter()
     with args.out.open("w") as out:

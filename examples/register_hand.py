@@ -46,7 +46,9 @@ def main() -> int:
             object_from_file(HERE / "data" / "box.npz"), force_closure(), hand.name, method=args.method
         )
         best = result.best
-        assert best is not None
+        if best is None:
+            print(f"no hand pose found with {hand.name}")
+            return 1
         print(f"grasp with {hand.name}: success {best.quality.success}, joints {best.joint_values.round(3)}")
     return 0
 

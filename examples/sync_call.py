@@ -36,9 +36,11 @@ def main() -> int:
             print(f"synthesis failed: {exc}")
             return 1
 
-    best = result.best
-    assert best is not None
     print(f"hand {result.hand}, {len(result.proposals)} proposal(s), model {result.model_version}")
+    best = result.best
+    if best is None:
+        print("the service found no hand pose for this task")
+        return 1
     print(f"success {best.quality.success} ({best.quality.reason}, {best.quality.iterations} iterations)")
     print(f"palm position {best.palm_position.round(3)} m, quaternion {best.palm_quaternion.round(3)}")
     for tip, point, force in zip(best.fingertips, best.contact_points, best.forces, strict=True):

@@ -84,8 +84,11 @@ def run_list(args: argparse.Namespace) -> int:
     from rich.table import Table
 
     table = Table(title=f"recent jobs ({len(jobs)})")
-    for column in ("id", "state", "stage", "created", "finished", "worker", "batch", "error"):
-        table.add_column(column)
+    width = max((len(j.id) for j in jobs), default=8)
+    table.add_column("id", no_wrap=True, min_width=width)
+    table.add_column("state", no_wrap=True, min_width=9)
+    for column in ("stage", "created", "finished", "worker", "batch", "error"):
+        table.add_column(column, overflow="ellipsis")
     colours = {"succeeded": "green", "failed": "red", "running": "cyan", "cancelled": "yellow", "expired": "yellow"}
     for j in jobs:
         state = f"[{colours.get(j.state.value, 'white')}]{j.state.value}[/]"

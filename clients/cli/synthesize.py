@@ -218,7 +218,10 @@ def run(args: argparse.Namespace) -> int:
         common.print_json({"job_id": job.id, "result": result_to_dict(result)})
     else:
         console = common.stdout_console()
-        console.print(result_table(result))
+        if result.proposals:
+            console.print(result_table(result))
+        else:
+            console.print(f"[yellow]no proposal[/]: the service found no hand pose ({result.hand})")
         timings = ", ".join(f"{k} {v:.3f} s" for k, v in result.timings.items())
         console.print(f"job {job.id}" + (f" · {timings}" if timings else ""))
         for path, what in ((args.out, "result"), (args.view, "3D view")):
