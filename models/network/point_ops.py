@@ -151,4 +151,7 @@ def gather_points(features: torch.Tensor, idx: torch.Tensor) -> torch.Tensor:
 
 def interpolate(features: torch.Tensor, idx: torch.Tensor, weights: torch.Tensor) -> torch.Tensor:
     """Weighted sum of gathered features: (B, M, C) with idx/weights (B, N, k) → (B, N, C)."""
-    return (gather_points(features, idx) * weights.unsqueeze(-1)).sum(dim=-2)
+    out = gather_points(features, idx[..., 0]) * weights[..., :1]
+    for j in range(1, idx.shape[-1]):
+        out = out + gather_points(features, idx[..., j]) * weights[..., j : j + 1]
+    return out
