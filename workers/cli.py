@@ -1,0 +1,108 @@
+"""`mani worker`: run Redis Streams worker processes (scale-out; the embedded backend runs its own inside
+`mani serve`). A small supervisor starts ``--concurrency`` worker processes (`workers.worker`), restarts one that
+dies (a crashed job is re-delivered to a live worker), and on SIGTERM/SIGINT forwards SIGTERM so each finishes its
+current batch, then exits.
+
+Example::
+
+    MANI_REDIS_URL=redis://localhost:6379/0 mani worker --concurrency 2 --batch-size 4 --max-wait-ms 5
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import signal
+import subprocess
+import sys
+import time
+from typing import Any
+
+log = logging.getLogger("workers.cli")
+GRACE_S = 120.0
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``worker`` sub-command to `mani`'s sub-parsers."""
+    parser = subparsers.add_parser(
+        "worker",
+        help="run queue workers against Redis (scale-out)",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--redis", metavar="URL", help="Redis URL (default: $MANI_REDIS_URL)")
+    parser.add_argument(
+        "--queue", metavar="PREFIX", help="key prefix of the queue (default: $MANI_QUEUE_PREFIX, mani:)"
+    )
+    parser.add_argument("--concurrency", type=int, metavar="N", help="worker processes (default 1)")
+    parser.add_argument("--batch-size", type=int, metavar="B", help="jobs taken at once (network micro-batch)")
+    parser.add_argument("--max-wait-ms", type=float, metavar="MS", help="wait this long to fill a batch")
+    parser.add_argument("--pipeline", metavar="MODULE:ATTR", help="pipeline (default: the models pipeline)")
+    parser.set_defaults(func=main)
+
+
+def main(args: argparse.Namespace) -> int:
+    """Run the supervisor until SIGTERM/SIGINT; exit code 0, or 2 on bad settings."""
+    from pydantic import ValidationError
+
+    from workers.logs import setup_logging
+    from workers.queue import queue_settings
+
+    overrides = {
+        "redis_url": args.redis, "queue_prefix": args.queue, "concurrency": args.concurrency,
+        "batch_size": args.batch_size, "max_wait_ms": args.max_wait_ms, "pipeline": args.pipeline,
+    }  # fmt: skip
+    try:
+        settings = queue_settings(None, **{k: v for k, v in overrides.items() if v is not None})
+    except ValidationError as exc:
+        print(f"mani worker: invalid settings: {exc}", file=sys.stderr)
+        return 2
+    if not settings.redis_url:
+        print(
+            "mani worker: needs --redis or MANI_REDIS_URL (embedded workers run inside `mani serve`)", file=sys.stderr
+        )
+        return 2
+    setup_logging(settings.log_level, f"supervisor-{os.getpid()}")
+    return supervise(settings.model_dump_json(), max(1, settings.concurrency))
+
+
+def supervise(settings_json: str, concurrency: int) -> int:
+    """Keep ``concurrency`` worker processes alive until told to stop."""
+    stopping = False
+
+    def stop(*_: object) -> None:
+        nonlocal stopping
+        stopping = True
+
+    signal.signal(signal.SIGTERM, stop)
+    signal.signal(signal.SIGINT, stop)
+    env = os.environ | {"MANI_WORKER_SETTINGS": settings_json}
+    children: list[tuple[subprocess.Popen[bytes], float]] = []
+
+    def spawn() -> tuple[subprocess.Popen[bytes], float]:
+        return subprocess.Popen([sys.executable, "-m", "workers.worker"], env=env), time.monotonic()
+
+    children = [spawn() for _ in range(concurrency)]
+    log.info("started %d workers", concurrency)
+    while not stopping:
+        time.sleep(0.2)
+        for i, (proc, born) in enumerate(children):
+            code = proc.poll()
+            if code is not None and not stopping:
+                log.warning("worker pid %d exited with code %s; restarting", proc.pid, code)
+                if time.monotonic() - born < 2.0:
+                    time.sleep(1.0)  # crash loop: slow down
+                children[i] = spawn()
+    for proc, _ in children:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGTERM)
+    end = time.monotonic() + GRACE_S
+    for proc, _ in children:
+        try:
+            proc.wait(max(0.1, end - time.monotonic()))
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+    log.info("workers stopped")
+    return 0

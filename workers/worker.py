@@ -1,0 +1,314 @@
+"""A Redis Streams worker process: load the pipeline (model) once, then consume micro-batches.
+
+Loop: XAUTOCLAIM entries idle longer than ``visibility_timeout`` (their worker died), else XREADGROUP COUNT =
+``batch_size`` (waiting up to ``max_wait_ms`` to fill a batch); for each job the BEGIN script counts the delivery
+(beyond ``max_deliveries`` → dead-letter stream, the job failed with its last error), drops expired or cancelled
+jobs, marks it running; the batch runs through `workers.runner.run_batch`; the FINISH script writes the result
+(msgpack, TTL) and acks in one atomic step, only while this worker still owns the entry. A heartbeat thread
+publishes the worker's state and XCLAIMs its own in-flight entries so a long job is not stolen. SIGTERM: finish the
+current batch, then exit. Redis going away: retry with back-off, recreate the group, go on.
+
+Run as ``python -m workers.worker`` (settings as JSON in ``MANI_WORKER_SETTINGS``, else ``MANI_*``); `mani worker`
+supervises several of these.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+import socket
+import threading
+import time
+from typing import Any
+
+import redis
+from redis.exceptions import RedisError, ResponseError
+
+from clients.codec import pack, unpack
+from clients.schemas import DeadLetter, ErrorBody, JobProgress, RobotRegister, Stage, SynthesisRequest, WorkerPublic
+from workers.logs import job_context, setup_logging
+from workers.pipeline import JobInput, Pipeline, error_from_exception, load_pipeline
+from workers.queue.records import new_id, state_for_error
+from workers.queue.redis_lua import BEGIN, FINISH, GROUP, TOUCH, Keys
+from workers.runner import run_batch
+from workers.settings import QueueSettings
+
+log = logging.getLogger("workers.worker")
+
+
+class RedisWorker:
+    """One consumer of the job stream (see module doc)."""
+
+    def __init__(self, settings: QueueSettings, worker_id: str | None = None) -> None:
+        if not settings.redis_url:
+            raise ValueError("redis_url: a Redis worker needs MANI_REDIS_URL / --redis")
+        self.settings = settings
+        self.id = worker_id or f"{socket.gethostname()}-{os.getpid()}-{new_id()[:6]}"
+        self.keys = Keys(settings.queue_prefix)
+        self.r: Any = redis.Redis.from_url(settings.redis_url, socket_connect_timeout=2, socket_timeout=30)
+        self.stopping = False
+        self.inflight: dict[str, str] = {}  # entry id -> job id
+        self.lock = threading.Lock()
+        self.jobs_done = 0
+        self.pipeline: Pipeline | None = None
+        self.info: WorkerPublic | None = None
+        self._begin, self._finish = self.r.register_script(BEGIN), self.r.register_script(FINISH)
+        self._last_claim = 0.0
+
+    # ---- lifecycle -------------------------------------------------------------------------------------------
+    def run(self) -> None:
+        """Serve until `stop()` (SIGTERM)."""
+        self.pipeline = load_pipeline(self.settings.pipeline, self.settings.pipeline_options)
+        now = time.time()
+        self.info = WorkerPublic(
+            id=self.id, host=socket.gethostname(), pid=os.getpid(), started_at=now, last_heartbeat=now,
+            model_loaded=self.pipeline.model_loaded, model_version=self.pipeline.model_version,
+        )  # fmt: skip
+        self._connect()
+        beat = threading.Thread(target=self._heartbeat_loop, name="mani-heartbeat", daemon=True)
+        beat.start()
+        log.info("worker ready", extra={"model_loaded": self.pipeline.model_loaded})
+        backoff = 0.1
+        while not self.stopping:
+            try:
+                entries = self._take()
+                if entries:
+                    self._handle(entries)
+                backoff = 0.1
+            except RedisError as exc:
+                log.warning("redis error, retrying in %.1f s: %s", backoff, exc)
+                time.sleep(backoff)
+                backoff = min(backoff * 2, 5.0)
+                self._connect(quiet=True)
+        self._leave()
+        log.info("worker stopped")
+
+    def stop(self, *_: object) -> None:
+        self.stopping = True
+
+    def _connect(self, quiet: bool = False) -> None:
+        """Create the group (if Redis lost it) and publish the built-in robots."""
+        try:
+            with_group = True
+            try:
+                self.r.xgroup_create(self.keys.stream, GROUP, id="0", mkstream=True)
+            except ResponseError:
+                with_group = False
+            assert self.pipeline is not None
+            robots = {r.name: pack(r.model_dump(mode="python", exclude_none=True)) for r in self.pipeline.robots()}
+            if robots:
+                self.r.hset(self.keys.robots, mapping=robots)  # type: ignore[arg-type]
+            if with_group:
+                log.info("created consumer group")
+            self._beat()
+        except RedisError:
+            if not quiet:
+                raise
+
+    def _leave(self) -> None:
+        try:
+            self.r.zrem(self.keys.workers, self.id)
+            self.r.delete(self.keys.worker(self.id))
+            pending = self.r.xpending_range(self.keys.stream, GROUP, "-", "+", 1, consumername=self.id)
+            if not pending:
+                self.r.xgroup_delconsumer(self.keys.stream, GROUP, self.id)
+        except RedisError:
+            pass
+
+    # ---- heartbeats ------------------------------------------------------------------------------------------
+    def _heartbeat_loop(self) -> None:
+        client = redis.Redis.from_url(self.settings.redis_url or "", socket_connect_timeout=2, socket_timeout=5)
+        touch = client.register_script(TOUCH)
+        while not self.stopping:
+            time.sleep(self.settings.heartbeat_interval)
+            try:
+                self._beat(client)
+                with self.lock:
+                    entries = list(self.inflight)
+                if entries:
+                    touch(keys=[self.keys.stream], args=[GROUP, self.id, *entries], client=client)
+            except RedisError as exc:
+                log.debug("heartbeat failed: %s", exc)
+
+    def _beat(self, client: Any = None) -> None:
+        assert self.info is not None
+        now = time.time()
+        with self.lock:
+            current = next(iter(self.inflight.values()), None)
+        info = self.info.model_copy(update={"last_heartbeat": now, "current_job": current, "jobs_done": self.jobs_done})
+        ttl = int(self.settings.heartbeat_timeout * 1000)
+        pipe = (client or self.r).pipeline(transaction=False)
+        pipe.set(self.keys.worker(self.id), pack(info.model_dump(mode="python", exclude_none=True)), px=ttl)
+        pipe.zadd(self.keys.workers, {self.id: now})
+        pipe.execute()
+
+    # ---- consuming -------------------------------------------------------------------------------------------
+    def _take(self) -> list[tuple[bytes, dict[bytes, bytes]]]:
+        size = self.settings.batch_size
+        now = time.monotonic()
+        if now - self._last_claim > min(1.0, self.settings.visibility_timeout / 4):
+            self._last_claim = now
+            idle = int(self.settings.visibility_timeout * 1000)
+            try:
+                claimed = self.r.xautoclaim(self.keys.stream, GROUP, self.id, idle, "0-0", count=size)
+            except ResponseError:  # NOGROUP after a Redis restart
+                self._connect()
+                return []
+            entries = [(e, f) for e, f in claimed[1] if f]
+            if entries:
+                log.info("re-delivering %d entries of stopped workers", len(entries))
+                return entries
+        try:
+            got = self.r.xreadgroup(GROUP, self.id, {self.keys.stream: ">"}, count=size, block=1000)
+        except ResponseError:
+            self._connect()
+            return []
+        entries = list(got[0][1]) if got else []
+        if entries and len(entries) < size and self.settings.max_wait_ms > 0:
+            more = self.r.xreadgroup(
+                GROUP, self.id, {self.keys.stream: ">"}, count=size - len(entries),
+                block=max(1, int(self.settings.max_wait_ms)),
+            )  # fmt: skip
+            entries += list(more[0][1]) if more else []
+        return entries
+
+    def _handle(self, entries: list[tuple[bytes, dict[bytes, bytes]]]) -> None:
+        jobs: list[JobInput] = []
+        entry_of: dict[str, str] = {}
+        started: dict[str, float] = {}
+        for entry_raw, fields in entries:
+            entry = entry_raw.decode()
+            if fields.get(b"k") == b"robot":
+                self._robot(entry, fields)
+                continue
+            job_id = fields[b"id"].decode()
+            with job_context(job_id):
+                job = self._start_job(entry, job_id, fields[b"p"])
+            if job is not None:
+                jobs.append(job)
+                entry_of[job_id] = entry
+                started[job_id] = time.time()
+        if not jobs:
+            return
+        with self.lock:
+            self.inflight.update({entry_of[j.id]: j.id for j in jobs})
+        assert self.pipeline is not None
+        outcomes = run_batch(self.pipeline, jobs, self._progress(), self._should_cancel)
+        for job in jobs:
+            outcome = outcomes[job.id]
+            timings = dict(getattr(outcome, "timings", {}) or {})
+            timings["run"] = time.time() - started[job.id]
+            with job_context(job.id):
+                if isinstance(outcome, ErrorBody):
+                    self._end(entry_of[job.id], job.id, state_for_error(outcome).value, error=outcome, timings=timings)
+                else:
+                    result = pack(outcome.model_dump(mode="python", exclude_none=True))
+                    self._end(entry_of[job.id], job.id, "succeeded", result=result, timings=timings)
+                self.jobs_done += 1
+            with self.lock:
+                self.inflight.pop(entry_of[job.id], None)
+
+    def _start_job(self, entry: str, job_id: str, payload: bytes) -> JobInput | None:
+        s = self.settings
+        verdict, deliveries = self._begin(keys=[self.keys.job(job_id)], args=[self.id, time.time(), s.max_deliveries])
+        verdict = verdict.decode()
+        if verdict == "run":
+            try:
+                request = SynthesisRequest.model_validate(unpack(payload))
+                robot = None
+                if request.robot.name and (raw := self.r.hget(self.keys.robot_urdf, request.robot.name)):
+                    robot = RobotRegister.model_validate(unpack(raw))  # type: ignore[arg-type]
+            except Exception as exc:  # a queue payload is input too
+                self._end(entry, job_id, "failed", error=error_from_exception(exc))
+                return None
+            raw_deadline = self.r.hget(self.keys.job(job_id), "deadline")
+            deadline = float(raw_deadline) if raw_deadline else None  # type: ignore[arg-type]
+            log.info("job started", extra={"delivery": int(deliveries)})
+            return JobInput(id=job_id, request=request, deadline=deadline, robot=robot)
+        if verdict == "dead":
+            h = self.r.hmget(self.keys.job(job_id), ["error", "error_type"])
+            message = h[0].decode() if h[0] else "failed on every delivery"  # type: ignore[union-attr]
+            error = ErrorBody(error=message, type=h[1].decode() if h[1] else "WorkerLost")  # type: ignore[union-attr]
+            letter = DeadLetter(job_id=job_id, deliveries=int(deliveries), error=error, failed_at=time.time())
+            self.r.xadd(self.keys.dead, {"d": pack(letter.model_dump(mode="python"))}, maxlen=10_000)
+            self._end(entry, job_id, "failed", error=error)
+            log.warning("job dead-lettered", extra={"deliveries": int(deliveries)})
+        elif verdict == "expired":
+            self._end(entry, job_id, "expired", error=ErrorBody(error="job deadline passed before it started",
+                                                                 type="DeadlineExceeded"))  # fmt: skip
+        elif verdict == "cancelled":
+            self._end(entry, job_id, "cancelled", error=ErrorBody(error="job cancelled", type="Cancelled"))
+        else:
+            self._end(entry, job_id, "", owner=False)  # already terminal: just ack
+        return None
+
+    def _end(
+        self, entry: str, job_id: str, state: str, *, result: bytes = b"", error: ErrorBody | None = None,
+        timings: dict[str, float] | None = None, owner: bool = True,
+    ) -> None:  # fmt: skip
+        s = self.settings
+        progress = JobProgress(stage=Stage.DONE, fraction=1.0) if state == "succeeded" else None
+        keys = [self.keys.stream, self.keys.job(job_id), self.keys.result(job_id), self.keys.counts, self.keys.done]
+        args: list[Any] = [
+            GROUP, self.id, entry, state, time.time(), result, error.error if error else "",
+            error.type if error else "", pack(timings or {}),
+            pack(progress.model_dump(mode="python")) if progress else "",
+            int(s.result_ttl * 1000), int(max(s.record_ttl, s.result_ttl) * 1000), job_id, "1" if owner else "0",
+        ]  # fmt: skip
+        if not self._finish(keys=keys, args=args):
+            log.warning("result discarded: the job was re-delivered to another worker")
+        elif state:
+            log.info("job finished", extra={"state": state})
+
+    def _progress(self) -> Any:
+        last: dict[str, tuple[float, str]] = {}
+
+        def progress(job_id: str, stage: Stage, fraction: float, iteration: int | None, top: int | None) -> None:
+            now = time.monotonic()
+            prev = last.get(job_id)
+            if prev and prev[1] == stage.value and now - prev[0] < 0.05 and iteration != top:
+                return
+            last[job_id] = (now, stage.value)
+            p = JobProgress(stage=stage, fraction=min(max(fraction, 0.0), 1.0), iteration=iteration, max_iterations=top)
+            self.r.hset(self.keys.job(job_id), "progress", pack(p.model_dump(mode="python", exclude_none=True)))
+
+        return progress
+
+    def _should_cancel(self, job_id: str) -> bool:
+        return self.r.hget(self.keys.job(job_id), "cancel") == b"1"
+
+    def _robot(self, entry: str, fields: dict[bytes, bytes]) -> None:
+        rid = fields[b"id"].decode()
+        assert self.pipeline is not None
+        try:
+            robot = RobotRegister.model_validate(unpack(fields[b"p"]))
+            public = self.pipeline.validate_robot(robot)
+            answer: dict[str, Any] = {"robot": public.model_dump(mode="python", exclude_none=True)}
+            pipe = self.r.pipeline()
+            pipe.hset(self.keys.robots, robot.name, pack(answer["robot"]))
+            pipe.hset(self.keys.robot_urdf, robot.name, fields[b"p"])
+            pipe.execute()
+        except Exception as exc:
+            answer = {"error": str(exc) or exc.__class__.__name__}
+        pipe = self.r.pipeline()
+        pipe.set(self.keys.robot_reply(rid), pack(answer), ex=300)
+        pipe.xack(self.keys.stream, GROUP, entry)
+        pipe.xdel(self.keys.stream, entry)
+        pipe.publish(self.keys.done, f"robot:{rid}")
+        pipe.execute()
+
+
+def main() -> None:
+    """Entry point of one worker process (``python -m workers.worker``)."""
+    raw = os.environ.get("MANI_WORKER_SETTINGS")
+    settings = QueueSettings.model_validate_json(raw) if raw else QueueSettings()
+    worker = RedisWorker(settings, os.environ.get("MANI_WORKER_ID"))
+    setup_logging(settings.log_level, worker.id)
+    signal.signal(signal.SIGTERM, worker.stop)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the supervisor forwards SIGTERM
+    worker.run()
+
+
+if __name__ == "__main__":
+    main()
