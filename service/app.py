@@ -12,7 +12,7 @@ from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
 from pydantic.json_schema import models_json_schema
 
-from clients.schemas import BatchCreate, RobotRegister, SynthesisRequest
+from clients.schemas import BatchCreate, ErrorBody, RobotRegister, SynthesisRequest
 from service import errors, logs
 from service.dashboard import History
 from service.metrics import Metrics
@@ -103,6 +103,17 @@ def _openapi(app: FastAPI) -> dict[str, Any]:
     components = schema.setdefault("components", {}).setdefault("schemas", {})
     for name, definition in defs.get("$defs", {}).items():
         components.setdefault(name, definition)
+    # FastAPI documents query-parameter errors with its own 422 shape; ours is ErrorBody everywhere.
+    components.setdefault("ErrorBody", ErrorBody.model_json_schema(ref_template="#/components/schemas/{model}"))
+    error_ref = {"$ref": "#/components/schemas/ErrorBody"}
+    for operations in schema.get("paths", {}).values():
+        for operation in operations.values():
+            invalid = operation.get("responses", {}).get("422")
+            if invalid and "HTTPValidationError" in str(invalid):
+                invalid["description"] = "Validation failed: `detail` names each field and problem"
+                invalid["content"] = {"application/json": {"schema": error_ref}}
+    for name in ("HTTPValidationError", "ValidationError"):
+        components.pop(name, None)
     app.openapi_schema = schema
     return schema
 
