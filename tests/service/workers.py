@@ -9,6 +9,7 @@ import json
 import os
 import subprocess
 import sys
+import uuid
 from collections.abc import Iterator
 from typing import Any
 
@@ -32,7 +33,7 @@ def start_queue_and_workers(
     if importlib.util.find_spec("workers.queue.redis") is None or importlib.util.find_spec("workers.cli") is None:
         pytest.skip("the Redis backend or `mani worker` is not part of this checkout yet")
     url = request.getfixturevalue("redis_url")
-    prefix = request.getfixturevalue("redis_prefix")
+    prefix = f"mani-test:{uuid.uuid4().hex[:12]}:"  # module-scoped twin of conftest's `redis_prefix`
     env = dict(
         os.environ,
         MANI_REDIS_URL=url,
@@ -51,3 +52,14 @@ def start_queue_and_workers(
             worker.wait(timeout=30)
         except subprocess.TimeoutExpired:
             worker.kill()
+        _delete_prefix(url, prefix)
+
+
+def _delete_prefix(url: str, prefix: str) -> None:
+    import redis
+
+    client = redis.Redis.from_url(url)
+    keys = list(client.scan_iter(match=prefix + "*", count=1000))
+    if keys:
+        client.delete(*keys)
+    client.close()
