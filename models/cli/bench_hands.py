@@ -26,6 +26,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--batches", default="1,64", help="comma-separated batch sizes")
     p.add_argument("--iters", type=int, default=30, help="timed calls per measurement")
     p.add_argument("--sdf-points", default="2048,8192", help="comma-separated object cloud sizes for the SDF")
+    p.add_argument("--threads", type=int, default=1, help="torch intra-op threads (workers run 1 each)")
     p.add_argument("--float32", action="store_true", help="time float32 instead of float64")
     p.set_defaults(func=run)
 
@@ -50,6 +51,7 @@ def run(args: argparse.Namespace) -> int:
     from models.geometry import ObjectGeometry
     from models.robots import get_hand, list_hands
 
+    torch.set_num_threads(args.threads)
     dtype = torch.float32 if args.float32 else torch.float64
     names = [n for n in args.hands.split(",") if n] or list_hands()
     batches = [int(b) for b in args.batches.split(",") if b]

@@ -149,8 +149,15 @@ class KinematicTree:
         depth = anc.sum(1) - 1
         self._levels = [np.nonzero(depth == d)[0] for d in range(1, int(depth.max()) + 1)] if nb > 1 else []
         kinds_a = np.asarray(kinds)
+        origin_a = np.stack(origins)
+        # flush round-off (e.g. 1e-76 from CAD exports): products of such values go subnormal and slow FK down 3x
+        origin_a[np.abs(origin_a) < 1e-14] = 0.0
+        for link, (bb, T) in self.link_body.items():
+            T = T.copy()
+            T[np.abs(T) < 1e-14] = 0.0
+            self.link_body[link] = (bb, T)
         self._np = {
-            "origin": np.stack(origins),
+            "origin": origin_a,
             "K": np.stack([skew_np(a) for a in axes]),
             "axis": np.stack(axes),
             "rev": (kinds_a == REVOLUTE).astype(np.float64),
