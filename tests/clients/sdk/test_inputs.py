@@ -148,3 +148,15 @@ def test_robot_registration_names(tmp_path: Path) -> None:
     assert robot_registration(str(path), ["a"], name="mine").name == "mine"
     with pytest.raises(ValidationError, match="tip_offsets"):
         robot_registration(path, ["a"], tip_offsets=[1, 2])
+
+
+def test_example_data_loads() -> None:
+    data = Path(__file__).resolve().parents[3] / "examples" / "data"
+    files = sorted(p for p in data.iterdir() if p.suffix in (".npz", ".ply"))
+    assert len(files) >= 5
+    for path in files:
+        obj = object_from_file(path)
+        assert obj.num_points >= 1024 and obj.normals is not None, path.name
+        outward = np.einsum("ij,ij->i", obj.points - obj.points.mean(axis=0), obj.normals) > 0
+        assert outward.mean() > 0.95, path.name
+    assert robot_registration(data / "two_finger.urdf", ["left_distal", "right_distal"]).name == "two_finger"
