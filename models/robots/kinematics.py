@@ -187,7 +187,7 @@ class KinematicTree:
         c = self.consts(q.dtype, q.device)
         B, nb = q.shape[0], len(self.body_names)
         src = torch.as_tensor(self._src, device=q.device)
-        theta = q[:, src] * c.mult + c.offset  # (B, nb)
+        theta = q[:, src] * c.mult + c.offset if self.dof else c.offset.expand(B, nb)  # (B, nb)
         s = (torch.sin(theta) * c.rev)[..., None, None]
         cm = ((1 - torch.cos(theta)) * c.rev)[..., None, None]
         eye3 = torch.eye(3, dtype=q.dtype, device=q.device)

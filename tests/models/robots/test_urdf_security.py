@@ -126,3 +126,26 @@ def test_unknown_builtin_lists_names() -> None:
     assert all(n in str(err.value) for n in list_hands())
     assert isinstance(err.value, KeyError)
     assert set(list_hands()) == {"allegro", "leap", "shadow", "panda_gripper", "barrett", "kinova3f"}
+
+
+def test_unknown_mimic_source_and_palm() -> None:
+    extra = """<link name="g"><collision><geometry><sphere radius="0.01"/></geometry></collision></link>
+    <joint name="j2" type="revolute"><parent link="palm"/><child link="g"/><limit lower="0" upper="1"/>
+    <mimic joint="nope"/></joint>"""
+    with pytest.raises(HandLoadError, match="mimics unknown"):
+        load_hand(_urdf(extra=extra), fingertips=["finger"])
+    with pytest.raises(HandLoadError, match="root link"):
+        load_hand(_urdf(), fingertips=["finger"], palm="nope")
+
+
+def test_rigid_hand_without_joints_and_continuous_joint() -> None:
+    doc = b"""<robot name="r"><link name="palm"><collision><geometry><box size="0.1 0.1 0.1"/></geometry>
+    </collision></link><link name="tip"/><joint name="f" type="fixed"><parent link="palm"/><child link="tip"/>
+    <origin xyz="0 0 0.1"/></joint></robot>"""
+    hand = load_hand(doc, fingertips=["tip"])
+    assert hand.dof == 0
+    p, J = hand.fingertip_jacobians(torch.zeros(2, 3), torch.tensor([[1.0, 0, 0, 0]] * 2), torch.zeros(2, 0))
+    assert J.shape == (2, 1, 3, 6)
+    np.testing.assert_allclose(p[0, 0].numpy(), [0, 0, 0.1])
+    hand = load_hand(_urdf(jtype="continuous"), fingertips=["finger"])
+    assert hand.lower[0] == pytest.approx(-np.pi) and hand.upper[0] == pytest.approx(np.pi)
