@@ -15,30 +15,30 @@ from service.settings import Settings
 from workers.queue import JobQueue
 
 
-def get_settings(request: Request) -> Settings:
+async def get_settings(request: Request) -> Settings:
     return request.app.state.settings  # type: ignore[no-any-return]
 
 
-def get_queue(request: Request) -> JobQueue:
+async def get_queue(request: Request) -> JobQueue:
     queue = getattr(request.app.state, "queue", None)
     if queue is None:
         raise Unavailable("the queue is not running")
     return queue  # type: ignore[no-any-return]
 
 
-def get_metrics(request: Request) -> Metrics:
+async def get_metrics(request: Request) -> Metrics:
     return request.app.state.metrics  # type: ignore[no-any-return]
 
 
-def get_robots(request: Request) -> RobotCatalog:
+async def get_robots(request: Request) -> RobotCatalog:
     return request.app.state.robots  # type: ignore[no-any-return]
 
 
-def get_history(request: Request) -> History:
+async def get_history(request: Request) -> History:
     return request.app.state.history  # type: ignore[no-any-return]
 
 
-def get_request_id(request: Request) -> str:
+async def get_request_id(request: Request) -> str:
     return str(request.state.request_id)
 
 
@@ -50,7 +50,7 @@ HistoryDep = Annotated[History, Depends(get_history)]
 RequestIdDep = Annotated[str, Depends(get_request_id)]
 
 
-def authorize(request: Request, settings: SettingsDep) -> None:
+async def authorize(request: Request, settings: SettingsDep) -> None:
     """Bearer key when keys are configured (except on ``open_paths``), then the caller's token bucket."""
     identity = request.client.host if request.client else "unknown"
     if settings.auth_enabled and request.url.path not in settings.open_paths:
