@@ -65,3 +65,22 @@ def test_surface_normals_point_outward(name: str) -> None:
         slack = np.einsum("ij,ij->i", hull.face_normals, hull.triangles_center)[None] - local @ hull.face_normals.T
         inside |= slack.min(axis=1) > 0
     assert inside.mean() > 0.95, f"{name}: only {inside.mean():.1%} of inward steps land inside the hand"
+
+
+@pytest.mark.parametrize("name", list_hands())
+def test_fingertip_points_lie_on_the_collision_surface(name: str) -> None:
+    """Tip offsets are pad points: within 2 mm of their link's collision mesh surface."""
+    hand = get_hand(name)
+    d = torch.float64
+    poses = hand.link_poses(torch.zeros(1, 3, dtype=d), torch.tensor([[1.0, 0, 0, 0]], dtype=d),
+                            torch.as_tensor(hand.rest[None]))  # fmt: skip
+    tips = hand.fingertips(torch.zeros(1, 3, dtype=d), torch.tensor([[1.0, 0, 0, 0]], dtype=d),
+                           torch.as_tensor(hand.rest[None]))[0].numpy()  # fmt: skip
+    meshes = []
+    for link, mesh in hand.collision_meshes.items():
+        m = mesh.copy()
+        m.apply_transform(poses[link][0].numpy())
+        meshes.append(m)
+    union = trimesh.util.concatenate(meshes)
+    _, dist, _ = trimesh.proximity.closest_point(union, tips)
+    assert dist.max() < 2e-3, f"{name}: tip points {np.round(dist * 1e3, 2)} mm from the surface"
