@@ -1,7 +1,8 @@
 """Results out: plain dicts and JSON for logs and files, and a plotly 3D figure of a grasp.
 
-The figure shows what the service's viewer shows: the object's points (coloured by the contact heatmap when the
-result carries one), the contact points, force arrows, the palm frame and the quality figures. plotly is
+The figure draws what the service's viewer draws (``GET /v1/jobs/{id}/view``): the object's points (coloured by
+the contact heatmap when the result carries one), the contacts, force arrows, the palm frame and the hand as
+links from the palm to its fingertips, titled with the quality figures. plotly is
 imported only when a figure is made.
 """
 
@@ -69,13 +70,17 @@ def result_figure(
     force_scale: float | None = None,
     title: str | None = None,
 ) -> Any:
-    """A plotly ``Figure`` of one proposal: object points, contacts, force arrows and palm frame.
+    """A plotly ``Figure`` of one proposal, drawn like the service's viewer (``/v1/jobs/{id}/view``).
+
+    The object's points are coloured by the contact heatmap when the result has one (else by the region mask,
+    else by height); then the contacts labelled with their fingertips, the force arrows, the palm frame, and the
+    hand as links from the palm to each fingertip at its contact.
 
     Args:
         result: the answer of `synthesize`.
         object: the object that was sent (its points are drawn; without it only the grasp is).
         proposal: which proposal (default: ``result.best``).
-        force_scale: metres of arrow per newton (default: the longest arrow is 30 % of the object's size).
+        force_scale: metres of arrow per newton (default: the longest arrow is 35 % of the object's size).
         title: figure title (default: hand, proposal and quality).
 
     Returns:
@@ -85,62 +90,114 @@ def result_figure(
 
     chosen = result.best if proposal is None else result.proposals[proposal]
     fig = go.Figure()
-    size = 0.1
+    reference = object.points if object is not None else chosen.contact_points if chosen is not None else None
+    size = float(np.max(np.ptp(reference, axis=0))) if reference is not None and len(reference) > 1 else 0.1
+    size = size or 0.1
     if object is not None:
         pts = object.points
-        size = float(np.max(np.ptp(pts, axis=0))) or size
         heat = result.heatmap if result.heatmap is not None and len(result.heatmap) == len(pts) else None
-        marker: dict[str, Any] = {"size": 2, "color": "lightgray" if heat is None else heat}
+        colour = heat if heat is not None else object.region_mask if object.region_mask is not None else pts[:, 2]
+        marker: dict[str, Any] = {"size": 2, "color": np.asarray(colour, dtype=float)}
+        marker.update(colorscale="YlOrRd" if heat is not None else "Greys", showscale=heat is not None)
         if heat is not None:
-            marker.update(colorscale="Viridis", colorbar={"title": "contact"}, cmin=0.0, cmax=1.0)
-        fig.add_trace(go.Scatter3d(x=pts[:, 0], y=pts[:, 1], z=pts[:, 2], mode="markers", marker=marker, name="object"))
+            marker["colorbar"] = {"title": "heat", "len": 0.5}
+        name = "object (heatmap)" if heat is not None else "object"
+        fig.add_trace(go.Scatter3d(x=pts[:, 0], y=pts[:, 1], z=pts[:, 2], mode="markers", marker=marker, name=name))
     if chosen is not None:
-        c, f = chosen.contact_points, chosen.forces
-        fig.add_trace(
-            go.Scatter3d(
-                x=c[:, 0],
-                y=c[:, 1],
-                z=c[:, 2],
-                mode="markers+text",
-                text=chosen.fingertips,
-                marker={"size": 6, "color": "red"},
-                name="contacts",
-            )
-        )
-        norms = np.linalg.norm(f, axis=1)
-        scale = force_scale if force_scale is not None else 0.3 * size / max(float(norms.max(initial=0)), 1e-9)
-        tips = c + f * scale
-        xs, ys, zs = _segments(c, tips)
-        fig.add_trace(go.Scatter3d(x=xs, y=ys, z=zs, mode="lines", line={"color": "orange", "width": 6}, name="forces"))
-        palm, rot = chosen.palm_position, _rotation(chosen.palm_quaternion)
-        for axis, colour in zip(range(3), ("red", "green", "blue"), strict=True):
-            end = palm + rot[:, axis] * 0.3 * size
-            fig.add_trace(
-                go.Scatter3d(
-                    x=[palm[0], end[0]],
-                    y=[palm[1], end[1]],
-                    z=[palm[2], end[2]],
-                    mode="lines",
-                    line={"color": colour, "width": 4},
-                    name=f"palm {'xyz'[axis]}",
-                    showlegend=axis == 0,
-                )
-            )
-        xs, ys, zs = _segments(np.repeat(palm[None], len(c), axis=0), c)
-        fig.add_trace(
-            go.Scatter3d(
-                x=xs,
-                y=ys,
-                z=zs,
-                mode="lines",
-                line={"color": "gray", "width": 2, "dash": "dot"},
-                name="palm → contacts",
-            )
-        )
+        _grasp_traces(fig, chosen, size, force_scale)
     index = result.proposals.index(chosen) if chosen is not None else 0
     heading = title or f"{result.hand}, proposal {index}: " + (quality_text(chosen) if chosen else "no proposal")
-    fig.update_layout(title=heading, scene={"aspectmode": "data"}, margin={"l": 0, "r": 0, "t": 40, "b": 0})
+    fig.update_layout(
+        title=heading, scene={"aspectmode": "data"}, margin={"l": 0, "r": 0, "t": 40, "b": 0}, legend={"x": 0, "y": 1}
+    )
     return fig
+
+
+def _grasp_traces(fig: Any, p: Proposal, size: float, force_scale: float | None) -> None:
+    import plotly.graph_objects as go
+
+    c, f = p.contact_points, p.forces
+    fig.add_trace(
+        go.Scatter3d(
+            x=c[:, 0],
+            y=c[:, 1],
+            z=c[:, 2],
+            mode="markers+text",
+            text=p.fingertips,
+            textposition="top center",
+            marker={"size": 7, "color": "#d62728"},
+            name="contacts",
+        )
+    )
+    norms = np.linalg.norm(f, axis=1)
+    scale = force_scale if force_scale is not None else 0.35 * size / max(float(norms.max(initial=0)), 1e-9)
+    tips = c + f * scale
+    xs, ys, zs = _segments(c, tips)
+    fig.add_trace(go.Scatter3d(x=xs, y=ys, z=zs, mode="lines", line={"color": "#1f77b4", "width": 6}, name="forces"))
+    if len(c) and float(norms.max(initial=0)) > 0:
+        fig.add_trace(
+            go.Cone(
+                x=tips[:, 0],
+                y=tips[:, 1],
+                z=tips[:, 2],
+                u=f[:, 0],
+                v=f[:, 1],
+                w=f[:, 2],
+                anchor="tip",
+                sizemode="absolute",
+                sizeref=0.08 * size,
+                showscale=False,
+                colorscale=[[0, "#1f77b4"], [1, "#1f77b4"]],
+                name="force heads",
+            )
+        )
+    palm, rot = p.palm_position, _rotation(p.palm_quaternion)
+    for axis, colour in enumerate(("#e41a1c", "#4daf4a", "#377eb8")):
+        end = palm + rot[:, axis] * 0.4 * size
+        fig.add_trace(
+            go.Scatter3d(
+                x=[palm[0], end[0]],
+                y=[palm[1], end[1]],
+                z=[palm[2], end[2]],
+                mode="lines",
+                line={"color": colour, "width": 8},
+                name="palm frame",
+                legendgroup="palm",
+                showlegend=axis == 0,
+            )
+        )
+    xs, ys, zs = _segments(np.repeat(palm[None], len(c), axis=0), c)
+    fig.add_trace(
+        go.Scatter3d(
+            x=xs,
+            y=ys,
+            z=zs,
+            mode="lines",
+            line={"color": "#8c564b", "width": 10},
+            opacity=0.6,
+            name="hand (palm → fingertips)",
+        )
+    )
+    fig.add_trace(
+        go.Scatter3d(
+            x=[palm[0]],
+            y=[palm[1]],
+            z=[palm[2]],
+            mode="markers",
+            name="palm",
+            marker={"size": 14, "color": "#8c564b", "symbol": "square"},
+        )
+    )
+    fig.add_trace(
+        go.Scatter3d(
+            x=c[:, 0],
+            y=c[:, 1],
+            z=c[:, 2],
+            mode="markers",
+            name="fingertips",
+            marker={"size": 12, "color": "#ff7f0e", "opacity": 0.35},
+        )
+    )
 
 
 def _segments(start: np.ndarray, end: np.ndarray) -> tuple[list[float | None], ...]:

@@ -30,7 +30,8 @@ def test_figure_shows_object_heatmap_contacts_forces_and_palm(
     result.heatmap = np.linspace(0, 1, obj.num_points)
     fig = result_figure(result, obj)
     names = [t.name for t in fig.data]
-    assert names[:3] == ["object", "contacts", "forces"] and "palm x" in names
+    assert names[:4] == ["object (heatmap)", "contacts", "forces", "force heads"]
+    assert {"palm frame", "hand (palm → fingertips)", "palm", "fingertips"} <= set(names)
     assert len(fig.data[0].x) == 256 and fig.data[0].marker.colorscale is not None
     assert len(fig.data[1].x) == 4
     assert "success" in fig.layout.title.text
