@@ -51,6 +51,7 @@ class RedisWorker:
         self.inflight: dict[str, str] = {}  # entry id -> job id
         self.lock = threading.Lock()
         self.jobs_done = 0
+        self.queued_for: dict[str, float] = {}
         self.pipeline: Pipeline | None = None
         self.info: WorkerPublic | None = None
         self._begin, self._finish = self.r.register_script(BEGIN), self.r.register_script(FINISH)
@@ -199,6 +200,8 @@ class RedisWorker:
             outcome = outcomes[job.id]
             timings = dict(getattr(outcome, "timings", {}) or {})
             timings["run"] = time.time() - started[job.id]
+            timings["queue"] = self.queued_for.pop(job.id, 0.0)
+            timings["total"] = timings["queue"] + timings["run"]
             with job_context(job.id):
                 if isinstance(outcome, ErrorBody):
                     self._end(entry_of[job.id], job.id, state_for_error(outcome).value, error=outcome, timings=timings)
@@ -211,8 +214,11 @@ class RedisWorker:
 
     def _start_job(self, entry: str, job_id: str, payload: bytes) -> JobInput | None:
         s = self.settings
-        verdict, deliveries = self._begin(keys=[self.keys.job(job_id)], args=[self.id, time.time(), s.max_deliveries])
+        now = time.time()
+        verdict, deliveries, *rest = self._begin(keys=[self.keys.job(job_id)], args=[self.id, now, s.max_deliveries])
         verdict = verdict.decode()
+        if rest:
+            self.queued_for[job_id] = now - float(rest[0])
         if verdict == "run":
             try:
                 request = SynthesisRequest.model_validate(unpack(payload))

@@ -3,13 +3,18 @@
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import json
+import os
+import subprocess
+import sys
 import time
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Iterator
 from typing import Any, TypeVar
 
 import numpy as np
 
-from clients.schemas import JobPublic, JobState, SynthesisRequest
+from clients.schemas import JobPublic, JobState, SynthesisRequest, WorkerPublic
 from workers.queue import JobQueue
 
 STAGED = "workers.testing:StagedPipeline"
@@ -49,3 +54,35 @@ async def until(queue: JobQueue, job_id: str, check: Callable[[JobPublic], bool]
 
 def running(job: JobPublic) -> bool:
     return job.state is JobState.RUNNING and job.progress.stage.value != "queued"
+
+
+@contextlib.contextmanager
+def redis_workers(url: str, prefix: str, concurrency: int = 1, **settings: Any) -> Iterator[subprocess.Popen[bytes]]:
+    """`mani worker` (the supervisor and its worker processes) on ``url``/``prefix`` running the staged pipeline;
+    ``settings``: any `QueueSettings` field (``pipeline_options`` as a dict)."""
+    env = dict(os.environ, MANI_REDIS_URL=url, MANI_QUEUE_PREFIX=prefix, MANI_PIPELINE=STAGED, MANI_LOG_LEVEL="WARNING")
+    for name, value in settings.items():
+        env[f"MANI_{name.upper()}"] = json.dumps(value) if isinstance(value, dict) else str(value)
+    cmd = [sys.executable, "-m", "clients.cli.main", "worker", "--concurrency", str(concurrency)]
+    proc = subprocess.Popen(cmd, env=env)
+    try:
+        yield proc
+    finally:
+        proc.terminate()
+        try:
+            proc.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+async def live_workers(queue: JobQueue, count: int, timeout: float = 30) -> list[WorkerPublic]:
+    """Wait until ``count`` workers send heartbeats."""
+    end = time.monotonic() + timeout
+    while True:
+        workers = await queue.workers()
+        if len(workers) >= count:
+            return workers
+        if time.monotonic() > end:
+            raise AssertionError(f"{len(workers)} of {count} workers came up")
+        await asyncio.sleep(0.05)

@@ -146,7 +146,7 @@ class RedisQueue(JobQueue):
     ) -> list[str]:
         ids = [new_id() for _ in requests]
         args: list[Any] = [self.keys.prefix, self.settings.max_queue, int(self.settings.record_ttl), time.time()]
-        args.append(len(requests))
+        args += [len(requests), int(self.settings.result_ttl * 1000)]
         for job_id, request in zip(ids, requests, strict=True):
             payload = pack(request.model_dump(mode="python", exclude_none=True))
             args += [

@@ -3,7 +3,7 @@
 Keys under the prefix P: ``P:jobs`` (stream, one consumer group "workers"; entries ``k`` job|robot, ``id``,
 ``p`` msgpack payload; deleted once acked, so XLEN = queued + running), ``P:job:ID`` (hash: the job's record,
 TTL ``record_ttl``), ``P:result:ID`` (msgpack result, TTL ``result_ttl``), ``P:recent`` (zset of ids by
-submit time), ``P:batch:ID`` (list), ``P:dead`` (stream of dead letters), ``P:counts`` (hash of totals),
+submit order, ``P:seq``), ``P:batch:ID`` (list), ``P:dead`` (stream of dead letters), ``P:counts`` (hash of totals),
 ``P:workers`` (zset by last heartbeat) + ``P:worker:ID`` (msgpack, TTL), ``P:robots`` / ``P:robot_urdf`` (hashes),
 ``P:robotreply:RID``; channel ``P:done`` announces finished job ids (and ``robot:RID``).
 """
@@ -44,7 +44,8 @@ class Keys:
         return f"{self.prefix}robotreply:{rid}"
 
 
-# KEYS: stream, recent. ARGV: prefix, max_queue, record_ttl, now, n, then n × (id, payload, deadline, batch, robot).
+# KEYS: stream, recent. ARGV: prefix, max_queue, record_ttl, now, n, result_ttl (ms: the submitter decides how long
+# results are kept), then n × (id, payload, deadline, batch, robot).
 # Returns n, or -(depth + 1) when the jobs do not fit.
 SUBMIT = (
     """
@@ -52,17 +53,17 @@ local n = tonumber(ARGV[5])
 local depth = redis.call('XLEN', KEYS[1])
 if depth + n > tonumber(ARGV[2]) then return -(depth + 1) end
 for i = 0, n - 1 do
-  local b = 6 + i * 5
+  local b = 7 + i * 5
   local id = ARGV[b]
   local key = ARGV[1] .. 'job:' .. id
-  redis.call('HSET', key, 'state', 'queued', 'created_at', ARGV[4], 'deliveries', 0)
+  redis.call('HSET', key, 'state', 'queued', 'created_at', ARGV[4], 'deliveries', 0, 'ttl', ARGV[6])
   if ARGV[b + 2] ~= '' then redis.call('HSET', key, 'deadline', ARGV[b + 2]) end
   if ARGV[b + 3] ~= '' then redis.call('HSET', key, 'batch_id', ARGV[b + 3]) end
   if ARGV[b + 4] ~= '' then redis.call('HSET', key, 'robot', ARGV[b + 4]) end
   local entry = redis.call('XADD', KEYS[1], '*', 'k', 'job', 'id', id, 'p', ARGV[b + 1])
   redis.call('HSET', key, 'entry', entry)
   redis.call('EXPIRE', key, ARGV[3])
-  redis.call('ZADD', KEYS[2], ARGV[4], id)
+  redis.call('ZADD', KEYS[2], redis.call('INCR', ARGV[1] .. 'seq'), id)
 end
 redis.call('ZREMRANGEBYRANK', KEYS[2], 0, -("""
     + str(RECENT_MAX)
@@ -72,8 +73,8 @@ return n
 )
 
 # A worker takes a delivered job. KEYS: job. ARGV: worker, now, max_deliveries.
-# Returns {verdict, deliveries}: run | dead | expired | cancelled | skip. A job found "running" was being run by a
-# worker that stopped responding: that becomes its last error.
+# Returns {verdict, deliveries, created_at (run only)}; verdict: run | dead | expired | cancelled | skip.
+# A job found "running" was being run by a worker that stopped responding: that becomes its last error.
 BEGIN = """
 local st = redis.call('HGET', KEYS[1], 'state')
 if not st or (st ~= 'queued' and st ~= 'running') then return {'skip', 0} end
@@ -92,13 +93,14 @@ end
 local deadline = redis.call('HGET', KEYS[1], 'deadline')
 if deadline and tonumber(deadline) <= tonumber(ARGV[2]) then return {'expired', d} end
 redis.call('HSET', KEYS[1], 'state', 'running', 'worker', ARGV[1], 'started_at', ARGV[2], 'progress', '')
-return {'run', d}
+return {'run', d, redis.call('HGET', KEYS[1], 'created_at')}
 """
 
 # Finish a job, but only if this worker still owns its stream entry (so a job re-delivered elsewhere yields one
 # result). The result is written before the XACK, in the same atomic step.
 # KEYS: stream, job, result, counts, done-channel.
-# ARGV: group, worker, entry, state, now, result ('' = none), error, error_type, timings, progress, result_ttl,
+# ARGV: group, worker, entry, state, now, result ('' = none), error, error_type, timings, progress, result_ttl
+#       (used when the record does not carry the submitter's),
 #       record_ttl, job id, require_owner ('1'/'0').
 FINISH = """
 if ARGV[14] == '1' then
@@ -107,10 +109,11 @@ if ARGV[14] == '1' then
 end
 local st = redis.call('HGET', KEYS[2], 'state')
 if st == 'queued' or st == 'running' then
-  if ARGV[6] ~= '' then redis.call('SET', KEYS[3], ARGV[6], 'PX', ARGV[11]) end
+  local ttl = redis.call('HGET', KEYS[2], 'ttl') or ARGV[11]
+  if ARGV[6] ~= '' then redis.call('SET', KEYS[3], ARGV[6], 'PX', ttl) end
   redis.call('HSET', KEYS[2], 'state', ARGV[4], 'finished_at', ARGV[5], 'timings', ARGV[9], 'progress', ARGV[10])
   if ARGV[7] ~= '' then redis.call('HSET', KEYS[2], 'error', ARGV[7], 'error_type', ARGV[8]) end
-  redis.call('PEXPIRE', KEYS[2], ARGV[12])
+  redis.call('PEXPIRE', KEYS[2], math.max(tonumber(ARGV[12]), tonumber(ttl)))
   redis.call('HINCRBY', KEYS[4], ARGV[4], 1)
 end
 if ARGV[3] ~= '' then
