@@ -111,9 +111,10 @@ def object_from_file(
         return _object_from_npz(path, **fields)
     if suffix == ".json":
         try:
-            return ObjectIn.model_validate_json(path.read_bytes())
+            obj = ObjectIn.model_validate_json(path.read_bytes())
         except pydantic.ValidationError as exc:
             raise local_validation_error(exc, "object") from exc
+        return as_object(obj, **fields)
     if suffix not in MESH_SUFFIXES:
         raise ValueError(f"{path}: unsupported file type {suffix!r}; use .npz, .json or one of {MESH_SUFFIXES}")
     import trimesh
@@ -168,7 +169,7 @@ def save_object(obj: ObjectIn, path: str | os.PathLike[str]) -> Path:
 def as_object(value: ObjectLike, **fields: Any) -> ObjectIn:
     """Coerce an `ObjectIn`, array, trimesh mesh, file path or dict into an `ObjectIn`."""
     if isinstance(value, ObjectIn):
-        return value.model_copy(update=fields) if fields else value
+        return _validated(ObjectIn, "object", **{**dict(value), **fields}) if fields else value
     if isinstance(value, dict):
         return _validated(ObjectIn, "object", **{**value, **fields})
     if isinstance(value, str | os.PathLike):

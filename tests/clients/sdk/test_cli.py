@@ -134,3 +134,18 @@ def test_jobs_list_show_cancel(cli: Any, fake: Any, object_file: Path, tmp_path:
     out = tmp_path / "r.json"
     assert cli(["jobs", "show", "job-1", "--follow", "--out", str(out), "--json"]) == EXIT_OK
     assert _json(capsys)["result_summary"]["success"] and out.exists()
+
+
+def test_synthesize_request_file_and_inline_urdf(cli: Any, fake: Any, object_file: Path, tmp_path: Path,
+                                                 object_points: np.ndarray) -> None:  # fmt: skip
+    request = tmp_path / "request.json"
+    request.write_text(make_request(object_points, "force_closure", "shadow", seed=11).model_dump_json())
+    assert cli(["synthesize", str(request), "--seed", "99"]) == EXIT_OK  # a whole request is used as it is
+    sent = fake.jobs["job-0"].request
+    assert sent.robot.name == "shadow" and sent.options.seed == 11
+    urdf = tmp_path / "g.urdf"
+    urdf.write_text('<robot name="g"><link name="a"/><link name="b"/></robot>')
+    assert cli(["synthesize", str(object_file), "--urdf", str(urdf)]) == EXIT_USAGE  # needs --fingertips
+    assert cli(["synthesize", str(object_file), "--urdf", str(urdf), "--fingertips", "a,b"]) == EXIT_OK
+    inline = fake.jobs["job-1"].request.robot
+    assert inline.urdf is not None and inline.fingertips == ["a", "b"]

@@ -90,6 +90,11 @@ def test_npz_round_trip(tmp_path: Path) -> None:
 def test_as_object_accepts_every_form(tmp_path: Path, object_points: np.ndarray) -> None:
     obj = object_from_points(object_points)
     assert as_object(obj) is obj
+    assert as_object(obj, properties={"friction": 0.9}).properties.friction == 0.9
+    with pytest.raises(ValidationError, match="region_mask"):
+        as_object(obj, region_mask=np.zeros(256, dtype=bool))
+    (tmp_path / "o.json").write_text(obj.model_dump_json())
+    assert object_from_file(tmp_path / "o.json", material="rigid").num_points == 256
     assert as_object(object_points).num_points == 256
     assert as_object({"points": object_points[:, :3].tolist()}).num_points == 256
     assert as_object(str(save_object(obj, tmp_path / "o.npz"))).num_points == 256
