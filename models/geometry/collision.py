@@ -5,7 +5,7 @@ gives no depth). We use it as the narrow-phase test per hand body, then measure 
 
 - hand → object: the largest depth of the hand body's surface samples (its vertices + ``BODY_SAMPLES`` area
   samples, seed 0) inside the object's watertight mesh (exact mesh signed distance, trimesh, evaluated only on
-  samples whose KD-tree Φ is below ``PREFILTER``);
+  the ``EXACT_CANDIDATES`` samples per body that the KD-tree Φ ranks deepest, if below ``PREFILTER``);
 - object → hand: the largest depth of object points (cloud + mesh vertices) inside the body's convex hull
   (half-space distance, exact for a convex body, an over-estimate for a non-convex one).
 
@@ -29,7 +29,9 @@ from models.robots.hand import ADJACENT_HOPS, Hand
 
 BODY_SAMPLES = 600
 PREFILTER = 0.01
-"""Only hand samples with KD-tree Φ below this (m) get the exact (slow) mesh signed distance."""
+"""Only hand samples with KD-tree Φ below this (m) get the exact (slow) mesh signed distance ..."""
+EXACT_CANDIDATES = 48
+"""... and of those only the ``EXACT_CANDIDATES`` deepest by the KD-tree estimate, per body."""
 
 
 @dataclass
@@ -38,6 +40,7 @@ class _BodyGeom:
     bvh: fcl.BVHModel
     samples: np.ndarray  # (k, 3) body frame
     planes: np.ndarray  # (f, 4) hull half-spaces n·x <= d, body frame
+    bounds: np.ndarray  # (2, 3) axis-aligned bounds, body frame
 
 
 def _bvh(mesh: trimesh.Trimesh) -> fcl.BVHModel:
@@ -55,8 +58,10 @@ def _planes(mesh: trimesh.Trimesh) -> np.ndarray:
     return np.hstack([n, d[:, None]])
 
 
-def _inside_depth(planes: np.ndarray, x: np.ndarray) -> float:
+def _inside_depth(planes: np.ndarray, x: np.ndarray, bounds: np.ndarray | None = None) -> float:
     """Largest depth (≥ 0) of points x (k, 3) inside the convex region n·x <= d."""
+    lo, hi = bounds if bounds is not None else (x.min(0), x.max(0))
+    x = x[np.all((x >= lo) & (x <= hi), axis=1)]  # cheap box cull first
     if len(x) == 0:
         return 0.0
     slack = planes[:, 3][None] - x @ planes[:, :3].T  # (k, f) > 0 inside each half-space
@@ -73,7 +78,7 @@ def _bodies(hand: Hand) -> list[_BodyGeom]:
                 continue
             samples, _ = trimesh.sample.sample_surface(mesh, BODY_SAMPLES, seed=0)
             pts = np.vstack([np.asarray(mesh.vertices), samples])
-            out.append(_BodyGeom(name, _bvh(mesh), pts, _planes(mesh)))
+            out.append(_BodyGeom(name, _bvh(mesh), pts, _planes(mesh), np.asarray(mesh.bounds)))
         cache["bodies"] = out
     return cache["bodies"]
 
@@ -110,13 +115,14 @@ def hand_object_penetration(
         if not _hits(_obj(body.bvh, T), obj):
             continue
         world = body.samples @ T[:3, :3].T + T[:3, 3]
-        phi, _, _ = geometry.signed_distance(world)  # cheap KD-tree pre-filter
-        near = world[phi < PREFILTER]
+        phi, _, _ = geometry.signed_distance(world)  # cheap KD-tree estimate ...
+        order = np.argsort(phi)[:EXACT_CANDIDATES]
+        near = world[order[phi[order] < PREFILTER]]  # ... then exact distances for the deepest candidates
         if len(near):
             sd = trimesh.proximity.signed_distance(mesh, near)  # exact, positive inside
             depth = max(depth, float(max(sd.max(), 0.0)))
         local = (obj_pts - T[:3, 3]) @ T[:3, :3]
-        depth = max(depth, _inside_depth(body.planes, local))
+        depth = max(depth, _inside_depth(body.planes, local, body.bounds))
     return depth
 
 
@@ -149,8 +155,8 @@ def _pair_depth(a: _BodyGeom, b: _BodyGeom, poses: dict[str, np.ndarray]) -> flo
         return 0.0
     T_ba = np.linalg.inv(Tb) @ Ta  # a's frame -> b's frame
     T_ab = np.linalg.inv(T_ba)
-    d1 = _inside_depth(b.planes, a.samples @ T_ba[:3, :3].T + T_ba[:3, 3])
-    d2 = _inside_depth(a.planes, b.samples @ T_ab[:3, :3].T + T_ab[:3, 3])
+    d1 = _inside_depth(b.planes, a.samples @ T_ba[:3, :3].T + T_ba[:3, 3], b.bounds)
+    d2 = _inside_depth(a.planes, b.samples @ T_ab[:3, :3].T + T_ab[:3, 3], a.bounds)
     return max(d1, d2, 1e-9)
 
 
