@@ -1,18 +1,18 @@
 """The hand registry: built-in hands by name (cached) and hardened loading of a user's URDF.
 
 Built-ins and their palm frames (``approach_axis`` is the palm-frame direction the palm faces / fingers close
-towards):
+towards; rest poses have the fingers open and slightly flexed, thumbs opposing):
 
-====================  ======================================  ==========  =========================================
-name                  source                                  free DoF    palm frame, approach
-====================  ======================================  ==========  =========================================
-``allegro``           example-robot-data, right hand          16          ``palm_link``; fingers along +z, +x
-``leap``              ghand ``ghand_right.urdf`` (LEAP-style)  16          ``palm_lower_right``; see ``_leap``
-``shadow``            gymnasium-robotics ``hand/reach.xml``    18 (22)     ``robot0:palm``; fingers +z, palm −y
-``panda_gripper``     example-robot-data ``panda.urdf``        1           ``panda_hand``; fingers along +z
-``barrett``           our ``descriptions/barrett_bh8.urdf``    4 (7)       ``bh_palm``; fingers along +z
-``kinova3f``          our ``descriptions/kinova_3f.urdf``      3 (6)       ``k3f_palm``; fingers along +z
-====================  ======================================  ==========  =========================================
+================  ==========================================  ========  ===============================================
+name              source                                      free DoF  palm frame (link), fingers, approach
+================  ==========================================  ========  ===============================================
+``allegro``       example-robot-data ``allegro_right_hand``   16        ``palm_link``: fingers along +z, approach +x
+``leap``          ghand ``ghand_right.urdf`` (LEAP-style)     16        ``root``: fingers along +x, approach −z
+``shadow``        gymnasium-robotics ``hand/reach.xml``       18 (22)   ``robot0:palm``: fingers along +z, approach −y
+``panda_gripper`` example-robot-data ``panda.urdf`` (hand)    1 (2)     ``panda_hand``: fingers along +z, approach +z
+``barrett``       our ``descriptions/barrett_bh8.urdf``       4 (7)     ``bh_palm``: fingers along +z, approach +z
+``kinova3f``      our ``descriptions/kinova_3f.urdf``         3 (6)     ``k3f_palm``: fingers along +z, approach +z
+================  ==========================================  ========  ===============================================
 
 Numbers in parentheses count the moving joints before tying: Shadow's distal joints J0 follow J1 through the
 MJCF's coupling tendon (J0 = 0.00805/0.00705 · J1), the Panda's second finger mimics the first, the Barrett and
