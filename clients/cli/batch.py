@@ -76,7 +76,7 @@ def read_requests(source: Path, args: argparse.Namespace) -> list[Any]:
 
     from clients.cli.synthesize import build_request
     from clients.schemas import SynthesisRequest
-    from clients.sdk._core import local_validation_error
+    from clients.sdk.errors import local_validation_error
     from clients.validation import field_errors
 
     if source.is_dir():

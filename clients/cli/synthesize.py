@@ -102,7 +102,7 @@ def build_request(args: argparse.Namespace, path: Path | None = None) -> Any:
     path = args.file if path is None else path
     from clients.schemas import SynthesisRequest
     from clients.sdk import make_request, object_from_file
-    from clients.sdk._core import local_validation_error
+    from clients.sdk.errors import local_validation_error
 
     if path.suffix.lower() == ".json":
         data = json.loads(path.read_text())
@@ -141,7 +141,7 @@ def wait_with_progress(job: Any, timeout: float, show: bool) -> Any:
     from rich.progress import BarColumn, Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from clients.sdk import TimeoutError
-    from clients.sdk._core import poll_delays
+    from clients.sdk.retry import poll_delays
 
     console = common.stderr_console()
     deadline = time.monotonic() + timeout
@@ -192,7 +192,7 @@ def result_table(result: Any) -> Any:
 def run(args: argparse.Namespace) -> int:
     """Run ``mani synthesize``."""
     from clients.sdk import result_figure, result_to_dict, result_to_json
-    from clients.sdk._core import job_result
+    from clients.sdk.tracking import job_result
 
     request = build_request(args)
     with common.client_factory(args) as client:

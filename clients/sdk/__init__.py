@@ -23,7 +23,6 @@ The wire models (`SynthesisRequest`, `SynthesisResult`, `JobPublic`, ...) live i
 never imports torch or server code.
 """
 
-from clients.sdk._core import RetryPolicy
 from clients.sdk.async_client import AsyncBatch, AsyncClient, AsyncJob
 from clients.sdk.client import Batch, Client, Job
 from clients.sdk.errors import (
@@ -51,6 +50,7 @@ from clients.sdk.inputs import (
     wrench,
 )
 from clients.sdk.outputs import load_result, result_figure, result_to_dict, result_to_json
+from clients.sdk.retry import RetryPolicy
 
 __all__ = [
     "AsyncBatch",

@@ -1,4 +1,4 @@
-"""The I/O-free half of the SDK: building requests, reading answers, deciding retries, tracking batches.
+"""The I/O-free half of the SDK: building requests, reading answers, deciding retries.
 
 `Client` and `AsyncClient` share everything here and differ only in how they send (the httpx pattern). Nothing
 in this module opens a connection or sleeps, so all of it is testable with plain values.
@@ -6,11 +6,9 @@ in this module opens a connection or sleeps, so all of it is testable with plain
 
 from __future__ import annotations
 
-import email.utils
 import random
-import time
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any, Generic, Literal, TypeVar
 
 import httpx
@@ -20,7 +18,6 @@ from pydantic import BaseModel
 from clients.codec import JSON, MSGPACK, DecodeError, decode_body, dump_model, media_type
 from clients.schemas import (
     BatchCreate,
-    BatchItem,
     BatchPublic,
     ErrorBody,
     JobCreated,
@@ -32,8 +29,24 @@ from clients.schemas import (
     SynthesisRequest,
     SynthesisResult,
 )
-from clients.sdk.errors import JobFailed, ServerError, TimeoutError, Unreachable, ValidationError, error_for
-from clients.validation import field_errors, summary
+from clients.sdk.errors import (
+    JobFailed,
+    ServerError,
+    TimeoutError,
+    Unreachable,
+    error_for,
+    local_validation_error,
+)
+from clients.sdk.retry import (
+    DEFAULT_RETRY,
+    IDEMPOTENT_METHODS,
+    MAYBE_SENT,
+    NOT_SENT,
+    RETRY_STATUSES,
+    RETRY_STATUSES_IDEMPOTENT,
+    RetryPolicy,
+    parse_retry_after,
+)
 
 T = TypeVar("T")
 ModelT = TypeVar("ModelT", bound=BaseModel)
@@ -43,74 +56,12 @@ DEFAULT_BASE_URL = "http://127.0.0.1:8000"
 USER_AGENT = "manifoundation-sdk/0.1"
 # Seconds added to the server-side wait of /v1/synthesize before the HTTP read gives up.
 READ_MARGIN_S = 10.0
-_RETRY_STATUSES = frozenset({429, 503})
-_RETRY_STATUSES_IDEMPOTENT = frozenset({429, 502, 503, 504})
-_IDEMPOTENT = frozenset({"GET", "HEAD", "DELETE", "OPTIONS"})
 # A finished job's error type → its state (anything else: failed).
 _ERROR_STATES = {
     "Cancelled": JobState.CANCELLED,
     "DeadlineExceeded": JobState.EXPIRED,
     "ResultExpired": JobState.EXPIRED,
 }
-# Transport errors where the request surely did not reach the service: safe to retry any method.
-_NOT_SENT = (httpx.ConnectError, httpx.ConnectTimeout, httpx.PoolTimeout)
-# Transport errors after sending: retried only for idempotent methods.
-_MAYBE_SENT = (httpx.ReadError, httpx.WriteError, httpx.RemoteProtocolError)
-
-
-@dataclass(frozen=True)
-class RetryPolicy:
-    """Retries with exponential backoff and jitter on 429/503 and connection errors.
-
-    The n-th retry waits ``min(max_backoff, backoff * 2**n)`` scaled by a random factor in
-    ``[1 - jitter, 1]``, or the service's Retry-After when that is longer (capped at ``max_retry_after``).
-
-    Attributes:
-        max_retries: retries after the first attempt (0 disables retrying).
-        backoff: first delay, seconds.
-        max_backoff: largest computed delay, seconds.
-        jitter: fraction of the delay drawn at random (0: none, 1: "full jitter").
-        max_retry_after: largest Retry-After honoured, seconds.
-    """
-
-    max_retries: int = 3
-    backoff: float = 0.25
-    max_backoff: float = 8.0
-    jitter: float = 0.5
-    max_retry_after: float = 60.0
-
-    def delay(self, retry: int, retry_after: float | None = None, rng: random.Random | None = None) -> float:
-        """Seconds to wait before retry number ``retry`` (0-based)."""
-        base = min(self.max_backoff, self.backoff * (2**retry))
-        draw = (rng or random).random()
-        wait = base * (1.0 - self.jitter * draw)
-        if retry_after is not None:
-            wait = max(wait, min(retry_after, self.max_retry_after))
-        return wait
-
-
-def parse_retry_after(value: str | None, now: float | None = None) -> float | None:
-    """Seconds from a Retry-After header (delta-seconds or an HTTP date); None when absent or unreadable."""
-    if not value:
-        return None
-    value = value.strip()
-    try:
-        return max(0.0, float(value))
-    except ValueError:
-        pass
-    try:
-        when = email.utils.parsedate_to_datetime(value)
-    except (TypeError, ValueError):
-        return None
-    return max(0.0, when.timestamp() - (time.time() if now is None else now))
-
-
-def poll_delays(first: float = 0.05, factor: float = 1.5, cap: float = 1.0) -> Iterator[float]:
-    """Growing pause between two status polls: fast for quick jobs, gentle for long ones."""
-    delay = first
-    while True:
-        yield delay
-        delay = min(cap, delay * factor)
 
 
 @dataclass
@@ -120,12 +71,6 @@ class Call(Generic[T]):
     request: httpx.Request
     parse: Callable[[httpx.Response], T]
     retry: bool = True
-
-
-def local_validation_error(exc: pydantic.ValidationError, what: str = "request") -> ValidationError:
-    """The SDK's `ValidationError` for input that failed the contract before it was sent."""
-    detail = field_errors(exc)
-    return ValidationError(f"invalid {what}: {summary(detail)}", type="ValidationError", detail=detail)
 
 
 class BaseClient:
@@ -147,7 +92,7 @@ class BaseClient:
         api_key: str | None = None,
         *,
         timeout: float | httpx.Timeout = 30.0,
-        retries: RetryPolicy | int = RetryPolicy(),
+        retries: RetryPolicy | int = DEFAULT_RETRY,
         encoding: Encoding = "msgpack",
         headers: dict[str, str] | None = None,
         poll_interval: float = 1.0,
@@ -245,13 +190,13 @@ class BaseClient:
         """
         if retry >= self.retry_policy.max_retries:
             return None
-        idempotent = request.method in _IDEMPOTENT
+        idempotent = request.method in IDEMPOTENT_METHODS
         if response is not None:
-            statuses = _RETRY_STATUSES_IDEMPOTENT if idempotent else _RETRY_STATUSES
+            statuses = RETRY_STATUSES_IDEMPOTENT if idempotent else RETRY_STATUSES
             if response.status_code not in statuses:
                 return None
             return self.retry_policy.delay(retry, parse_retry_after(response.headers.get("retry-after")), self._rng)
-        if isinstance(exc, _NOT_SENT) or (idempotent and isinstance(exc, _MAYBE_SENT)):
+        if isinstance(exc, NOT_SENT) or (idempotent and isinstance(exc, MAYBE_SENT)):
             return self.retry_policy.delay(retry, None, self._rng)
         return None
 
@@ -410,96 +355,3 @@ def _fastapi_detail(response: httpx.Response) -> ErrorBody | None:
     if isinstance(data, dict) and isinstance(data.get("detail"), str):
         return ErrorBody(error=data["detail"], type=f"HTTP{response.status_code}")
     return None
-
-
-@dataclass
-class BatchTracker:
-    """Which items of a batch are finished, fed one `BatchPublic` page at a time (no I/O).
-
-    The client fetches `pages_to_fetch()` each round, feeds every page to `update`, and reports the items it
-    returns; `missing_results()` lists succeeded items whose page carried no result (the client then reads
-    the job itself).
-    """
-
-    batch_id: str
-    total: int
-    page_size: int = 100
-    items: list[BatchItem | None] = field(init=False)
-    reported: set[int] = field(default_factory=set)
-    server_terminal: int = 0
-
-    def __post_init__(self) -> None:
-        self.items = [None] * self.total
-
-    @property
-    def done(self) -> bool:
-        """Whether every item was reported."""
-        return len(self.reported) == self.total
-
-    def pending_pages(self) -> list[int]:
-        """Offsets of the pages that hold an item not yet reported, lowest first."""
-        pending = (i for i in range(self.total) if i not in self.reported)
-        return sorted({(i // self.page_size) * self.page_size for i in pending})
-
-    def worth_more_pages(self) -> bool:
-        """After the first page of a round: whether the other pages can hold news (counts say so)."""
-        return self.server_terminal > len(self.reported)
-
-    def update(self, page: BatchPublic) -> list[BatchItem]:
-        """Record a page; return its items that just finished (with a result or an error)."""
-        self.server_terminal = sum(n for state, n in page.counts.items() if JobState(state).terminal)
-        fresh = []
-        for item in page.items:
-            if not 0 <= item.index < self.total:
-                continue
-            self.items[item.index] = item
-            if item.index in self.reported or not item.state.terminal:
-                continue
-            if item.state is JobState.SUCCEEDED and item.result is None:
-                continue  # its result comes from the job itself: see missing_results
-            self.reported.add(item.index)
-            fresh.append(item)
-        return fresh
-
-    def missing_results(self) -> list[BatchItem]:
-        """Succeeded items whose result was not in their page."""
-        return [
-            item
-            for item in self.items
-            if item is not None
-            and item.index not in self.reported
-            and item.state is JobState.SUCCEEDED
-            and item.result is None
-        ]
-
-    def fill(self, index: int, job: JobPublic) -> BatchItem:
-        """Complete an item from its job (read separately) and mark it reported."""
-        item = BatchItem(index=index, job_id=job.id, state=job.state, result=job.result, error=job.error)
-        self.items[index] = item
-        self.reported.add(index)
-        return item
-
-
-def job_result(job: JobPublic) -> SynthesisResult:
-    """The result of a finished job, or `JobFailed` when it has none."""
-    if job.state is JobState.SUCCEEDED and job.result is not None:
-        return job.result
-    raise JobFailed.from_job(job)
-
-
-def item_result(item: BatchItem) -> SynthesisResult:
-    """The result of a finished batch item, or `JobFailed` when it has none."""
-    if item.state is JobState.SUCCEEDED and item.result is not None:
-        return item.result
-    raise JobFailed(item.job_id, item.state, item.error)
-
-
-def parse_event(data: str) -> JobPublic:
-    """One SSE ``data`` payload: a `JobPublic` in JSON."""
-    try:
-        return JobPublic.model_validate_json(data)
-    except pydantic.ValidationError as exc:
-        raise ServerError(f"unreadable job event: {exc}", type="ProtocolError") from exc
-
-
-JOB_EVENT_TYPES = frozenset({"message", "progress", "end"})

@@ -20,19 +20,12 @@ from clients.schemas import (
     SynthesisRequest,
     SynthesisResult,
 )
-from clients.sdk._core import (
-    JOB_EVENT_TYPES,
-    BaseClient,
-    BatchTracker,
-    Call,
-    item_result,
-    job_result,
-    parse_event,
-    poll_delays,
-)
+from clients.sdk._core import BaseClient, Call
 from clients.sdk.errors import TimeoutError
 from clients.sdk.inputs import ObjectLike, RobotLike, TaskLike, make_request, robot_registration
+from clients.sdk.retry import poll_delays
 from clients.sdk.sse import SSEDecoder
+from clients.sdk.tracking import JOB_EVENT_TYPES, BatchTracker, item_result, job_result, parse_event
 
 T = TypeVar("T")
 

@@ -18,7 +18,10 @@ from __future__ import annotations
 
 import builtins
 
+import pydantic
+
 from clients.schemas import ErrorBody, FieldError, JobPublic, JobState
+from clients.validation import field_errors, summary
 
 
 class ManiError(Exception):
@@ -159,3 +162,9 @@ def error_for(
     if cls in (RateLimited, ServerError):
         kwargs["retry_after"] = retry_after
     return cls(message, **kwargs)  # type: ignore[arg-type]
+
+
+def local_validation_error(exc: pydantic.ValidationError, what: str = "request") -> ValidationError:
+    """The SDK's `ValidationError` for input that failed the contract before it was sent."""
+    detail = field_errors(exc)
+    return ValidationError(f"invalid {what}: {summary(detail)}", type="ValidationError", detail=detail)

@@ -29,7 +29,7 @@ from clients.schemas import (
     TaskIn,
     WrenchTask,
 )
-from clients.sdk._core import local_validation_error
+from clients.sdk.errors import local_validation_error
 
 MESH_SUFFIXES = (".ply", ".obj", ".stl", ".off", ".glb")
 DEFAULT_NUM_POINTS = 2048

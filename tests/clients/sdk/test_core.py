@@ -16,8 +16,10 @@ from hypothesis import strategies as st
 from clients.codec import MSGPACK, pack
 from clients.schemas import BatchItem, BatchPublic, JobState
 from clients.sdk import NotFound, RateLimited, RequestError, RetryPolicy, ServerError, Unauthorized, ValidationError
-from clients.sdk._core import BaseClient, BatchTracker, parse_retry_after, poll_delays
+from clients.sdk._core import BaseClient
+from clients.sdk.retry import parse_retry_after, poll_delays
 from clients.sdk.sse import iter_events
+from clients.sdk.tracking import BatchTracker
 
 
 @given(st.integers(0, 20), st.floats(0, 1), st.one_of(st.none(), st.floats(0, 1000)))
