@@ -10,7 +10,7 @@ from typing import Any
 
 import httpx
 import pytest
-from hypothesis import given
+from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from clients.codec import MSGPACK, pack
@@ -158,3 +158,47 @@ def test_sse_decoding() -> None:
     lines = [": keep-alive", "", "event: progress", 'data: {"a":', "data: 1}", "id: 7", "", "data: last"]
     events = list(iter_events(lines))
     assert [(e.event, e.data, e.id) for e in events] == [("progress", '{"a":\n1}', "7"), ("message", "last", "7")]
+
+
+def _tracker_round(tracker: BatchTracker, states: list[JobState]) -> list[int]:
+    """One polling round as the clients do it, against a batch whose items are in ``states``."""
+    from clients.schemas import ErrorBody, JobPublic
+
+    counts: dict[JobState, int] = {}
+    for s in states:
+        counts[s] = counts.get(s, 0) + 1
+    fresh: list[int] = []
+    for n, offset in enumerate(tracker.pending_pages()):
+        if n > 0 and not tracker.worth_more_pages():
+            break
+        items = [
+            BatchItem(index=i, job_id=f"j{i}", state=states[i],
+                      error=ErrorBody(error="x", type="X") if states[i] is JobState.FAILED else None)
+            for i in range(offset, min(offset + tracker.page_size, tracker.total))
+        ]  # fmt: skip
+        page = BatchPublic(id="b", total=tracker.total, counts=counts, done=False, items=items, offset=offset,
+                           limit=tracker.page_size, created_at=0.0)  # fmt: skip
+        fresh += [item.index for item in tracker.update(page)]
+    for item in tracker.missing_results():  # succeeded, no result in the page: the client reads the job
+        job = JobPublic(id=item.job_id, state=states[item.index], created_at=0.0)
+        fresh.append(tracker.fill(item.index, job).index)
+    return fresh
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(1, 40), st.integers(1, 12), st.randoms(use_true_random=False))
+def test_batch_tracker_reports_every_item_exactly_once(total: int, page_size: int, rng: random.Random) -> None:
+    """Items finish in any order (results never in the pages): each is reported once, none is lost."""
+    states = [JobState.QUEUED] * total
+    tracker = BatchTracker("b", total=total, page_size=page_size)
+    reported: list[int] = []
+    for _ in range(20):
+        for i in rng.sample(range(total), k=rng.randint(0, total)):
+            if not states[i].terminal:
+                states[i] = rng.choice([JobState.RUNNING, JobState.SUCCEEDED, JobState.FAILED])
+        reported += _tracker_round(tracker, states)
+        assert len(reported) == len(set(reported))
+        assert set(reported) == {i for i, s in enumerate(states) if s.terminal} or not tracker.worth_more_pages()
+    states = [s if s.terminal else JobState.SUCCEEDED for s in states]
+    reported += _tracker_round(tracker, states)
+    assert tracker.done and sorted(reported) == list(range(total))
