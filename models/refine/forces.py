@@ -5,7 +5,11 @@ Written with auxiliary variables ``t = R G f − τ`` and the epigraph ``min s, 
 random instances; this one is always well posed, and the solver's tolerance applies to ‖r‖ itself rather than to
 ‖r‖², so residuals of 1e-8 are resolved (with ‖r‖² the interior point stops near ‖r‖ ≈ 1e-4). Normal forces are bounded, ``f_i·(−n_i) ≤ max_normal_force`` (default
 1, paper §III-B: unit target wrench and forces of at most one in the normal direction). Force closure adds
-``Σ_i f_i·(−n_i) = 1``, which excludes f = 0. `solve_forces_cvxpy` is the plain CVXPY reference.
+``Σ_i f_i·(−n_i) = 1``, which excludes f = 0, and — since Gf = 0 alone is also met by grasps on the boundary of
+force closure (two opposing fingers and idle others: Ferrari–Canny ε = 0) — asks every finger to carry a share
+``f_i·(−n_i) ≥ CLOSURE_MIN_SHARE / m`` inside a cone narrowed to ``CLOSURE_CONE_SHRINK · μ`` (the 8-sided pyramid
+of the ε metric is inscribed at cos(π/8) ≈ 0.92 of the cone). Forces strictly inside the cones with Gf = 0 and a
+full-rank G is the classical force-closure condition. `solve_forces_cvxpy` is the plain CVXPY reference.
 """
 
 from __future__ import annotations
@@ -19,6 +23,18 @@ from models.refine.grasp import cone_rows, grasp_maps
 from models.refine.wrench import WrenchTask
 
 DEFAULT_MAX_NORMAL_FORCE = 1.0
+CLOSURE_MIN_SHARE = 0.25
+CLOSURE_CONE_SHRINK = 0.9
+
+
+def cone_mu(task: WrenchTask, mu: float) -> float:
+    """Friction coefficient of the optimisation's cones (narrowed for force closure)."""
+    return mu * CLOSURE_CONE_SHRINK if task.closure else mu
+
+
+def min_normal_force(task: WrenchTask, m: int) -> float:
+    """Lower bound on each normal force (closure only)."""
+    return CLOSURE_MIN_SHARE / m if task.closure else 0.0
 
 
 @dataclass(frozen=True)
@@ -77,8 +93,9 @@ def solve_forces(
         nrows[i, 3 * i : 3 * i + 3] = -normals[i]
     if task.closure:
         prob.zero(nrows.sum(axis=0, keepdims=True), np.ones(1))
+        prob.leq(-nrows, np.full(m, -min_normal_force(task, m)))
     prob.leq(nrows, np.full(m, max_normal_force))
-    cones = cone_rows(normals, mu)
+    cones = cone_rows(normals, cone_mu(task, mu))
     for i in range(m):
         a = np.zeros((3, n))
         a[:, 3 * i : 3 * i + 3] = -cones[i]
@@ -104,7 +121,7 @@ def solve_forces_cvxpy(
     m = len(points)
     gmat = wrench_matrix(task, points)
     f = cp.Variable(3 * m)
-    cones = cone_rows(normals, mu)
+    cones = cone_rows(normals, cone_mu(task, mu))
     cons = []
     normal_force = []
     for i in range(m):
@@ -112,6 +129,7 @@ def solve_forces_cvxpy(
         cons.append(cp.SOC(cones[i][0] @ fi, cones[i][1:] @ fi))
         normal_force.append(-normals[i] @ fi)
         cons.append(-normals[i] @ fi <= max_normal_force)
+        cons.append(-normals[i] @ fi >= min_normal_force(task, m))
     if task.closure:
         cons.append(cp.sum(cp.hstack(normal_force)) == 1)
     prob = cp.Problem(cp.Minimize(cp.sum_squares(gmat @ f - task.target)), cons)

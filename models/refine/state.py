@@ -51,6 +51,7 @@ class Linearisation:
         tip_phi, tip_grad: (m,), (m, 3) distance the objective drives to zero (Φ, or Φ^R with a mask) and its
             gradient.
         normals: (m, 3) outward normal at each tip's projection on the surface (grasp maps, friction cones).
+        normal_jac: (m, 3, 3) ∂n/∂p at the tips (zeros when the field has no curvature model).
         forces: f* (m, 3) and the inner solution.
         sph, sph_jac, sph_phi, sph_grad, sph_radius, sph_allow: spheres and Φ at their centres; ``sph_allow``
             is the allowed overlap (m) per sphere (fingertip spheres may touch).
@@ -66,6 +67,7 @@ class Linearisation:
     tip_phi: np.ndarray
     tip_grad: np.ndarray
     normals: np.ndarray
+    normal_jac: np.ndarray
     solution: ForceSolution
     sph: np.ndarray
     sph_jac: np.ndarray
@@ -160,6 +162,9 @@ def linearise(
     m = len(tips)
     tip_phi, tip_grad = phi_all[:m], grad_all[:m]
     normals = field.surface_normal(tips) if hasattr(field, "surface_normal") else tip_grad
+    normal_jac = (
+        field.normal_jacobian(tips) if hasattr(field, "normal_jacobian") else np.zeros((len(tips), 3, 3))
+    )
     if tip_field is not None:
         tip_phi, tip_grad = tip_field(tips)
     solution = solve_forces(task, tips, normals, mu, max_normal_force)
@@ -176,6 +181,7 @@ def linearise(
         tip_phi=np.asarray(tip_phi, dtype=np.float64),
         tip_grad=np.asarray(tip_grad, dtype=np.float64),
         normals=np.asarray(normals, dtype=np.float64),
+        normal_jac=normal_jac,
         solution=solution,
         sph=sph,
         sph_jac=sph_jac,

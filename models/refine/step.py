@@ -1,12 +1,14 @@
 """One SCP step (paper Eq. 9-16) over (δq, f = f* + δf), with Clarabel's native API or plain CVXPY.
 
     min  ‖r* + B δq + R G δf‖² + λ Σ_i (Φ_i + ∇Φ_iᵀ J_i δq)² + ρ Σ slacks + ε Σ (δq_j / s_j)²
-    s.t. f_i ∈ FC(μ) (exact SOC), f_i·(−n_i) ≤ f_max, [closure: Σ f_i·(−n_i) = 1]
+    s.t. f_i ∈ FC(μ) (exact SOC), f_i·(−n_i) ≤ f_max, [closure: Σ f_i·(−n_i) = 1, shares and narrowed cones
+         as in `models.refine.forces`]
          q_min ≤ q + δq ≤ q_max,  |δq| ≤ s_q,  |δf| ≤ s_f
          Φ(c_k) + ∇Φ(c_k)ᵀ J_k δq + σ_k ≥ ε_k − a_k           (active spheres; a_k: fingertip allowance)
          ‖c_i − c_j‖ + u_ijᵀ (J_i − J_j) δq + σ_ij ≥ ε_i + ε_j   (active pairs, linearised Eq. 15)
 
-B = R Σ_i [0; −[f_i*]× J_i / ρ] is ∂(R G(p) f*)/∂q. The non-penetration and self-collision rows carry slacks σ ≥ 0
+B = R Σ_i ([0; −[f_i*]× J_i / ρ] + G_i (−[f_i*]× [n_i]× ∂n_i/∂p J_i)) is ∂(R G(p) f*)/∂q: the contact moves
+(lever arm) and, on a curved surface, its friction cone turns with the normal and carries f* along. The non-penetration and self-collision rows carry slacks σ ≥ 0
 with an exact-penalty weight ρ, so a step always exists even from a penetrating start. The native build uses
 auxiliary variables for the residual and the tip distances (``P`` diagonal), as the force problem does.
 """
@@ -18,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from models.refine.conic import ConicProblem
-from models.refine.forces import wrench_matrix
-from models.refine.grasp import cone_rows, skew
+from models.refine.forces import cone_mu, min_normal_force, wrench_matrix
+from models.refine.grasp import cone_rows, grasp_maps, skew
 from models.refine.state import Linearisation
 
 
@@ -63,6 +65,11 @@ def _model_terms(lin: Linearisation, params: StepParams) -> dict[str, np.ndarray
     # ∂(R G f*)/∂q: torque part of G_i f* changes by δp × f* = −[f*]× J δq, over ρ
     dtorque = np.einsum("mab,mbn->an", -skew(lin.forces), lin.tip_jac) / task.length
     bmat = task.projection @ np.vstack([np.zeros((3, dtorque.shape[1])), dtorque])
+    # sliding turns the contact frame by ω = n × (∂n/∂p) J δq, which turns f* by ω × f* = −[f*]× ω
+    turn = -skew(lin.forces) @ skew(lin.normals) @ lin.normal_jac  # (m, 3, 3)
+    dforce = np.einsum("mab,mbn->man", turn, lin.tip_jac)
+    g = grasp_maps(lin.tips, task.centre, task.length)
+    bmat = bmat + task.projection @ np.einsum("mia,man->in", g, dforce)
     tip_rows = np.einsum("ma,man->mn", lin.tip_grad, lin.tip_jac)
     active = np.flatnonzero(lin.sph_phi - lin.sph_radius < params.active_margin)
     sph_rows = np.einsum("sa,san->sn", lin.sph_grad[active], lin.sph_jac[active])
@@ -120,6 +127,7 @@ def solve_step(lin: Linearisation, params: StepParams) -> StepSolution:
         nrow[i, iff + 3 * i : iff + 3 * i + 3] = -lin.normals[i]
     if lin.task.closure:
         prob.zero(nrow.sum(axis=0, keepdims=True), np.ones(1))
+        prob.leq(-nrow, np.full(m, -min_normal_force(lin.task, m)))
     prob.leq(nrow, np.full(m, lin.max_normal_force))
     # box: lo ≤ δq ≤ hi, |f − f*| ≤ s_f
     eye = np.eye(nx)
@@ -139,7 +147,7 @@ def solve_step(lin: Linearisation, params: StepParams) -> StepSolution:
         prob.leq(rows, t["pair_rhs"])
     if a + b:
         prob.leq(-eye[isl:], np.zeros(a + b))
-    cones = cone_rows(lin.normals, lin.mu)
+    cones = cone_rows(lin.normals, cone_mu(lin.task, lin.mu))
     for i in range(m):
         rows = np.zeros((3, nx))
         rows[:, iff + 3 * i : iff + 3 * i + 3] = -cones[i]
@@ -170,7 +178,7 @@ def solve_step_cvxpy(lin: Linearisation, params: StepParams) -> StepSolution:
         + params.regularisation * cp.sum_squares(cp.multiply(1 / np.maximum(params.trust, 1e-9), dq))
         + params.penalty * (cp.sum(sig_s) + cp.sum(sig_p))
     )
-    cones = cone_rows(lin.normals, lin.mu)
+    cones = cone_rows(lin.normals, cone_mu(lin.task, lin.mu))
     f0 = lin.forces.reshape(-1)
     cons = [dq >= t["lo"], dq <= t["hi"], cp.abs(f - f0) <= params.trust_force]
     normal = []
@@ -179,6 +187,7 @@ def solve_step_cvxpy(lin: Linearisation, params: StepParams) -> StepSolution:
         cons.append(cp.SOC(cones[i][0] @ fi, cones[i][1:] @ fi))
         normal.append(-lin.normals[i] @ fi)
         cons.append(-lin.normals[i] @ fi <= lin.max_normal_force)
+        cons.append(-lin.normals[i] @ fi >= min_normal_force(lin.task, m))
     if lin.task.closure:
         cons.append(cp.sum(cp.hstack(normal)) == 1)
     if len(t["sph_rhs"]):

@@ -1,0 +1,207 @@
+"""The refinement evaluation (paper Table II, DESIGN.md §5) as a library; `mani eval refine` drives it.
+
+Protocol, per object and grasp:
+
+1. Known-feasible palm pose: H = m random surface points (farthest-point spread over a random half of the cloud)
+   are used as contacts, initialised (§III-B-1) and refined for force closure with the default settings; the
+   first result that passes verification is the ground truth (up to ``attempts`` tries, else the grasp is
+   skipped and counted in ``skipped``).
+2. Target: force closure (w = 0), or a task wrench that the ground-truth grasp can produce: random forces in the
+   friction cones at its contacts, w = Σ G_i f_i, kept when the forces that give the unit wrench w/‖w‖ respect the
+   normal bound (else resampled) — the paper's data generator does the same.
+3. Start: the ground-truth palm moved back along its approach axis by ``retreat`` (paper: 30 cm; default 10 cm,
+   see README for both), rotated about its origin by a random axis and an angle uniform in [0, 60°], moved by a
+   random vector of length ≤ 5 cm; fingers at rest.
+4. Run refinement and the direct-grasp baseline from the same start; verify both with exact geometry.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from models.refine.baseline import direct_grasp
+from models.refine.field import PointCloudField
+from models.refine.grasp import grasp_maps, tangents
+from models.refine.initialise import initialise, rest_geometry
+from models.refine.refine import RefineConfig, refine
+from models.refine.state import HandPose
+from models.refine.verify import verify
+from models.refine.wrench import WrenchTask, characteristic_length, closure_task, rigid_task
+
+DEFAULT_MU = 0.5
+
+
+@dataclass
+class Trial:
+    """One grasp: ours and the baseline."""
+
+    object_id: str
+    grasp: int
+    success: bool
+    seconds: float
+    iterations: int
+    reason: str
+    failures: list[str]
+    baseline_success: bool
+    baseline_seconds: float
+    baseline_failures: list[str]
+
+
+@dataclass
+class Report:
+    """All trials of one (hand, mode) run, plus skipped grasps (no feasible ground truth found)."""
+
+    hand: str
+    mode: str
+    trials: list[Trial] = field(default_factory=list)
+    skipped: int = 0
+
+    def summary(self) -> dict[str, float]:
+        """Success rates (%), median / p90 seconds per grasp, median iterations, for ours and the baseline."""
+        if not self.trials:
+            return {"n": 0, "skipped": self.skipped}
+        sec = np.array([t.seconds for t in self.trials])
+        bsec = np.array([t.baseline_seconds for t in self.trials])
+        return {
+            "n": len(self.trials),
+            "skipped": self.skipped,
+            "success": 100.0 * np.mean([t.success for t in self.trials]),
+            "median_s": float(np.median(sec)),
+            "p90_s": float(np.percentile(sec, 90)),
+            "median_iterations": float(np.median([t.iterations for t in self.trials])),
+            "baseline_success": 100.0 * np.mean([t.baseline_success for t in self.trials]),
+            "baseline_median_s": float(np.median(bsec)),
+            "baseline_p90_s": float(np.percentile(bsec, 90)),
+        }
+
+
+def spread_contacts(points: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
+    """Indices of ``count`` farthest-point-spread points in a random half-space-ish subset of the cloud."""
+    direction = rng.normal(size=3)
+    side = points @ direction
+    pool = np.flatnonzero(side >= np.quantile(side, rng.uniform(0.2, 0.5)))
+    chosen = [int(rng.choice(pool))]
+    dist = np.linalg.norm(points[pool] - points[chosen[0]], axis=1)
+    for _ in range(count - 1):
+        nxt = int(pool[np.argmax(dist)])
+        chosen.append(nxt)
+        dist = np.minimum(dist, np.linalg.norm(points[pool] - points[nxt], axis=1))
+    return np.asarray(chosen)
+
+
+def feasible_grasp(
+    hand: Any, cloud: PointCloudField, mesh: Any, task: WrenchTask, mu: float, rng: np.random.Generator,
+    attempts: int = 6, config: RefineConfig | None = None,
+) -> HandPose | None:
+    """A verified force-closure pose from random contacts (protocol step 1), or None."""
+    rest = rest_geometry(hand)
+    for _ in range(attempts):
+        idx = spread_contacts(cloud.points, hand.num_fingertips, rng)
+        cand = initialise(hand, cloud, cloud.points[idx], cloud.normals[idx], rest=rest)[0]
+        res = refine(hand, cloud, task, cand.pose, mu, config)
+        if res.converged and verify(hand, res.pose, cloud, task, mu, mesh).success:
+            return res.pose
+    return None
+
+
+def feasible_wrench(
+    tips: np.ndarray, normals: np.ndarray, mu: float, centre: np.ndarray, length: float,
+    rng: np.random.Generator, max_normal_force: float = 1.0, tries: int = 200,
+) -> np.ndarray:
+    """A unit scaled wrench the contacts can produce within the force bound (protocol step 2)."""
+    t1, t2 = tangents(normals)
+    g = grasp_maps(tips, centre, length)
+    best, best_fn = None, np.inf
+    for _ in range(tries):
+        fn = rng.uniform(0, 1, size=len(tips))
+        ang = rng.uniform(0, 2 * np.pi, size=len(tips))
+        ft = mu * rng.uniform(0, 1, size=len(tips)) * fn
+        f = -normals * fn[:, None] + (np.cos(ang) * ft)[:, None] * t1 + (np.sin(ang) * ft)[:, None] * t2
+        w = np.einsum("mij,mj->i", g, f)
+        needed = fn.max() / np.linalg.norm(w)
+        if needed < best_fn:
+            best, best_fn = w, needed
+        if needed <= max_normal_force:
+            break
+    assert best is not None
+    return best / np.linalg.norm(best)
+
+
+def perturb(
+    hand: Any, pose: HandPose, rng: np.random.Generator, retreat: float = 0.10,
+    max_angle_deg: float = 60.0, max_shift: float = 0.05,
+) -> HandPose:
+    """Protocol step 3: retreat along the approach axis, random rotation ≤ max angle, shift ≤ max_shift."""
+    rot = Rotation.from_quat(pose.palm_quat[[1, 2, 3, 0]])
+    approach = rot.apply(np.asarray(hand.approach_axis, dtype=np.float64))
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    turn = Rotation.from_rotvec(axis * np.deg2rad(rng.uniform(0, max_angle_deg)))
+    shift = rng.normal(size=3)
+    shift *= rng.uniform(0, max_shift) / np.linalg.norm(shift)
+    quat = (turn * rot).as_quat()[[3, 0, 1, 2]]
+    return HandPose(pose.palm_pos - approach * retreat + shift, quat, np.asarray(hand.rest, dtype=np.float64).copy())
+
+
+def evaluate(
+    hand: Any,
+    objects: Iterable[Any],
+    mode: str,
+    grasps: int,
+    seed: int,
+    mu: float = DEFAULT_MU,
+    retreat: float = 0.10,
+    config: RefineConfig | None = None,
+    on_trial: Callable[[Trial | None], None] | None = None,
+) -> Report:
+    """Run the protocol over ``objects`` (each with ``.id``, ``.points``, ``.normals``, ``.mesh``).
+
+    ``on_trial`` is called after every grasp (with None for a skipped one), e.g. to advance a progress bar.
+    """
+    if mode not in ("task", "closure"):
+        raise ValueError(f"mode must be 'task' or 'closure', got {mode!r}")
+    report = Report(hand=hand.name, mode=mode)
+    for k, obj in enumerate(objects):
+        cloud = PointCloudField(obj.points, obj.normals)
+        centre = np.zeros(3)  # procedural objects are centred on their centre of mass
+        length = characteristic_length(obj.points, centre)
+        closure = closure_task(centre, length)
+        for j in range(grasps):
+            rng = np.random.default_rng([seed, k, j])
+            gt = feasible_grasp(hand, cloud, obj.mesh, closure, mu, rng)
+            if gt is None:
+                report.skipped += 1
+                if on_trial:
+                    on_trial(None)
+                continue
+            if mode == "closure":
+                task = closure
+            else:
+                import torch
+
+                with torch.no_grad():
+                    tips = hand.fingertips(*gt.tensors())[0].numpy()
+                w = feasible_wrench(tips, cloud.surface_normal(tips), mu, centre, length, rng)
+                task = rigid_task(np.concatenate([w[:3], w[3:] * length]), centre, length)
+            start = perturb(hand, gt, rng, retreat=retreat)
+            t0 = time.perf_counter()
+            res = refine(hand, cloud, task, start, mu, config)
+            seconds = time.perf_counter() - t0
+            ver = verify(hand, res.pose, cloud, task, mu, obj.mesh)
+            base_pose, base_s = direct_grasp(hand, cloud, start, centre)
+            base = verify(hand, base_pose, cloud, task, mu, obj.mesh)
+            trial = Trial(
+                object_id=obj.id, grasp=j, success=ver.success, seconds=seconds, iterations=res.iterations,
+                reason=res.reason, failures=ver.failures, baseline_success=base.success,
+                baseline_seconds=base_s, baseline_failures=base.failures,
+            )
+            report.trials.append(trial)
+            if on_trial:
+                on_trial(trial)
+    return report

@@ -1,0 +1,121 @@
+"""Verification of a hand pose with exact geometry (DESIGN.md §5), shared by refinement and the baseline.
+
+Criteria (all must hold): wrench residual ‖R Σ G_i f_i − τ‖² < 1e-6 with the optimal forces of Eq. (6-8) at the
+final fingertips (unit target wrench); every fingertip within 5 mm of the surface (exact mesh signed distance
+when a mesh is known, else the point field; with a region mask: within 5 mm of an allowed point); hand–object
+penetration ≤ 1 mm and self-collision depth ≤ 1 mm, both measured on the hand's collision meshes with fcl
+(`models.geometry`); for force closure, Ferrari–Canny ε > 0 (parallel-jaw grippers: soft-finger pads).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import torch
+
+from models.refine.closure import ferrari_canny
+from models.refine.field import PointCloudField
+from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE, solve_forces
+from models.refine.state import HandPose
+from models.refine.wrench import WrenchTask
+
+RESIDUAL_SQ_TOL = 1e-6
+TIP_TOL = 5e-3
+PENETRATION_TOL = 1e-3
+SELF_COLLISION_TOL = 1e-3
+PAD_TORSION = 0.005  # m: soft-finger torsional coefficient used for two-fingertip (parallel-jaw) hands
+
+
+@dataclass
+class Verification:
+    """Measured quality of a final pose and whether it passes (``failures`` names the criteria it misses)."""
+
+    residual_norm: float
+    max_tip_distance: float
+    penetration: float
+    self_collision: float
+    epsilon: float
+    forces: np.ndarray
+    tips: np.ndarray
+    contacts: np.ndarray
+    normals: np.ndarray
+    failures: list[str] = field(default_factory=list)
+
+    @property
+    def success(self) -> bool:
+        return not self.failures
+
+
+def torsion_for(hand: Any) -> float:
+    """Soft-finger coefficient for the closure metric: pads for two-fingertip grippers, point contacts else."""
+    return PAD_TORSION if hand.num_fingertips == 2 else 0.0
+
+
+def verify(
+    hand: Any,
+    pose: HandPose,
+    cloud: PointCloudField,
+    task: WrenchTask,
+    mu: float,
+    mesh: Any | None = None,
+    max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE,
+    collisions: bool = True,
+) -> Verification:
+    """Verify ``pose`` (see module doc).
+
+    Args:
+        hand: a `models.robots.Hand`.
+        pose: final pose.
+        cloud: the object's oriented points (and region mask, if any).
+        task: the task the forces must produce.
+        mu: friction coefficient.
+        mesh: the object's watertight trimesh (exact distances and penetration); None: convex hull of the points.
+        max_normal_force: force bound of Eq. (6-8).
+        collisions: measure penetration and self-collision with fcl (False: skip, reported as 0).
+    """
+    with torch.no_grad():
+        tips = hand.fingertips(*pose.tensors())[0].numpy()
+    normals = cloud.surface_normal(tips)
+    sol = solve_forces(task, tips, normals, mu, max_normal_force)
+    if cloud.mask is not None:
+        tip_dist = cloud.region_distance(tips)[0]
+    elif mesh is not None:
+        import trimesh
+
+        tip_dist = np.abs(trimesh.proximity.signed_distance(mesh, tips))
+    else:
+        tip_dist = np.abs(cloud.signed_distance(tips)[0])
+    _, _, contacts = cloud.signed_distance(tips)
+    pen = selfc = 0.0
+    if collisions:
+        from models.geometry import ObjectGeometry, hand_object_penetration, hand_self_collision
+
+        geom = ObjectGeometry.from_points(cloud.points, cloud.normals, mesh)
+        pen = hand_object_penetration(hand, geom, pose.palm_pos, pose.palm_quat, pose.q)
+        selfc = hand_self_collision(hand, pose.palm_pos, pose.palm_quat, pose.q)
+    eps = ferrari_canny(tips, normals, mu, task.centre, task.length, torsional=torsion_for(hand))
+    failures = []
+    if not sol.residual_norm**2 < RESIDUAL_SQ_TOL:
+        failures.append("wrench_residual")
+    if not float(np.max(tip_dist)) <= TIP_TOL:
+        failures.append("tip_distance")
+    if pen > PENETRATION_TOL:
+        failures.append("penetration")
+    if selfc > SELF_COLLISION_TOL:
+        failures.append("self_collision")
+    if task.closure and not eps > 0:
+        failures.append("not_force_closure")
+    return Verification(
+        residual_norm=sol.residual_norm,
+        max_tip_distance=float(np.max(tip_dist)),
+        penetration=float(pen),
+        self_collision=float(selfc),
+        epsilon=float(eps),
+        forces=sol.forces,
+        tips=tips,
+        contacts=np.asarray(contacts),
+        normals=normals,
+        failures=failures,
+    )
