@@ -7,7 +7,8 @@ so that points behind the allowed region read negative.
 
 Normals, when missing, are estimated by PCA over the ``NORMAL_NEIGHBOURS`` nearest points and oriented outward:
 first away from the centroid, then by a few rounds of neighbour majority votes (consistent on smooth shapes).
-Mesh, when missing: the convex hull of the points (conservative for non-convex objects).
+Mesh, when missing (or given but not watertight): the convex hull of the points (and the mesh's vertices) —
+conservative for non-convex objects: penetration checks against it over-report depth in concavities.
 """
 
 from __future__ import annotations
@@ -68,6 +69,8 @@ class ObjectGeometry:
             n = n / norm
         if mesh is None:
             mesh = trimesh.convex.convex_hull(pts)
+        elif not mesh.is_watertight:  # exact checks need an inside: fall back to the hull of mesh + cloud
+            mesh = trimesh.convex.convex_hull(np.vstack([np.asarray(mesh.vertices), pts]))
         return cls(pts, n, mesh, tree)
 
     @property

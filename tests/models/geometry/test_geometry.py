@@ -135,3 +135,21 @@ def test_self_collision_of_a_builtin() -> None:
     q[hand2.joint_names.index("bh_j22")] = 2.4
     q[hand2.joint_names.index("bh_j32")] = 2.4
     assert hand_self_collision(hand2, np.zeros(3), quat, q) > 0.005
+
+
+def test_open_mesh_falls_back_to_a_watertight_hull() -> None:
+    box = trimesh.creation.box(extents=(0.1, 0.1, 0.1))
+    open_box = trimesh.Trimesh(box.vertices, box.faces[:-2])  # one face missing
+    pts, face = trimesh.sample.sample_surface_even(box, 500, seed=0)
+    geom = ObjectGeometry.from_points(pts, box.face_normals[face], open_box)
+    assert geom.mesh.is_watertight and geom.volume == pytest.approx(1e-3, rel=1e-6)
+
+
+@pytest.mark.parametrize(
+    "points, normals",
+    [(np.zeros((3, 3)), None), (np.full((10, 3), np.nan), None), (np.zeros((10, 2)), None),
+     (np.random.default_rng(0).normal(size=(10, 3)), np.zeros((10, 3)))],
+)  # fmt: skip
+def test_invalid_clouds_are_rejected(points: np.ndarray, normals: np.ndarray | None) -> None:
+    with pytest.raises(InvalidPointCloud):
+        ObjectGeometry.from_points(points, normals)
