@@ -38,14 +38,14 @@ def _run(url: str, extra: list[str], budget_ms: int, timeout: float) -> subproce
         return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=False)
 
 
-def dump_dom(url: str, budget_ms: int = 6000, timeout: float = 90) -> str:
+def dump_dom(url: str, budget_ms: int = 6000, timeout: float = 150) -> str:
     """The page's DOM after its scripts ran for ``budget_ms`` of virtual time."""
     done = _run(url, ["--dump-dom"], budget_ms, timeout)
     assert done.returncode == 0, done.stderr[-2000:]
     return done.stdout
 
 
-def screenshot(url: str, name: str, budget_ms: int = 6000, timeout: float = 90) -> Path:
+def screenshot(url: str, name: str, budget_ms: int = 6000, timeout: float = 150) -> Path:
     """A PNG of the page under ``artifacts/service/`` (git-ignored), returned."""
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     path = ARTIFACTS / name
