@@ -10,7 +10,7 @@ from contextvars import ContextVar
 
 request_id_var: ContextVar[str | None] = ContextVar("mani_request_id", default=None)
 
-_RESERVED = set(vars(logging.makeLogRecord({}))) | {"message", "asctime"}
+_RESERVED = set(vars(logging.makeLogRecord({}))) | {"message", "asctime", "color_message"}
 
 
 class JsonFormatter(logging.Formatter):
