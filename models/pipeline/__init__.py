@@ -1,0 +1,35 @@
+"""The science entry point the workers call: `run_pipeline` / `run_pipeline_batch` on `SynthesisInput`.
+
+Pure: numpy arrays and a `models.robots.Hand` in, dataclasses out; never imports clients, service or workers.
+"""
+
+from models.pipeline.run import run_pipeline, run_pipeline_batch
+from models.pipeline.types import (
+    Cancelled,
+    InvalidInput,
+    IterationOutput,
+    JointInput,
+    ModelUnavailable,
+    PipelineError,
+    ProposalOutput,
+    QualityOutput,
+    SynthesisInput,
+    SynthesisOutput,
+    TaskInput,
+)
+
+__all__ = [
+    "Cancelled",
+    "InvalidInput",
+    "IterationOutput",
+    "JointInput",
+    "ModelUnavailable",
+    "PipelineError",
+    "ProposalOutput",
+    "QualityOutput",
+    "SynthesisInput",
+    "SynthesisOutput",
+    "TaskInput",
+    "run_pipeline",
+    "run_pipeline_batch",
+]

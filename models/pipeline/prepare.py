@@ -1,0 +1,158 @@
+"""Validate a `SynthesisInput` and derive what every stage needs (field, mass, task, contact sets)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from models.pipeline.tasks import build_task, network_motion
+from models.pipeline.types import MATERIALS, METHODS, InvalidInput, SynthesisInput
+from models.refine.evaluation import spread_contacts
+from models.refine.field import PointCloudField
+from models.refine.wrench import DEFAULT_DENSITY, WrenchTask
+
+DEFAULT_FRICTION = 0.5
+
+
+@dataclass
+class Prepared:
+    """A validated input with its derived quantities."""
+
+    inp: SynthesisInput
+    cloud: PointCloudField
+    mesh: Any | None
+    centre: np.ndarray
+    mass: float
+    inertia: np.ndarray
+    task: WrenchTask
+    mu: float
+    tip_field: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None
+    seconds: float
+
+
+def _array(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
+    arr = np.asarray(value, dtype=np.float64)
+    if arr.ndim != len(shape) or any(s is not None and s != a for s, a in zip(shape, arr.shape, strict=True)):
+        raise InvalidInput(f"{name}: expected shape {tuple('N' if s is None else s for s in shape)}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise InvalidInput(f"{name}: contains NaN or inf")
+    return arr
+
+
+def prepare(inp: SynthesisInput) -> Prepared:
+    """Check shapes and options, estimate normals if missing, compute mass properties and the task residual."""
+    t0 = time.perf_counter()
+    from models.geometry import ObjectGeometry
+
+    points = _array("points", inp.points, (None, 3))
+    n = len(points)
+    if n < 16:
+        raise InvalidInput(f"points: {n} points, need at least 16")
+    if inp.method not in METHODS:
+        raise InvalidInput(f"method: {inp.method!r} is not one of {', '.join(METHODS)}")
+    if inp.material not in MATERIALS:
+        raise InvalidInput(f"material: {inp.material!r} is not one of {', '.join(MATERIALS)}")
+    if inp.num_proposals < 1 or inp.max_iterations < 1:
+        raise InvalidInput("num_proposals and max_iterations must be ≥ 1")
+    mask = None
+    if inp.mask is not None:
+        mask = np.asarray(inp.mask).astype(bool).reshape(-1)
+        if mask.shape != (n,) or not mask.any():
+            raise InvalidInput(f"mask: expected ({n},) with at least one allowed point")
+    mesh = None
+    if inp.mesh_vertices is not None and inp.mesh_faces is not None:
+        import trimesh
+
+        mesh = trimesh.Trimesh(
+            vertices=_array("mesh.vertices", inp.mesh_vertices, (None, 3)),
+            faces=np.asarray(inp.mesh_faces, dtype=np.int64),
+            process=True,
+        )
+    normals = None if inp.normals is None else _array("normals", inp.normals, (n, 3))
+    try:
+        geom = ObjectGeometry.from_points(points, normals, mesh)
+    except ValueError as exc:
+        raise InvalidInput(str(exc)) from exc
+    density = float(inp.properties.get("density", DEFAULT_DENSITY))
+    mp = geom.mass_properties(density)
+    centre = np.asarray(mp.com, dtype=np.float64)
+    inertia = np.asarray(mp.inertia, dtype=np.float64)
+    if inp.joint is not None:
+        if inp.joint.type not in ("revolute", "prismatic"):
+            raise InvalidInput(f"joint.type: {inp.joint.type!r} is not revolute or prismatic")
+        _array("joint.axis", inp.joint.axis, (3,))
+        _array("joint.origin", inp.joint.origin, (3,))
+    task = build_task(inp.task, points, mp.mass, centre, inertia, inp.joint)
+    mu = float(inp.properties.get("friction", DEFAULT_FRICTION))
+    if not 0 < mu <= 5:
+        raise InvalidInput(f"properties.friction: {mu} is outside (0, 5]")
+    cloud = PointCloudField(points, geom.normals, mask)
+    tip_field = cloud.region_distance if mask is not None else None
+    if inp.method == "contacts":
+        if inp.contacts is None:
+            raise InvalidInput("contacts: required with method 'contacts'")
+        contacts = _array("contacts", inp.contacts, (None, 3))
+        if not 1 <= len(contacts) <= inp.hand.num_fingertips:
+            raise InvalidInput(
+                f"contacts: {len(contacts)} contacts for a hand with {inp.hand.num_fingertips} fingertips"
+            )
+    return Prepared(inp, cloud, geom.mesh if mesh is not None else mesh, centre, mp.mass, inertia, task, mu,
+                    tip_field, time.perf_counter() - t0)
+
+
+def network_inputs(batch: Sequence[Prepared]) -> list[Any]:
+    """`models.network.inference.NetworkInput` rows for the predictor."""
+    from models.network.inference import NetworkInput
+
+    rows = []
+    for p in batch:
+        inp, hand = p.inp, p.inp.hand
+        mask = p.cloud.mask if p.cloud.mask is not None else np.ones(len(p.cloud.points), dtype=bool)
+        rows.append(
+            NetworkInput(
+                points=p.cloud.points,
+                normals=p.cloud.normals,
+                motion=network_motion(inp.task, p.cloud.points, p.centre, p.mass, p.inertia, inp.joint),
+                mask=mask,
+                properties=dict(inp.properties),
+                hand_points=np.asarray(hand.surface_points),
+                hand_normals=np.asarray(hand.surface_normals),
+                hand_key=inp.hand_key or getattr(hand, "name", "hand"),
+            )
+        )
+    return rows
+
+
+def contact_sets(prep: Prepared, net_out: Any | None) -> list[tuple[np.ndarray, np.ndarray, np.ndarray | None]]:
+    """One (contacts (H, 3), normals (H, 3), predicted heatmap or None) per proposal."""
+    inp, cloud = prep.inp, prep.cloud
+    m = inp.hand.num_fingertips
+    allowed = np.flatnonzero(cloud.mask) if cloud.mask is not None else np.arange(len(cloud.points))
+    rng = np.random.default_rng(inp.seed)
+
+    def random_set() -> tuple[np.ndarray, np.ndarray, None]:
+        sub = allowed[spread_contacts(cloud.points[allowed], min(m, len(allowed)), rng)]
+        return cloud.points[sub], cloud.normals[sub], None
+
+    if inp.method == "contacts":
+        assert inp.contacts is not None
+        pts = np.asarray(inp.contacts, dtype=np.float64)
+        idx = cloud.nearest_index(pts)
+        return [(cloud.points[idx], cloud.normals[idx], None)] * inp.num_proposals
+    if inp.method == "random_contacts" or net_out is None:
+        return [random_set() for _ in range(inp.num_proposals)]
+    from models.network.selection import select_contacts
+
+    sets: list[tuple[np.ndarray, np.ndarray, np.ndarray | None]] = []
+    for k in range(inp.num_proposals):
+        heat, force = net_out.heatmaps[k], net_out.force_maps[k]
+        sel = select_contacts(cloud.points, heat, force, cloud.mask, m)
+        if len(sel) == 0:  # nothing above threshold: fall back to random contacts in the region
+            sets.append(random_set())
+            continue
+        sets.append((sel.points, cloud.normals[sel.indices], np.asarray(heat, dtype=np.float64)))
+    return sets

@@ -1,0 +1,263 @@
+"""`run_pipeline`: contacts → initial pose → SOCP refinement → verification, with progress, cancel, deadline.
+
+Stages reported to ``progress(stage, fraction)``: "network", "initialisation", "refinement" (k / max
+iterations over all proposals), "verification". ``should_cancel()`` is checked between stages and before every
+refinement iteration (raises `Cancelled`). A ``deadline`` (time.monotonic()) that passes during refinement stops
+it and returns the best iterate, not converged, reason "deadline"; later proposals are then not refined.
+Deformable materials (cloth, rope, plasticine) are handled as rigid bodies for the hand: the task's motion is
+fitted rigidly (Kabsch) and the hand must produce that wrench.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from models.pipeline.prepare import Prepared, contact_sets, network_inputs, prepare
+from models.pipeline.types import (
+    Cancelled,
+    InvalidInput,
+    IterationOutput,
+    ModelUnavailable,
+    ProposalOutput,
+    QualityOutput,
+    SynthesisInput,
+    SynthesisOutput,
+)
+from models.refine.baseline import direct_grasp
+from models.refine.initialise import initialise, rest_geometry
+from models.refine.refine import RefineConfig, refine
+from models.refine.state import HandPose
+from models.refine.verify import verify
+
+Progress = Callable[[str, float], None]
+CancelCheck = Callable[[], bool]
+
+
+def _check(should_cancel: CancelCheck | None) -> None:
+    if should_cancel is not None and should_cancel():
+        raise Cancelled("synthesis cancelled")
+
+
+def _network(batch: Sequence[Prepared], predictor: Any) -> list[Any]:
+    """One predictor call for every network input of the batch (grouped by K); returns outputs in order."""
+    outputs: list[Any] = [None] * len(batch)
+    by_k: dict[int, list[int]] = {}
+    for i, prep in enumerate(batch):
+        if prep.inp.method == "network":
+            by_k.setdefault(prep.inp.num_proposals, []).append(i)
+    if by_k and predictor is None:
+        raise ModelUnavailable("method 'network' needs a trained model; none is loaded (use 'contacts')")
+    for k, idx in by_k.items():
+        res = predictor.predict(network_inputs([batch[i] for i in idx]), num_samples=k,
+                                seed=[batch[i].inp.seed for i in idx])
+        for i, out in zip(idx, res, strict=True):
+            outputs[i] = out
+    return outputs
+
+
+def _start_pose(prep: Prepared) -> HandPose:
+    """Direct-grasp start: palm 10 cm outside the object along a seeded direction, facing its centre."""
+    from scipy.spatial.transform import Rotation
+
+    rng = np.random.default_rng(prep.inp.seed)
+    d = rng.normal(size=3)
+    d /= np.linalg.norm(d)
+    hand = prep.inp.hand
+    rot = Rotation.align_vectors([-d], [np.asarray(hand.approach_axis, dtype=np.float64)])[0]
+    radius = float(np.max(np.linalg.norm(prep.cloud.points - prep.centre, axis=1)))
+    quat = rot.as_quat()[[3, 0, 1, 2]]
+    return HandPose(prep.centre + d * (radius + 0.1), quat, np.asarray(hand.rest, dtype=np.float64).copy())
+
+
+def _proposal(prep: Prepared, pose: HandPose, result: Any, seconds: dict[str, float]) -> ProposalOutput:
+    inp, hand = prep.inp, prep.inp.hand
+    t0 = time.perf_counter()
+    mesh = prep.mesh
+    ver = verify(hand, pose, prep.cloud, prep.task, prep.mu, mesh)
+    seconds["verification"] = seconds.get("verification", 0.0) + time.perf_counter() - t0
+    history = None
+    if inp.return_history and result is not None:
+        history = [IterationOutput(h.residual_norm, h.max_tip_distance, h.trust_scale) for h in result.history]
+    quality = QualityOutput(
+        success=ver.success,
+        converged=bool(result.converged) if result is not None else False,
+        reason=result.reason if result is not None else "not_refined",
+        iterations=int(result.iterations) if result is not None else 0,
+        wrench_residual=float(ver.residual_norm**2),
+        max_tip_distance=ver.max_tip_distance,
+        penetration_depth=ver.penetration,
+        self_collision_depth=ver.self_collision,
+        epsilon=ver.epsilon if prep.task.closure else None,
+        failures=list(ver.failures),
+    )
+    return ProposalOutput(
+        contact_points=ver.contacts,
+        contact_normals=ver.normals,
+        forces=ver.forces,
+        fingertips=list(hand.fingertip_links),
+        palm_position=pose.palm_pos.copy(),
+        palm_quaternion=pose.palm_quat.copy(),
+        joint_names=list(hand.joint_names),
+        joint_values=pose.q.copy(),
+        quality=quality,
+        history=history,
+    )
+
+
+def _finish(
+    prep: Prepared, net_out: Any, progress: Progress | None, should_cancel: CancelCheck | None,
+    timings: dict[str, float],
+) -> SynthesisOutput:
+    inp, hand = prep.inp, prep.inp.hand
+    report = progress or (lambda stage, fraction: None)
+    _check(should_cancel)
+    t0 = time.perf_counter()
+    starts: list[HandPose] = []
+    if inp.method == "direct_grasp":
+        for k in range(inp.num_proposals):
+            pose, _ = direct_grasp(hand, prep.cloud, _start_pose(prep) if k == 0 else _start_pose(
+                Prepared(**{**prep.__dict__, "inp": _reseed(inp, inp.seed + k)})), prep.centre)
+            starts.append(pose)
+    else:
+        rest = rest_geometry(hand)
+        sets = contact_sets(prep, net_out)
+        for k, (points, normals, heat) in enumerate(sets):
+            cand = initialise(hand, prep.cloud, points, normals, predicted=heat, rest=rest)
+            starts.append(cand[0].pose)
+            report("initialisation", (k + 1) / len(sets))
+    timings["initialisation"] = time.perf_counter() - t0
+    _check(should_cancel)
+    proposals, t0 = [], time.perf_counter()
+    config = RefineConfig(max_iterations=inp.max_iterations, history=inp.return_history)
+    results: list[Any] = []
+    total = max(1, len(starts) * inp.max_iterations)
+    for k, start in enumerate(starts):
+        if not inp.refine or inp.method == "direct_grasp":
+            results.append(None)
+            continue
+        if inp.deadline is not None and time.monotonic() >= inp.deadline:
+            results.append(_expired(start))
+            continue
+        res = refine(
+            hand, prep.cloud, prep.task, start, prep.mu, config, tip_field=prep.tip_field, deadline=inp.deadline,
+            should_cancel=should_cancel,
+            progress=lambda it, cap, k=k: report("refinement", (k * inp.max_iterations + it) / total),
+        )
+        results.append(res)
+    timings["refinement"] = time.perf_counter() - t0
+    _check(should_cancel)
+    seconds: dict[str, float] = {}
+    for k, (start, res) in enumerate(zip(starts, results, strict=True)):
+        proposals.append(_proposal(prep, res.pose if res is not None else start, res, seconds))
+        report("verification", (k + 1) / len(starts))
+        _check(should_cancel)
+    timings["verification"] = seconds.get("verification", 0.0)
+    proposals.sort(key=lambda p: not p.quality.success)
+    heat = force = None
+    if net_out is not None:
+        heat, force = net_out.heatmaps[0].astype(np.float64), net_out.force_maps[0].astype(np.float64)
+    return SynthesisOutput(hand=getattr(hand, "name", "hand"), proposals=proposals, heatmap=heat, force_map=force,
+                           timings=timings)
+
+
+def _reseed(inp: SynthesisInput, seed: int) -> SynthesisInput:
+    from dataclasses import replace
+
+    return replace(inp, seed=seed)
+
+
+def _expired(start: HandPose) -> Any:
+    from models.refine.refine import RefineResult
+
+    z = np.zeros((0, 3))
+    return RefineResult(start, z, z, z, z, float("inf"), float("inf"), 0.0, 0.0, False, "deadline", 0, 0.0)
+
+
+def run_pipeline(
+    inp: SynthesisInput,
+    predictor: Any | None = None,
+    progress: Progress | None = None,
+    should_cancel: CancelCheck | None = None,
+) -> SynthesisOutput:
+    """Synthesise contacts, forces and hand poses for one request.
+
+    Args:
+        inp: the request in core form.
+        predictor: object with ``predict(batch, num_samples, seed)`` (`models.network.ContactPredictor`);
+            required for method "network".
+        progress: ``progress(stage, fraction)`` callback.
+        should_cancel: polled between stages and refinement iterations.
+
+    Returns:
+        The output (proposals that fail verification are returned too, marked ``success=False``).
+
+    Raises:
+        InvalidInput: malformed arrays or task. ModelUnavailable: "network" without a predictor.
+        Cancelled: ``should_cancel()`` returned true.
+    """
+    out = run_pipeline_batch([inp], predictor, progress, should_cancel, raise_errors=True)[0]
+    assert isinstance(out, SynthesisOutput)
+    return out
+
+
+def run_pipeline_batch(
+    inputs: Sequence[SynthesisInput],
+    predictor: Any | None = None,
+    progress: Progress | None = None,
+    should_cancel: CancelCheck | None = None,
+    raise_errors: bool = False,
+) -> list[SynthesisOutput | Exception]:
+    """Run many requests: the network once for the whole batch (micro-batching), then refine each.
+
+    Returns one entry per input: its output, or (with ``raise_errors=False``) the `InvalidInput` /
+    `ModelUnavailable` raised for it, so one bad request does not sink its batch-mates. `Cancelled` always
+    propagates.
+    """
+    report = progress or (lambda stage, fraction: None)
+    preps: list[Prepared | Exception] = []
+    for inp in inputs:
+        try:
+            preps.append(prepare(inp))
+        except InvalidInput as exc:
+            if raise_errors:
+                raise
+            preps.append(exc)
+    _check(should_cancel)
+    ok = [p for p in preps if isinstance(p, Prepared)]
+    t0 = time.perf_counter()
+    report("network", 0.0)
+    try:
+        net = _network(ok, predictor)
+    except ModelUnavailable as exc:
+        if raise_errors:
+            raise
+        net = [exc if p.inp.method == "network" else None for p in ok]
+    net_s = time.perf_counter() - t0
+    report("network", 1.0)
+    results: list[SynthesisOutput | Exception] = []
+    j = 0
+    for p in preps:
+        if not isinstance(p, Prepared):
+            results.append(p)
+            continue
+        net_out = net[j]
+        j += 1
+        if isinstance(net_out, Exception):
+            results.append(net_out)
+            continue
+        timings = {"prepare": p.seconds, "network": net_s if p.inp.method == "network" else 0.0}
+        try:
+            results.append(_finish(p, net_out, progress, should_cancel, timings))
+        except InvalidInput as exc:
+            if raise_errors:
+                raise
+            results.append(exc)
+        timings["total"] = sum(timings.values())
+    return results
+
+
+__all__ = ["run_pipeline", "run_pipeline_batch"]

@@ -1,0 +1,176 @@
+"""Core inputs and outputs of the synthesis pipeline (pure dataclasses; the worker maps the wire schemas here).
+
+Mirrors ``clients/schemas`` (requests, tasks, results) field for field without importing it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from models.refine.refine import Cancelled
+
+METHODS = ("network", "contacts", "direct_grasp", "random_contacts")
+TASK_KINDS = ("delta_pose", "point_motion", "target_points", "wrench", "force_closure", "joint_motion")
+MATERIALS = ("rigid", "articulated", "cloth", "rope", "plasticine")
+
+
+class PipelineError(Exception):
+    """Base of the pipeline's errors."""
+
+
+class InvalidInput(PipelineError, ValueError):
+    """An input that cannot be processed (the message names the field)."""
+
+
+class ModelUnavailable(PipelineError, RuntimeError):
+    """Method "network" without a predictor (no trained model loaded)."""
+
+
+__all__ = [
+    "MATERIALS",
+    "METHODS",
+    "TASK_KINDS",
+    "Cancelled",
+    "InvalidInput",
+    "IterationOutput",
+    "JointInput",
+    "ModelUnavailable",
+    "PipelineError",
+    "ProposalOutput",
+    "QualityOutput",
+    "SynthesisInput",
+    "SynthesisOutput",
+    "TaskInput",
+]
+
+
+@dataclass
+class TaskInput:
+    """What the manipulation should achieve (``kind`` picks the fields used).
+
+    Attributes:
+        kind: one of `TASK_KINDS`.
+        translation: (3,) m, and rotation: (4,) wxyz about the centre of mass (``delta_pose``).
+        motion: (N, 3) per-point displacement (``point_motion``).
+        targets: (N, 3) target cloud, point-to-point (``target_points``).
+        wrench: (6,) force N and torque N·m about the centre of mass (``wrench``).
+        delta: signed joint displacement, rad or m (``joint_motion``).
+    """
+
+    kind: str
+    translation: np.ndarray | None = None
+    rotation: np.ndarray | None = None
+    motion: np.ndarray | None = None
+    targets: np.ndarray | None = None
+    wrench: np.ndarray | None = None
+    delta: float | None = None
+
+
+@dataclass
+class JointInput:
+    """Articulation: ``type`` revolute|prismatic, unit ``axis`` (3,) through ``origin`` (3,), moving ``part_mask``
+    (N,) bool."""
+
+    type: str
+    axis: np.ndarray
+    origin: np.ndarray
+    part_mask: np.ndarray
+
+
+@dataclass
+class SynthesisInput:
+    """One synthesis request in core form.
+
+    Attributes:
+        points: (N, 3) object points (m). normals: (N, 3) outward unit normals, or None (estimated).
+        hand: a `models.robots.Hand`.
+        task: the task.
+        material: one of `MATERIALS`. properties: friction, density, stretch, bending, youngs_modulus,
+            poisson_ratio (those given).
+        mask: (N,) bool, True where contact is allowed, or None.
+        joint: articulation, or None.
+        mesh_vertices, mesh_faces: optional watertight mesh (exact verification).
+        contacts: (H, 3) given contacts (method "contacts").
+        method: one of `METHODS`. num_proposals: K. refine: run the SOCP refinement.
+        max_iterations: refinement cap. seed: seeds sampling. deadline: `time.monotonic()` value or None.
+        return_history: keep per-iteration records. hand_key: cache key of the hand for the network.
+    """
+
+    points: np.ndarray
+    hand: Any
+    task: TaskInput
+    normals: np.ndarray | None = None
+    material: str = "rigid"
+    properties: dict[str, float] = field(default_factory=dict)
+    mask: np.ndarray | None = None
+    joint: JointInput | None = None
+    mesh_vertices: np.ndarray | None = None
+    mesh_faces: np.ndarray | None = None
+    contacts: np.ndarray | None = None
+    method: str = "network"
+    num_proposals: int = 1
+    refine: bool = True
+    max_iterations: int = 100
+    seed: int = 0
+    deadline: float | None = None
+    return_history: bool = False
+    hand_key: str | None = None
+
+
+@dataclass
+class QualityOutput:
+    """Verification figures of one proposal (see `models.refine.verify`)."""
+
+    success: bool
+    converged: bool
+    reason: str
+    iterations: int
+    wrench_residual: float  # ‖Σ G f − w‖² for the normalised target
+    max_tip_distance: float
+    penetration_depth: float
+    self_collision_depth: float
+    epsilon: float | None
+    failures: list[str] = field(default_factory=list)
+
+
+@dataclass
+class IterationOutput:
+    """One refinement iteration: residual ‖r*‖, max tip distance (m), trust-region scale."""
+
+    residual: float
+    tip_distance: float
+    step: float
+
+
+@dataclass
+class ProposalOutput:
+    """One hand proposal: contacts (one per fingertip), forces, pose and quality."""
+
+    contact_points: np.ndarray
+    contact_normals: np.ndarray
+    forces: np.ndarray
+    fingertips: list[str]
+    palm_position: np.ndarray
+    palm_quaternion: np.ndarray
+    joint_names: list[str]
+    joint_values: np.ndarray
+    quality: QualityOutput
+    history: list[IterationOutput] | None = None
+
+
+@dataclass
+class SynthesisOutput:
+    """Proposals (successful ones first), optional network maps, and seconds per stage."""
+
+    hand: str
+    proposals: list[ProposalOutput]
+    heatmap: np.ndarray | None = None
+    force_map: np.ndarray | None = None
+    timings: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def best(self) -> ProposalOutput | None:
+        return next((p for p in self.proposals if p.quality.success), self.proposals[0] if self.proposals else None)
