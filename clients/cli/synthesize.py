@@ -71,7 +71,7 @@ def parse_task(text: str) -> Any:
     import numpy as np
 
     from clients.sdk import delta_pose, force_closure, target_points, wrench
-    from clients.sdk.inputs import as_task
+    from clients.sdk.tasks import as_task
 
     kind, _, rest = text.partition(":")
     if text.startswith("@"):

@@ -37,20 +37,11 @@ from clients.sdk.errors import (
     Unreachable,
     ValidationError,
 )
-from clients.sdk.inputs import (
-    delta_pose,
-    force_closure,
-    make_request,
-    object_from_file,
-    object_from_mesh,
-    object_from_points,
-    robot_registration,
-    save_object,
-    target_points,
-    wrench,
-)
+from clients.sdk.objects import object_from_file, object_from_mesh, object_from_points, save_object
 from clients.sdk.outputs import load_result, result_figure, result_to_dict, result_to_json
+from clients.sdk.requests import make_request, robot_registration
 from clients.sdk.retry import RetryPolicy
+from clients.sdk.tasks import delta_pose, force_closure, target_points, wrench
 
 __all__ = [
     "AsyncBatch",

@@ -23,9 +23,11 @@ from clients.schemas import (
 )
 from clients.sdk._core import BaseClient, Call
 from clients.sdk.errors import TimeoutError
-from clients.sdk.inputs import ObjectLike, RobotLike, TaskLike, make_request, robot_registration
+from clients.sdk.objects import ObjectLike
+from clients.sdk.requests import RobotLike, make_request, robot_registration
 from clients.sdk.retry import poll_delays
 from clients.sdk.sse import SSEDecoder
+from clients.sdk.tasks import TaskLike
 from clients.sdk.tracking import JOB_EVENT_TYPES, BatchTracker, item_result, job_result, parse_event
 
 T = TypeVar("T")

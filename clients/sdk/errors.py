@@ -17,11 +17,14 @@
 from __future__ import annotations
 
 import builtins
+from typing import Any, TypeVar
 
 import pydantic
 
 from clients.schemas import ErrorBody, FieldError, JobPublic, JobState
 from clients.validation import field_errors, summary
+
+ModelT = TypeVar("ModelT", bound=pydantic.BaseModel)
 
 
 class ManiError(Exception):
@@ -168,3 +171,11 @@ def local_validation_error(exc: pydantic.ValidationError, what: str = "request")
     """The SDK's `ValidationError` for input that failed the contract before it was sent."""
     detail = field_errors(exc)
     return ValidationError(f"invalid {what}: {summary(detail)}", type="ValidationError", detail=detail)
+
+
+def checked(cls: type[ModelT], what: str, **fields: Any) -> ModelT:
+    """``cls(**fields)``, raising the SDK's `ValidationError` (naming each field) instead of pydantic's."""
+    try:
+        return cls(**fields)
+    except pydantic.ValidationError as exc:
+        raise local_validation_error(exc, what) from exc

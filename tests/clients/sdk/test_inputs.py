@@ -24,7 +24,8 @@ from clients.sdk import (
     target_points,
     wrench,
 )
-from clients.sdk.inputs import as_object, as_task, rotation_to_quaternion
+from clients.sdk.objects import as_object
+from clients.sdk.tasks import as_task, rotation_to_quaternion
 
 
 def test_points_with_and_without_normals(object_points: np.ndarray) -> None:
