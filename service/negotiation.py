@@ -19,15 +19,28 @@ BODY_MEDIA_TYPES = (JSON, MSGPACK)
 
 
 def accepted(request: Request) -> str:
-    """`MSGPACK` when the Accept header prefers it (or lists only it), else `JSON`."""
-    accept = request.headers.get("accept", "")
-    for part in accept.split(","):
-        kind = media_type(part)
-        if kind == MSGPACK:
-            return MSGPACK
-        if part.split(";", 1)[0].strip().lower() in (JSON, "application/*", "*/*"):
-            return JSON
-    return JSON
+    """`MSGPACK` when the Accept header prefers it (by q-value, then order), else `JSON`."""
+    best, best_q = JSON, -1.0
+    for part in request.headers.get("accept", "").split(","):
+        kind, _, params = part.partition(";")
+        kind = kind.strip().lower()
+        if not kind:
+            continue
+        q = 1.0
+        for param in params.split(";"):
+            name, _, value = param.partition("=")
+            if name.strip() == "q":
+                try:
+                    q = float(value)
+                except ValueError:
+                    q = 0.0
+        choice = MSGPACK if media_type(kind) == MSGPACK else JSON if kind in _JSON_LIKE else None
+        if choice is not None and q > best_q:
+            best, best_q = choice, q
+    return best
+
+
+_JSON_LIKE = frozenset({JSON, "application/*", "*/*"})
 
 
 def respond(

@@ -283,3 +283,17 @@ def test_sse_events_over_uvicorn() -> None:
                         break
         assert events[0][0] == "progress" and events[0][1]["state"] == "queued"
         assert events[-1][0] == "end" and events[-1][1]["state"] == "succeeded" and events[-1][1]["result"]
+
+
+@pytest.mark.parametrize(
+    "accept, expected",
+    [
+        ("application/msgpack", MSGPACK),
+        ("application/x-msgpack, application/json;q=0.5", MSGPACK),
+        ("application/msgpack;q=0.1, application/json", "application/json"),
+        ("text/html, */*;q=0.8", "application/json"),
+        ("", "application/json"),
+    ],
+)
+def test_accept_negotiation(client: TestClient, accept: str, expected: str) -> None:
+    assert client.get("/healthz", headers={"Accept": accept}).headers["content-type"] == expected

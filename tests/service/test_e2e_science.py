@@ -1,0 +1,59 @@
+"""End to end with the real science in the workers (`workers.models_pipeline`): a direct-grasp request on a
+built-in hand (runs without trained weights), its result drawn by the viewer in headless Chromium.
+
+The embedded run is in the default suite; the Redis run of the same request is `slow`.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import time
+from collections.abc import Iterator
+
+import httpx
+import pytest
+
+from clients.schemas import SynthesisResult
+from service.app import create_app
+from service.settings import Settings
+
+from .browser import dump_dom, screenshot
+from .helpers import request_body
+from .server import serving
+from .workers import start_queue_and_workers
+
+PIPELINE = "workers.models_pipeline:ModelsPipeline"
+PREFERRED_HANDS = ("allegro", "leap", "barrett", "panda_gripper")
+
+
+@pytest.fixture(scope="module", params=["embedded", pytest.param("redis", marks=pytest.mark.slow)])
+def base(request: pytest.FixtureRequest) -> Iterator[str]:
+    if importlib.util.find_spec("workers.models_pipeline") is None:
+        pytest.skip("workers.models_pipeline (the science pipeline) is not part of this checkout yet")
+    with (
+        start_queue_and_workers(request, pipeline=PIPELINE) as queue,
+        serving(create_app(Settings(sync_wait_max=120), queue=queue)) as url,
+    ):
+        deadline = time.monotonic() + 300
+        while httpx.get(f"{url}/readyz", timeout=10).status_code != 200:
+            assert time.monotonic() < deadline, "no worker loaded the pipeline"
+            time.sleep(0.5)
+        yield url
+
+
+def test_direct_grasp_and_viewer(base: str) -> None:
+    names = [r["name"] for r in httpx.get(f"{base}/v1/robots").json()["robots"]]
+    hand = next((h for h in PREFERRED_HANDS if h in names), names[0])
+    body = request_body(hand, n=512, timeout=120, return_heatmap=False, max_iterations=30)
+    response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=180)
+    assert response.status_code == 200, response.text[:2000]
+    result = SynthesisResult.model_validate(response.json())
+    assert result.hand == hand and result.proposals
+    proposal = result.proposals[0]
+    assert proposal.contact_points.shape == proposal.forces.shape and len(proposal.joint_values)
+    job_id = response.headers["x-job-id"]
+    url = f"{base}/v1/jobs/{job_id}/view"
+    dom = dump_dom(url, budget_ms=4000)
+    assert "could not load" not in dom and "Ferrari–Canny ε" in dom and hand in dom
+    assert "gl-container" in dom and "3D view unavailable" not in dom
+    screenshot(url, f"viewer_{hand}.png", budget_ms=4000)
