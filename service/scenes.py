@@ -16,7 +16,7 @@ from pydantic import BaseModel, Field
 from clients.schemas import JobPublic, SynthesisRequest
 
 MAX_VIEW_POINTS = 4096
-MAX_SCENES = 256
+MAX_SCENES = 128
 
 
 @dataclass
@@ -28,7 +28,7 @@ class _Scene:
 
 
 class SceneStore:
-    """job id → subsampled object, LRU-bounded (≈ 256 × 4096 × 3 × 4 B ≈ 12 MB at most)."""
+    """job id → subsampled object, LRU-bounded (128 × 4096 × (3 + 3) × 4 B ≈ 12.6 MB at most)."""
 
     def __init__(self, size: int = MAX_SCENES) -> None:
         self.size = size

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import asyncio
+import time
 from collections.abc import AsyncIterator
 
 from fastapi import APIRouter, Query, Request
@@ -76,14 +77,15 @@ def _event(name: str, job: JobPublic) -> bytes:
 async def _stream(request: Request, queue: QueueDep, job_id: str, interval: float) -> AsyncIterator[bytes]:
     events = queue.events(job_id, interval=interval).__aiter__()
     pending: asyncio.Task[JobPublic] | None = None
+    quiet_since = time.monotonic()
     try:
-        while True:
-            if getattr(request.app.state, "shutting_down", False):
-                return
+        while not getattr(request.app.state, "shutting_down", False):
             pending = pending or asyncio.ensure_future(events.__anext__())
-            done, _ = await asyncio.wait({pending}, timeout=SSE_KEEPALIVE_S)
+            done, _ = await asyncio.wait({pending}, timeout=1.0)  # wake up each second to notice a shutdown
             if not done:
-                yield b": keep-alive\n\n"
+                if time.monotonic() - quiet_since > SSE_KEEPALIVE_S:
+                    quiet_since = time.monotonic()
+                    yield b": keep-alive\n\n"
                 continue
             try:
                 job = pending.result()
@@ -92,6 +94,7 @@ async def _stream(request: Request, queue: QueueDep, job_id: str, interval: floa
             pending = None
             if job.state.terminal:
                 break
+            quiet_since = time.monotonic()
             yield _event("progress", job)
         yield _event("end", await queue.get(job_id))
     finally:
