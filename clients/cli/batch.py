@@ -77,7 +77,6 @@ def read_requests(source: Path, args: argparse.Namespace) -> list[Any]:
     from clients.cli.synthesize import build_request
     from clients.schemas import SynthesisRequest
     from clients.sdk.errors import local_validation_error
-    from clients.validation import field_errors
 
     if source.is_dir():
         files = sorted(p for p in source.iterdir() if p.suffix.lower() in OBJECT_SUFFIXES)
@@ -93,9 +92,7 @@ def read_requests(source: Path, args: argparse.Namespace) -> list[Any]:
         try:
             requests.append(SynthesisRequest.model_validate_json(line))
         except pydantic.ValidationError as exc:
-            err = local_validation_error(exc, f"request on line {number}")
-            err.detail = field_errors(exc, root=f"line {number}")
-            raise err from exc
+            raise local_validation_error(exc, f"line {number}") from exc
     if not requests:
         raise ValueError(f"{source}: no requests")
     return requests

@@ -245,7 +245,7 @@ class BaseClient:
         try:
             body = BatchCreate(requests=requests)
         except pydantic.ValidationError as exc:
-            raise local_validation_error(exc, "batch") from exc
+            raise local_validation_error(exc) from exc
         http = self.build_request("POST", "/v1/batches", body=body)
 
         def parse(response: httpx.Response) -> str:

@@ -167,15 +167,21 @@ def error_for(
     return cls(message, **kwargs)  # type: ignore[arg-type]
 
 
-def local_validation_error(exc: pydantic.ValidationError, what: str = "request") -> ValidationError:
-    """The SDK's `ValidationError` for input that failed the contract before it was sent."""
-    detail = field_errors(exc)
-    return ValidationError(f"invalid {what}: {summary(detail)}", type="ValidationError", detail=detail)
+def local_validation_error(exc: pydantic.ValidationError, root: str = "") -> ValidationError:
+    """The SDK's `ValidationError` for input that failed the contract before it was sent.
+
+    Args:
+        exc: pydantic's error.
+        root: where the validated part sits in the request (e.g. ``"object"``), so that field paths read as
+            the service would write them (``object.points``).
+    """
+    detail = field_errors(exc, root=root)
+    return ValidationError(f"invalid {root or 'request'}: {summary(detail)}", type="ValidationError", detail=detail)
 
 
-def checked(cls: type[ModelT], what: str, **fields: Any) -> ModelT:
-    """``cls(**fields)``, raising the SDK's `ValidationError` (naming each field) instead of pydantic's."""
+def checked(cls: type[ModelT], root: str, **fields: Any) -> ModelT:
+    """``cls(**fields)``, raising the SDK's `ValidationError` (fields under ``root``) instead of pydantic's."""
     try:
         return cls(**fields)
     except pydantic.ValidationError as exc:
-        raise local_validation_error(exc, what) from exc
+        raise local_validation_error(exc, root) from exc

@@ -50,7 +50,7 @@ def make_request(
     opts = checked(SynthesisOptions, "options", **options)
     return checked(
         SynthesisRequest,
-        "request",
+        "",
         object=as_object(object),
         task=as_task(task),
         robot=as_robot(robot),
@@ -91,4 +91,4 @@ def robot_registration(
         name = match.group(1) if match else "custom-hand"
     clean = re.sub(r"[^a-z0-9_\-]", "-", name.lower()).strip("-_")[:64] or "custom-hand"
     offsets = None if tip_offsets is None else np.asarray(tip_offsets, dtype=np.float64)
-    return checked(RobotRegister, "robot", name=clean, urdf=text, fingertips=list(fingertips), tip_offsets=offsets)
+    return checked(RobotRegister, "", name=clean, urdf=text, fingertips=list(fingertips), tip_offsets=offsets)

@@ -77,7 +77,7 @@ def test_synthesize_exit_codes(cli: Any, fake: Any, object_file: Path, tmp_path:
     assert cli(["synthesize", str(tmp_path / "missing.npz")]) == EXIT_USAGE
     assert cli(["synthesize", str(object_file), "--task", "juggle"]) == EXIT_USAGE
     assert cli(["synthesize", str(object_file), "--seed", "-3", "--json"]) == EXIT_USAGE
-    assert _json(capsys)["detail"][0]["field"] == "seed"
+    assert _json(capsys)["detail"][0]["field"] == "options.seed"
     fake.script.append(httpx.Response(404, json={"error": "robot.name: unknown hand 'x'", "type": "NotFound"}))
     assert cli(["synthesize", str(object_file), "--hand", "x"]) == EXIT_USAGE
     fake.script += [httpx.ConnectError("refused")] * 4
@@ -149,3 +149,12 @@ def test_synthesize_request_file_and_inline_urdf(cli: Any, fake: Any, object_fil
     assert cli(["synthesize", str(object_file), "--urdf", str(urdf), "--fingertips", "a,b"]) == EXIT_OK
     inline = fake.jobs["job-1"].request.robot
     assert inline.urdf is not None and inline.fingertips == ["a", "b"]
+
+
+def test_batch_jsonl_errors_name_the_line(cli: Any, tmp_path: Path, object_points: np.ndarray,
+                                          capsys: pytest.CaptureFixture[str]) -> None:  # fmt: skip
+    good = make_request(object_points).model_dump_json()
+    bad = good.replace('"force_closure"', '"juggle"')
+    (tmp_path / "r.jsonl").write_text(f"{good}\n\n{bad}\n")
+    assert cli(["batch", "submit", str(tmp_path / "r.jsonl"), "--json"]) == EXIT_USAGE
+    assert _json(capsys)["detail"][0]["field"].startswith("line 3.task")

@@ -36,7 +36,7 @@ def test_points_with_and_without_normals(object_points: np.ndarray) -> None:
     assert object_from_points(object_points[:, :3]).normals is None
     with pytest.raises(ValidationError) as info:
         object_from_points(object_points[:10])
-    assert info.value.detail[0].field == "points"
+    assert info.value.detail[0].field == "object.points"
     bad = object_points.copy()
     bad[5, 0] = np.nan
     with pytest.raises(ValidationError, match="NaN"):
