@@ -158,3 +158,14 @@ def test_batch_jsonl_errors_name_the_line(cli: Any, tmp_path: Path, object_point
     (tmp_path / "r.jsonl").write_text(f"{good}\n\n{bad}\n")
     assert cli(["batch", "submit", str(tmp_path / "r.jsonl"), "--json"]) == EXIT_USAGE
     assert _json(capsys)["detail"][0]["field"].startswith("line 3.task")
+
+
+def test_bench_dispatches_to_installed_benchmarks(capsys: pytest.CaptureFixture[str]) -> None:
+    from clients.cli.plugins import load_plugins
+
+    assert main(["bench"]) == EXIT_USAGE  # no benchmark named: usage on stderr
+    installed = load_plugins("mani.bench")
+    with pytest.raises(SystemExit):
+        build_parser().parse_args(["bench", "--help"])
+    out = capsys.readouterr().out
+    assert all(name in out for name in installed)
