@@ -23,7 +23,9 @@ from typing import Any
 EXAMPLE = """examples:
   mani bench service                              # 1, 8, 32 clients against a fresh `mani serve --workers 2`
   mani bench service --clients 1,8 --requests 40 --json artifacts/bench_service.json
-  mani bench service --url http://127.0.0.1:8000  # an already running service"""
+  mani bench service --url http://127.0.0.1:8000  # an already running service
+  mani bench service --pipeline workers.testing:StagedPipeline --pipeline-options '{"stage_seconds": 0.01}'
+                                                  # the service and queue alone, with a known compute time"""
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -43,6 +45,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--hand", help="hand name (default: the first one the service lists)")
     parser.add_argument("--method", default="direct_grasp", help="options.method of the requests")
     parser.add_argument("--pipeline", help="worker pipeline 'module:attr' of the started service (MANI_PIPELINE)")
+    parser.add_argument("--pipeline-options", metavar="JSON", help="its keyword arguments (MANI_PIPELINE_OPTIONS)")
     parser.add_argument("--key", help="API key of a service with auth on")
     parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
     parser.set_defaults(func=run)
@@ -153,6 +156,8 @@ def _start_service(args: argparse.Namespace) -> tuple[subprocess.Popen[bytes], s
     env.pop("MANI_REDIS_URL", None)
     if args.pipeline:
         env["MANI_PIPELINE"] = args.pipeline
+    if args.pipeline_options:
+        env["MANI_PIPELINE_OPTIONS"] = args.pipeline_options
     cmd = [
         sys.executable,
         "-m",
