@@ -25,6 +25,7 @@ JOB_ERROR_STATUS = {
     "InvalidPointCloud": 422,
     "InfeasibleTask": 422,
     "RobotInvalid": 422,
+    "HandLoadError": 422,
     "UnknownHand": 404,
     "UnknownRobot": 404,
     "NotFound": 404,
