@@ -277,12 +277,18 @@ class RedisWorker:
                 return
             last[job_id] = (now, stage.value)
             p = JobProgress(stage=stage, fraction=min(max(fraction, 0.0), 1.0), iteration=iteration, max_iterations=top)
-            self.r.hset(self.keys.job(job_id), "progress", pack(p.model_dump(mode="python", exclude_none=True)))
+            try:
+                self.r.hset(self.keys.job(job_id), "progress", pack(p.model_dump(mode="python", exclude_none=True)))
+            except RedisError as exc:  # progress is best effort; the outcome is what must not be lost
+                log.warning("progress not written: %s", exc)
 
         return progress
 
     def _should_cancel(self, job_id: str) -> bool:
-        return self.r.hget(self.keys.job(job_id), "cancel") == b"1"
+        try:
+            return bool(self.r.hget(self.keys.job(job_id), "cancel") == b"1")
+        except RedisError:
+            return False
 
     def _robot(self, entry: str, fields: dict[bytes, bytes]) -> None:
         rid = fields[b"id"].decode()

@@ -16,7 +16,11 @@ from collections.abc import AsyncIterator
 from typing import Any
 
 import redis.asyncio as aioredis
+from redis.asyncio.retry import Retry
+from redis.backoff import ExponentialBackoff
+from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import RedisError, ResponseError
+from redis.exceptions import TimeoutError as RedisTimeoutError
 
 from clients.codec import pack, unpack
 from clients.schemas import (
@@ -91,9 +95,13 @@ class RedisQueue(JobQueue):
     # ---- lifecycle -------------------------------------------------------------------------------------------
     async def start(self) -> None:
         assert self.settings.redis_url is not None
-        self._client = aioredis.from_url(
-            self.settings.redis_url, socket_connect_timeout=2, socket_timeout=10, health_check_interval=10
-        )
+        pool = aioredis.BlockingConnectionPool.from_url(
+            self.settings.redis_url, max_connections=64, timeout=20,
+            socket_connect_timeout=2, socket_timeout=10, health_check_interval=10,
+            retry=Retry(ExponentialBackoff(cap=0.5, base=0.05), 3),
+            retry_on_error=[RedisConnectionError, RedisTimeoutError],
+        )  # fmt: skip
+        self._client = aioredis.Redis(connection_pool=pool)
         with contextlib.suppress(RedisError):
             await ensure_group(self._client, self.keys)
         self._submit = self._client.register_script(SUBMIT)
@@ -121,7 +129,10 @@ class RedisQueue(JobQueue):
             pubsub = self._client.pubsub(ignore_subscribe_messages=True)
             try:
                 await pubsub.subscribe(self.keys.done)
-                async for message in pubsub.listen():
+                while True:
+                    message = await pubsub.get_message(ignore_subscribe_messages=True, timeout=1.0)
+                    if message is None:
+                        continue
                     for future in self._waiters.pop(message["data"].decode(), []):
                         if not future.done():
                             future.set_result(None)
