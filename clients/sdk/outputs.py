@@ -106,9 +106,13 @@ def result_figure(
     if chosen is not None:
         _grasp_traces(fig, chosen, size, force_scale)
     index = result.proposals.index(chosen) if chosen is not None else 0
-    heading = title or f"{result.hand}, proposal {index}: " + (quality_text(chosen) if chosen else "no proposal")
+    quality = quality_text(chosen) if chosen is not None else "no proposal"
+    heading = title or f"{result.hand}, proposal {index}<br><sup>{quality}</sup>"
     fig.update_layout(
-        title=heading, scene={"aspectmode": "data"}, margin={"l": 0, "r": 0, "t": 40, "b": 0}, legend={"x": 0, "y": 1}
+        title={"text": heading, "x": 0.01, "font": {"size": 15}},
+        scene={"aspectmode": "data"},
+        margin={"l": 0, "r": 0, "t": 60, "b": 0},
+        legend={"x": 0, "y": 0.9},
     )
     return fig
 
