@@ -3,13 +3,15 @@
 Sphere procedure, per body mesh (in the body frame):
 
 1. Take the mesh vertices plus ``SURFACE_SAMPLES`` surface samples (seed 0).
-2. PCA of those points; the first principal axis is the link's long axis (sign fixed: largest component > 0).
-3. Cut the points into ``n = clip(ceil(L / (SLAB_RATIO * w_min)), 1, MAX_PER_LINK)`` equal slabs along that axis
-   (L the length along it, w_min the smaller cross-section extent).
-4. One sphere per non-empty slab: centre = centre of the slab points' bounding box (in the PCA frame), radius =
-   largest distance from it to a slab point + ``MARGIN``.
+2. PCA of those points: the principal frame and extents e1 ≥ e2 ≥ e3.
+3. A sphere budget ``K = clip(round(A / AREA_PER_SPHERE), 1, MAX_PER_LINK)``, A the area of the PCA box;
+   grids of cubic cells of size s = e1 · SHRINK^k (k = 0, 1, ... while s > ``MIN_CELL``), each principal axis
+   cut into ``ceil(e_i / s)`` cells; keep the finest grid whose occupied cells number at most K (the scan
+   stops past 4 K).
+4. One sphere per non-empty cell: centre = centre of the cell points' bounding box (in the PCA frame), radius =
+   largest distance from it to a cell point + ``MARGIN``.
 
-Each sphere contains every sampled point of its slab by construction, so the surface is covered up to the sampling
+Each sphere contains every sampled point of its cell by construction, so the surface is covered up to the sampling
 gap (< ``MARGIN`` for the meshes we ship: tests check fresh samples with a stated tolerance).
 """
 
@@ -21,8 +23,10 @@ import numpy as np
 import trimesh
 
 SURFACE_SAMPLES = 3000
-SLAB_RATIO = 0.75
-MAX_PER_LINK = 6
+AREA_PER_SPHERE = 1e-3
+MAX_PER_LINK = 24
+MIN_CELL = 4e-3
+SHRINK = 0.9
 MARGIN = 1e-3
 
 
@@ -39,20 +43,35 @@ def fit_spheres(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
             vt[i] = -vt[i]
     local = (pts - mean) @ vt.T
     lo, hi = local.min(0), local.max(0)
-    ext = hi - lo
-    w_min = max(min(ext[1], ext[2]), 1e-4)
-    n = int(np.clip(np.ceil(ext[0] / (SLAB_RATIO * w_min)), 1, MAX_PER_LINK))
-    edges = np.linspace(lo[0], hi[0], n + 1)
-    slab = np.clip(np.searchsorted(edges, local[:, 0], side="right") - 1, 0, n - 1)
+    ext = np.maximum(hi - lo, 1e-6)
+    box_area = 2.0 * float(ext[0] * ext[1] + ext[0] * ext[2] + ext[1] * ext[2])
+    budget = int(np.clip(round(box_area / AREA_PER_SPHERE), 1, MAX_PER_LINK))
+    best = np.zeros(len(local), dtype=np.int64)
+    size = float(ext[0])
+    while size > MIN_CELL:  # the finest grid whose occupied cells fit the budget
+        n = [max(1, int(np.ceil(e / size - 1e-9))) for e in ext]
+        cell = (_bins(local[:, 0], lo[0], hi[0], n[0]) * n[1] + _bins(local[:, 1], lo[1], hi[1], n[1])) * n[2]
+        cell = cell + _bins(local[:, 2], lo[2], hi[2], n[2])
+        occupied = len(np.unique(cell))
+        if occupied <= budget:
+            best = cell
+        elif occupied > 4 * budget:  # finer grids only occupy more cells
+            break
+        size *= SHRINK
+    cell = best
+    used = np.unique(cell)
     centres, radii = [], []
-    for s in range(n):
-        p = local[slab == s]
-        if len(p) == 0:
-            continue
+    for s in used:
+        p = local[cell == s]
         c = 0.5 * (p.min(0) + p.max(0))
         radii.append(float(np.linalg.norm(p - c, axis=1).max()) + MARGIN)
         centres.append(c @ vt + mean)
     return np.asarray(centres), np.asarray(radii)
+
+
+def _bins(x: np.ndarray, lo: float, hi: float, n: int) -> np.ndarray:
+    edges = np.linspace(lo, hi, n + 1)
+    return np.clip(np.searchsorted(edges, x, side="right") - 1, 0, n - 1)
 
 
 def sample_surface(meshes: list[trimesh.Trimesh], count: int, oversample: int = 8) -> tuple[np.ndarray, np.ndarray]:
