@@ -72,7 +72,7 @@ def child_main(worker_id: str, settings_json: str, conn: Connection) -> None:
     link = _Link(conn)
     signal.signal(signal.SIGTERM, lambda *_: setattr(link, "stopping", True))
     started = time.time()
-    pipeline = load_pipeline(settings.pipeline, settings.pipeline_options)
+    pipeline = load_pipeline(settings.pipeline, settings.pipeline_options, settings.weights_dir)
     info = WorkerPublic(
         id=worker_id,
         host=socket.gethostname(),

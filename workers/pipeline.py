@@ -11,6 +11,7 @@ torch-free; a pipeline imports its heavy dependencies in its own module, in the 
 from __future__ import annotations
 
 import importlib
+import inspect
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
@@ -54,11 +55,15 @@ class Pipeline(Protocol):
         ...
 
 
-def load_pipeline(spec: str, options: dict[str, Any] | None = None) -> Pipeline:
-    """Instantiate ``"module:attr"`` with ``options`` as keyword arguments."""
+def load_pipeline(spec: str, options: dict[str, Any] | None = None, weights_dir: str | None = None) -> Pipeline:
+    """Instantiate ``"module:attr"`` with ``options`` as keyword arguments (plus ``weights_dir`` when given and
+    the factory takes it)."""
     module_name, _, attr = spec.partition(":")
     factory = getattr(importlib.import_module(module_name), attr)
-    pipeline = factory(**(options or {}))
+    kwargs = dict(options or {})
+    if weights_dir and "weights_dir" in inspect.signature(factory).parameters:
+        kwargs.setdefault("weights_dir", weights_dir)
+    pipeline = factory(**kwargs)
     if not isinstance(pipeline, Pipeline):
         raise TypeError(f"{spec} does not implement workers.pipeline.Pipeline")
     return pipeline

@@ -60,7 +60,7 @@ class RedisWorker:
     # ---- lifecycle -------------------------------------------------------------------------------------------
     def run(self) -> None:
         """Serve until `stop()` (SIGTERM)."""
-        self.pipeline = load_pipeline(self.settings.pipeline, self.settings.pipeline_options)
+        self.pipeline = load_pipeline(self.settings.pipeline, self.settings.pipeline_options, self.settings.weights_dir)
         now = time.time()
         self.info = WorkerPublic(
             id=self.id, host=socket.gethostname(), pid=os.getpid(), started_at=now, last_heartbeat=now,

@@ -1,0 +1,116 @@
+"""Wire ↔ science: `SynthesisRequest` → `models.pipeline.SynthesisInput`, `SynthesisOutput` → `SynthesisResult`.
+
+Imported in the worker process only (it imports `models`, hence torch).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from clients.schemas import (
+    IterationRecord,
+    Method,
+    Proposal,
+    Quality,
+    SynthesisRequest,
+    SynthesisResult,
+)
+from models.pipeline import JointInput, SynthesisInput, SynthesisOutput, TaskInput
+
+_BIG = float(np.finfo(np.float64).max)
+
+
+def method_of(request: SynthesisRequest) -> str:
+    """The pipeline method: "auto" is the given contacts when present, else the network."""
+    if request.options.method is Method.AUTO:
+        return "contacts" if request.contacts is not None else "network"
+    return request.options.method.value
+
+
+def to_input(request: SynthesisRequest, hand: Any, deadline: float | None = None) -> SynthesisInput:
+    """The core input of ``request`` for ``hand`` (a `models.robots.Hand`).
+
+    Args:
+        deadline: unix time after which refinement stops (converted to a `time.monotonic()` value).
+    """
+    obj, task, options = request.object, request.task, request.options
+    joint = None
+    if obj.joint is not None:
+        joint = JointInput(obj.joint.type, obj.joint.axis, obj.joint.origin, obj.joint.part_mask.astype(bool))
+    core_task = TaskInput(
+        kind=task.kind,
+        translation=getattr(task, "translation", None),
+        rotation=getattr(task, "rotation", None),
+        motion=getattr(task, "motion", None),
+        targets=getattr(task, "targets", None),
+        wrench=getattr(task, "wrench", None),
+        delta=getattr(task, "delta", None),
+    )
+    return SynthesisInput(
+        points=obj.points.astype(np.float64),
+        hand=hand,
+        task=core_task,
+        normals=None if obj.normals is None else obj.normals.astype(np.float64),
+        material=obj.material.value,
+        properties=obj.properties.present(),
+        mask=None if obj.region_mask is None else obj.region_mask.astype(bool),
+        joint=joint,
+        mesh_vertices=None if obj.mesh is None else obj.mesh.vertices,
+        mesh_faces=None if obj.mesh is None else obj.mesh.faces,
+        contacts=None if request.contacts is None else request.contacts.points.astype(np.float64),
+        method=method_of(request),
+        num_proposals=options.num_proposals,
+        refine=options.refine,
+        max_iterations=options.max_iterations,
+        seed=options.seed,
+        deadline=None if deadline is None else time.monotonic() + (deadline - time.time()),
+        return_history=options.return_history,
+        hand_key=getattr(hand, "name", None),
+    )
+
+
+def _finite(value: float) -> float:
+    return float(value) if np.isfinite(value) else _BIG
+
+
+def to_result(output: SynthesisOutput, request: SynthesisRequest, model_version: str) -> SynthesisResult:
+    """The wire result of ``output`` (maps and history only when the request asked for them)."""
+    proposals = []
+    for p in output.proposals:
+        q = p.quality
+        quality = Quality(
+            success=bool(q.success), converged=bool(q.converged), reason=q.reason, iterations=int(q.iterations),
+            wrench_residual=_finite(q.wrench_residual), max_tip_distance=_finite(q.max_tip_distance),
+            penetration_depth=_finite(q.penetration_depth), self_collision_depth=_finite(q.self_collision_depth),
+            epsilon=None if q.epsilon is None or not np.isfinite(q.epsilon) else float(q.epsilon),
+        )  # fmt: skip
+        history = None
+        if request.options.return_history and p.history is not None:
+            history = [IterationRecord(residual=_finite(h.residual), tip_distance=_finite(h.tip_distance),
+                                       step=_finite(h.step)) for h in p.history]  # fmt: skip
+        proposals.append(
+            Proposal(
+                contact_points=np.asarray(p.contact_points, dtype=np.float64).reshape(-1, 3),
+                contact_normals=np.asarray(p.contact_normals, dtype=np.float64).reshape(-1, 3),
+                forces=np.asarray(p.forces, dtype=np.float64).reshape(-1, 3),
+                fingertips=list(p.fingertips),
+                palm_position=np.asarray(p.palm_position, dtype=np.float64),
+                palm_quaternion=np.asarray(p.palm_quaternion, dtype=np.float64),
+                joint_names=list(p.joint_names),
+                joint_values=np.asarray(p.joint_values, dtype=np.float64),
+                quality=quality,
+                history=history,
+            )
+        )
+    options = request.options
+    return SynthesisResult(
+        hand=output.hand,
+        model_version=model_version,
+        proposals=proposals,
+        heatmap=output.heatmap if options.return_heatmap and output.heatmap is not None else None,
+        force_map=output.force_map if options.return_force_map and output.force_map is not None else None,
+        timings={k: float(v) for k, v in output.timings.items()},
+    )

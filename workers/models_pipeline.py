@@ -1,0 +1,200 @@
+"""`ModelsPipeline`: the worker's default `Pipeline`, the science of `models` (network → selection →
+initialisation → refinement → verification).
+
+Loaded once per worker process: the network from ``weights_dir`` (default ``models/weights``) when a checkpoint
+is there (``model_loaded``), and the built-in hands (published as the robot catalogue). Without weights, jobs
+whose method needs the network ("network", or "auto" without contacts) fail with a `ModelUnavailable` error;
+"contacts", "direct_grasp" and "random_contacts" run end to end. Jobs run one at a time (per-job progress and
+cancellation); with ``batch_network=True`` the network-method jobs of a micro-batch share one network call.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import logging
+import time
+from collections import OrderedDict
+from pathlib import Path
+from typing import Any
+
+from clients.schemas import ErrorBody, RobotPublic, RobotRegister, Stage
+from workers.pipeline import CancelFn, JobInput, Outcome, ProgressFn
+from workers.queue.records import MODEL_UNAVAILABLE, cancelled_error
+
+log = logging.getLogger("workers.models_pipeline")
+_HAND_CACHE = 32
+
+
+class ModelsPipeline:
+    """The models pipeline behind the worker's `Pipeline` protocol (see module doc)."""
+
+    def __init__(
+        self,
+        weights_dir: str | None = None,
+        threads: int = 1,
+        batch_network: bool = False,
+        hands: list[str] | None = None,
+    ) -> None:
+        """
+        Args:
+            weights_dir: checkpoint directory (or a directory of them); default ``models/weights``.
+            threads: torch threads of this process (1: one worker process per core).
+            batch_network: share one network call among a micro-batch's network jobs.
+            hands: built-in hands to load and publish (default: all).
+        """
+        import torch
+
+        import models
+        from models.robots import get_hand, list_hands
+
+        torch.set_num_threads(max(1, threads))
+        self.batch_network = batch_network
+        self.predictor = self._load(Path(weights_dir) if weights_dir else Path(models.__file__).parent / "weights")
+        self.model_loaded = self.predictor is not None
+        card = getattr(self.predictor, "card", None)
+        self.model_version: str | None = f"{card.config_name}-{card.version}" if card else None
+        self._hands: OrderedDict[str, Any] = OrderedDict()
+        self._builtin = {name: get_hand(name) for name in (hands if hands is not None else list_hands())}
+
+    @staticmethod
+    def _load(path: Path) -> Any | None:
+        if not path.is_dir():
+            log.info("no model weights at %s: method 'network' unavailable", path)
+            return None
+        from models.network.inference import ContactPredictor
+
+        candidates = [path, *sorted(p for p in path.iterdir() if p.is_dir())]
+        for candidate in candidates:
+            try:
+                predictor = ContactPredictor.from_checkpoint(candidate)
+            except Exception as exc:
+                log.debug("no checkpoint at %s: %s", candidate, exc)
+                continue
+            log.info("model loaded from %s", candidate)
+            return predictor
+        log.warning("no loadable checkpoint under %s: method 'network' unavailable", path)
+        return None
+
+    # ---- robots ----------------------------------------------------------------------------------------------
+    def robots(self) -> list[RobotPublic]:
+        return [_public(hand, name, builtin=True, source="built-in") for name, hand in self._builtin.items()]
+
+    def validate_robot(self, robot: RobotRegister) -> RobotPublic:
+        hand = self._user_hand(robot.name, robot.urdf, robot.fingertips, robot.tip_offsets)
+        return _public(hand, robot.name, builtin=False, source="user")
+
+    def _user_hand(self, name: str, urdf: str, fingertips: list[str], offsets: Any) -> Any:
+        from models.robots import HandLoadError, load_hand
+
+        key = hashlib.blake2b(f"{name}\0{urdf}\0{fingertips}\0{offsets}".encode(), digest_size=16).hexdigest()
+        if key in self._hands:
+            self._hands.move_to_end(key)
+            return self._hands[key]
+        try:
+            hand = load_hand(urdf.encode(), fingertips=fingertips, tip_offsets=offsets, name=name)
+        except HandLoadError as exc:
+            raise ValueError(f"urdf: {exc}") from exc
+        self._hands[key] = hand
+        while len(self._hands) > _HAND_CACHE:
+            self._hands.popitem(last=False)
+        return hand
+
+    def _hand(self, job: JobInput) -> Any:
+        robot = job.request.robot
+        if robot.urdf is not None:
+            return self._user_hand("inline", robot.urdf, robot.fingertips or [], robot.tip_offsets)
+        if robot.name in self._builtin:
+            return self._builtin[robot.name]
+        if job.robot is not None:
+            r = job.robot
+            return self._user_hand(r.name, r.urdf, r.fingertips, r.tip_offsets)
+        raise LookupError(f"robot.name: unknown hand {robot.name!r}; built-in: {', '.join(self._builtin)}")
+
+    # ---- jobs ------------------------------------------------------------------------------------------------
+    def run(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
+        if self.batch_network and len(jobs) > 1:
+            return self._run_batched(jobs, progress, should_cancel)
+        return [self._run_one(job, progress, should_cancel) for job in jobs]
+
+    def _run_one(self, job: JobInput, progress: ProgressFn, should_cancel: CancelFn) -> Outcome:
+        from models.pipeline import Cancelled, InvalidInput, ModelUnavailable, run_pipeline
+        from workers.convert import to_input, to_result
+
+        try:
+            inp = to_input(job.request, self._hand(job), job.deadline)
+            out = run_pipeline(inp, self.predictor, _reporter(job, progress), lambda: should_cancel(job.id))
+        except Cancelled:
+            return cancelled_error()
+        except ModelUnavailable as exc:
+            return ErrorBody(error=str(exc), type=MODEL_UNAVAILABLE)
+        except (InvalidInput, LookupError, ValueError) as exc:
+            return ErrorBody(error=str(exc), type="InvalidInput")
+        return to_result(out, job.request, self.model_version or "none")
+
+    def _run_batched(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
+        from models.pipeline import Cancelled, ModelUnavailable, run_pipeline_batch
+        from workers.convert import to_input, to_result
+
+        outcomes: list[Outcome | None] = [None] * len(jobs)
+        inputs, index = [], []
+        for i, job in enumerate(jobs):
+            try:
+                inputs.append(to_input(job.request, self._hand(job), job.deadline))
+                index.append(i)
+            except (LookupError, ValueError) as exc:
+                outcomes[i] = ErrorBody(error=str(exc), type="InvalidInput")
+        reporters = [_reporter(jobs[i], progress) for i in index]
+
+        def report(stage: str, fraction: float) -> None:
+            for r in reporters:
+                r(stage, fraction)
+
+        try:
+            outs = run_pipeline_batch(inputs, self.predictor, report, lambda: all(should_cancel(j.id) for j in jobs))
+        except Cancelled:
+            outs = [Cancelled("cancelled")] * len(inputs)
+        for i, out in zip(index, outs, strict=True):
+            job = jobs[i]
+            if should_cancel(job.id) or isinstance(out, Cancelled):
+                outcomes[i] = cancelled_error()
+            elif isinstance(out, ModelUnavailable):
+                outcomes[i] = ErrorBody(error=str(out), type=MODEL_UNAVAILABLE)
+            elif isinstance(out, Exception):
+                outcomes[i] = ErrorBody(error=str(out), type="InvalidInput")
+            else:
+                outcomes[i] = to_result(out, job.request, self.model_version or "none")
+        return [o if o is not None else ErrorBody(error="no outcome", type="InternalError") for o in outcomes]
+
+
+def _reporter(job: JobInput, progress: ProgressFn) -> Any:
+    """The pipeline's ``progress(stage, fraction)`` → the worker's per-job progress (refinement k/max)."""
+    options = job.request.options
+    total = max(1, options.max_iterations * options.num_proposals)
+    last = [0.0]
+
+    def report(stage: str, fraction: float) -> None:
+        try:
+            kind = Stage(stage)
+        except ValueError:
+            return
+        if kind is Stage.REFINEMENT:
+            done = round(fraction * total)
+            iteration = min(
+                options.max_iterations, done - options.max_iterations * (done // (options.max_iterations + 1))
+            )
+            progress(job.id, kind, fraction, max(iteration, 0), options.max_iterations)
+        else:
+            now = time.monotonic()
+            if now - last[0] > 0.01 or fraction in (0.0, 1.0):
+                last[0] = now
+                progress(job.id, kind, fraction, None, None)
+
+    return report
+
+
+def _public(hand: Any, name: str, *, builtin: bool, source: str) -> RobotPublic:
+    return RobotPublic(
+        name=name, builtin=builtin, dof=int(hand.dof), joint_names=list(hand.joint_names),
+        lower=[float(x) for x in hand.lower], upper=[float(x) for x in hand.upper],
+        fingertips=list(hand.fingertip_links), num_spheres=len(hand.sphere_radii), source=source,
+    )  # fmt: skip
