@@ -226,13 +226,14 @@ class Hand:
         """World pose (B, 4, 4) of every link below the palm (including fixed ones)."""
         self._check(palm_pos, palm_quat, q)
         T = self.tree.body_poses(palm_pos, palm_quat, q)
-        out = {}
-        for link, (b, Tbl) in self.tree.link_body.items():
-            out[link] = (
-                T[:, b]
-                if np.allclose(Tbl, np.eye(4))
-                else T[:, b] @ torch.as_tensor(Tbl, dtype=q.dtype, device=q.device)
-            )
+        names = list(self.tree.link_body)
+        key = ("link_offsets", q.dtype, q.device)
+        if key not in self._cache:
+            offs = np.stack([self.tree.link_body[n][1] for n in names])
+            self._cache[key] = torch.as_tensor(offs, dtype=q.dtype, device=q.device)
+        bodies = torch.as_tensor([self.tree.link_body[n][0] for n in names], device=q.device)
+        poses = T[:, bodies] @ self._cache[key]  # (B, L, 4, 4), one batched product
+        out = {n: poses[:, i] for i, n in enumerate(names)}
         return out
 
     def fingertips(self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor) -> torch.Tensor:

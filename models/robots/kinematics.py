@@ -167,6 +167,8 @@ class KinematicTree:
             "coupling": coupling,
         }
         self._cache: dict[tuple[torch.dtype, torch.device], _Consts] = {}
+        self._level_cache: dict[torch.device, list[tuple[torch.Tensor, torch.Tensor]]] = {}
+        self._src_t: dict[torch.device, torch.Tensor] = {}
 
     @property
     def dof(self) -> int:
@@ -186,7 +188,9 @@ class KinematicTree:
         """World poses of every body: (B, 3), (B, 4) wxyz, (B, D) -> (B, nb, 4, 4)."""
         c = self.consts(q.dtype, q.device)
         B, nb = q.shape[0], len(self.body_names)
-        src = torch.as_tensor(self._src, device=q.device)
+        src = self._src_t.get(q.device)
+        if src is None:
+            src = self._src_t[q.device] = torch.as_tensor(self._src, device=q.device)
         theta = q[:, src] * c.mult + c.offset if self.dof else c.offset.expand(B, nb)  # (B, nb)
         s = (torch.sin(theta) * c.rev)[..., None, None]
         cm = ((1 - torch.cos(theta)) * c.rev)[..., None, None]
@@ -204,11 +208,17 @@ class KinematicTree:
         palm[:, 3, 3] = 1
         out = [palm] + [palm] * (nb - 1)
         T = torch.stack(out, dim=1).clone() if nb > 1 else palm[:, None].clone()
-        for idx in self._levels:
-            idx_t = torch.as_tensor(idx, device=q.device)
-            par_t = torch.as_tensor(self.parent[idx], device=q.device)
+        for idx_t, par_t in self._level_index(q.device):
             T[:, idx_t] = T[:, par_t] @ local[:, idx_t]
         return T
+
+    def _level_index(self, device: torch.device) -> list[tuple[torch.Tensor, torch.Tensor]]:
+        if device not in self._level_cache:
+            self._level_cache[device] = [
+                (torch.as_tensor(idx, device=device), torch.as_tensor(self.parent[idx], device=device))
+                for idx in self._levels
+            ]
+        return self._level_cache[device]
 
     def point_weights(self, bodies: np.ndarray, dtype: torch.dtype, device: torch.device) -> torch.Tensor:
         """(n, nb, D): how much each body's joint moves a point on ``bodies[i]`` per unit free joint."""
