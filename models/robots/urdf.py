@@ -31,6 +31,9 @@ from models.robots.description import (
 MAX_URDF_BYTES = 2_000_000
 MAX_LINKS = 256
 MAX_JOINTS = 256
+MAX_GEOMETRIES = 512
+MAX_EXTENT = 5.0
+"""Largest accepted primitive size or origin offset (m): a hand is not 5 m wide."""
 
 MeshLoader = Callable[[str, np.ndarray], trimesh.Trimesh | None]
 """(filename, scale (3,)) -> mesh in the geometry frame, or None to skip."""
@@ -57,6 +60,8 @@ def _origin(elem: ET.Element | None, what: str) -> np.ndarray:
     if elem is None:
         return np.eye(4)
     xyz = _floats(elem.get("xyz"), 3, f"{what} origin xyz", [0.0, 0.0, 0.0])
+    if np.any(np.abs(xyz) > MAX_EXTENT):
+        raise HandLoadError(f"{what} origin xyz: offsets beyond {MAX_EXTENT} m")
     rpy = _floats(elem.get("rpy"), 3, f"{what} origin rpy", [0.0, 0.0, 0.0])
     return transform(xyz, rpy)
 
@@ -88,8 +93,8 @@ def _geometry(col: ET.Element, what: str, mesh_loader: MeshLoader | None) -> tri
         size = np.ones(1)
     else:
         raise HandLoadError(f"{what}: unknown geometry <{shape.tag}>")
-    if np.any(size <= 0):
-        raise HandLoadError(f"{what}: geometry sizes must be positive")
+    if np.any(size <= 0) or np.any(size > MAX_EXTENT):
+        raise HandLoadError(f"{what}: geometry sizes must be in (0, {MAX_EXTENT}] m")
     mesh = mesh.copy()
     mesh.apply_transform(_origin(col.find("origin"), what))
     return mesh
@@ -133,6 +138,9 @@ def parse_urdf(
         )
     if not link_elems:
         raise HandLoadError("no <link> elements")
+    n_geom = sum(len(le.findall("collision")) + (len(le.findall("visual")) if use_visual else 0) for le in link_elems)
+    if n_geom > MAX_GEOMETRIES:
+        raise HandLoadError(f"{n_geom} geometry elements: over the {MAX_GEOMETRIES} limit")
     links: dict[str, list[trimesh.Trimesh]] = {}
     for le in link_elems:
         name = le.get("name")

@@ -149,3 +149,11 @@ def test_rigid_hand_without_joints_and_continuous_joint() -> None:
     np.testing.assert_allclose(p[0, 0].numpy(), [0, 0, 0.1])
     hand = load_hand(_urdf(jtype="continuous"), fingertips=["finger"])
     assert hand.lower[0] == pytest.approx(-np.pi) and hand.upper[0] == pytest.approx(np.pi)
+
+
+def test_geometry_count_and_extent_caps() -> None:
+    many = '<link name="m">' + '<collision><geometry><sphere radius="0.01"/></geometry></collision>' * 600 + "</link>"
+    with pytest.raises(HandLoadError, match="geometry elements"):
+        load_hand(_urdf(extra=many), fingertips=["finger"])
+    with pytest.raises(HandLoadError, match="sizes"):
+        load_hand(_urdf(geom='<box size="100 0.02 0.02"/>'), fingertips=["finger"])
