@@ -1,0 +1,51 @@
+"""`mani data generate`: labelled training data for rigid and articulated objects (see models/data)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``data`` command (sub-command ``generate``)."""
+    p = subparsers.add_parser("data", help="generate training data")
+    sub = p.add_subparsers(dest="data_command", required=True)
+    g = sub.add_parser("generate", help="generate (or resume) a sharded data set")
+    g.add_argument("--out", default="data/v2", help="output directory (shards + manifest.json)")
+    g.add_argument("--objects", type=int, default=400, help="number of objects")
+    g.add_argument("--seed", type=int, default=0)
+    g.add_argument("--workers", type=int, default=2, help="worker processes")
+    g.add_argument("--objects-per-shard", type=int, default=2)
+    g.add_argument(
+        "--hands", default=None, help="comma-separated training hands (default: allegro,leap,panda_gripper,kinova3f)"
+    )
+    g.add_argument("--held-out-hands", default=None, help="comma-separated held-out hands (default: shadow,barrett)")
+    g.add_argument("--palms", type=int, default=16, help="palm poses sampled per (object, hand)")
+    g.add_argument("--grasps-per-job", type=int, default=6)
+    g.add_argument("--examples-per-grasp", type=int, default=4)
+    g.add_argument("--articulated-fraction", type=float, default=0.2)
+    g.add_argument("--test-fraction", type=float, default=0.15)
+    g.add_argument("--no-progress", action="store_true")
+    g.set_defaults(func=_generate)
+
+
+def _generate(args: argparse.Namespace) -> int:
+    import json
+
+    from models.data.generate import HELD_OUT_HANDS, TRAIN_HANDS, DataConfig, generate
+
+    cfg = DataConfig(
+        objects=args.objects,
+        seed=args.seed,
+        objects_per_shard=args.objects_per_shard,
+        test_fraction=args.test_fraction,
+        articulated_fraction=args.articulated_fraction,
+        hands=tuple(args.hands.split(",")) if args.hands else TRAIN_HANDS,
+        held_out_hands=tuple(args.held_out_hands.split(",")) if args.held_out_hands is not None else HELD_OUT_HANDS,
+        grasps_per_job=args.grasps_per_job,
+        examples_per_grasp=args.examples_per_grasp,
+        palms=args.palms,
+    )
+    manifest = generate(cfg, args.out, workers=args.workers, progress=not args.no_progress)
+    print(json.dumps(manifest["totals"], indent=1))
+    return 0

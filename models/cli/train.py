@@ -1,0 +1,50 @@
+"""`mani train`: train the network from a config file plus ``key=value`` overrides (see models/training)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+
+def register(subparsers: Any) -> None:
+    """Add the ``train`` command."""
+    p = subparsers.add_parser("train", help="train the contact network")
+    p.add_argument("--config", default="configs/train_cpu.yaml", help="YAML training config")
+    p.add_argument("--resume", action="store_true", help="continue the run in the config's `out` directory")
+    p.add_argument(
+        "--export", default=None, help="after training, copy the best checkpoint here (e.g. models/weights/cpu)"
+    )
+    p.add_argument("--no-progress", action="store_true")
+    p.add_argument("overrides", nargs="*", help="key=value settings overriding the config file")
+    p.set_defaults(func=_train)
+
+
+def _train(args: argparse.Namespace) -> int:
+    import json
+    import shutil
+    from pathlib import Path
+
+    from models.training.config import load_config
+    from models.training.trainer import train
+
+    cfg = load_config(args.config, args.overrides)
+    result = train(cfg, resume=args.resume, progress=not args.no_progress)
+    print(
+        json.dumps(
+            {
+                "out": str(result.out),
+                "epochs": result.epochs,
+                "wall_seconds": round(result.wall_seconds, 1),
+                "best_val": result.best_val,
+                **result.final,
+            },
+            indent=1,
+        )
+    )
+    if args.export:
+        dst = Path(args.export)
+        dst.mkdir(parents=True, exist_ok=True)
+        for name in ("model.safetensors", "model_card.json"):
+            shutil.copy2(result.out / "best" / name, dst / name)
+        print(f"exported {result.out / 'best'} -> {dst}")
+    return 0

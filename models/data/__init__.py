@@ -1,0 +1,12 @@
+"""Training data for rigid and articulated objects (paper appendix "Articulated/Rigid Bodies").
+
+Pipeline per (object, hand): `sampling` (palm poses facing the object → per-finger damped-least-squares IK
+onto surface points (`ik`) → combinations → exact rejection tests (`checks`)) → `examples` (forces in friction
+cones, summed wrench, inverse of Eq. 4 → target motion; articulated joints from the joint-space residual) →
+`labels` (documented heat kernel, force map, region masks). `generate` writes seeded, resumable shards with a
+manifest using worker processes (`mani data generate`); `dataset` reads them for training.
+
+Splits: objects by id (train/test), motions by held-out wrench-direction cones → ``train``, ``test_so``
+(Seen-Object/Unseen-Motion), ``test_uo`` (Unseen-Object/Unseen-Motion). Training hands: allegro, leap,
+panda_gripper, kinova3f; shadow and barrett are held out (test examples only).
+"""

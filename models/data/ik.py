@@ -1,0 +1,212 @@
+"""Batched damped-least-squares IK of fingertips onto surface points (palm fixed, or free for coupled hands).
+
+Rows of a batch are independent problems. Phase 1 drives each fingertip towards its sampled target; phase 2
+projects the tips onto the surface (target = the nearest surface point, i.e. Newton on Φ(p) = 0). Fingers
+whose joints are disjoint are solved in the same row without interacting (the damped normal matrix is block
+diagonal), which is what makes the per-finger solutions combinable afterwards.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import torch
+
+DAMPING = 0.02  # λ (m) of δ = Jᵀ (J Jᵀ + λ² I)⁻¹ e
+MAX_JOINT_STEP = 0.25  # rad (or m) per iteration
+MAX_PALM_STEP = 0.01  # m / rad per iteration when the palm is free
+
+
+def finger_joint_sets(hand) -> list[np.ndarray]:  # type: ignore[no-untyped-def]
+    """For each fingertip, the indices (into q) of the joints that move it (at the rest pose)."""
+    pos = torch.zeros(1, 3, dtype=torch.float64)
+    quat = torch.tensor([[1.0, 0.0, 0.0, 0.0]], dtype=torch.float64)
+    q = torch.as_tensor(hand.rest[None], dtype=torch.float64)
+    _, jac = hand.fingertip_jacobians(pos, quat, q)
+    cols = jac[0, :, :, 6:].abs().sum(dim=1) > 1e-9  # (m, D)
+    # a joint at a singular configuration can show a zero column: also use the limits' midpoint
+    q2 = torch.as_tensor(((hand.lower + hand.upper) / 2)[None], dtype=torch.float64)
+    _, jac2 = hand.fingertip_jacobians(pos, quat, q2)
+    cols = cols | (jac2[0, :, :, 6:].abs().sum(dim=1) > 1e-9)
+    return [np.flatnonzero(c.numpy()) for c in cols]
+
+
+def finger_groups(joint_sets: list[np.ndarray]) -> list[list[int]]:
+    """Fingers grouped by shared joints (connected components)."""
+    m = len(joint_sets)
+    parent = list(range(m))
+
+    def find(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for i in range(m):
+        for j in range(i + 1, m):
+            if np.intersect1d(joint_sets[i], joint_sets[j]).size:
+                parent[find(i)] = find(j)
+    groups: dict[int, list[int]] = {}
+    for i in range(m):
+        groups.setdefault(find(i), []).append(i)
+    return list(groups.values())
+
+
+TIP_WEIGHT = 0.3  # weight of the contact point's rows; the pad-centre rows have weight 1
+
+
+def tip_points(hand) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # type: ignore[no-untyped-def]
+    """Bodies (m,), contact points (m, 3) and pad centres (m, 3) in their body frames, and the pad radii (m,).
+
+    The pad centre of a fingertip is the centre of its collision sphere nearest the contact point; the radius
+    is their distance. Driving the pad centre to ``target + radius · n`` makes the pad touch the surface at the
+    target whatever the finger's orientation.
+    """
+    bodies, tips, pads, radii = [], [], [], []
+    centres = np.asarray(hand.sphere_centres)
+    for i, link in enumerate(hand.fingertip_links):
+        b, T = hand.tree.link_body[link]
+        tip = T[:3, :3] @ hand.tip_offsets[i] + T[:3, 3]
+        body = hand.tree.body_names[b]
+        cand = [k for k, lk in enumerate(hand.sphere_links) if lk == body]
+        if cand:
+            k = cand[int(np.argmin(np.linalg.norm(centres[cand] - tip, axis=1)))]
+            pad = centres[k]
+        else:
+            pad = tip
+        bodies.append(b)
+        tips.append(tip)
+        pads.append(pad)
+        radii.append(float(np.linalg.norm(tip - pad)))
+    return np.asarray(bodies, dtype=np.int64), np.asarray(tips), np.asarray(pads), np.asarray(radii)
+
+
+def _points_and_jacobian(
+    hand,
+    palm_pos: torch.Tensor,
+    palm_quat: torch.Tensor,
+    q: torch.Tensor,  # type: ignore[no-untyped-def]
+    bodies: np.ndarray,
+    local: torch.Tensor,
+) -> tuple[torch.Tensor, torch.Tensor]:
+    T = hand.tree.body_poses(palm_pos, palm_quat, q)
+    Tb = T[:, torch.as_tensor(bodies)]
+    pts = (Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]
+    return pts, hand.tree.point_jacobian(T, bodies, pts, palm_pos)
+
+
+def solve_ik(
+    hand,  # type: ignore[no-untyped-def]
+    palm_pos: torch.Tensor,
+    palm_quat: torch.Tensor,
+    q: torch.Tensor,
+    targets: torch.Tensor,
+    surface: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+    *,
+    free_palm: bool = False,
+    iters_target: int = 15,
+    iters_project: int = 10,
+) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Move fingertips onto the surface near ``targets``, pads facing the surface.
+
+    Each fingertip contributes its pad centre (→ the target pushed out along the surface normal by the pad
+    radius, see `tip_points`) and, with weight ``TIP_WEIGHT``, its contact point (→ the target).
+
+    Args:
+        hand: a `models.robots.Hand`.
+        palm_pos, palm_quat, q: (B, 3), (B, 4), (B, D) float64 start.
+        targets: (B, m, 3) per-fingertip targets.
+        surface: (M, 3) → nearest surface points (M, 3) and their outward normals (M, 3).
+        free_palm: also move the palm (hands whose fingers share joints).
+        iters_target, iters_project: iterations of each phase.
+
+    Returns:
+        palm_pos, palm_quat, q, tips (B, m, 3) at the end.
+    """
+    lower = torch.as_tensor(hand.lower, dtype=q.dtype)
+    upper = torch.as_tensor(hand.upper, dtype=q.dtype)
+    B, m = targets.shape[:2]
+    D = q.shape[1]
+    bodies, tip_local, pad_local, radii = tip_points(hand)
+    local = torch.as_tensor(np.concatenate([tip_local, pad_local]), dtype=q.dtype)
+    bodies2 = np.concatenate([bodies, bodies])
+    weights = torch.cat([torch.full((3 * m,), TIP_WEIGHT, dtype=q.dtype), torch.ones(3 * m, dtype=q.dtype)])
+    depth = torch.as_tensor(radii, dtype=q.dtype)[None, :, None]
+    _, tgt_normals = surface(targets.reshape(-1, 3).numpy())
+    tgt_normals_t = torch.as_tensor(tgt_normals, dtype=q.dtype).reshape(B, m, 3)
+    for it in range(iters_target + iters_project):
+        pts, jac = _points_and_jacobian(hand, palm_pos, palm_quat, q, bodies2, local)
+        tips = pts[:, :m]
+        if it >= iters_target:
+            # project the pad centre: its nearest surface point is where the pad touches
+            near, nrm = surface(pts[:, m:].reshape(-1, 3).numpy())
+            goal = torch.as_tensor(near, dtype=q.dtype).reshape(B, m, 3)
+            normal = torch.as_tensor(nrm, dtype=q.dtype).reshape(B, m, 3)
+        else:
+            goal, normal = targets, tgt_normals_t
+        goal2 = torch.cat([goal, goal + depth * normal], dim=1)
+        err = (goal2 - pts).reshape(B, 6 * m) * weights
+        J = jac.reshape(B, 6 * m, 6 + D) * weights[:, None]
+        if not free_palm:
+            J = J[:, :, 6:]
+        n = J.shape[2]
+        A = J.transpose(1, 2) @ J + DAMPING**2 * torch.eye(n, dtype=q.dtype)
+        delta = torch.linalg.solve(A, J.transpose(1, 2) @ err[..., None])[..., 0]
+        if free_palm:
+            palm = delta[:, :6].clamp(-MAX_PALM_STEP * 3, MAX_PALM_STEP * 3)
+            dq = delta[:, 6:].clamp(-MAX_JOINT_STEP, MAX_JOINT_STEP)
+            palm_pos, palm_quat, _ = hand.apply_delta(palm_pos, palm_quat, q, torch.cat([palm, dq], dim=1))
+        else:
+            dq = delta.clamp(-MAX_JOINT_STEP, MAX_JOINT_STEP)
+        q = torch.minimum(torch.maximum(q + dq, lower), upper)
+    tips = hand.fingertips(palm_pos, palm_quat, q)
+    return palm_pos, palm_quat, q, tips
+
+
+def separate(
+    hand,  # type: ignore[no-untyped-def]
+    palm_pos: torch.Tensor,
+    palm_quat: torch.Tensor,
+    q: torch.Tensor,
+    nearest: Callable[[np.ndarray], np.ndarray],
+    iters: int = 8,
+    margin: float = 2e-3,
+) -> torch.Tensor:
+    """Push overlapping self-collision sphere pairs apart while keeping the fingertips on the surface.
+
+    Each iteration stacks the fingertip rows (target: nearest surface point) and, for every pair overlapping
+    within ``margin``, one row ``u·(J_a − J_b) δq = overlap + margin``; solved by damped least squares over the
+    finger joints (palm fixed). Returns the new q (B, D).
+    """
+    pairs = torch.as_tensor(np.asarray(hand.self_collision_pairs, dtype=np.int64).reshape(-1, 2))
+    if not len(pairs):
+        return q
+    radii = torch.as_tensor(hand.sphere_radii, dtype=q.dtype)
+    need = radii[pairs].sum(dim=1) + margin
+    lower = torch.as_tensor(hand.lower, dtype=q.dtype)
+    upper = torch.as_tensor(hand.upper, dtype=q.dtype)
+    B, m = q.shape[0], hand.num_fingertips
+    for _ in range(iters):
+        c, jc = hand.spheres(palm_pos, palm_quat, q)
+        diff = c[:, pairs[:, 0]] - c[:, pairs[:, 1]]
+        dist = diff.norm(dim=-1)
+        over = need[None] - dist  # (B, P)
+        if not bool((over > 0).any()):
+            break
+        tips, jt = hand.fingertip_jacobians(palm_pos, palm_quat, q)
+        goal = torch.as_tensor(nearest(tips.reshape(-1, 3).numpy()), dtype=q.dtype).reshape(B, m, 3)
+        rows_t = jt[..., 6:].reshape(B, 3 * m, -1)
+        err_t = (goal - tips).reshape(B, 3 * m)
+        u = diff / dist.clamp_min(1e-9)[..., None]
+        jp = (u[..., None] * (jc[:, pairs[:, 0], :, 6:] - jc[:, pairs[:, 1], :, 6:])).sum(dim=2)  # (B, P, D)
+        active = (over > 0).to(q.dtype)
+        rows_p = jp * active[..., None]
+        err_p = over.clamp_min(0.0) * active
+        J = torch.cat([rows_t, rows_p], dim=1)
+        e = torch.cat([err_t, err_p], dim=1)
+        # least squares via the normal equations in joint space (few joints, many rows)
+        A = J.transpose(1, 2) @ J + DAMPING**2 * torch.eye(J.shape[2], dtype=q.dtype)
+        dq = torch.linalg.solve(A, (J.transpose(1, 2) @ e[..., None]))[..., 0].clamp(-MAX_JOINT_STEP, MAX_JOINT_STEP)
+        q = torch.minimum(torch.maximum(q + dq, lower), upper)
+    return q

@@ -1,0 +1,260 @@
+"""Hierarchical grasp sampling (paper appendix "Articulated/Rigid Bodies").
+
+1. Palm poses facing the object: a surface point p and its normal n; the palm's approach axis points along −n
+   (tilted up to ``MAX_TILT``), random roll, and the rest-pose fingertip centroid placed at p + δ n with δ from
+   slightly outside down to inside the object (so the fingers can wrap around small objects).
+2. Per-finger IK: each finger gets ``candidates`` surface targets near its rest fingertip (facing it); one
+   batched damped-least-squares solve handles all (palm, candidate) rows, then projects the tips on the surface
+   (`ik.py`). Hands whose fingers all share joints (parallel grippers) move the palm too.
+3. Combine finger solutions: for each palm pose, random combinations of one converged solution per finger
+   group.
+4. Separate: a few least-squares steps push overlapping self-collision spheres apart while keeping the tips
+   on the surface (`ik.separate`).
+5. Reject: a fingertip off the surface (> ``TIP_TOL``), two contacts closer than ``MIN_CONTACT_GAP``, hand–
+   object penetration beyond 1 mm (5 mm for fingertip bodies) or self-collision beyond 1 mm (`checks.py`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+import trimesh
+from scipy.spatial.transform import Rotation
+
+from models.data.checks import (
+    PENETRATION_TOL,
+    TIP_PENETRATION_TOL,
+    ObjectField,
+    fingertip_bodies,
+    penetration_depth,
+    self_overlap,
+)
+from models.data.ik import finger_groups, finger_joint_sets, separate, solve_ik
+
+MAX_TILT = np.deg2rad(25.0)
+TIP_TOL = 4e-3  # m, fingertip contact point to surface (the pad touches; DESIGN §5 allows 5 mm)
+MIN_CONTACT_GAP = 0.01  # m
+CANDIDATE_RADIUS = 0.035  # m around the rest fingertip
+VORONOI_MARGIN = 0.01  # m
+PAD_FACING = 0.6  # a fingertip's pad direction must point into the surface: cos < −PAD_FACING
+
+
+@dataclass(frozen=True)
+class Grasp:
+    """A feasible hand configuration with every fingertip on the surface.
+
+    Attributes:
+        palm_pos (3,), palm_quat (4,) wxyz, q (D,): the hand.
+        contacts (m, 3): surface points under the fingertips; normals (m, 3): outward normals there.
+        penetration, self_overlap: the measured violations (m), both ≤ 1 mm.
+    """
+
+    palm_pos: np.ndarray
+    palm_quat: np.ndarray
+    q: np.ndarray
+    contacts: np.ndarray
+    normals: np.ndarray
+    penetration: float
+    self_overlap: float
+
+
+def pad_directions(hand) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """(m, 3) unit "pad" direction of each fingertip in its link frame: the outward normal of the fingertip
+    body's collision mesh at the contact point (the side of the finger that should face the object)."""
+    if hand.name in _PADS:
+        return _PADS[hand.name]
+    out = np.zeros((hand.num_fingertips, 3))
+    for i, link in enumerate(hand.fingertip_links):
+        b, T = hand.tree.link_body[link]
+        mesh = hand.collision_meshes.get(hand.tree.body_names[b])
+        tip_body = T[:3, :3] @ hand.tip_offsets[i] + T[:3, 3]
+        if mesh is None:
+            d = hand.tip_offsets[i]
+        else:
+            _, _, face = trimesh.proximity.closest_point(mesh, tip_body[None])
+            d = T[:3, :3].T @ np.asarray(mesh.face_normals)[face[0]]
+        out[i] = d / max(np.linalg.norm(d), 1e-9)
+    _PADS[hand.name] = out
+    return out
+
+
+_PADS: dict[str, np.ndarray] = {}
+
+
+def pad_alignment(
+    hand,
+    palm_pos: torch.Tensor,
+    palm_quat: torch.Tensor,
+    q: torch.Tensor,  # type: ignore[no-untyped-def]
+    normals: np.ndarray,
+) -> np.ndarray:
+    """(B, m) cosine between each fingertip's world pad direction and the surface normal there (−1: facing)."""
+    poses = hand.link_poses(palm_pos, palm_quat, q)
+    pads = pad_directions(hand)
+    world = np.stack([poses[link][:, :3, :3].numpy() @ pads[i] for i, link in enumerate(hand.fingertip_links)], 1)
+    return np.einsum("bij,bij->bi", world, normals)
+
+
+def _rotation_to(a: np.ndarray, b: np.ndarray) -> Rotation:
+    """A rotation taking unit vector a onto unit vector b."""
+    rot, _ = Rotation.align_vectors(b[None], a[None])
+    return rot
+
+
+def sample_palms(
+    hand,
+    obj: ObjectField,
+    size: float,
+    count: int,
+    rng: np.random.Generator,  # type: ignore[no-untyped-def]
+) -> tuple[np.ndarray, np.ndarray]:
+    """``count`` palm poses facing the object: positions (B, 3), quaternions (B, 4) wxyz."""
+    pos0 = torch.zeros(1, 3, dtype=torch.float64)
+    quat0 = torch.tensor([[1.0, 0.0, 0.0, 0.0]], dtype=torch.float64)
+    tips = hand.fingertips(pos0, quat0, torch.as_tensor(hand.rest[None]))[0].numpy()
+    centroid = tips.mean(axis=0)
+    reach = max(float(centroid @ hand.approach_axis), 0.02)
+    idx = rng.integers(len(obj.points), size=count)
+    positions, quats = np.zeros((count, 3)), np.zeros((count, 4))
+    for b, i in enumerate(idx):
+        p, n = obj.points[i], obj.normals[i]
+        tilt = Rotation.from_rotvec(_random_perpendicular(n, rng) * rng.uniform(0.0, MAX_TILT))
+        d = tilt.apply(-n)
+        rot = Rotation.from_rotvec(d * rng.uniform(-np.pi, np.pi)) * _rotation_to(hand.approach_axis, d)
+        delta = rng.uniform(-min(0.45 * size, 0.8 * reach), 0.01)
+        positions[b] = p + delta * n - rot.apply(centroid)
+        x, y, z, w = rot.as_quat()
+        quats[b] = (w, x, y, z)
+    return positions, quats
+
+
+def _random_perpendicular(n: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    v = rng.normal(size=3)
+    v -= (v @ n) * n
+    return v / max(float(np.linalg.norm(v)), 1e-12)
+
+
+def _targets(obj: ObjectField, all_tips: np.ndarray, i: int, k: int, rng: np.random.Generator) -> np.ndarray:
+    """(k, 3) surface targets near fingertip i, facing it, and nearer to it than to the other fingertips (by
+    ``VORONOI_MARGIN``), so that fingers do not cross."""
+    tips = all_tips[i]
+    near = obj.tree.query_ball_point(tips, r=CANDIDATE_RADIUS)
+    near = np.asarray(near, dtype=np.int64)
+    if near.size:
+        facing = near[np.einsum("ij,ij->i", tips - obj.points[near], obj.normals[near]) > 0]
+        near = facing if facing.size else near
+        d = np.linalg.norm(obj.points[near][:, None] - all_tips[None], axis=-1)
+        others = np.delete(d, i, axis=1)
+        if others.shape[1]:
+            own = near[d[:, i] + VORONOI_MARGIN < others.min(axis=1)]
+            near = own if own.size else near
+    if not near.size:
+        _, near = obj.tree.query(tips, k=k)
+        near = np.atleast_1d(near)
+    return obj.points[rng.choice(near, size=k)]
+
+
+def sample_grasps(
+    hand,  # type: ignore[no-untyped-def]
+    obj: ObjectField,
+    size: float,
+    rng: np.random.Generator,
+    *,
+    palms: int = 12,
+    candidates: int = 8,
+    combos: int = 32,
+    max_grasps: int = 8,
+) -> list[Grasp]:
+    """Feasible grasps of ``hand`` on ``obj`` by the hierarchical sampling of the module docstring."""
+    joint_sets = finger_joint_sets(hand)
+    groups = finger_groups(joint_sets)
+    free_palm = len(groups) == 1 and len(groups[0]) > 1
+    m, D = hand.num_fingertips, hand.dof
+    palm_pos, palm_quat = sample_palms(hand, obj, size, palms, rng)
+    pp = torch.as_tensor(palm_pos).repeat_interleave(candidates, 0)
+    pq = torch.as_tensor(palm_quat).repeat_interleave(candidates, 0)
+    q0 = torch.as_tensor(np.tile(hand.rest, (palms * candidates, 1)))
+    with torch.no_grad():
+        rest_tips = hand.fingertips(
+            torch.as_tensor(palm_pos), torch.as_tensor(palm_quat), torch.as_tensor(np.tile(hand.rest, (palms, 1)))
+        ).numpy()
+        targets = np.zeros((palms, candidates, m, 3))
+        for b in range(palms):
+            for i in range(m):
+                targets[b, :, i] = _targets(obj, rest_tips[b], i, candidates, rng)
+        pp, pq, q, tips = solve_ik(
+            hand, pp, pq, q0, torch.as_tensor(targets.reshape(-1, m, 3)), obj.surface, free_palm=free_palm
+        )
+    tips_np = tips.numpy()
+    phi, nrm, _ = obj.signed_distance(tips_np.reshape(-1, 3))
+    ok = (np.abs(phi) <= TIP_TOL).reshape(palms, candidates, m)
+    if not free_palm:
+        with torch.no_grad():
+            ok &= (pad_alignment(hand, pp, pq, q, nrm.reshape(-1, m, 3)) < -PAD_FACING).reshape(palms, candidates, m)
+    q_np = q.numpy().reshape(palms, candidates, D)
+    pp_np, pq_np = pp.numpy().reshape(palms, candidates, 3), pq.numpy().reshape(palms, candidates, 4)
+
+    # combine per-group solutions
+    rows_pos, rows_quat, rows_q = [], [], []
+    for b in range(palms):
+        if free_palm:
+            for k in np.flatnonzero(ok[b].all(axis=1)):
+                rows_pos.append(pp_np[b, k])
+                rows_quat.append(pq_np[b, k])
+                rows_q.append(q_np[b, k])
+            continue
+        good = [np.flatnonzero(ok[b][:, g].all(axis=1)) for g in groups]
+        if any(len(g) == 0 for g in good):
+            continue
+        for _ in range(combos):
+            qc = hand.rest.copy()
+            for g, rows in zip(groups, good, strict=True):
+                k = rng.choice(rows)
+                cols = np.unique(np.concatenate([joint_sets[i] for i in g]))
+                qc[cols] = q_np[b, k, cols]
+            rows_pos.append(palm_pos[b])
+            rows_quat.append(palm_quat[b])
+            rows_q.append(qc)
+    if not rows_q:
+        return []
+    P = torch.as_tensor(np.stack(rows_pos))
+    Q = torch.as_tensor(np.stack(rows_quat))
+    J = torch.as_tensor(np.stack(rows_q))
+    with torch.no_grad():
+        if not free_palm:
+            J = separate(hand, P, Q, J, obj.nearest)
+        tips = hand.fingertips(P, Q, J).numpy()
+        over = self_overlap(hand, P, Q, J)
+    gaps = np.linalg.norm(tips[:, :, None] - tips[:, None, :], axis=-1) + np.eye(m)[None] * 1e3
+    keep = (over <= PENETRATION_TOL) & (gaps.min(axis=(1, 2)) >= MIN_CONTACT_GAP)
+    keep &= (np.abs(obj.signed_distance(tips.reshape(-1, 3))[0]).reshape(-1, m) <= TIP_TOL).all(axis=1)
+    idx = np.flatnonzero(keep)
+    rng.shuffle(idx)
+    out: list[Grasp] = []
+    for start in range(0, len(idx), 16):
+        sel = idx[start : start + 16]
+        with torch.no_grad():
+            tipb = fingertip_bodies(hand)
+            depth = penetration_depth(hand, obj, P[sel], Q[sel], J[sel], skip=tipb)
+            others = frozenset(hand.collision_meshes) - tipb
+            tip_depth = penetration_depth(hand, obj, P[sel], Q[sel], J[sel], skip=others)
+        for j, d, dt in zip(sel, depth, tip_depth, strict=True):
+            if d > PENETRATION_TOL or dt > TIP_PENETRATION_TOL:
+                continue
+            phi, nrm, _ = obj.signed_distance(tips[j])
+            out.append(
+                Grasp(
+                    P[j].numpy(),
+                    Q[j].numpy(),
+                    J[j].numpy(),
+                    tips[j] - phi[:, None] * nrm,
+                    nrm,
+                    float(max(d, dt)),
+                    float(over[j]),
+                )
+            )
+            if len(out) >= max_grasps:
+                return out
+    return out

@@ -1,0 +1,77 @@
+"""Training configuration: a YAML file plus ``key=value`` overrides from the command line."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+
+@dataclass
+class TrainConfig:
+    """Everything a training run needs (recorded in the run directory and the model card)."""
+
+    # --- data ---
+    data: list[str] = field(default_factory=lambda: ["data/v1"])  # generated data directories
+    val_splits: list[str] = field(default_factory=lambda: ["test_so", "test_uo"])
+    limit: int | None = None  # cap on training examples (None: all)
+    val_limit: int | None = 128  # cap on validation examples (None: all)
+    reload_each_epoch: bool = False  # re-read the data directories every epoch (train while generating)
+    augment: bool = True  # random rotations
+    # --- model ---
+    network: str = "cpu"  # registered network configuration
+    seed: int = 0
+    # --- optimisation (AdamW + linear warm-up then cosine decay) ---
+    epochs: int = 20
+    batch_size: int = 16
+    lr: float = 1e-3
+    weight_decay: float = 1e-4
+    warmup_steps: int = 50
+    min_lr_ratio: float = 0.05
+    grad_clip: float = 5.0
+    # --- loss of Eq. (3); None: the network configuration's λ ---
+    lambda_c: float | None = None
+    lambda_s: float | None = None
+    lambda_kl: float | None = None
+    # --- run ---
+    out: str = "runs/cpu"
+    device: str = "auto"  # auto: cuda when available, else cpu
+    threads: int = 2
+    max_minutes: float | None = None  # stop after the epoch that crosses this wall time
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+def _coerce(value: str, current: Any) -> Any:
+    import yaml
+
+    parsed = yaml.safe_load(value)
+    if isinstance(current, list) and isinstance(parsed, str):
+        return [parsed]
+    return parsed
+
+
+def load_config(path: str | Path | None = None, overrides: list[str] | None = None) -> TrainConfig:
+    """A config from YAML ``path`` (optional) with ``key=value`` overrides applied.
+
+    Raises:
+        ValueError: an unknown key or a malformed override.
+    """
+    import yaml
+
+    cfg = TrainConfig()
+    names = {f.name for f in dataclasses.fields(TrainConfig)}
+    data: dict[str, Any] = {}
+    if path is not None:
+        data = yaml.safe_load(Path(path).read_text()) or {}
+    for item in overrides or []:
+        if "=" not in item:
+            raise ValueError(f"override {item!r} must be key=value")
+        k, v = item.split("=", 1)
+        data[k.strip()] = _coerce(v, getattr(cfg, k.strip(), None))
+    unknown = set(data) - names
+    if unknown:
+        raise ValueError(f"unknown training settings {sorted(unknown)}; known: {sorted(names)}")
+    return dataclasses.replace(cfg, **data)
