@@ -43,6 +43,8 @@ class RefineConfig:
         trust_translation, trust_rotation, trust_joint, trust_force: initial trust region s_q, s_f.
         trust_grow, trust_shrink, trust_max_scale, trust_min_scale: adaptive trust region; ``adaptive=False``
             keeps the initial region (the paper's fixed s_q, s_f).
+        stall_window, stall_tolerance: stop ("stalled") when the merit fell by less than this fraction over the
+            last ``stall_window`` iterations (a local minimum: more iterations only cost time).
         tip_sphere_allowance: overlap allowed for spheres on fingertip links (m).
         solver: ``"clarabel"`` (native, default) or ``"cvxpy"`` (the reference, slow).
         history: keep per-iteration records.
@@ -64,6 +66,8 @@ class RefineConfig:
     trust_shrink: float = 0.4
     trust_max_scale: float = 4.0
     trust_min_scale: float = 1.0 / 256
+    stall_window: int = 12
+    stall_tolerance: float = 0.02
     tip_sphere_allowance: float = 1e-3
     solver: str = "clarabel"
     history: bool = False
@@ -178,6 +182,7 @@ def refine(
     pose, lin = start, lin_at(start)
     value = merit(lin, cfg)
     scale, history, reason, it = 1.0, [], "max_iterations", 0
+    merits = [value]
     for it in range(1, cfg.max_iterations + 1):
         if _converged(lin, cfg):
             reason, it = "converged", it - 1
@@ -214,6 +219,10 @@ def refine(
             if not accepted and scale <= cfg.trust_min_scale and predicted <= 1e-12:
                 reason = "stalled"
                 break
+        merits.append(value)
+        if len(merits) > cfg.stall_window and value > (1 - cfg.stall_tolerance) * merits[-1 - cfg.stall_window]:
+            reason = "stalled"
+            break
         if cfg.history:
             history.append(
                 IterationRecord(
@@ -230,9 +239,8 @@ def refine(
             )
         if progress is not None:
             progress(it, cfg.max_iterations)
-    else:
-        if _converged(lin, cfg):
-            reason = "converged"
+    if reason != "converged" and not reason.startswith("solver_failed") and _converged(lin, cfg):
+        reason = "converged"
     _, _, nearest = field_.signed_distance(lin.tips)
     return RefineResult(
         pose=pose,

@@ -102,19 +102,30 @@ class Linearisation:
         return np.maximum(0.0, r - self.pair_dist)
 
 
-_ALLOWANCE: dict[tuple[int, float], np.ndarray] = {}
 
 
 def sphere_allowance(hand: Any, tip_allowance: float) -> np.ndarray:
-    """Per-sphere overlap (m) the non-penetration rows allow.
+    """Per-sphere overlap (m) the non-penetration rows allow: ``tip_allowance`` for spheres on fingertip links
+    (they carry the contacts), none for the others. Verification checks the real meshes."""
+    owner = np.asarray(getattr(hand, "sphere_fingertip", np.full(len(hand.sphere_radii), -1)))
+    return np.where(owner >= 0, tip_allowance, 0.0)
 
-    A sphere fitted to a fingertip link usually contains that fingertip's contact point (Allegro: the tip point lies
-    10 mm inside its 19 mm tip sphere), so ``Φ(c) ≥ r`` would keep the contact ≥ 10 mm off the surface. Such
-    spheres are shrunk to pass through the contact point, ``Φ(c) ≥ |p − c| − tip_allowance``; other spheres on
-    fingertip links get ``tip_allowance``; all others none. Verification checks the real meshes.
+
+_CONTACT: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+
+def contact_spheres(hand: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Per fingertip: the index of its pad sphere (the sphere on its link nearest to its tip point; −1 if none)
+    and that sphere's radius (0 for −1).
+
+    The fingertip is modelled by its pad sphere: its contact point is the sphere point nearest to the object,
+    ``p = c − r ∇Φ(c)``, at distance ``Φ(c) − r``. The hand's fixed tip point lies inside the fitted spheres
+    (Allegro/LEAP: 3-4 mm inside two overlapping ones), so with a fixed point the fingertip can touch only in
+    one orientation and the SCP stalled 6-20 mm off the surface in our runs; the pad model is orientation-free
+    and consistent with the non-penetration rows.
     """
-    key = (id(hand), tip_allowance)
-    if key not in _ALLOWANCE:
+    key = id(hand)
+    if key not in _CONTACT:
         pos = torch.zeros(1, 3, dtype=torch.float64)
         quat = torch.tensor([[1.0, 0.0, 0.0, 0.0]], dtype=torch.float64)
         q = torch.as_tensor(hand.rest, dtype=torch.float64)[None]
@@ -123,12 +134,28 @@ def sphere_allowance(hand: Any, tip_allowance: float) -> np.ndarray:
             sph = hand.spheres(pos, quat, q, jacobian=False)[0][0].numpy()
         radius = np.asarray(hand.sphere_radii, dtype=np.float64)
         owner = np.asarray(getattr(hand, "sphere_fingertip", np.full(len(radius), -1)))
-        allow = np.zeros(len(radius))
-        for k in np.flatnonzero(owner >= 0):
-            inside = radius[k] - np.linalg.norm(tips[owner[k]] - sph[k])
-            allow[k] = max(inside, 0.0) + tip_allowance
-        _ALLOWANCE[key] = allow
-    return _ALLOWANCE[key]
+        idx = np.full(len(tips), -1)
+        for i in range(len(tips)):
+            mine = np.flatnonzero(owner == i)
+            if len(mine):
+                idx[i] = mine[np.argmin(np.linalg.norm(sph[mine] - tips[i], axis=1))]
+        _CONTACT[key] = (idx, np.where(idx >= 0, radius[np.maximum(idx, 0)], 0.0))
+    return _CONTACT[key]
+
+
+def contact_points(
+    hand: Any, field: DistanceField, tips: np.ndarray, tip_jac: np.ndarray | None, sph: np.ndarray,
+    sph_jac: np.ndarray | None,
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]:
+    """Fingertip contact points (m, 3), their Jacobians, distances Φ(c) − r (m,) and gradients (m, 3)."""
+    idx, rad = contact_spheres(hand)
+    centres = np.where((idx >= 0)[:, None], sph[np.maximum(idx, 0)], tips)
+    phi, grad, _ = field.signed_distance(centres)
+    points = centres - rad[:, None] * grad
+    jac = None
+    if tip_jac is not None and sph_jac is not None:
+        jac = np.where((idx >= 0)[:, None, None], sph_jac[np.maximum(idx, 0)], tip_jac)
+    return points, jac, phi - rad, grad
 
 
 def linearise(
@@ -156,11 +183,13 @@ def linearise(
     with torch.no_grad():
         tips_t, tip_jac_t = hand.fingertip_jacobians(pos, quat, q)
         sph_t, sph_jac_t = hand.spheres(pos, quat, q)
-    tips, tip_jac = tips_t[0].numpy(), tip_jac_t[0].numpy()
     sph, sph_jac = sph_t[0].numpy(), sph_jac_t[0].numpy()
+    tips, tip_jac, tip_phi, tip_grad = contact_points(
+        hand, field, tips_t[0].numpy(), tip_jac_t[0].numpy(), sph, sph_jac
+    )
+    assert tip_jac is not None
     phi_all, grad_all, _ = field.signed_distance(np.concatenate([tips, sph]))
     m = len(tips)
-    tip_phi, tip_grad = phi_all[:m], grad_all[:m]
     normals = field.surface_normal(tips) if hasattr(field, "surface_normal") else tip_grad
     normal_jac = (
         field.normal_jacobian(tips) if hasattr(field, "normal_jacobian") else np.zeros((len(tips), 3, 3))

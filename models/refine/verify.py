@@ -1,8 +1,10 @@
 """Verification of a hand pose with exact geometry (DESIGN.md §5), shared by refinement and the baseline.
 
 Criteria (all must hold): wrench residual ‖R Σ G_i f_i − τ‖² < 1e-6 with the optimal forces of Eq. (6-8) at the
-final fingertips (unit target wrench); every fingertip within 5 mm of the surface (exact mesh signed distance
-when a mesh is known, else the point field; with a region mask: within 5 mm of an allowed point); hand–object
+final fingertips (unit target wrench); every fingertip within 5 mm of the surface — a fingertip is its pad sphere
+(`models.refine.state.contact_spheres`), its distance is Φ(centre) − radius with the exact mesh signed distance
+when a mesh is known, else the point field (with a region mask: its contact point within 5 mm of an allowed
+point); hand–object
 penetration ≤ 1 mm and self-collision depth ≤ 1 mm, both measured on the hand's collision meshes with fcl
 (`models.geometry`); for force closure, Ferrari–Canny ε > 0 (parallel-jaw grippers: soft-finger pads).
 """
@@ -18,7 +20,7 @@ import torch
 from models.refine.closure import ferrari_canny
 from models.refine.field import PointCloudField
 from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE, solve_forces
-from models.refine.state import HandPose
+from models.refine.state import HandPose, contact_points, contact_spheres
 from models.refine.wrench import WrenchTask
 
 RESIDUAL_SQ_TOL = 1e-6
@@ -76,7 +78,9 @@ def verify(
         collisions: measure penetration and self-collision with fcl (False: skip, reported as 0).
     """
     with torch.no_grad():
-        tips = hand.fingertips(*pose.tensors())[0].numpy()
+        fk_tips = hand.fingertips(*pose.tensors())[0].numpy()
+        sph = hand.spheres(*pose.tensors(), jacobian=False)[0][0].numpy()
+    tips, _, tip_phi, _ = contact_points(hand, cloud, fk_tips, None, sph, None)
     normals = cloud.surface_normal(tips)
     sol = solve_forces(task, tips, normals, mu, max_normal_force)
     if cloud.mask is not None:
@@ -84,9 +88,11 @@ def verify(
     elif mesh is not None:
         import trimesh
 
-        tip_dist = np.abs(trimesh.proximity.signed_distance(mesh, tips))
+        idx, rad = contact_spheres(hand)
+        centres = np.where((idx >= 0)[:, None], sph[np.maximum(idx, 0)], fk_tips)
+        tip_dist = np.abs(-trimesh.proximity.signed_distance(mesh, centres) - rad)  # trimesh: positive inside
     else:
-        tip_dist = np.abs(cloud.signed_distance(tips)[0])
+        tip_dist = np.abs(tip_phi)
     _, _, contacts = cloud.signed_distance(tips)
     pen = selfc = 0.0
     if collisions:
