@@ -153,3 +153,30 @@ def test_open_mesh_falls_back_to_a_watertight_hull() -> None:
 def test_invalid_clouds_are_rejected(points: np.ndarray, normals: np.ndarray | None) -> None:
     with pytest.raises(InvalidPointCloud):
         ObjectGeometry.from_points(points, normals)
+
+
+def test_builtin_hand_penetration_and_rigid_motion_invariance() -> None:
+    """A ball between the fingers penetrates; moving hand and ball together changes nothing."""
+    import torch
+
+    hand = get_hand("allegro")
+    d = torch.float64
+    tips = hand.fingertips(torch.zeros(1, 3, dtype=d), torch.tensor([[1.0, 0, 0, 0]], dtype=d),
+                           torch.as_tensor(hand.rest[None]))[0].numpy()  # fmt: skip
+    centre = tips.mean(0)
+    geom = _sphere_cloud(r=0.04, n=2000, centre=tuple(centre))
+    quat = np.array([1.0, 0, 0, 0])
+    depth = hand_object_penetration(hand, geom, np.zeros(3), quat, hand.rest)
+    assert depth > 0.005
+    R = Rotation.from_rotvec([0.2, -0.4, 0.3])
+    t = np.array([0.3, -0.1, 0.2])
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R.as_matrix(), t
+    moved = ObjectGeometry.from_points(
+        R.apply(geom.points) + t, R.apply(geom.normals), geom.mesh.copy().apply_transform(T)
+    )
+    xyzw = R.as_quat()
+    depth2 = hand_object_penetration(hand, moved, t, np.array([xyzw[3], *xyzw[:3]]), hand.rest)
+    assert depth2 == pytest.approx(depth, abs=1e-6)
+    far = _sphere_cloud(r=0.04, n=2000, centre=(0.5, 0.5, 0.5))
+    assert hand_object_penetration(hand, far, np.zeros(3), quat, hand.rest) == 0.0
