@@ -4,7 +4,8 @@
   ``stage_seconds=0``), one worker; "round trip" = submit → result visible to the client, "overhead" = round trip
   minus the worker's own run time. Embedded, and Redis on ``--redis`` (loopback) with a `mani worker`.
 - Throughput: ``--pipeline-jobs`` requests submitted at once to the embedded backend with 1 and 2 worker
-  processes running ``--pipeline`` (default: the models pipeline on a small direct-grasp request); jobs/s.
+  processes running ``--pipeline`` (default: the models pipeline, Panda gripper, 256-point sphere, two given
+  contacts, force closure: initialisation → SOCP refinement (≤ 50 iterations) → verification); jobs/s.
 - Batching gain: the network stage (``ContactPredictor``, random weights: timing only) on B objects as one
   batch vs one by one, one thread (as a worker process on a 2-core machine runs it).
 """
@@ -62,15 +63,18 @@ def main(args: argparse.Namespace) -> int:
     return 0
 
 
-def _request(seed: int = 0, method: str = "direct_grasp", hand: str = "test_gripper") -> Any:
+def _request(seed: int = 0, hand: str = "test_gripper") -> Any:
+    """A 256-point sphere (r = 4 cm), force closure, two given contacts (refined by the SOCP loop)."""
     from clients.schemas import SynthesisRequest
 
     rng = np.random.default_rng(seed)
     points = rng.normal(size=(256, 3))
     normals = points / np.linalg.norm(points, axis=1, keepdims=True)
+    axis = normals[0]
     return SynthesisRequest.model_validate(
         {"object": {"points": 0.04 * normals, "normals": normals}, "task": {"kind": "force_closure"},
-         "robot": {"name": hand}, "options": {"seed": seed, "method": method, "max_iterations": 50}}
+         "robot": {"name": hand}, "contacts": {"points": 0.04 * np.stack([axis, -axis])},
+         "options": {"seed": seed, "method": "contacts", "max_iterations": 50}}
     )  # fmt: skip
 
 
@@ -126,9 +130,10 @@ async def _throughput(pipeline: str, workers: int, jobs: int) -> dict[str, Any]:
     from clients.schemas import JobState
     from workers.queue import create_queue
 
-    hand = "test_gripper" if pipeline == STAGED else "allegro"
-    queue = create_queue(None, redis_url=None, concurrency=workers, pipeline=pipeline, log_level="WARNING",
-                         start_timeout=300, batch_size=1)  # fmt: skip
+    hand = "test_gripper" if pipeline == STAGED else "panda_gripper"
+    options = {} if pipeline == STAGED else {"hands": [hand]}
+    queue = create_queue(None, redis_url=None, concurrency=workers, pipeline=pipeline, pipeline_options=options,
+                         log_level="WARNING", start_timeout=300, batch_size=1)  # fmt: skip
     await queue.start()
     try:
         if len(await queue.workers()) < workers:

@@ -35,6 +35,8 @@ from workers.runner import run_batch
 from workers.settings import QueueSettings
 
 log = logging.getLogger("workers.worker")
+PROGRESS_S = 0.05
+"""Seconds between a job's progress writes and cancel-flag reads (keeps short jobs at ~4 Redis round trips)."""
 
 
 class RedisWorker:
@@ -52,6 +54,8 @@ class RedisWorker:
         self.lock = threading.Lock()
         self.jobs_done = 0
         self.queued_for: dict[str, float] = {}
+        self.cancel_checked: dict[str, float] = {}
+        self.builtin_robots: set[str] = set()
         self.pipeline: Pipeline | None = None
         self.info: WorkerPublic | None = None
         self._begin, self._finish = self.r.register_script(BEGIN), self.r.register_script(FINISH)
@@ -98,6 +102,7 @@ class RedisWorker:
                 with_group = False
             assert self.pipeline is not None
             robots = {r.name: pack(r.model_dump(mode="python", exclude_none=True)) for r in self.pipeline.robots()}
+            self.builtin_robots = set(robots)
             if robots:
                 self.r.hset(self.keys.robots, mapping=robots)  # type: ignore[arg-type]
             if with_group:
@@ -211,6 +216,7 @@ class RedisWorker:
                 self.jobs_done += 1
             with self.lock:
                 self.inflight.pop(entry_of[job.id], None)
+            self.cancel_checked.pop(job.id, None)
 
     def _start_job(self, entry: str, job_id: str, payload: bytes) -> JobInput | None:
         s = self.settings
@@ -219,17 +225,22 @@ class RedisWorker:
         verdict = verdict.decode()
         if rest:
             self.queued_for[job_id] = now - float(rest[0])
+            self.cancel_checked[job_id] = time.monotonic()  # BEGIN just checked the cancel flag
         if verdict == "run":
             try:
                 request = SynthesisRequest.model_validate(unpack(payload))
                 robot = None
-                if request.robot.name and (raw := self.r.hget(self.keys.robot_urdf, request.robot.name)):
+                builtin = request.robot.name in self.builtin_robots
+                if (
+                    request.robot.name
+                    and not builtin
+                    and (raw := self.r.hget(self.keys.robot_urdf, request.robot.name))
+                ):
                     robot = RobotRegister.model_validate(unpack(raw))  # type: ignore[arg-type]
             except Exception as exc:  # a queue payload is input too
                 self._end(entry, job_id, "failed", error=error_from_exception(exc))
                 return None
-            raw_deadline = self.r.hget(self.keys.job(job_id), "deadline")
-            deadline = float(raw_deadline) if raw_deadline else None  # type: ignore[arg-type]
+            deadline = float(rest[1]) if len(rest) > 1 and rest[1] else None
             log.info("job started", extra={"delivery": int(deliveries)})
             return JobInput(id=job_id, request=request, deadline=deadline, robot=robot)
         if verdict == "dead":
@@ -268,14 +279,15 @@ class RedisWorker:
             log.info("job finished", extra={"state": state})
 
     def _progress(self) -> Any:
-        last: dict[str, tuple[float, str]] = {}
+        """Progress writes, at most one per job every `PROGRESS_S` (a job shorter than that writes none)."""
+        start = time.monotonic()
+        last: dict[str, float] = {}
 
         def progress(job_id: str, stage: Stage, fraction: float, iteration: int | None, top: int | None) -> None:
             now = time.monotonic()
-            prev = last.get(job_id)
-            if prev and prev[1] == stage.value and now - prev[0] < 0.05 and iteration != top:
+            if now - last.get(job_id, start) < PROGRESS_S:
                 return
-            last[job_id] = (now, stage.value)
+            last[job_id] = now
             p = JobProgress(stage=stage, fraction=min(max(fraction, 0.0), 1.0), iteration=iteration, max_iterations=top)
             try:
                 self.r.hset(self.keys.job(job_id), "progress", pack(p.model_dump(mode="python", exclude_none=True)))
@@ -285,6 +297,11 @@ class RedisWorker:
         return progress
 
     def _should_cancel(self, job_id: str) -> bool:
+        """The job's cancel flag, read at most every `PROGRESS_S` (BEGIN read it when the job started)."""
+        now = time.monotonic()
+        if now - self.cancel_checked.get(job_id, 0.0) < PROGRESS_S:
+            return False
+        self.cancel_checked[job_id] = now
         try:
             return bool(self.r.hget(self.keys.job(job_id), "cancel") == b"1")
         except RedisError:

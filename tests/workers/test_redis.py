@@ -127,7 +127,8 @@ def test_poison_job_dead_letters_after_n_deliveries(redis_url: str, redis_prefix
         queue = client(redis_url, redis_prefix)
         await queue.start()
         opts = {"crash_seed": 666}
-        with redis_workers(redis_url, redis_prefix, pipeline_options=opts, max_deliveries=2, **FAST):
+        fast = {"heartbeat_interval": 0.2, "visibility_timeout": 0.8}
+        with redis_workers(redis_url, redis_prefix, pipeline_options=opts, max_deliveries=2, **fast):
             try:
                 [job_id] = await queue.submit([small_request(666)])
                 job = await queue.wait(job_id, 60)

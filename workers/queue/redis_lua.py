@@ -73,7 +73,7 @@ return n
 )
 
 # A worker takes a delivered job. KEYS: job. ARGV: worker, now, max_deliveries.
-# Returns {verdict, deliveries, created_at (run only)}; verdict: run | dead | expired | cancelled | skip.
+# Returns {verdict, deliveries, created_at, deadline (run only)}; verdict: run | dead | expired | cancelled | skip.
 # A job found "running" was being run by a worker that stopped responding: that becomes its last error.
 BEGIN = """
 local st = redis.call('HGET', KEYS[1], 'state')
@@ -93,7 +93,7 @@ end
 local deadline = redis.call('HGET', KEYS[1], 'deadline')
 if deadline and tonumber(deadline) <= tonumber(ARGV[2]) then return {'expired', d} end
 redis.call('HSET', KEYS[1], 'state', 'running', 'worker', ARGV[1], 'started_at', ARGV[2], 'progress', '')
-return {'run', d, redis.call('HGET', KEYS[1], 'created_at')}
+return {'run', d, redis.call('HGET', KEYS[1], 'created_at'), deadline or ''}
 """
 
 # Finish a job, but only if this worker still owns its stream entry (so a job re-delivered elsewhere yields one
