@@ -74,7 +74,9 @@ class Hand:
             raise HandLoadError(f"tip_offsets must be finite with shape ({m}, 3), got {offs.shape}")
         self.tip_offsets = offs
         self.rest = self._rest(rest)
-        axis = np.array([0.0, 0.0, 1.0]) if approach_axis is None else np.asarray(approach_axis, float)
+        axis = np.array([0.0, 0.0, 1.0]) if approach_axis is None else np.asarray(approach_axis, float).reshape(-1)
+        if axis.shape != (3,) or not np.all(np.isfinite(axis)) or np.linalg.norm(axis) < 1e-9:
+            raise HandLoadError(f"approach_axis must be a finite non-zero 3-vector, got {axis.tolist()}")
         self.approach_axis = axis / np.linalg.norm(axis)
 
         # geometry of each body, in the body frame
@@ -87,6 +89,8 @@ class Hand:
                 per_body.setdefault(b, []).append(mm)
         for b, meshes in sorted(per_body.items()):
             self.collision_meshes[tree.body_names[b]] = cast(trimesh.Trimesh, trimesh.util.concatenate(meshes))
+        if not self.collision_meshes:
+            raise HandLoadError("the hand has no collision geometry (user URDFs need box/sphere/cylinder shapes)")
         # fingertip points in their bodies
         tip_body, tip_local = [], []
         for link, off in zip(self.fingertip_links, self.tip_offsets, strict=True):
@@ -106,9 +110,15 @@ class Hand:
         elif isinstance(rest, dict):
             r = np.zeros(D)
             for k, v in rest.items():
+                if k not in self.joint_names:
+                    raise HandLoadError(f"rest: {k!r} is not a free joint ({self.joint_names})")
                 r[self.joint_names.index(k)] = v
         else:
-            r = np.asarray(rest, dtype=np.float64).reshape(D)
+            r = np.asarray(rest, dtype=np.float64).reshape(-1)
+            if r.shape != (D,):
+                raise HandLoadError(f"rest must have {D} values, got {r.shape[0]}")
+        if not np.all(np.isfinite(r)):
+            raise HandLoadError("rest values must be finite")
         return np.clip(r, self.lower, self.upper)
 
     def _fit_spheres(self) -> None:

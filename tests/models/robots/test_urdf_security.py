@@ -157,3 +157,16 @@ def test_geometry_count_and_extent_caps() -> None:
         load_hand(_urdf(extra=many), fingertips=["finger"])
     with pytest.raises(HandLoadError, match="sizes"):
         load_hand(_urdf(geom='<box size="100 0.02 0.02"/>'), fingertips=["finger"])
+
+
+def test_bad_rest_axis_and_no_geometry() -> None:
+    with pytest.raises(HandLoadError, match="rest"):
+        load_hand(_urdf(), fingertips=["finger"], rest=[0.1, 0.2])
+    with pytest.raises(HandLoadError, match="rest"):
+        load_hand(_urdf(), fingertips=["finger"], rest=[float("nan")])
+    with pytest.raises(HandLoadError, match="approach_axis"):
+        load_hand(_urdf(), fingertips=["finger"], approach_axis=[0, 0, 0])
+    only_meshes = b"""<robot name="r"><link name="palm"><collision><geometry><mesh filename="x.stl"/></geometry>
+    </collision></link></robot>"""
+    with pytest.raises(HandLoadError, match="no collision geometry"):
+        load_hand(only_meshes, fingertips=["palm"])
