@@ -20,7 +20,7 @@ from typing import Any
 from clients.codec import pack, unpack
 from clients.schemas import ErrorBody, JobProgress, RobotRegister, Stage, SynthesisRequest, WorkerPublic
 from workers.logs import job_context, setup_logging
-from workers.pipeline import JobInput, Pipeline, load_pipeline
+from workers.pipeline import JobInput, Pipeline, error_from_exception, load_pipeline
 from workers.runner import run_batch
 from workers.settings import QueueSettings
 
@@ -113,15 +113,20 @@ def _heartbeat(link: _Link, interval: float) -> None:
 
 
 def _run(pipeline: Pipeline, link: _Link, raw_jobs: list[dict[str, Any]]) -> None:
-    jobs = [
-        JobInput(
-            id=raw["id"],
-            request=SynthesisRequest.model_validate(unpack(raw["request"])),
-            deadline=raw.get("deadline"),
-            robot=RobotRegister.model_validate(raw["robot"]) if raw.get("robot") else None,
-        )
-        for raw in raw_jobs
-    ]
+    jobs: list[JobInput] = []
+    for raw in raw_jobs:
+        try:
+            jobs.append(
+                JobInput(
+                    id=raw["id"],
+                    request=SynthesisRequest.model_validate(unpack(raw["request"])),
+                    deadline=raw.get("deadline"),
+                    robot=RobotRegister.model_validate(raw["robot"]) if raw.get("robot") else None,
+                )
+            )
+        except Exception as exc:  # a queue payload is input too: fail that job, not the worker
+            error = error_from_exception(exc).model_dump(mode="python", exclude_none=True)
+            link.send({"op": "done", "id": raw["id"], "error": error, "timings": {}})
     last: dict[str, float] = {}
 
     def progress(job_id: str, stage: Stage, fraction: float, iteration: int | None, maximum: int | None) -> None:

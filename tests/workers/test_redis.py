@@ -35,7 +35,7 @@ def test_round_trip_progress_robots(redis_url: str, redis_prefix: str) -> None:
     async def main() -> None:
         queue = client(redis_url, redis_prefix)
         await queue.start()
-        with redis_workers(redis_url, redis_prefix, pipeline_options={"stage_seconds": 0.05}, **FAST):
+        with redis_workers(redis_url, redis_prefix, pipeline_options={"stage_seconds": 0.05}, **FAST) as supervisor:
             try:
                 await live_workers(queue, 1)
                 [job_id] = await queue.submit([small_request(1)])
@@ -58,6 +58,12 @@ def test_round_trip_progress_robots(redis_url: str, redis_prefix: str) -> None:
                     await queue.register_robot(RobotRegister(name="bad", urdf=URDF, fingertips=["nope"]))
                 with pytest.raises(JobNotFound):
                     await queue.get("0" * 32)
+                # SIGTERM: the running job is finished, then the workers exit
+                [job_id] = await queue.submit([small_request(5)])
+                await until(queue, job_id, running)
+                supervisor.send_signal(signal.SIGTERM)
+                assert (await queue.wait(job_id, 20)).state is JobState.SUCCEEDED
+                assert await asyncio.get_running_loop().run_in_executor(None, supervisor.wait, 30) == 0
             finally:
                 await queue.close()
 
