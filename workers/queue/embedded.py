@@ -429,6 +429,8 @@ class EmbeddedQueue(JobQueue):
                 error = worker_lost_error(detail, job.deliveries, max_deliveries)
                 if job.cancel:
                     self._finish(job, error=ErrorBody(error="job cancelled", type="Cancelled"))
+                elif not self._running:
+                    self._finish(job, error=ErrorBody(error="queue shut down while the job ran", type="QueueShutdown"))
                 elif job.deliveries >= max_deliveries:
                     self._finish(job, error=error)
                     self._dead.append(DeadLetter(job_id=job.id, deliveries=job.deliveries, error=error,
