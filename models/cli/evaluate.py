@@ -37,7 +37,7 @@ def add_refine(sub: Any) -> None:
     r.add_argument("--objects", type=int, default=20, help="number of test objects (default 20)")
     r.add_argument("--grasps", type=int, default=2, help="grasps per object (default 2)")
     r.add_argument("--seed", type=int, default=0, help="seed of objects, targets and starts (default 0)")
-    r.add_argument("--retreat", type=float, default=0.10, help="start distance behind the feasible pose, m")
+    r.add_argument("--retreat", type=float, default=0.30, help="start distance behind the feasible pose, m (paper: 0.3)")
     r.add_argument("--max-iterations", type=int, default=100, help="refinement iteration cap (default 100)")
     r.add_argument("--mu", type=float, default=0.5, help="friction coefficient (default 0.5)")
     r.add_argument("--json", default=None, help="also write every trial to this JSON file")
@@ -72,7 +72,7 @@ def run_refine(args: argparse.Namespace) -> int:
         return EXIT_USAGE
     objects = object_set(args.objects, seed=args.seed)
     config = RefineConfig(max_iterations=args.max_iterations)
-    console = Console()
+    console = Console(width=160)
     reports = []
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   console=console) as bar:

@@ -10,9 +10,9 @@ Protocol, per object and grasp:
 2. Target: force closure (w = 0), or a task wrench that the ground-truth grasp can produce: random forces in the
    friction cones at its contacts, w = Σ G_i f_i, kept when the forces that give the unit wrench w/‖w‖ respect the
    normal bound (else resampled) — the paper's data generator does the same.
-3. Start: the ground-truth palm moved back along its approach axis by ``retreat`` (paper: 30 cm; default 10 cm,
-   see README for both), rotated about its origin by a random axis and an angle uniform in [0, 60°], moved by a
-   random vector of length ≤ 5 cm; fingers at rest.
+3. Start: the ground-truth palm moved back along its approach axis by ``retreat`` (paper and default: 30 cm),
+   rotated about its origin by a random axis and an angle uniform in [0, 60°], moved by a random vector of length
+   ≤ 5 cm; fingers at rest.
 4. Run our refinement (`models.refine.strategy.refine_from_start`: approach alignment, SCP, restarts within the
    100-iteration budget) and the direct-grasp baseline from the same start; verify both with exact geometry.
 """
@@ -151,7 +151,7 @@ def feasible_wrench(
 
 
 def perturb(
-    hand: Any, pose: HandPose, rng: np.random.Generator, retreat: float = 0.10,
+    hand: Any, pose: HandPose, rng: np.random.Generator, retreat: float = 0.30,
     max_angle_deg: float = 60.0, max_shift: float = 0.05,
 ) -> HandPose:
     """Protocol step 3: retreat along the approach axis, random rotation ≤ max angle, shift ≤ max_shift."""
@@ -173,7 +173,7 @@ def evaluate(
     grasps: int,
     seed: int,
     mu: float = DEFAULT_MU,
-    retreat: float = 0.10,
+    retreat: float = 0.30,
     config: RefineConfig | None = None,
     on_trial: Callable[[Trial | None], None] | None = None,
 ) -> Report:
