@@ -203,10 +203,8 @@ class Hand:
                 v = torch.as_tensor(self._tip_local, dtype=like.dtype, device=like.device)
             elif key == "sphere_local":
                 v = torch.as_tensor(self.sphere_centres, dtype=like.dtype, device=like.device)
-            elif key == "tip_w":
-                v = self.tree.point_weights(self._tip_body, like.dtype, like.device)
             else:
-                v = self.tree.point_weights(self._sphere_body, like.dtype, like.device)
+                raise KeyError(key)
             self._cache[k] = v
         return self._cache[k]
 
@@ -229,8 +227,7 @@ class Hand:
         pts = (Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]
         if not jacobian:
             return pts, None
-        w = self._const("tip_w" if which == "tip" else "sphere_w", q)
-        return pts, self.tree.point_jacobian(T, bodies, pts, palm_pos, w)
+        return pts, self.tree.point_jacobian(T, bodies, pts, palm_pos)
 
     def link_poses(self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor) -> dict[str, torch.Tensor]:
         """World pose (B, 4, 4) of every link below the palm (including fixed ones)."""

@@ -74,6 +74,7 @@ class _Consts:
     mult: torch.Tensor  # (nb,)
     offset: torch.Tensor  # (nb,)
     coupling: torch.Tensor  # (nb, D): d theta_b / d q_d
+    body_weights: torch.Tensor  # (nb, nb, D): [j, k, d] = d theta_k / d q_d if k is j or an ancestor of j
 
 
 class KinematicTree:
@@ -165,6 +166,7 @@ class KinematicTree:
             "mult": mult,
             "offset": offset,
             "coupling": coupling,
+            "body_weights": anc[:, :, None] * coupling[None],
         }
         self._cache: dict[tuple[torch.dtype, torch.device], _Consts] = {}
         self._level_cache: dict[torch.device, list[tuple[torch.Tensor, torch.Tensor]]] = {}
@@ -180,7 +182,7 @@ class KinematicTree:
             t = {k: torch.as_tensor(v, dtype=dtype, device=device) for k, v in self._np.items()}
             self._cache[key] = _Consts(
                 t["origin"], t["K"], t["K"] @ t["K"], t["axis"], t["rev"], t["pris"], t["mult"], t["offset"],
-                t["coupling"],
+                t["coupling"], t["body_weights"],
             )  # fmt: skip
         return self._cache[key]
 
@@ -220,26 +222,18 @@ class KinematicTree:
             ]
         return self._level_cache[device]
 
-    def point_weights(self, bodies: np.ndarray, dtype: torch.dtype, device: torch.device) -> torch.Tensor:
-        """(n, nb, D): how much each body's joint moves a point on ``bodies[i]`` per unit free joint."""
-        w = self.ancestors[bodies][:, :, None] * self._np["coupling"][None]
-        return torch.as_tensor(w, dtype=dtype, device=device)
-
     def point_jacobian(
-        self, T: torch.Tensor, bodies: np.ndarray, points: torch.Tensor, palm_pos: torch.Tensor,
-        weights: torch.Tensor | None = None,
-    ) -> torch.Tensor:  # fmt: skip
-        """Jacobian (B, n, 3, 6 + D) of world points (B, n, 3) rigidly attached to ``bodies`` (n,)."""
+        self, T: torch.Tensor, bodies: np.ndarray, points: torch.Tensor, palm_pos: torch.Tensor
+    ) -> torch.Tensor:
+        """Jacobian (B, n, 3, 6 + D) of world points (B, n, 3) rigidly attached to ``bodies`` (n,).
+
+        Per body j, the joint columns of a point p on j are Σ_k W[j,k,d] (a_k × (p − o_k)) for revolute and
+        Σ_k W[j,k,d] a_k for prismatic ancestors k (world axis a_k through o_k, W the coupling-weighted ancestor
+        table): = A_j × p − C_j with A_j, C_j per body, so the cost grows with bodies, not points.
+        """
         c = self.consts(points.dtype, points.device)
-        if weights is None:
-            weights = self.point_weights(bodies, points.dtype, points.device)
         B, n = points.shape[:2]
         D = self.dof
-        axis_w = (T[..., :3, :3] @ c.axis[..., None])[..., 0]  # (B, nb, 3)
-        o_w = T[..., :3, 3]
-        r = points[:, :, None, :] - o_w[:, None]  # (B, n, nb, 3)
-        v = torch.linalg.cross(axis_w[:, None].expand_as(r), r, dim=-1) * c.rev[:, None]
-        v = v + axis_w[:, None] * c.pris[:, None]
         J = points.new_zeros(B, n, 3, 6 + D)
         J[..., 0, 0] = J[..., 1, 1] = J[..., 2, 2] = 1.0
         rp = points - palm_pos[:, None]
@@ -248,5 +242,15 @@ class KinematicTree:
         J[..., 1, 3], J[..., 1, 5] = -rp[..., 2], rp[..., 0]
         J[..., 2, 3], J[..., 2, 4] = rp[..., 1], -rp[..., 0]
         if D:
-            J[..., 6:] = torch.einsum("bnkc,nkd->bncd", v, weights)
+            axis_w = (T[..., :3, :3] @ c.axis[..., None])[..., 0]  # (B, nb, 3)
+            o_w = T[..., :3, 3]
+            rev, pris = c.rev[:, None], c.pris[:, None]
+            A = torch.einsum("jkd,bkc->bjdc", c.body_weights, axis_w * rev)  # (B, nb, D, 3)
+            C = torch.einsum(
+                "jkd,bkc->bjdc", c.body_weights, torch.linalg.cross(axis_w, o_w, dim=-1) * rev - axis_w * pris
+            )
+            idx = torch.as_tensor(bodies, device=points.device)
+            Ap, Cp = A[:, idx], C[:, idx]  # (B, n, D, 3)
+            Jq = torch.linalg.cross(Ap, points[:, :, None, :].expand_as(Ap), dim=-1) - Cp
+            J[..., 6:] = Jq.transpose(-1, -2)
         return J
