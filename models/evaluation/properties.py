@@ -1,0 +1,99 @@
+"""Network-only checks: multimodality, region-mask compliance, physical-property sensitivity.
+
+- Multimodality: K = 8 latent samples per case; contacts by NMS; two contact sets are the same mode when every
+  contact of one has a contact of the other within ``MODE_RADIUS`` × object size (and they have equally many);
+  we report the mean number of distinct sets per case.
+- Mask compliance: fraction of selected contacts (all samples, cases with a partial mask) inside the mask.
+- Property sensitivity: the same case with friction 0.2 and 1.0; mean |Δ heatmap| and the fraction of cases
+  whose selected contact sets differ.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from models.evaluation.testset import TestCase
+
+MODE_RADIUS = 0.1
+
+
+def _inputs(case: TestCase, hand: Any, friction: float | None = None) -> Any:
+    from models.network import NetworkInput
+
+    return NetworkInput(
+        points=case.points,
+        normals=case.normals,
+        motion=case.motion,
+        mask=case.mask,
+        properties={"friction": case.friction if friction is None else friction},
+        hand_points=hand.surface_points,
+        hand_normals=hand.surface_normals,
+        hand_key=hand.name,
+    )
+
+
+def _select(case: TestCase, heat: np.ndarray, force: np.ndarray, hand: Any, mask: bool = True) -> np.ndarray:
+    from models.network import select_contacts
+
+    return select_contacts(case.points, heat, force, case.mask if mask else None, hand.num_fingertips).indices
+
+
+def _same(a: np.ndarray, b: np.ndarray, pts: np.ndarray, radius: float) -> bool:
+    if len(a) != len(b):
+        return False
+    if not len(a):
+        return True
+    d = np.linalg.norm(pts[a][:, None] - pts[b][None], axis=-1)
+    return bool((d.min(axis=1) <= radius).all() and (d.min(axis=0) <= radius).all())
+
+
+@dataclass
+class PropertyReport:
+    cases: int
+    mean_modes: float  # distinct contact sets among K samples
+    samples: int
+    mask_cases: int
+    mask_compliance: float  # fraction of contacts inside the mask (must be 1)
+    empty_selections: float  # fraction of samples with no contact above threshold
+    friction_heat_delta: float  # mean |heat(μ=0.2) − heat(μ=1.0)|
+    friction_changes_contacts: float  # fraction of cases whose contact set changes
+
+
+def evaluate_properties(cases: list[TestCase], hand: Any, predictor: Any, k: int = 8, seed: int = 0) -> PropertyReport:
+    """The three checks of the module docstring on ``cases`` with ``hand``."""
+    modes, inside, total, empty, mask_cases = [], 0, 0, 0, 0
+    deltas, changed = [], 0
+    for i, case in enumerate(cases):
+        out = predictor.predict([_inputs(case, hand)], num_samples=k, seed=seed + i)[0]
+        scale = float(np.ptp(case.points, axis=0).max())
+        sets = [_select(case, out.heatmaps[j], out.force_maps[j], hand) for j in range(k)]
+        empty += sum(len(s) == 0 for s in sets)
+        distinct: list[np.ndarray] = []
+        for s in sets:
+            if len(s) and not any(_same(s, t, case.points, MODE_RADIUS * scale) for t in distinct):
+                distinct.append(s)
+        modes.append(len(distinct))
+        if not case.mask.all():
+            mask_cases += 1
+            for s in sets:
+                inside += int(case.mask[s].sum())
+                total += len(s)
+        lo, hi = predictor.predict([_inputs(case, hand, 0.2), _inputs(case, hand, 1.0)], num_samples=1, seed=seed + i)
+        deltas.append(float(np.abs(lo.heatmaps[0] - hi.heatmaps[0]).mean()))
+        a = _select(case, lo.heatmaps[0], lo.force_maps[0], hand)
+        b = _select(case, hi.heatmaps[0], hi.force_maps[0], hand)
+        changed += int(not _same(a, b, case.points, MODE_RADIUS * scale))
+    n = max(len(cases), 1)
+    return PropertyReport(
+        cases=len(cases),
+        mean_modes=float(np.mean(modes)) if modes else 0.0,
+        samples=k,
+        mask_cases=mask_cases,
+        mask_compliance=inside / total if total else 1.0,
+        empty_selections=empty / max(len(cases) * k, 1),
+        friction_heat_delta=float(np.mean(deltas)) if deltas else 0.0,
+        friction_changes_contacts=changed / n,
+    )
