@@ -108,3 +108,12 @@ def test_apply_delta_rotation_about_palm_origin() -> None:
     before, after = hand.fingertips(pos, quat, q)[0], hand.fingertips(pos2, quat2, q2)[0]
     r = (before - pos).numpy()
     np.testing.assert_allclose((after - pos).numpy(), np.stack([-r[:, 1], r[:, 0], r[:, 2]], 1), atol=1e-12)
+
+
+@pytest.mark.parametrize("name", list_hands())
+def test_fingertips_lie_ahead_along_the_approach_axis(name: str) -> None:
+    """At rest the fingertips sit in front of the palm origin along ``approach_axis`` (palm frame)."""
+    hand = get_hand(name)
+    pos, quat = torch.zeros(1, 3, dtype=D64), torch.tensor([[1.0, 0, 0, 0]], dtype=D64)
+    tips = hand.fingertips(pos, quat, torch.as_tensor(hand.rest[None]))[0].numpy()
+    assert float(tips.mean(0) @ hand.approach_axis) > 0.02
