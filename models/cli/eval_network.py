@@ -46,7 +46,7 @@ def _run(args: argparse.Namespace) -> int:
     predictor = ContactPredictor.from_checkpoint(args.weights)
     methods = tuple(args.methods.split(","))
     rows = []
-    props = {}
+    props: dict[str, Any] = {}
     t0 = time.perf_counter()
     for split in args.splits.split(","):
         cases = load_cases(args.data, split, args.cases, args.seed, articulated=False if args.rigid_only else None)

@@ -40,14 +40,14 @@ def load_cases(
     """Up to ``limit`` cases of ``split``, one per object first (then more per object), seeded order."""
     d = Path(data_dir)
     manifest = json.loads((d / "manifest.json").read_text())
-    cfg_d = dict(manifest["config"])
-    cfg = DataConfig(**{k: tuple(v) if isinstance(v, list) else v for k, v in cfg_d.items()})
+    cfg_d: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in manifest["config"].items()}
+    cfg = DataConfig(**cfg_d)
     rows: list[tuple[int, int, int, str]] = []  # (shard, example, global object, object id)
     for s in manifest["shards"].values():
         z = np.load(d / s["file"], allow_pickle=False)
         if int(z["num_examples"]) == 0:
             continue
-        for e in np.flatnonzero(z["split"] == split):
+        for e in np.flatnonzero(z["split"] == split).tolist():
             if articulated is not None and bool(z["articulated"][e]) != articulated:
                 continue
             oi = int(z["obj_index"][e])
