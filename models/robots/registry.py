@@ -14,9 +14,10 @@ name              source                                      free DoF  palm fra
 ``kinova3f``      our ``descriptions/kinova_3f.urdf``         3 (6)     ``k3f_palm``: fingers along +z, approach +z
 ================  ==========================================  ========  ===============================================
 
-Numbers in parentheses count the moving joints before tying: Shadow's distal joints J0 follow J1 through the
-MJCF's coupling tendon (J0 = 0.00805/0.00705 · J1), the Panda's second finger mimics the first, the Barrett and
-Kinova distal joints are coupled to their proximal joints (see the URDFs).
+Fingertips are listed index, middle, ring, (little,) thumb. Numbers in parentheses count the moving joints
+before tying: Shadow's distal joints J0 follow J1 through the MJCF's coupling tendon (J0 = 0.00805/0.00705 · J1),
+the Panda's second finger mimics the first, the Barrett spread is shared by fingers 1 and 2 and its distal joints
+are coupled to the proximal ones, as are the Kinova ones (see the URDFs).
 """
 
 from __future__ import annotations
@@ -98,7 +99,9 @@ def _leap() -> Hand:
     path = _site_packages() / "ghand" / "assets" / "models" / "urdf" / "ghand_right.urdf"
     # the URDF has visual meshes only: each mesh file is replaced by its cached convex hull (meshcache.py)
     desc = parse_urdf(path.read_bytes(), mesh_loader=hull_loader(DESCRIPTIONS / "leap_hulls.npz"), use_visual=True)
-    tips = ["tip_soft", "tip_soft_1", "tip_soft_2", "tip_soft__thumb"]
+    # fingers (joints: MCP flexion, abduction, PIP, DIP): index tip_soft_2 (id1, id0, id2, id3), middle tip_soft
+    # (id9, id8, id10, id11), ring tip_soft_1 (id5, id4, id6, id7); thumb id12..id15
+    tips = ["tip_soft_2", "tip_soft", "tip_soft_1", "tip_soft__thumb"]
     # pad points of the soft tips (link y runs along the finger, the pad bulges towards link +x; thumb -x)
     offsets = np.array([[0.017, 0.025, 0.0]] * 3 + [[-0.0155, 0.026, 0.0]])
     # palm frame = URDF root: fingers along +x, flexion (negative joint values) curls them towards -z
