@@ -31,6 +31,9 @@ ADJACENT_HOPS = 2
 class Hand:
     """Kinematics, collision spheres and geometry of one hand (see module doc for conventions).
 
+    Built-ins are shared per process (:func:`models.robots.get_hand` caches them): treat every attribute as
+    read-only (copy ``rest`` before editing it).
+
     Attributes:
         name: registry name.
         joint_names: (D,) free finger joints; lower, upper, rest: (D,) float64.
