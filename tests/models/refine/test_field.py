@@ -1,0 +1,48 @@
+import numpy as np
+import pytest
+import trimesh
+
+from models.refine.field import PointCloudField
+
+
+@pytest.fixture(scope="module")
+def sphere_field():
+    mesh = trimesh.creation.icosphere(subdivisions=4, radius=0.05)
+    pts, faces = trimesh.sample.sample_surface(mesh, 4000, seed=1)
+    return PointCloudField(np.asarray(pts), np.asarray(mesh.face_normals[faces]))
+
+
+def test_signed_distance_close_to_exact(sphere_field):
+    rng = np.random.default_rng(0)
+    d = rng.normal(size=(200, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    r = rng.uniform(0.03, 0.09, size=200)
+    phi, grad, _ = sphere_field.signed_distance(d * r[:, None])
+    np.testing.assert_allclose(phi, r - 0.05, atol=1.5e-3)
+    outside = r > 0.06
+    assert np.all(np.einsum("ij,ij->i", grad[outside], d[outside]) > 0.8)
+
+
+def test_box_edge_has_no_sign_jumps(box):
+    _, pts, nrm = box
+    field = PointCloudField(pts, nrm)
+    # walk around an edge 1 cm outside the box: Φ stays positive and continuous
+    angles = np.linspace(0, np.pi / 2, 200)
+    path = np.stack([0.02 + 0.01 * np.cos(angles), np.zeros_like(angles), 0.03 + 0.01 * np.sin(angles)], axis=1)
+    phi = field.signed_distance(path)[0]
+    assert np.all(phi > 0.005)
+    assert np.max(np.abs(np.diff(phi))) < 2e-3
+
+
+def test_region_distance_and_normals(sphere_field):
+    mask = sphere_field.points[:, 2] > 0.04
+    masked = PointCloudField(sphere_field.points, sphere_field.normals, mask)
+    dist, grad = masked.region_distance(np.array([[0, 0, 0.06], [0.06, 0, 0]]))
+    assert dist[0] < 0.015 and dist[1] > 0.03
+    np.testing.assert_allclose(np.linalg.norm(grad, axis=1), 1.0)
+    n = sphere_field.surface_normal(np.array([[0, 0, 0.05]]))
+    assert n[0, 2] > 0.99
+    jac = sphere_field.normal_jacobian(np.array([[0, 0, 0.05]]))
+    assert 0.3 / 0.05 < jac[0, 0, 0] < 3 / 0.05  # of the order of the curvature 1/R
+    with pytest.raises(ValueError):
+        PointCloudField(sphere_field.points, sphere_field.normals, np.zeros(len(sphere_field.points), bool))

@@ -1,0 +1,57 @@
+import time
+
+import numpy as np
+import pytest
+
+from models.refine.field import PointCloudField
+from models.refine.initialise import initialise
+from models.refine.refine import Cancelled, RefineConfig, refine
+from models.refine.verify import verify
+from models.refine.wrench import closure_task, rigid_task
+
+CONTACTS = np.array([[0.02, 0, 0], [-0.02, 0, 0]])
+NORMALS = np.array([[1.0, 0, 0], [-1, 0, 0]])
+
+
+@pytest.fixture(scope="module")
+def setup(box, gripper):
+    mesh, pts, nrm = box
+    field = PointCloudField(pts, nrm)
+    start = initialise(gripper, field, CONTACTS, NORMALS)[0]
+    return mesh, field, start
+
+
+def test_initialisation_fits_the_gripper_across_the_box(setup, gripper):
+    _, _, start = setup
+    assert start.rms < 0.03
+    assert start.pose.q[0] == pytest.approx(gripper.rest[0])
+
+
+def test_two_finger_antipodal_box_closure(setup, gripper):
+    mesh, field, start = setup
+    task = closure_task(np.zeros(3), 0.05)
+    res = refine(gripper, field, task, start.pose, 0.5, RefineConfig(history=True))
+    assert res.converged, res.reason
+    assert res.residual_norm < 1e-6 and res.max_tip_distance < 5e-3
+    assert len(res.history) == res.iterations
+    ver = verify(gripper, res.pose, field, task, 0.5, mesh)
+    assert ver.success, ver.failures
+    assert ver.epsilon > 0
+
+
+def test_unreachable_wrench_is_a_clear_non_converged_result(setup, gripper):
+    _, field, start = setup
+    task = rigid_task(np.array([1.0, 0, 0, 0, 0, 0]), np.zeros(3), 0.05)
+    res = refine(gripper, field, task, start.pose, 0.5, RefineConfig(max_iterations=8, max_normal_force=0.05))
+    assert not res.converged
+    assert res.reason in ("max_iterations", "stalled")
+    assert res.residual_norm > 0.5
+
+
+def test_deadline_and_cancel(setup, gripper):
+    _, field, start = setup
+    task = closure_task(np.zeros(3), 0.05)
+    res = refine(gripper, field, task, start.pose, 0.5, deadline=time.monotonic() - 1)
+    assert res.reason == "deadline" and not res.converged and res.iterations == 0
+    with pytest.raises(Cancelled):
+        refine(gripper, field, task, start.pose, 0.5, should_cancel=lambda: True)
