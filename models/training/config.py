@@ -38,7 +38,7 @@ class TrainConfig:
     out: str = "runs/cpu"
     device: str = "auto"  # auto: cuda when available, else cpu
     threads: int = 2
-    max_minutes: float | None = None  # stop after the epoch that crosses this wall time
+    max_minutes: float | None = None  # time budget: the schedule decays by it and training stops when it ends
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)

@@ -167,8 +167,11 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         t0 = time.perf_counter()
         perm = rng.permutation(len(train_ex))
         sums = {"loss": 0.0, "heat": 0.0, "force": 0.0, "kl": 0.0}
+        seen = 0
         bar = tqdm(range(steps_per_epoch), desc=f"epoch {epoch}/{cfg.epochs}", disable=not progress, leave=False)
         for step in bar:
+            if cfg.max_minutes is not None and time.perf_counter() - t_start > cfg.max_minutes * 60:
+                break  # time budget spent: validate and save what we have
             idx = perm[step * cfg.batch_size : (step + 1) * cfg.batch_size]
             b = make_batch(train_ex, idx, hand_scale, rng if cfg.augment else None).to(device)
             res = model(b.obj, b.hand, b.heat, b.force, generator=gen if device.type == "cpu" else None)
@@ -181,9 +184,10 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
                 lambda_s=cfg.lambda_s,
                 lambda_kl=cfg.lambda_kl,
             )
-            lr = cfg.lr * lr_factor(
-                global_step, (epoch - 1 + step / steps_per_epoch) / cfg.epochs, cfg.warmup_steps, cfg.min_lr_ratio
-            )
+            frac = (epoch - 1 + step / steps_per_epoch) / cfg.epochs
+            if cfg.max_minutes is not None:  # a time budget: decay by whichever runs out first
+                frac = max(frac, (time.perf_counter() - t_start) / (cfg.max_minutes * 60))
+            lr = cfg.lr * lr_factor(global_step, frac, cfg.warmup_steps, cfg.min_lr_ratio)
             for group in opt.param_groups:
                 group["lr"] = lr
             global_step += 1
@@ -193,10 +197,13 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             opt.step()
             for k in sums:
                 sums[k] += float(terms[k].detach()) * len(idx)
+            seen += len(idx)
             bar.set_postfix(loss=f"{float(terms['loss']):.4f}", lr=f"{lr:.2e}")
         bar.close()
-        train_m = {k: v / len(train_ex) for k, v in sums.items()}
-        rows = [{"split": "train", **train_m, "examples": len(train_ex)}]
+        if seen == 0:
+            break
+        train_m = {k: v / seen for k, v in sums.items()}
+        rows = [{"split": "train", **train_m, "examples": seen}]
         val_m = evaluate_loss(model, val_ex, cfg, device, hand_scale) if val_ex is not None else None
         if val_m is not None:
             rows.append({"split": "val", **val_m, "examples": len(val_ex) if val_ex is not None else 0})
