@@ -3,7 +3,9 @@
 Stages reported to ``progress(stage, fraction)``: "network", "initialisation", "refinement" (k / max
 iterations over all proposals), "verification". ``should_cancel()`` is checked between stages and before every
 refinement iteration (raises `Cancelled`). A ``deadline`` (time.monotonic()) that passes during refinement stops
-it and returns the best iterate, not converged, reason "deadline"; later proposals are then not refined.
+it and returns the best iterate, not converged, reason "deadline"; later proposals are then not refined. For
+methods "network" and "random_contacts" a refinement that stalls is restarted from approach alignments
+(`models.refine.strategy`) within the same iteration budget; given contacts ("contacts") are never abandoned.
 Deformable materials (cloth, rope, plasticine) are handled as rigid bodies for the hand: the task's motion is
 fitted rigidly (Kabsch) and the hand must produce that wrench.
 """
@@ -12,6 +14,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -31,6 +34,7 @@ from models.refine.baseline import direct_grasp
 from models.refine.initialise import initialise, rest_geometry
 from models.refine.refine import RefineConfig, refine
 from models.refine.state import HandPose
+from models.refine.strategy import refine_from_start
 from models.refine.verify import verify
 
 Progress = Callable[[str, float], None]
@@ -147,6 +151,16 @@ def _finish(
             should_cancel=should_cancel,
             progress=lambda it, cap, k=k: report("refinement", (k * inp.max_iterations + it) / total),
         )
+        left = inp.max_iterations - res.iterations
+        if not res.converged and res.reason != "deadline" and inp.method != "contacts" and left >= 10:
+            # the initial pose led to a local minimum: restart from approach alignments (models.refine.strategy)
+            again = refine_from_start(
+                hand, prep.cloud, prep.task, start, prep.mu, replace(config, max_iterations=left),
+                seed=inp.seed + k, tip_field=prep.tip_field, deadline=inp.deadline, should_cancel=should_cancel,
+            )
+            again.iterations += res.iterations
+            if again.converged:
+                res = again
         results.append(res)
     timings["refinement"] = time.perf_counter() - t0
     _check(should_cancel)
@@ -165,8 +179,6 @@ def _finish(
 
 
 def _reseed(inp: SynthesisInput, seed: int) -> SynthesisInput:
-    from dataclasses import replace
-
     return replace(inp, seed=seed)
 
 

@@ -1,0 +1,111 @@
+import time
+
+import numpy as np
+import pytest
+import trimesh
+
+from models.pipeline import (
+    Cancelled,
+    InvalidInput,
+    ModelUnavailable,
+    SynthesisInput,
+    SynthesisOutput,
+    TaskInput,
+    run_pipeline,
+    run_pipeline_batch,
+)
+
+
+@pytest.fixture(scope="module")
+def box():
+    mesh = trimesh.creation.box(extents=[0.04, 0.06, 0.06])
+    pts, faces = trimesh.sample.sample_surface(mesh, 512, seed=0)
+    return np.asarray(pts), np.asarray(mesh.face_normals[faces])
+
+
+@pytest.fixture(scope="module")
+def gripper():
+    from models.robots import get_hand
+
+    return get_hand("panda_gripper")
+
+
+def _inp(box, gripper, **kw):
+    pts, nrm = box
+    base = dict(points=pts, normals=nrm, hand=gripper, task=TaskInput("force_closure"), method="contacts",
+                contacts=np.array([[0.02, 0, 0], [-0.02, 0, 0]]))
+    base.update(kw)
+    return SynthesisInput(**base)
+
+
+def test_contacts_closure_end_to_end(box, gripper):
+    stages = []
+    out = run_pipeline(_inp(box, gripper, return_history=True), progress=lambda s, f: stages.append(s))
+    best = out.best
+    assert best is not None and best.quality.success, best.quality.failures
+    assert best.quality.epsilon is not None and best.quality.epsilon > 0
+    assert best.contact_points.shape == (2, 3) and best.forces.shape == (2, 3)
+    assert best.joint_names == list(gripper.joint_names) and best.palm_quaternion.shape == (4,)
+    assert best.history is not None and len(best.history) == best.quality.iterations
+    assert {"initialisation", "refinement", "verification"} <= set(stages)
+    assert {"network", "initialisation", "refinement", "verification"} <= set(out.timings)
+
+
+def test_task_from_delta_pose(box, gripper):
+    inp = _inp(box, gripper, task=TaskInput("delta_pose", translation=np.array([0, 0, 0.05])), refine=False)
+    out = run_pipeline(inp)
+    assert out.proposals[0].quality.reason == "not_refined"
+    assert out.proposals[0].quality.epsilon is None
+
+
+def test_network_without_model_is_model_unavailable(box, gripper):
+    with pytest.raises(ModelUnavailable):
+        run_pipeline(_inp(box, gripper, method="network"))
+
+
+def test_invalid_inputs_name_the_field(box, gripper):
+    pts, _ = box
+    with pytest.raises(InvalidInput, match="points"):
+        run_pipeline(_inp(box, gripper, points=pts[:, :2]))
+    with pytest.raises(InvalidInput, match="contacts"):
+        run_pipeline(_inp(box, gripper, contacts=np.zeros((3, 3))))
+    with pytest.raises(InvalidInput, match="task.kind"):
+        run_pipeline(_inp(box, gripper, task=TaskInput("dance")))
+
+
+def test_cancel_and_deadline(box, gripper):
+    with pytest.raises(Cancelled):
+        run_pipeline(_inp(box, gripper), should_cancel=lambda: True)
+    out = run_pipeline(_inp(box, gripper, deadline=time.monotonic() - 1))
+    assert out.proposals[0].quality.reason == "deadline" and not out.proposals[0].quality.converged
+
+
+def test_batch_keeps_going_past_a_bad_input(box, gripper):
+    pts, _ = box
+    res = run_pipeline_batch([_inp(box, gripper, refine=False), _inp(box, gripper, points=pts[:5])])
+    assert isinstance(res[0], SynthesisOutput) and isinstance(res[1], InvalidInput)
+
+
+class _FakePredictor:
+    """Stands in for models.network: a heatmap on the two x faces."""
+
+    def __init__(self):
+        self.calls = 0
+
+    def predict(self, batch, num_samples, seed):
+        from types import SimpleNamespace
+
+        self.calls += 1
+        outs = []
+        for row in batch:
+            heat = (np.abs(row.points[:, 0]) > 0.0199).astype(np.float32)[None].repeat(num_samples, 0)
+            outs.append(SimpleNamespace(heatmaps=heat, force_maps=np.zeros((num_samples, len(row.points), 3))))
+        return outs
+
+
+def test_network_batch_calls_the_predictor_once(box, gripper):
+    fake = _FakePredictor()
+    inp = _inp(box, gripper, method="network", refine=False)
+    res = run_pipeline_batch([inp, inp], fake)
+    assert fake.calls == 1
+    assert all(isinstance(r, SynthesisOutput) and r.heatmap is not None for r in res)
