@@ -37,7 +37,7 @@ def add_refine(sub: Any) -> None:
     r.add_argument("--objects", type=int, default=20, help="number of test objects (default 20)")
     r.add_argument("--grasps", type=int, default=2, help="grasps per object (default 2)")
     r.add_argument("--seed", type=int, default=0, help="seed of objects, targets and starts (default 0)")
-    r.add_argument("--retreat", type=float, default=0.30, help="start distance behind the feasible pose, m (paper: 0.3)")
+    r.add_argument("--retreat", type=float, default=0.30, help="start distance behind the feasible pose (m, paper 0.3)")
     r.add_argument("--max-iterations", type=int, default=100, help="refinement iteration cap (default 100)")
     r.add_argument("--mu", type=float, default=0.5, help="friction coefficient (default 0.5)")
     r.add_argument("--json", default=None, help="also write every trial to this JSON file")
@@ -79,9 +79,13 @@ def run_refine(args: argparse.Namespace) -> int:
         for hand in hand_objs:
             for mode in modes:
                 job = bar.add_task(f"{hand.name} {mode}", total=args.objects * args.grasps)
+
+                def advance(_trial: Any, job: Any = job) -> None:
+                    bar.advance(job)
+
                 reports.append(evaluate(
                     hand, objects, mode, args.grasps, args.seed, mu=args.mu, retreat=args.retreat, config=config,
-                    on_trial=lambda _t, job=job: bar.advance(job),
+                    on_trial=advance,
                 ))
     table = Table(title=f"refinement: {args.objects} objects x {args.grasps} grasps, seed {args.seed}, "
                         f"retreat {args.retreat} m, mu {args.mu}")

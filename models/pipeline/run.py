@@ -146,10 +146,12 @@ def _finish(
         if inp.deadline is not None and time.monotonic() >= inp.deadline:
             results.append(_expired(start))
             continue
+        def step_done(it: int, cap: int, k: int = k) -> None:
+            report("refinement", (k * inp.max_iterations + it) / total)
+
         res = refine(
             hand, prep.cloud, prep.task, start, prep.mu, config, tip_field=prep.tip_field, deadline=inp.deadline,
-            should_cancel=should_cancel,
-            progress=lambda it, cap, k=k: report("refinement", (k * inp.max_iterations + it) / total),
+            should_cancel=should_cancel, progress=step_done,
         )
         left = inp.max_iterations - res.iterations
         if not res.converged and res.reason != "deadline" and inp.method != "contacts" and left >= 10:

@@ -74,11 +74,11 @@ class Report:
         return {
             "n": len(self.trials),
             "skipped": self.skipped,
-            "success": 100.0 * np.mean([t.success for t in self.trials]),
+            "success": 100.0 * float(np.mean([t.success for t in self.trials])),
             "median_s": float(np.median(sec)),
             "p90_s": float(np.percentile(sec, 90)),
             "median_iterations": float(np.median([t.iterations for t in self.trials])),
-            "baseline_success": 100.0 * np.mean([t.baseline_success for t in self.trials]),
+            "baseline_success": 100.0 * float(np.mean([t.baseline_success for t in self.trials])),
             "baseline_median_s": float(np.median(bsec)),
             "baseline_p90_s": float(np.percentile(bsec, 90)),
         }

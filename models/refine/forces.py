@@ -3,8 +3,9 @@
 Written with auxiliary variables ``t = R G f − τ`` and the epigraph ``min s, ‖t‖ ≤ s`` (same minimiser as
 ‖t‖²): a ``P = 2 GᵀG`` formulation is singular whenever G is rank-deficient and made Clarabel fail on ~1 % of
 random instances; this one is always well posed, and the solver's tolerance applies to ‖r‖ itself rather than to
-‖r‖², so residuals of 1e-8 are resolved (with ‖r‖² the interior point stops near ‖r‖ ≈ 1e-4). Normal forces are bounded, ``f_i·(−n_i) ≤ max_normal_force`` (default
-1, paper §III-B: unit target wrench and forces of at most one in the normal direction). Force closure adds
+‖r‖², so residuals of 1e-8 are resolved (with ‖r‖² the interior point stops near ‖r‖ ≈ 1e-4). Normal forces
+are bounded, ``f_i·(−n_i) ≤ max_normal_force`` (default 1, paper §III-B: unit target wrench and forces of at most
+one in the normal direction). Force closure adds
 ``Σ_i f_i·(−n_i) = 1``, which excludes f = 0, and — since Gf = 0 alone is also met by grasps on the boundary of
 force closure (two opposing fingers and idle others: Ferrari–Canny ε = 0) — asks every finger to carry a share
 ``f_i·(−n_i) ≥ CLOSURE_MIN_SHARE / m`` inside a cone narrowed to ``CLOSURE_CONE_SHRINK · μ`` (the 8-sided pyramid
@@ -15,6 +16,7 @@ full-rank G is the classical force-closure condition. `solve_forces_cvxpy` is th
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -122,7 +124,7 @@ def solve_forces_cvxpy(
     gmat = wrench_matrix(task, points)
     f = cp.Variable(3 * m)
     cones = cone_rows(normals, cone_mu(task, mu))
-    cons = []
+    cons: list[Any] = []
     normal_force = []
     for i in range(m):
         fi = f[3 * i : 3 * i + 3]

@@ -182,7 +182,7 @@ def initialise(
         scored.append((iou(heatmap(field.points, tips, radius), target), -rms, rot, t, assign, direction))
     scored.sort(key=lambda s: (s[0], s[1]), reverse=True)
     out = []
-    for score, neg_rms, rot, t, assign, direction in scored[:top_k]:
+    for score, neg_rms, rot, t, assign, _direction in scored[:top_k]:
         t = back_off(rot, t, rest, radii, field, rot @ axis)
         quat = Rotation.from_matrix(rot).as_quat()[[3, 0, 1, 2]]
         pose = HandPose(t, quat, np.asarray(hand.rest, dtype=np.float64).copy())

@@ -8,8 +8,9 @@
          ‖c_i − c_j‖ + u_ijᵀ (J_i − J_j) δq + σ_ij ≥ ε_i + ε_j   (active pairs, linearised Eq. 15)
 
 B = R Σ_i ([0; −[f_i*]× J_i / ρ] + G_i (−[f_i*]× [n_i]× ∂n_i/∂p J_i)) is ∂(R G(p) f*)/∂q: the contact moves
-(lever arm) and, on a curved surface, its friction cone turns with the normal and carries f* along. The non-penetration and self-collision rows carry slacks σ ≥ 0
-with an exact-penalty weight ρ, so a step always exists even from a penetrating start. The native build uses
+(lever arm) and, on a curved surface, its friction cone turns with the normal and carries f* along. The
+non-penetration and self-collision rows carry slacks σ ≥ 0 with an exact-penalty weight ρ, so a step always
+exists even from a penetrating start. The native build uses
 auxiliary variables for the residual and the tip distances (``P`` diagonal), as the force problem does.
 """
 

@@ -69,7 +69,7 @@ def test_invalid_inputs_name_the_field(box, gripper):
         run_pipeline(_inp(box, gripper, points=pts[:, :2]))
     with pytest.raises(InvalidInput, match="contacts"):
         run_pipeline(_inp(box, gripper, contacts=np.zeros((3, 3))))
-    with pytest.raises(InvalidInput, match="task.kind"):
+    with pytest.raises(InvalidInput, match=r"task\.kind"):
         run_pipeline(_inp(box, gripper, task=TaskInput("dance")))
 
 
