@@ -96,6 +96,10 @@ class PointCloudField:
         grad = np.where(dist[:, None] > 1e-9, d / np.maximum(dist, 1e-12)[:, None], self.normals[j])
         return dist, grad
 
+    def ball_indices(self, x: np.ndarray, radius: float) -> list[list[int]]:
+        """For each x, the indices of the cloud points within ``radius``."""
+        return list(self._tree.query_ball_point(np.asarray(x, dtype=np.float64), radius))
+
     def nearest_index(self, x: np.ndarray) -> np.ndarray:
         """Index of the nearest cloud point for each x."""
         return np.asarray(self._tree.query(np.asarray(x, dtype=np.float64))[1])

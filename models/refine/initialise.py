@@ -175,11 +175,16 @@ def initialise(
         for assign in itertools.permutations(range(m), h):
             rot, t, rms = fit_palm(rest.tips[list(assign)], contacts, axis, direction, approach_weight)
             fits.append((rot, t, rms, assign, direction))
-    # score on the fitted (not yet backed-off) pose: where the fingertips land
+    # score on the fitted (not yet backed-off) pose: where the fingertips land (one batched ball query)
+    all_tips = np.stack([rest.tips @ rot.T + t for rot, t, *_ in fits]).reshape(-1, 3)
+    balls = field.ball_indices(all_tips, radius)
+    target_set = set(np.flatnonzero(target).tolist())
     scored = []
-    for rot, t, rms, assign, direction in fits:
-        tips = rest.tips @ rot.T + t
-        scored.append((iou(heatmap(field.points, tips, radius), target), -rms, rot, t, assign, direction))
+    for f, (rot, t, rms, assign, direction) in enumerate(fits):
+        touched: set[int] = set().union(*balls[f * m : (f + 1) * m])
+        union = len(touched | target_set)
+        score = len(touched & target_set) / union if union else 0.0
+        scored.append((score, -rms, rot, t, assign, direction))
     scored.sort(key=lambda s: (s[0], s[1]), reverse=True)
     out = []
     for score, neg_rms, rot, t, assign, _direction in scored[:top_k]:

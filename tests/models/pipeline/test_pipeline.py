@@ -109,3 +109,14 @@ def test_network_batch_calls_the_predictor_once(box, gripper):
     res = run_pipeline_batch([inp, inp], fake)
     assert fake.calls == 1
     assert all(isinstance(r, SynthesisOutput) and r.heatmap is not None for r in res)
+
+
+def test_masked_refinement_ends_on_allowed_points(box, gripper):
+    pts, _ = box
+    mask = np.abs(pts[:, 0]) > 0.0199  # only the two x faces may be touched
+    out = run_pipeline(_inp(box, gripper, mask=mask))
+    best = out.best
+    assert best is not None and best.quality.success, best.quality.failures
+    allowed = pts[mask]
+    for p in best.contact_points:
+        assert np.min(np.linalg.norm(allowed - p, axis=1)) < 5e-3
