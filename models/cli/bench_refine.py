@@ -2,7 +2,8 @@
 
 Both solve identical local models (linearisations of a hand facing procedural objects from random directions,
 with random finger joints); the objectives must agree and the times are compared (median, ratio). With
-``--refinements N`` it also times N full refinements (force closure, from the evaluation's approach start).
+``--refinements N`` it also times N full refinements (force closure, from the evaluation's approach start) with
+the adaptive trust region and with the paper's fixed one.
 
 Example:
     mani bench refine --hand allegro --steps 40 --refinements 10
@@ -79,16 +80,25 @@ def run(args: argparse.Namespace) -> int:
     console.print(f"ratio (median cvxpy / median native): {np.median(rebuilt) / np.median(native):.1f}x; "
                   f"max relative objective gap {max(gaps):.1e}")
     if args.refinements:
-        times, its, conv = [], [], []
-        for i in tqdm(range(args.refinements), desc="refinements"):
+        # the same starts for the adaptive trust region (default) and the paper's fixed s_q, s_f
+        starts = []
+        for i in range(args.refinements):
             obj = objects[i % len(objects)]
             cloud = PointCloudField(obj.points, obj.normals)
             task = closure_task(np.zeros(3), characteristic_length(obj.points, np.zeros(3)))
-            res = refine(hand, cloud, task, approach_start(hand, cloud, np.zeros(3), rng), 0.5, RefineConfig())
-            times.append(res.seconds)
-            its.append(res.iterations)
-            conv.append(res.converged)
-        console.print(f"refinement: median {np.median(times):.3f} s, p90 {np.percentile(times, 90):.3f} s, "
-                      f"median {np.median(its):.0f} iterations ({1e3 * np.sum(times) / max(1, np.sum(its)):.1f} "
-                      f"ms/iteration), converged {100 * np.mean(conv):.0f} %")
+            starts.append((cloud, task, approach_start(hand, cloud, np.zeros(3), rng)))
+        rows = Table(title=f"{args.refinements} force-closure refinements from approach starts")
+        for col in ("trust region", "converged %", "median s", "p90 s", "median it", "ms / it"):
+            rows.add_column(col, justify="right")
+        for label, cfg in (("adaptive", RefineConfig()), ("fixed", RefineConfig(adaptive=False))):
+            times, its, conv = [], [], []
+            for cloud, task, start in tqdm(starts, desc=f"refinements ({label})"):
+                res = refine(hand, cloud, task, start, 0.5, cfg)
+                times.append(res.seconds)
+                its.append(res.iterations)
+                conv.append(res.converged)
+            rows.add_row(label, f"{100 * np.mean(conv):.0f}", f"{np.median(times):.3f}",
+                         f"{np.percentile(times, 90):.3f}", f"{np.median(its):.0f}",
+                         f"{1e3 * np.sum(times) / max(1, np.sum(its)):.1f}")
+        console.print(rows)
     return EXIT_OK
