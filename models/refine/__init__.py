@@ -1,0 +1,40 @@
+"""Wrench-based hand pose refinement (paper §III-B): target wrenches, contact forces, the iterative SOCP,
+force closure, articulated objects, masked regions, the direct-grasp baseline, verification and evaluation.
+
+Modules: `wrench` (Eq. 4-5, P^J), `grasp` (G_i, cones), `forces` (Eq. 6-8, native Clarabel + CVXPY reference),
+`closure` (Ferrari–Canny ε), `field` (point-cloud Φ, Φ^R), `state` (iterate, local model), `step` (Eq. 9-16, native
++ CVXPY reference), `refine` (the loop), `strategy` (approach alignment + restarts), `initialise` (§III-B-1),
+`baseline` (direct grasp), `verify` (DESIGN.md §5), `evaluation` (Table II protocol).
+"""
+
+from models.refine.closure import ferrari_canny
+from models.refine.field import PointCloudField
+from models.refine.forces import ForceSolution, solve_forces, solve_forces_cvxpy
+from models.refine.initialise import InitCandidate, initialise
+from models.refine.refine import Cancelled, RefineConfig, RefineResult, refine
+from models.refine.state import HandPose
+from models.refine.strategy import refine_from_start
+from models.refine.verify import Verification, verify
+from models.refine.wrench import WrenchTask, articulated_task, closure_task, rigid_task
+
+__all__ = [
+    "Cancelled",
+    "ForceSolution",
+    "HandPose",
+    "InitCandidate",
+    "PointCloudField",
+    "RefineConfig",
+    "RefineResult",
+    "Verification",
+    "WrenchTask",
+    "articulated_task",
+    "closure_task",
+    "ferrari_canny",
+    "initialise",
+    "refine",
+    "refine_from_start",
+    "rigid_task",
+    "solve_forces",
+    "solve_forces_cvxpy",
+    "verify",
+]
