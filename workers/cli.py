@@ -84,15 +84,17 @@ def supervise(settings_json: str, concurrency: int) -> int:
         return subprocess.Popen([sys.executable, "-m", "workers.worker"], env=env), time.monotonic()
 
     children = [spawn() for _ in range(concurrency)]
+    quick_deaths = [0] * concurrency
     log.info("started %d workers", concurrency)
     while not stopping:
-        time.sleep(0.2)
+        time.sleep(0.1)
         for i, (proc, born) in enumerate(children):
             code = proc.poll()
             if code is not None and not stopping:
                 log.warning("worker pid %d exited with code %s; restarting", proc.pid, code)
-                if time.monotonic() - born < 2.0:
-                    time.sleep(1.0)  # crash loop: slow down
+                quick_deaths[i] = quick_deaths[i] + 1 if time.monotonic() - born < 5.0 else 0
+                if quick_deaths[i] > 2:
+                    time.sleep(min(10.0, 0.5 * quick_deaths[i]))  # crash loop: slow down
                 children[i] = spawn()
     for proc, _ in children:
         if proc.poll() is None:
