@@ -174,7 +174,9 @@ def _start_service(args: argparse.Namespace) -> tuple[subprocess.Popen[bytes], s
     return proc, f"http://127.0.0.1:{port}"
 
 
-def _wait_ready(url: str, proc: subprocess.Popen[bytes] | None, timeout: float = 300) -> None:
+def _wait_ready(url: str, proc: subprocess.Popen[bytes] | None, workers: int, timeout: float = 300) -> None:
+    """Until ``workers`` workers are live (``/readyz`` counts them; "ready" also needs trained weights, which
+    the direct-grasp requests of this benchmark do not use)."""
     import httpx
 
     deadline = time.monotonic() + timeout
@@ -182,12 +184,13 @@ def _wait_ready(url: str, proc: subprocess.Popen[bytes] | None, timeout: float =
         if proc is not None and proc.poll() is not None:
             raise RuntimeError(f"the service exited with code {proc.returncode}")
         try:
-            if httpx.get(f"{url}/readyz", timeout=2).status_code == 200:
+            response = httpx.get(f"{url}/readyz", timeout=2)
+            if response.status_code == 200 or response.json().get("workers", 0) >= workers:
                 return
-        except httpx.HTTPError:
+        except (httpx.HTTPError, ValueError):
             pass
         time.sleep(0.5)
-    raise RuntimeError(f"{url} was not ready after {timeout:.0f} s")
+    raise RuntimeError(f"{url}: fewer than {workers} live workers after {timeout:.0f} s")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -197,7 +200,7 @@ def run(args: argparse.Namespace) -> int:
     levels = [int(c) for c in args.clients.split(",") if c.strip()]
     proc, url = (None, args.url.rstrip("/")) if args.url else _start_service(args)
     try:
-        _wait_ready(url, proc)
+        _wait_ready(url, proc, args.workers if proc is not None else 1)
         headers = {"Content-Type": "application/json"}
         if args.key:
             headers["Authorization"] = f"Bearer {args.key}"
