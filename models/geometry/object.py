@@ -45,6 +45,7 @@ class ObjectGeometry:
     normals: np.ndarray
     mesh: trimesh.Trimesh
     tree: cKDTree = field(repr=False)
+    _region: tuple[int, np.ndarray, cKDTree] | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def from_points(
@@ -91,8 +92,12 @@ class ObjectGeometry:
         if mask.shape != (len(self.points),) or not mask.any():
             raise InvalidPointCloud(f"mask must be ({len(self.points)},) bool with at least one True")
         x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
-        allowed = np.nonzero(mask)[0]
-        _, k = cKDTree(self.points[allowed]).query(x)
+        key = hash(mask.tobytes())
+        if self._region is None or self._region[0] != key:  # one tree per mask, reused across iterations
+            allowed = np.nonzero(mask)[0]
+            self._region = (key, allowed, cKDTree(self.points[allowed]))
+        _, allowed, region_tree = self._region
+        _, k = region_tree.query(x)
         idx = allowed[k]
         d = x - self.points[idx]
         dist = np.linalg.norm(d, axis=1)

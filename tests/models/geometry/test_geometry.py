@@ -66,6 +66,10 @@ def test_masked_distance_uses_allowed_region_only() -> None:
     assert mask[idx[0]]
     assert phi[0] > 0.049  # it must travel to the +x face
     np.testing.assert_allclose(np.linalg.norm(grad, axis=1), 1.0)
+    top = geom.points[:, 2] > 0.019  # another mask: the +z face, right below the query (cached tree replaced)
+    phi2, grad2, _ = geom.masked_signed_distance(x, top)
+    assert phi2[0] == pytest.approx(0.03, abs=2e-3)
+    np.testing.assert_allclose(grad2[0], [0, 0, 1], atol=0.1)
     with pytest.raises(InvalidPointCloud):
         geom.masked_signed_distance(x, np.zeros(len(geom.points), bool))
 
