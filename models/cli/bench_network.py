@@ -93,7 +93,8 @@ def run(args: argparse.Namespace) -> int:
     exact_peak = _reset_peak_rss()
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} CPUs, torch {torch.__version__}, "
-        f"{torch.get_num_threads()} threads; N={args.points}, K={args.samples}, {args.iters} timed calls"
+        f"{torch.get_num_threads()} threads; N={args.points}, K={args.samples}, {args.iters} timed calls; "
+        f"load average at start {os.getloadavg()[0]:.1f}"
     )
     print(f"peak memory: process peak RSS {'during each row' if exact_peak else 'so far (cumulative)'}")
     header = f"{'config':<8} {'params':>10} {'batch':>5} {'p50 ms':>9} {'p90 ms':>9} {'samples/s':>10} {'peak MB':>8}"

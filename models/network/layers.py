@@ -85,7 +85,8 @@ class SetAbstraction(nn.Module):
 
     def __init__(self, in_dim: int, widths: Sequence[int], grouped_norm: bool = True) -> None:
         super().__init__()
-        self.first = SplitLinear([3, in_dim], widths[0])
+        self.lin_x = nn.Linear(3, widths[0])
+        self.lin_f = nn.Linear(in_dim, widths[0], bias=False)
         self.act = norm_act(widths[0], grouped_norm)
         self.rest = MLP(widths[0], widths[1:], norm=grouped_norm) if len(widths) > 1 else nn.Identity()
         self.post = nn.Identity() if grouped_norm else nn.LayerNorm(widths[-1])
@@ -100,9 +101,9 @@ class SetAbstraction(nn.Module):
         radius: float,
     ) -> torch.Tensor:
         """Args: xyz (B, N, 3), feats (B, N, C), new_xyz (B, M, 3), group (B, M, k). Returns (B, M, C')."""
-        lin_x, lin_f = self.first.parts[0], self.first.parts[1]
-        per_point = lin_f(feats) + F.linear(xyz / radius, lin_x.weight)
-        per_centre = F.linear(new_xyz / radius, lin_x.weight) - lin_x.bias
+        w_x = self.lin_x.weight
+        per_point = self.lin_f(feats) + F.linear(xyz / radius, w_x)
+        per_centre = F.linear(new_xyz / radius, w_x) - self.lin_x.bias
         h = gather_points(per_point, group) - per_centre.unsqueeze(2)
         return self.post(self.rest(self.act(h)).amax(dim=2))
 

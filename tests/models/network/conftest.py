@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 
 import numpy as np
 import pytest
+import torch
 
 from models.network import ContactPredictor, NetworkInput
 
@@ -18,6 +19,19 @@ def sphere(n: int, radius: float, rng: np.random.Generator) -> tuple[np.ndarray,
 
 
 MakeInput = Callable[..., NetworkInput]
+
+
+@pytest.fixture(scope="package", autouse=True)
+def one_torch_thread() -> Iterator[None]:
+    """Run these tests on one torch thread (restored afterwards).
+
+    The tests check values, not speed; with 2 intra-op threads on a loaded 2-core machine, OpenMP barriers
+    made small ops up to 10× slower (measured), one thread keeps the suite well under its time budget.
+    """
+    before = torch.get_num_threads()
+    torch.set_num_threads(1)
+    yield
+    torch.set_num_threads(before)
 
 
 @pytest.fixture

@@ -58,9 +58,9 @@ def test_create_model_is_seeded() -> None:
 
 def test_training_forward_and_gradients_reach_every_parameter() -> None:
     model = create_model("cpu", seed=0)
-    obj, hand, heat, force = random_batch(2, 600)
+    obj, hand, heat, force = random_batch(2, 256)
     out = model(obj, hand, heat, force, generator=torch.Generator().manual_seed(0))
-    assert out["heat"].shape == (2, 600) and out["force"].shape == (2, 600, 3)
+    assert out["heat"].shape == (2, 256) and out["force"].shape == (2, 256, 3)
     assert out["mu"].shape == (2, 64) and out["logvar"].shape == (2, 64)
     loss = cvae_loss(out, heat, force, model.config)["loss"]
     loss.backward()
