@@ -1,7 +1,8 @@
 """`mani bench hands`: forward kinematics + all fingertip Jacobians per hand (batch 1 and 64), sphere centres +
 Jacobians, and the KD-tree signed distance per 100 query points.
 
-Median of ``--iters`` timed calls after 3 warm-up calls, float64 (what the refinement uses) unless ``--float32``.
+Median and minimum of ``--iters`` timed calls after 3 warm-up calls (the minimum is the least disturbed call on a
+shared machine), float64 (what the refinement uses) unless ``--float32``, one torch thread unless ``--threads``.
 """
 
 from __future__ import annotations
@@ -32,6 +33,11 @@ def register(subparsers: Any) -> None:
 
 
 def _median_ms(fn: Any, iters: int) -> float:
+    return _times_ms(fn, iters)[0]
+
+
+def _times_ms(fn: Any, iters: int) -> tuple[float, float]:
+    """(median, min) wall milliseconds of ``iters`` calls after 3 warm-up calls (min: least disturbed call)."""
     for _ in range(3):
         fn()
     times = []
@@ -40,7 +46,7 @@ def _median_ms(fn: Any, iters: int) -> float:
         fn()
         times.append(time.perf_counter() - t0)
     times.sort()
-    return 1e3 * times[len(times) // 2]
+    return 1e3 * times[len(times) // 2], 1e3 * times[0]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -60,7 +66,10 @@ def run(args: argparse.Namespace) -> int:
     print(
         f"machine: {cpu}, {os.cpu_count()} cores, torch {torch.__version__}, threads {torch.get_num_threads()}, {kind}"
     )
-    header = f"{'hand':<14} {'dof':>4} {'tips':>4} {'spheres':>7} {'batch':>5} {'tips+J ms':>10} {'spheres+J ms':>13}"
+    header = (
+        f"{'hand':<14} {'dof':>4} {'tips':>4} {'spheres':>7} {'batch':>5} {'tips+J ms p50/min':>18} "
+        f"{'spheres+J ms p50/min':>21}"
+    )
     print(header)
     print("-" * len(header))
     for name in names:
@@ -71,10 +80,11 @@ def run(args: argparse.Namespace) -> int:
             quat = torch.as_tensor(g.normal(size=(B, 4)), dtype=dtype)
             quat = quat / quat.norm(dim=-1, keepdim=True)
             q = torch.as_tensor(g.uniform(hand.lower, hand.upper, size=(B, hand.dof)), dtype=dtype)
-            t_tip = _median_ms(lambda: hand.fingertip_jacobians(pos, quat, q), args.iters)  # noqa: B023
-            t_sph = _median_ms(lambda: hand.spheres(pos, quat, q), args.iters)  # noqa: B023
+            tip50, tipmin = _times_ms(lambda: hand.fingertip_jacobians(pos, quat, q), args.iters)  # noqa: B023
+            sph50, sphmin = _times_ms(lambda: hand.spheres(pos, quat, q), args.iters)  # noqa: B023
+            t_tip, t_sph = f"{tip50:.3f}/{tipmin:.3f}", f"{sph50:.3f}/{sphmin:.3f}"
             print(f"{name:<14} {hand.dof:>4} {hand.num_fingertips:>4} {len(hand.sphere_radii):>7} {B:>5} "
-                  f"{t_tip:>10.3f} {t_sph:>13.3f}")  # fmt: skip
+                  f"{t_tip:>18} {t_sph:>21}")  # fmt: skip
     g = np.random.default_rng(0)
     for n in (int(v) for v in args.sdf_points.split(",") if v):
         d = g.normal(size=(n, 3))
