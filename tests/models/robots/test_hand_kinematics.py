@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import torch
 
-from models.robots import Hand, get_hand, list_hands
+from models.robots import Hand, get_hand, list_hands, load_hand
 from models.robots.registry import BUILTINS
 
 D64 = torch.float64
@@ -117,3 +117,30 @@ def test_fingertips_lie_ahead_along_the_approach_axis(name: str) -> None:
     pos, quat = torch.zeros(1, 3, dtype=D64), torch.tensor([[1.0, 0, 0, 0]], dtype=D64)
     tips = hand.fingertips(pos, quat, torch.as_tensor(hand.rest[None]))[0].numpy()
     assert float(tips.mean(0) @ hand.approach_axis) > 0.02
+
+
+MIMIC_URDF = b"""<robot name="m"><link name="palm"><collision><geometry><box size="0.05 0.05 0.02"/></geometry>
+</collision></link><link name="a"><collision><origin xyz="0 0 0.03"/><geometry><cylinder radius="0.008" length="0.06"/>
+</geometry></collision></link><link name="b"><collision><origin xyz="0 0 0.02"/><geometry>
+<box size="0.01 0.01 0.04"/></geometry></collision></link><link name="s"><collision><geometry>
+<sphere radius="0.01"/></geometry></collision></link><link name="tip"/>
+<joint name="ja" type="revolute"><parent link="palm"/><child link="a"/><origin xyz="0.02 0 0.01" rpy="0.1 0.2 0.3"/>
+<axis xyz="0 1 0"/><limit lower="-1" upper="1"/></joint>
+<joint name="jb" type="revolute"><parent link="a"/><child link="b"/><origin xyz="0 0 0.06"/><axis xyz="1 1 0"/>
+<limit lower="-2" upper="2"/><mimic joint="ja" multiplier="-0.5" offset="0.3"/></joint>
+<joint name="js" type="prismatic"><parent link="palm"/><child link="s"/><origin xyz="-0.02 0 0.01"/>
+<axis xyz="0 0 1"/><limit lower="0" upper="0.05"/><mimic joint="ja" multiplier="0.02"/></joint>
+<joint name="jt" type="fixed"><parent link="b"/><child link="tip"/><origin xyz="0 0.005 0.04" rpy="0 0.5 0"/></joint>
+</robot>"""
+
+
+def test_user_mimic_with_negative_multiplier_offset_and_prismatic() -> None:
+    hand = load_hand(MIMIC_URDF, fingertips=["tip", "s"], tip_offsets=[[0.001, 0.002, 0.003], [0, 0, 0.01]])
+    assert hand.joint_names == ["ja"]
+    pos, quat, q = _random_state(hand, B=4, seed=5)
+    J_fd = _fd_jacobian(hand, hand.fingertips, pos, quat, q)
+    assert float((hand.fingertip_jacobians(pos, quat, q)[1] - J_fd).abs().max()) < 1e-6
+    Jc_fd = _fd_jacobian(hand, lambda p_, q_, j_: hand.spheres(p_, q_, j_, jacobian=False)[0], pos, quat, q)
+    assert float((hand.spheres(pos, quat, q)[1] - Jc_fd).abs().max()) < 1e-6
+    # jb = -0.5 ja + 0.3 must stay in [-2, 2]; js = 0.02 ja in [0, 0.05] tightens ja to [0, 1]
+    assert hand.lower[0] == pytest.approx(0.0) and hand.upper[0] == pytest.approx(1.0)
