@@ -148,7 +148,7 @@ def _run(pipeline: Pipeline, link: _Link, raw_jobs: list[dict[str, Any]]) -> Non
         outcome = outcomes[job.id]
         body = outcome.model_dump(mode="python", exclude_none=True)
         key = "error" if isinstance(outcome, ErrorBody) else "result"
-        timings = {**getattr(outcome, "timings", {}), "batch": elapsed}
+        timings = {**getattr(outcome, "timings", {}), "run": elapsed}
         link.send({"op": "done", "id": job.id, key: body, "timings": timings})
         with job_context(job.id):
             log.info("job finished", extra={"outcome": outcome.type if isinstance(outcome, ErrorBody) else "ok"})

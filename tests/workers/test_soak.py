@@ -52,7 +52,9 @@ def test_soak_random_kills(redis_url: str, redis_prefix: str, tmp_path: Path) ->
             entry = json.loads(line)
             if entry.get("msg") == "job finished" and entry.get("state") == "succeeded":
                 finished[entry["job_id"]] += 1
-    assert sum(finished.values()) == succeeded and max(finished.values()) == 1  # zero duplicated results
+    assert max(finished.values()) == 1  # zero duplicated results
+    # a worker killed between committing a result and writing its log line leaves one line fewer
+    assert succeeded - kills <= sum(finished.values()) <= succeeded
 
 
 async def _soak(url: str, prefix: str) -> tuple[dict[str, JobState], int, int]:
