@@ -7,6 +7,7 @@ The embedded run is in the default suite; the Redis run of the same request is `
 from __future__ import annotations
 
 import importlib.util
+import shutil
 import time
 from collections.abc import Iterator
 
@@ -17,7 +18,7 @@ from clients.schemas import SynthesisResult
 from service.app import create_app
 from service.settings import Settings
 
-from .browser import dump_dom, screenshot
+from .browser import screenshot
 from .helpers import request_body
 from .server import serving
 from .workers import start_queue_and_workers
@@ -53,8 +54,9 @@ def test_direct_grasp_and_viewer(base: str) -> None:
     proposal = result.proposals[0]
     assert proposal.contact_points.shape == proposal.forces.shape and len(proposal.joint_values)
     job_id = response.headers["x-job-id"]
-    url = f"{base}/v1/jobs/{job_id}/view"
-    dom = dump_dom(url, budget_ms=4000)
-    assert "could not load" not in dom and "Ferrari–Canny ε" in dom and hand in dom
-    assert "gl-container" in dom and "3D view unavailable" not in dom
-    screenshot(url, f"viewer_{hand}.png", budget_ms=4000)
+    scene = httpx.get(f"{base}/v1/jobs/{job_id}/scene").json()
+    assert len(scene["points"]) == 512 and scene["job"]["result"]["proposals"]
+    # The page's DOM is checked by test_pages.py; here, a picture of a real result (artifacts/service/).
+    if any(shutil.which(name) for name in ("chromium", "chromium-browser", "google-chrome")):
+        png = screenshot(f"{base}/v1/jobs/{job_id}/view", f"viewer_{hand}.png", budget_ms=4000)
+        assert png.stat().st_size > 10_000
