@@ -123,9 +123,8 @@ def _finish(
     starts: list[HandPose] = []
     if inp.method == "direct_grasp":
         for k in range(inp.num_proposals):
-            pose, _ = direct_grasp(hand, prep.cloud, _start_pose(prep) if k == 0 else _start_pose(
-                Prepared(**{**prep.__dict__, "inp": _reseed(inp, inp.seed + k)})), prep.centre)
-            starts.append(pose)
+            start = _start_pose(replace(prep, inp=replace(inp, seed=inp.seed + k)))
+            starts.append(direct_grasp(hand, prep.cloud, start, prep.centre)[0])
     else:
         rest = rest_geometry(hand)
         sets = contact_sets(prep, net_out)
@@ -178,10 +177,6 @@ def _finish(
         heat, force = net_out.heatmaps[0].astype(np.float64), net_out.force_maps[0].astype(np.float64)
     return SynthesisOutput(hand=getattr(hand, "name", "hand"), proposals=proposals, heatmap=heat, force_map=force,
                            timings=timings)
-
-
-def _reseed(inp: SynthesisInput, seed: int) -> SynthesisInput:
-    return replace(inp, seed=seed)
 
 
 def _expired(start: HandPose) -> Any:
