@@ -56,10 +56,10 @@ def stack(pipeline: str, options: dict[str, Any], concurrency: int = 1, ready_ti
         while not server.started:
             assert thread.is_alive() and time.monotonic() < deadline, "uvicorn did not start"
             time.sleep(0.05)
-        with Client(url, retries=0) as client:
-            while not client.ready().ready:
+        with Client(url, retries=0) as client:  # workers up (a model is not needed for every method)
+            while (ready := client.ready()).workers < concurrency:
                 if time.monotonic() > deadline:
-                    pytest.skip(f"workers not ready in {ready_timeout:g} s: {client.ready().detail}")
+                    pytest.skip(f"workers not up in {ready_timeout:g} s: {ready.detail}")
                 time.sleep(0.1)
         yield url
     finally:
@@ -131,6 +131,7 @@ def test_batch_through_worker_processes(url: str) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(900)
 def test_direct_grasp_with_a_built_in_hand() -> None:
     if importlib.util.find_spec("workers.models_pipeline") is None:
         pytest.skip("the science pipeline (workers.models_pipeline) is not part of this tree yet")
@@ -139,7 +140,7 @@ def test_direct_grasp_with_a_built_in_hand() -> None:
     from clients.sdk import delta_pose, object_from_file
 
     box = object_from_file(Path(__file__).resolve().parents[3] / "examples" / "data" / "box.npz")
-    with stack("workers.models_pipeline:ModelsPipeline", {}, ready_timeout=300) as base, Client(base) as client:
+    with stack("workers.models_pipeline:ModelsPipeline", {}, ready_timeout=600) as base, Client(base) as client:
         result = client.synthesize(box, delta_pose([0, 0, 0.05]), "leap", method="direct_grasp", timeout=120)
         best = result.best
         assert best is not None and best.contact_points.shape[1] == 3
