@@ -297,3 +297,10 @@ def test_sse_events_over_uvicorn() -> None:
 )
 def test_accept_negotiation(client: TestClient, accept: str, expected: str) -> None:
     assert client.get("/healthz", headers={"Accept": accept}).headers["content-type"] == expected
+
+
+def test_robot_body_is_size_capped() -> None:
+    urdf = '<robot name="r"><link name="tip"/>' + "<!-- padding -->" * 200 + "</robot>"
+    with make_client(max_robot_bytes=2048) as client:
+        response = client.post("/v1/robots", json={"name": "big_hand", "urdf": urdf, "fingertips": ["tip"]})
+        assert "2048" in assert_error(response, 413, "PayloadTooLarge").error
