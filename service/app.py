@@ -34,9 +34,9 @@ With API keys configured, `/v1` needs `Authorization: Bearer <key>`."""
 
 def build_queue(settings: Settings) -> JobQueue:
     """The queue the settings ask for: Redis Streams with ``redis_url``, else embedded workers."""
-    from workers.queue import create_queue  # type: ignore[attr-defined]
+    from workers.queue import create_queue
 
-    return create_queue(settings.queue_settings())  # type: ignore[no-any-return]
+    return create_queue(settings.queue_settings())
 
 
 def create_app(settings: Settings | None = None, *, queue: JobQueue | None = None) -> FastAPI:
