@@ -39,90 +39,12 @@ from clients.schemas import (
     WorkerPublic,
 )
 from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
+from workers.queue.embedded_parts import ChildProcess, JobRecord, WorkerHandle, settle
 from workers.queue.records import new_id, result_expired_error, state_for_error, worker_lost_error
 from workers.settings import QueueSettings
 
 log = logging.getLogger("workers.queue.embedded")
 _TOMBSTONES_PER_RESULT = 10
-
-
-class _Job:
-    __slots__ = (
-        "batch_id", "cancel", "created_at", "deadline", "deliveries", "error", "finished_at", "id", "payload",
-        "progress", "result", "robot", "started_at", "state", "timings", "worker",
-    )  # fmt: skip
-
-    def __init__(self, job_id: str, payload: bytes, robot: str | None, deadline: float | None, batch: str | None):
-        self.id, self.payload, self.robot, self.deadline, self.batch_id = job_id, payload, robot, deadline, batch
-        self.created_at = time.time()
-        self.state = JobState.QUEUED
-        self.progress = JobProgress()
-        self.started_at: float | None = None
-        self.finished_at: float | None = None
-        self.deliveries = 0
-        self.worker: str | None = None
-        self.timings: dict[str, float] = {}
-        self.result: SynthesisResult | None = None
-        self.error: ErrorBody | None = None
-        self.cancel = False
-
-    def public(self, with_result: bool) -> JobPublic:
-        return JobPublic(
-            id=self.id,
-            state=self.state,
-            progress=self.progress.model_copy(),
-            created_at=self.created_at,
-            started_at=self.started_at,
-            finished_at=self.finished_at,
-            deadline=self.deadline,
-            deliveries=self.deliveries,
-            worker=self.worker,
-            batch_id=self.batch_id,
-            timings=dict(self.timings),
-            result=self.result if with_result else None,
-            error=self.error,
-        )
-
-
-class _Process:
-    """The few `multiprocessing.Process` methods we use, over a `subprocess.Popen`."""
-
-    def __init__(self, popen: subprocess.Popen[bytes]) -> None:
-        self.popen = popen
-        self.pid = popen.pid
-
-    @property
-    def exitcode(self) -> int | None:
-        return self.popen.poll()
-
-    def is_alive(self) -> bool:
-        return self.popen.poll() is None
-
-    def join(self, timeout: float | None = None) -> None:
-        with contextlib.suppress(subprocess.TimeoutExpired):
-            self.popen.wait(timeout)
-
-    def terminate(self) -> None:
-        with contextlib.suppress(ProcessLookupError):
-            self.popen.terminate()
-
-    def kill(self) -> None:
-        with contextlib.suppress(ProcessLookupError):
-            self.popen.kill()
-
-
-class _Worker:
-    def __init__(self, worker_id: str, process: _Process, conn: Connection) -> None:
-        self.id, self.process, self.conn = worker_id, process, conn
-        self.lock = threading.Lock()
-        self.info: WorkerPublic | None = None
-        self.inflight: set[str] = set()
-        self.jobs_done = 0
-
-    def send(self, message: dict[str, Any]) -> None:
-        data = pack(message)
-        with self.lock:
-            self.conn.send_bytes(data)
 
 
 class EmbeddedQueue(JobQueue):
@@ -134,13 +56,13 @@ class EmbeddedQueue(JobQueue):
         base = settings or QueueSettings()
         self.settings = base.model_copy(update=overrides) if overrides else base
         self._lock = threading.Lock()
-        self._jobs: dict[str, _Job] = {}
+        self._jobs: dict[str, JobRecord] = {}
         self._pending: deque[str] = deque()
         self._finished: OrderedDict[str, None] = OrderedDict()
         self._tombstones: OrderedDict[str, tuple[float, str | None]] = OrderedDict()
         self._batches: OrderedDict[str, list[str]] = OrderedDict()
         self._waiters: dict[str, list[tuple[asyncio.AbstractEventLoop, asyncio.Future[None]]]] = {}
-        self._workers: dict[str, _Worker] = {}
+        self._workers: dict[str, WorkerHandle] = {}
         self._robots: dict[str, RobotPublic] = {}
         self._registered: dict[str, RobotRegister] = {}
         self._robot_replies: dict[str, tuple[asyncio.AbstractEventLoop, asyncio.Future[dict[str, Any]]]] = {}
@@ -180,7 +102,7 @@ class EmbeddedQueue(JobQueue):
         if self._pump is not None:
             await asyncio.get_running_loop().run_in_executor(None, self._pump.join, 10)
 
-    def _join(self, workers: list[_Worker]) -> None:
+    def _join(self, workers: list[WorkerHandle]) -> None:
         deadline = time.monotonic() + 10
         for worker in workers:
             worker.process.join(max(0.0, deadline - time.monotonic()))
@@ -189,7 +111,7 @@ class EmbeddedQueue(JobQueue):
                 worker.process.join(2)
                 worker.process.kill()
 
-    def _spawn(self) -> _Worker:
+    def _spawn(self) -> WorkerHandle:
         worker_id = new_id()[:12]
         parent, child = socket.socketpair()
         process = subprocess.Popen(
@@ -201,7 +123,7 @@ class EmbeddedQueue(JobQueue):
         child.close()
         assert process.stdin is not None
         process.stdin.close()
-        worker = _Worker(worker_id, _Process(process), Connection(parent.detach()))
+        worker = WorkerHandle(worker_id, ChildProcess(process), Connection(parent.detach()))
         self._workers[worker_id] = worker
         return worker
 
@@ -220,7 +142,7 @@ class EmbeddedQueue(JobQueue):
                 raise QueueFull(f"queue holds {len(self._pending)} jobs (max {self.settings.max_queue})", 1.0)
             ids = []
             for request, payload in zip(requests, payloads, strict=True):
-                job = _Job(new_id(), payload, request.robot.name, deadline, batch_id)
+                job = JobRecord(new_id(), payload, request.robot.name, deadline, batch_id)
                 self._jobs[job.id] = job
                 self._pending.append(job.id)
                 ids.append(job.id)
@@ -263,7 +185,7 @@ class EmbeddedQueue(JobQueue):
         return await self.get(job_id)
 
     async def cancel(self, job_id: str) -> JobPublic:
-        target: _Worker | None = None
+        target: WorkerHandle | None = None
         with self._lock:
             job = self._jobs.get(job_id)
             if job is None:
@@ -416,9 +338,9 @@ class EmbeddedQueue(JobQueue):
                         self._finish(job, error=ErrorBody.model_validate(msg["error"]))
             elif op == "robot" and (reply := self._robot_replies.get(msg["rid"])):
                 loop, future = reply
-                loop.call_soon_threadsafe(_settle, future, msg)
+                loop.call_soon_threadsafe(settle, future, msg)
 
-    def _lost(self, worker: _Worker, detail: str) -> None:
+    def _lost(self, worker: WorkerHandle, detail: str) -> None:
         with self._lock:
             self._workers.pop(worker.id, None)
             max_deliveries = self.settings.max_deliveries
@@ -449,7 +371,7 @@ class EmbeddedQueue(JobQueue):
         worker.conn.close()
 
     def _dispatch(self) -> None:
-        sends: list[tuple[_Worker, list[dict[str, Any]]]] = []
+        sends: list[tuple[WorkerHandle, list[dict[str, Any]]]] = []
         with self._lock:
             idle = [w for w in self._workers.values() if w.info is not None and not w.inflight]
             now = time.time()
@@ -495,7 +417,7 @@ class EmbeddedQueue(JobQueue):
                 if len(self._tombstones) > _TOMBSTONES_PER_RESULT * self.settings.max_results:
                     self._tombstones.popitem(last=False)
 
-    def _finish(self, job: _Job, *, result: SynthesisResult | None = None, error: ErrorBody | None = None) -> None:
+    def _finish(self, job: JobRecord, *, result: SynthesisResult | None = None, error: ErrorBody | None = None) -> None:
         """Make ``job`` terminal (caller holds the lock) and wake its waiters."""
         if job.state is JobState.QUEUED:
             with contextlib.suppress(ValueError):
@@ -512,9 +434,4 @@ class EmbeddedQueue(JobQueue):
             job.timings["total"] = job.finished_at - job.created_at
         self._finished[job.id] = None
         for loop, future in self._waiters.pop(job.id, []):
-            loop.call_soon_threadsafe(_settle, future, None)
-
-
-def _settle(future: asyncio.Future[Any], value: Any) -> None:
-    if not future.done():
-        future.set_result(value)
+            loop.call_soon_threadsafe(settle, future, None)
