@@ -14,6 +14,7 @@ supervises several of these.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import signal
@@ -60,6 +61,7 @@ class RedisWorker:
         self.info: WorkerPublic | None = None
         self._begin, self._finish = self.r.register_script(BEGIN), self.r.register_script(FINISH)
         self._last_claim = 0.0
+        self._last_tidy = time.monotonic()
 
     # ---- lifecycle -------------------------------------------------------------------------------------------
     def run(self) -> None:
@@ -150,9 +152,21 @@ class RedisWorker:
         pipe.execute()
 
     # ---- consuming -------------------------------------------------------------------------------------------
+    def _tidy(self) -> None:
+        """Forget consumers of workers that died long ago and own nothing (their names are never reused)."""
+        idle_ms = 1000 * max(60.0, 10 * self.settings.visibility_timeout)
+        for consumer in self.r.xinfo_consumers(self.keys.stream, GROUP):
+            name = consumer["name"].decode() if isinstance(consumer["name"], bytes) else consumer["name"]
+            if name != self.id and int(consumer["pending"]) == 0 and int(consumer["idle"]) > idle_ms:
+                self.r.xgroup_delconsumer(self.keys.stream, GROUP, name)
+
     def _take(self) -> list[tuple[bytes, dict[bytes, bytes]]]:
         size = self.settings.batch_size
         now = time.monotonic()
+        if now - self._last_tidy > 30.0:
+            self._last_tidy = now
+            with contextlib.suppress(ResponseError):
+                self._tidy()
         if now - self._last_claim > min(1.0, self.settings.visibility_timeout / 4):
             self._last_claim = now
             idle = int(self.settings.visibility_timeout * 1000)
