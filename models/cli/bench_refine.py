@@ -1,6 +1,7 @@
 """`mani bench refine`: one SCP step with Clarabel's native API vs the same step rebuilt in CVXPY, in one run.
 
-Both solve identical local models (linearisations of a hand facing procedural objects from random directions,
+Times are CPU seconds of this process (one thread), robust to other load on the machine. Both solve identical
+local models (linearisations of a hand facing procedural objects from random directions,
 with random finger joints); the objectives must agree and the times are compared (median, ratio). With
 ``--refinements N`` it also times N full refinements (force closure, from the evaluation's approach start) with
 the adaptive trust region and with the paper's fixed one.
@@ -62,11 +63,11 @@ def run(args: argparse.Namespace) -> int:
         q = np.clip(start.q + rng.normal(scale=0.2, size=hand.dof), hand.lower, hand.upper)
         lin = linearise(hand, HandPose(start.palm_pos, start.palm_quat, q), cloud, task, 0.5, 1.0)
         params = StepParams(base, 0.25)
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         a = solve_step(lin, params)
-        t1 = time.perf_counter()
+        t1 = time.process_time()
         b = solve_step_cvxpy(lin, params)
-        t2 = time.perf_counter()
+        t2 = time.process_time()
         native.append(t1 - t0)
         rebuilt.append(t2 - t1)
         gaps.append(abs(a.objective - b.objective) / max(1.0, abs(b.objective)))

@@ -5,7 +5,7 @@ Protocol, per object and grasp:
 1. Known-feasible palm pose: the palm faces the object centre from a random direction with a random roll about
    it, its rest fingertips centred on the object and then backed off until no palm/finger-body sphere touches
    (fingertips may start inside); refinement for force closure with the default settings; the first result that
-   passes verification is the ground truth (up to ``attempts`` tries, else the grasp is skipped and counted in
+   passes verification is the ground truth (up to ``attempts`` = 10 tries, else the grasp is skipped and counted in
    ``skipped``). (Random contacts + §III-B-1 initialisation, tried first, gave feasible grasps 3× less often.)
 2. Target: force closure (w = 0), or a task wrench that the ground-truth grasp can produce: random forces in the
    friction cones at its contacts, w = Σ G_i f_i, kept when the forces that give the unit wrench w/‖w‖ respect the
@@ -103,7 +103,7 @@ def spread_contacts(points: np.ndarray, count: int, rng: np.random.Generator) ->
 
 def feasible_grasp(
     hand: Any, cloud: PointCloudField, mesh: Any, task: WrenchTask, mu: float, rng: np.random.Generator,
-    attempts: int = 6, config: RefineConfig | None = None,
+    attempts: int = 10, config: RefineConfig | None = None,
 ) -> HandPose | None:
     """A verified force-closure pose from random contacts (protocol step 1), or None."""
     rest = rest_geometry(hand)
