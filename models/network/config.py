@@ -49,7 +49,7 @@ class NetworkConfig:
     property_hidden: int = 32
     property_dim: int = 10
     # --- PointNet++ set abstractions (φ_o and φ_q) ---
-    grouped_norm: bool = True  # LayerNorm inside the per-neighbour layers (False: after the max-pool only)
+    grouped_norm: bool = True  # BatchNorm inside the per-neighbour layers (False: after the max-pool only)
     # --- object encoder φ_o (PointNet++) ---
     sa_mlps: tuple[tuple[int, ...], ...] = ((32, 32, 64), (64, 64, 128), (128, 128, 256))
     fp_mlps: tuple[tuple[int, ...], ...] = ((256, 256), (128, 128), (128, 128))  # coarse → fine
@@ -167,7 +167,7 @@ def paper() -> NetworkConfig:
 def cpu() -> NetworkConfig:
     """The shipped default, sized for the latency goals on 2 CPU cores (``mani bench network``).
 
-    Against the dataclass defaults, measured per object (N = 2048, batch 8, 1 thread, CPU time): no LayerNorm
+    Against the dataclass defaults, measured per object (N = 2048, batch 8, 1 thread, CPU time): no norm
     inside the grouped layers, 16 neighbours at level 1, a 64-wide ε^o and narrower decoders took the cost
     from ≈55 ms to ≈27 ms with 0.63 M parameters.
     """

@@ -1,7 +1,9 @@
-"""The network can fit a handful of synthetic examples: the loss of Eq. (3) drops by at least 10×.
+"""The network can fit a handful of synthetic examples.
 
-Measured: ≈150 Adam steps on 4 examples of 512 points take ≈20-40 s on 2 cores, so the test is marked slow
-(run with ``pytest -m slow``).
+Stated factors: over 150 Adam steps (lr 2e-3) on 4 examples of 256 points, the loss of Eq. (3) drops at least
+30× and the heatmap MSE ends below 0.2 × the heatmap's variance (so the per-point structure is learnt, not
+only the mean). Measured on the 2-core machine: loss 0.329 → 0.0036 (≈90×) and heatmap MSE 0.0022 against a
+variance of 0.044 at step 140, ≈35 s on one thread, hence marked slow (run with ``pytest -m slow``).
 """
 
 from __future__ import annotations
@@ -13,7 +15,8 @@ import torch
 from models.network import PROPERTY_NAMES, ObjectTensors, create_model, cvae_loss
 
 STEPS = 150
-DROP_FACTOR = 10.0
+DROP_FACTOR = 30.0
+HEAT_VS_VARIANCE = 0.2
 
 
 def synthetic_batch(b: int, n: int) -> tuple[ObjectTensors, torch.Tensor, torch.Tensor, torch.Tensor]:
@@ -24,7 +27,7 @@ def synthetic_batch(b: int, n: int) -> tuple[ObjectTensors, torch.Tensor, torch.
     motion_dir = rng.standard_normal((b, 3))
     motion_dir /= np.linalg.norm(motion_dir, axis=-1, keepdims=True)
     contact = -motion_dir  # push from behind
-    heat = np.exp(-np.square(np.linalg.norm(d - contact[:, None], axis=-1)) / 0.1)
+    heat = np.exp(-np.square(np.linalg.norm(d - contact[:, None], axis=-1)) / 0.5)
     force = heat[..., None] * motion_dir[:, None] * 0.5
     xyz = torch.tensor(d * 0.5, dtype=torch.float32)
     obj = ObjectTensors(
@@ -43,16 +46,19 @@ def synthetic_batch(b: int, n: int) -> tuple[ObjectTensors, torch.Tensor, torch.
 @pytest.mark.slow
 def test_overfit_a_few_examples() -> None:
     torch.manual_seed(0)
-    model = create_model("cpu", seed=0).train()
-    obj, hand, heat, force = synthetic_batch(4, 512)
+    model = create_model("cpu", seed=0).train()  # the package fixture runs this on one torch thread
+    obj, hand, heat, force = synthetic_batch(4, 256)
     opt = torch.optim.Adam(model.parameters(), lr=2e-3)
     gen = torch.Generator().manual_seed(0)
-    losses = []
+    losses, heat_mse = [], []
     for _ in range(STEPS):
         terms = cvae_loss(model(obj, hand, heat, force, generator=gen), heat, force, model.config)
         opt.zero_grad()
         terms["loss"].backward()
         opt.step()
         losses.append(terms["loss"].item())
+        heat_mse.append(terms["heat"].item())
     first, last = np.mean(losses[:5]), np.mean(losses[-5:])
     assert last * DROP_FACTOR < first, f"loss {first:.4f} → {last:.4f}"
+    variance = heat.var(dim=1).mean().item()
+    assert np.mean(heat_mse[-5:]) < HEAT_VS_VARIANCE * variance, f"heat MSE {heat_mse[-5:]} vs var {variance}"
