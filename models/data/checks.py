@@ -5,9 +5,7 @@ against the object: a KD-tree point-to-plane distance on a dense oriented cloud 
 flagged points are confirmed with the mesh's exact signed distance (trimesh). A hand is rejected when any
 point lies deeper than ``PENETRATION_TOL`` inside the object. When `models.geometry` provides
 ``hand_object_penetration`` / ``hand_self_collision`` those are used instead (see `sampling.py`).
-Fingertip bodies are tested separately with ``TIP_PENETRATION_TOL``: the contact point sits on the pad, and a
-rigid pad touching the surface at a tilt dips into it by r(1 − cos θ); we accept up to 5 mm there (a soft pad)
-and 1 mm for every other body.
+These are fast pre-filters; `sampling.exact_checks` then applies the verification's own tests (fcl).
 Self-collision: the hand's self-collision sphere pairs may not overlap by more than ``PENETRATION_TOL``.
 """
 
@@ -21,7 +19,6 @@ import trimesh
 from scipy.spatial import cKDTree
 
 PENETRATION_TOL = 1e-3  # m (DESIGN §5)
-TIP_PENETRATION_TOL = 5e-3  # m, fingertip bodies (see the module docstring)
 HAND_SAMPLES_PER_BODY = 96
 DENSE_POINTS = 8192
 

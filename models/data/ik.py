@@ -59,27 +59,42 @@ TIP_WEIGHT = 0.3  # weight of the contact point's rows; the pad-centre rows have
 def tip_points(hand) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # type: ignore[no-untyped-def]
     """Bodies (m,), contact points (m, 3) and pad centres (m, 3) in their body frames, and the pad radii (m,).
 
-    The pad centre of a fingertip is the centre of its collision sphere nearest the contact point; the radius
-    is their distance. Driving the pad centre to ``target + radius · n`` makes the pad touch the surface at the
-    target whatever the finger's orientation.
+    The pad of a fingertip is the project's pad sphere (`models.refine.state.contact_spheres`: the sphere on
+    its link nearest the tip point), so labels, refinement and verification share one fingertip model. Driving
+    the pad centre to ``target + radius · n`` makes the pad touch the surface at the target whatever the
+    finger's orientation. Hands without a pad sphere use the tip point (radius 0).
     """
-    bodies, tips, pads, radii = [], [], [], []
-    centres = np.asarray(hand.sphere_centres)
+    from models.refine.state import contact_spheres
+
+    idx, rad = contact_spheres(hand)
+    bodies, tips, pads = [], [], []
     for i, link in enumerate(hand.fingertip_links):
         b, T = hand.tree.link_body[link]
         tip = T[:3, :3] @ hand.tip_offsets[i] + T[:3, 3]
-        body = hand.tree.body_names[b]
-        cand = [k for k, lk in enumerate(hand.sphere_links) if lk == body]
-        if cand:
-            k = cand[int(np.argmin(np.linalg.norm(centres[cand] - tip, axis=1)))]
-            pad = centres[k]
-        else:
-            pad = tip
+        pad = tip
+        if idx[i] >= 0:
+            bs, Ts = hand.tree.link_body[hand.sphere_links[idx[i]]]
+            if bs == b:
+                pad = Ts[:3, :3] @ np.asarray(hand.sphere_centres[idx[i]]) + Ts[:3, 3]
         bodies.append(b)
         tips.append(tip)
         pads.append(pad)
-        radii.append(float(np.linalg.norm(tip - pad)))
-    return np.asarray(bodies, dtype=np.int64), np.asarray(tips), np.asarray(pads), np.asarray(radii)
+    radii = np.where(idx >= 0, rad, 0.0)
+    return np.asarray(bodies, dtype=np.int64), np.asarray(tips), np.asarray(pads), np.asarray(radii, dtype=float)
+
+
+def pad_spheres(
+    hand,
+    palm_pos: torch.Tensor,
+    palm_quat: torch.Tensor,
+    q: torch.Tensor,  # type: ignore[no-untyped-def]
+) -> tuple[np.ndarray, np.ndarray]:
+    """World pad centres (B, m, 3) and radii (m,)."""
+    bodies, _, pad_local, radii = tip_points(hand)
+    T = hand.tree.body_poses(palm_pos, palm_quat, q)
+    Tb = T[:, torch.as_tensor(bodies)]
+    local = torch.as_tensor(pad_local, dtype=q.dtype)
+    return ((Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]).numpy(), radii
 
 
 def _points_and_jacobian(
@@ -169,15 +184,15 @@ def separate(
     palm_pos: torch.Tensor,
     palm_quat: torch.Tensor,
     q: torch.Tensor,
-    nearest: Callable[[np.ndarray], np.ndarray],
+    surface: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
     iters: int = 8,
     margin: float = 2e-3,
 ) -> torch.Tensor:
-    """Push overlapping self-collision sphere pairs apart while keeping the fingertips on the surface.
+    """Push overlapping self-collision sphere pairs apart while keeping the pads on the surface.
 
-    Each iteration stacks the fingertip rows (target: nearest surface point) and, for every pair overlapping
-    within ``margin``, one row ``u·(J_a − J_b) δq = overlap + margin``; solved by damped least squares over the
-    finger joints (palm fixed). Returns the new q (B, D).
+    Each iteration stacks the pad-centre rows (target: nearest surface point + radius · normal) and, for every
+    pair overlapping within ``margin``, one row ``u·(J_a − J_b) δq = overlap + margin``; solved by damped least
+    squares over the finger joints (palm fixed). Returns the new q (B, D).
     """
     pairs = torch.as_tensor(np.asarray(hand.self_collision_pairs, dtype=np.int64).reshape(-1, 2))
     if not len(pairs):
@@ -187,6 +202,8 @@ def separate(
     lower = torch.as_tensor(hand.lower, dtype=q.dtype)
     upper = torch.as_tensor(hand.upper, dtype=q.dtype)
     B, m = q.shape[0], hand.num_fingertips
+    bodies, _, pad_np, radii_np = tip_points(hand)
+    pad_local = torch.as_tensor(pad_np, dtype=q.dtype)
     for _ in range(iters):
         c, jc = hand.spheres(palm_pos, palm_quat, q)
         diff = c[:, pairs[:, 0]] - c[:, pairs[:, 1]]
@@ -194,10 +211,11 @@ def separate(
         over = need[None] - dist  # (B, P)
         if not bool((over > 0).any()):
             break
-        tips, jt = hand.fingertip_jacobians(palm_pos, palm_quat, q)
-        goal = torch.as_tensor(nearest(tips.reshape(-1, 3).numpy()), dtype=q.dtype).reshape(B, m, 3)
+        pads, jt = _points_and_jacobian(hand, palm_pos, palm_quat, q, bodies, pad_local)
+        near, nrm = surface(pads.reshape(-1, 3).numpy())
+        goal = torch.as_tensor(near + np.tile(radii_np, B)[:, None] * nrm, dtype=q.dtype).reshape(B, m, 3)
         rows_t = jt[..., 6:].reshape(B, 3 * m, -1)
-        err_t = (goal - tips).reshape(B, 3 * m)
+        err_t = (goal - pads).reshape(B, 3 * m)
         u = diff / dist.clamp_min(1e-9)[..., None]
         jp = (u[..., None] * (jc[:, pairs[:, 0], :, 6:] - jc[:, pairs[:, 1], :, 6:])).sum(dim=2)  # (B, P, D)
         active = (over > 0).to(q.dtype)

@@ -10,8 +10,9 @@
    group.
 4. Separate: a few least-squares steps push overlapping self-collision spheres apart while keeping the tips
    on the surface (`ik.separate`).
-5. Reject: a fingertip off the surface (> ``TIP_TOL``), two contacts closer than ``MIN_CONTACT_GAP``, hand–
-   object penetration beyond 1 mm (5 mm for fingertip bodies) or self-collision beyond 1 mm (`checks.py`).
+5. Reject with the verification's own tests: a pad sphere off the surface (|Φ(c) − r| > ``TIP_TOL``, exact
+   mesh distance), two contacts closer than ``MIN_CONTACT_GAP``, hand–object penetration or self-collision
+   deeper than 1 mm on the collision meshes (`models.geometry`, fcl), after fast pre-filters (`checks.py`).
 """
 
 from __future__ import annotations
@@ -23,18 +24,12 @@ import torch
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from models.data.checks import (
-    PENETRATION_TOL,
-    TIP_PENETRATION_TOL,
-    ObjectField,
-    fingertip_bodies,
-    penetration_depth,
-    self_overlap,
-)
-from models.data.ik import finger_groups, finger_joint_sets, separate, solve_ik
+from models.data.checks import PENETRATION_TOL, ObjectField, penetration_depth, self_overlap
+from models.data.ik import finger_groups, finger_joint_sets, pad_spheres, separate, solve_ik
 
 MAX_TILT = np.deg2rad(25.0)
-TIP_TOL = 4e-3  # m, fingertip contact point to surface (the pad touches; DESIGN §5 allows 5 mm)
+TIP_TOL = 4e-3  # m, pad sphere to surface, |Φ(c) − r| (DESIGN §5 allows 5 mm)
+PREFILTER_TOL = 3e-3  # m, fast point-cloud penetration pre-filter before the exact (fcl) test
 MIN_CONTACT_GAP = 0.01  # m
 CANDIDATE_RADIUS = 0.035  # m around the rest fingertip
 VORONOI_MARGIN = 0.01  # m
@@ -184,12 +179,13 @@ def sample_grasps(
         for b in range(palms):
             for i in range(m):
                 targets[b, :, i] = _targets(obj, rest_tips[b], i, candidates, rng)
-        pp, pq, q, tips = solve_ik(
+        pp, pq, q, _tips = solve_ik(
             hand, pp, pq, q0, torch.as_tensor(targets.reshape(-1, m, 3)), obj.surface, free_palm=free_palm
         )
-    tips_np = tips.numpy()
-    phi, nrm, _ = obj.signed_distance(tips_np.reshape(-1, 3))
-    ok = (np.abs(phi) <= TIP_TOL).reshape(palms, candidates, m)
+    with torch.no_grad():
+        pads, radii = pad_spheres(hand, pp, pq, q)
+    phi, nrm, _ = obj.signed_distance(pads.reshape(-1, 3))
+    ok = (np.abs(phi.reshape(-1, m) - radii[None]) <= TIP_TOL).reshape(palms, candidates, m)
     if not free_palm:
         with torch.no_grad():
             ok &= (pad_alignment(hand, pp, pq, q, nrm.reshape(-1, m, 3)) < -PAD_FACING).reshape(palms, candidates, m)
@@ -224,37 +220,57 @@ def sample_grasps(
     J = torch.as_tensor(np.stack(rows_q))
     with torch.no_grad():
         if not free_palm:
-            J = separate(hand, P, Q, J, obj.nearest)
-        tips = hand.fingertips(P, Q, J).numpy()
+            J = separate(hand, P, Q, J, obj.surface)
+        pads, radii = pad_spheres(hand, P, Q, J)
         over = self_overlap(hand, P, Q, J)
-    gaps = np.linalg.norm(tips[:, :, None] - tips[:, None, :], axis=-1) + np.eye(m)[None] * 1e3
+    gaps = np.linalg.norm(pads[:, :, None] - pads[:, None, :], axis=-1) + np.eye(m)[None] * 1e3
     keep = (over <= PENETRATION_TOL) & (gaps.min(axis=(1, 2)) >= MIN_CONTACT_GAP)
-    keep &= (np.abs(obj.signed_distance(tips.reshape(-1, 3))[0]).reshape(-1, m) <= TIP_TOL).all(axis=1)
+    phi_fast = obj.signed_distance(pads.reshape(-1, 3))[0].reshape(-1, m) - radii[None]
+    keep &= (np.abs(phi_fast) <= TIP_TOL).all(axis=1)
     idx = np.flatnonzero(keep)
     rng.shuffle(idx)
     out: list[Grasp] = []
     for start in range(0, len(idx), 16):
         sel = idx[start : start + 16]
-        with torch.no_grad():
-            tipb = fingertip_bodies(hand)
-            depth = penetration_depth(hand, obj, P[sel], Q[sel], J[sel], skip=tipb)
-            others = frozenset(hand.collision_meshes) - tipb
-            tip_depth = penetration_depth(hand, obj, P[sel], Q[sel], J[sel], skip=others)
-        for j, d, dt in zip(sel, depth, tip_depth, strict=True):
-            if d > PENETRATION_TOL or dt > TIP_PENETRATION_TOL:
+        with torch.no_grad():  # fast pre-filter (point-cloud field, every body within 3 mm)
+            depth = penetration_depth(hand, obj, P[sel], Q[sel], J[sel])
+        for j, d in zip(sel, depth, strict=True):
+            if d > PREFILTER_TOL:
                 continue
-            phi, nrm, _ = obj.signed_distance(tips[j])
-            out.append(
-                Grasp(
-                    P[j].numpy(),
-                    Q[j].numpy(),
-                    J[j].numpy(),
-                    tips[j] - phi[:, None] * nrm,
-                    nrm,
-                    float(max(d, dt)),
-                    float(over[j]),
-                )
-            )
+            exact = exact_checks(hand, obj, P[j].numpy(), Q[j].numpy(), J[j].numpy(), pads[j], radii)
+            if exact is None:
+                continue
+            contacts, normals, pen, selfc = exact
+            out.append(Grasp(P[j].numpy(), Q[j].numpy(), J[j].numpy(), contacts, normals, pen, selfc))
             if len(out) >= max_grasps:
                 return out
     return out
+
+
+def exact_checks(
+    hand,
+    obj: ObjectField,
+    palm_pos: np.ndarray,
+    palm_quat: np.ndarray,
+    q: np.ndarray,  # type: ignore[no-untyped-def]
+    pads: np.ndarray,
+    radii: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, float, float] | None:
+    """The verification's own tests (`models.geometry`, fcl on the collision meshes; exact mesh distance of the
+    pad spheres): contacts (m, 3) = pad points nearest the surface, normals, penetration, self-collision; None
+    when a test fails."""
+    dist = obj.exact_signed_distance(pads) - radii
+    if np.max(np.abs(dist)) > TIP_TOL:
+        return None
+    from models.geometry import ObjectGeometry, hand_object_penetration, hand_self_collision
+
+    geom = ObjectGeometry.from_points(obj.points, obj.normals, obj.mesh)
+    pen = float(hand_object_penetration(hand, geom, palm_pos, palm_quat, q))
+    if pen > PENETRATION_TOL:
+        return None
+    selfc = float(hand_self_collision(hand, palm_pos, palm_quat, q))
+    if selfc > PENETRATION_TOL:
+        return None
+    _, nrm, _ = obj.signed_distance(pads)
+    surf, nrm = obj.surface(pads - radii[:, None] * nrm)
+    return surf, nrm, pen, selfc
