@@ -12,6 +12,7 @@ import torch
 from models.data.checks import PENETRATION_TOL, ObjectField, self_overlap
 from models.data.dataset import load_examples, make_batch
 from models.data.generate import DataConfig, generate, object_split, run_shard
+from models.data.ik import pad_spheres
 from models.data.sampling import TIP_TOL, sample_grasps
 from models.objects import make_object
 from models.robots import get_hand
@@ -37,15 +38,13 @@ def test_sampled_grasps_touch_without_collisions() -> None:
     grasps = sample_grasps(hand, field, obj.size, np.random.default_rng(0), palms=8, max_grasps=3)
     assert grasps
     for g in grasps:
-        tips = hand.fingertips(
-            torch.as_tensor(g.palm_pos[None]), torch.as_tensor(g.palm_quat[None]), torch.as_tensor(g.q[None])
-        )[0].numpy()
-        assert np.all(np.abs(field.exact_signed_distance(tips)) <= TIP_TOL + 1e-3)
+        pose = (torch.as_tensor(g.palm_pos[None]), torch.as_tensor(g.palm_quat[None]), torch.as_tensor(g.q[None]))
+        pads, radii = pad_spheres(hand, *pose)
+        assert np.all(np.abs(field.exact_signed_distance(pads[0]) - radii) <= TIP_TOL + 1e-9)
         assert np.all((g.q >= hand.lower - 1e-9) & (g.q <= hand.upper + 1e-9))
-        over = self_overlap(
-            hand, torch.as_tensor(g.palm_pos[None]), torch.as_tensor(g.palm_quat[None]), torch.as_tensor(g.q[None])
-        )
-        assert over[0] <= PENETRATION_TOL
+        assert self_overlap(hand, *pose)[0] <= PENETRATION_TOL
+        assert g.penetration <= PENETRATION_TOL and g.self_overlap <= PENETRATION_TOL
+        np.testing.assert_allclose(np.linalg.norm(g.normals, axis=1), 1.0, atol=1e-9)
 
 
 def test_object_split_is_fixed_by_id() -> None:
