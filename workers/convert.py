@@ -76,8 +76,24 @@ def _finite(value: float) -> float:
     return float(value) if np.isfinite(value) else _BIG
 
 
-def to_result(output: SynthesisOutput, request: SynthesisRequest, model_version: str) -> SynthesisResult:
-    """The wire result of ``output`` (maps and history only when the request asked for them)."""
+def hand_spheres(hand: Any, palm_position: np.ndarray, palm_quaternion: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The hand's collision spheres at a pose, (S, 4): world centre and radius (what viewers draw)."""
+    import torch
+
+    def row(a: np.ndarray) -> torch.Tensor:
+        return torch.as_tensor(np.asarray(a, dtype=np.float64))[None]
+
+    centres, _ = hand.spheres(row(palm_position), row(palm_quaternion), row(q), jacobian=False)
+    return np.hstack([centres[0].numpy(), np.asarray(hand.sphere_radii, dtype=np.float64)[:, None]])
+
+
+def to_result(
+    output: SynthesisOutput, request: SynthesisRequest, model_version: str, hand: Any = None
+) -> SynthesisResult:
+    """The wire result of ``output`` (maps and history only when the request asked for them).
+
+    With ``hand``, each proposal carries the hand's collision spheres at its pose.
+    """
     proposals = []
     for p in output.proposals:
         q = p.quality
@@ -102,6 +118,9 @@ def to_result(output: SynthesisOutput, request: SynthesisRequest, model_version:
                 joint_names=list(p.joint_names),
                 joint_values=np.asarray(p.joint_values, dtype=np.float64),
                 quality=quality,
+                hand_spheres=None
+                if hand is None
+                else hand_spheres(hand, p.palm_position, p.palm_quaternion, p.joint_values),
                 history=history,
             )
         )

@@ -121,7 +121,8 @@ class ModelsPipeline:
         from workers.convert import to_input, to_result
 
         try:
-            inp = to_input(job.request, self._hand(job), job.deadline)
+            hand = self._hand(job)
+            inp = to_input(job.request, hand, job.deadline)
             out = run_pipeline(inp, self.predictor, _reporter(job, progress), lambda: should_cancel(job.id))
         except Cancelled:
             return cancelled_error()
@@ -129,18 +130,20 @@ class ModelsPipeline:
             return ErrorBody(error=str(exc), type=MODEL_UNAVAILABLE)
         except (InvalidInput, LookupError, ValueError) as exc:
             return ErrorBody(error=str(exc), type="InvalidInput")
-        return to_result(out, job.request, self.model_version or "none")
+        return to_result(out, job.request, self.model_version or "none", hand)
 
     def _run_batched(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
         from models.pipeline import Cancelled, ModelUnavailable, run_pipeline_batch
         from workers.convert import to_input, to_result
 
         outcomes: list[Outcome | None] = [None] * len(jobs)
-        inputs, index = [], []
+        inputs, index, hands = [], [], []
         for i, job in enumerate(jobs):
             try:
-                inputs.append(to_input(job.request, self._hand(job), job.deadline))
+                hand = self._hand(job)
+                inputs.append(to_input(job.request, hand, job.deadline))
                 index.append(i)
+                hands.append(hand)
             except (LookupError, ValueError) as exc:
                 outcomes[i] = ErrorBody(error=str(exc), type="InvalidInput")
         reporters = [_reporter(jobs[i], progress) for i in index]
@@ -153,7 +156,7 @@ class ModelsPipeline:
             outs = run_pipeline_batch(inputs, self.predictor, report, lambda: all(should_cancel(j.id) for j in jobs))
         except Cancelled:
             outs = [Cancelled("cancelled")] * len(inputs)
-        for i, out in zip(index, outs, strict=True):
+        for i, hand, out in zip(index, hands, outs, strict=True):
             job = jobs[i]
             if should_cancel(job.id) or isinstance(out, Cancelled):
                 outcomes[i] = cancelled_error()
@@ -162,7 +165,7 @@ class ModelsPipeline:
             elif isinstance(out, Exception):
                 outcomes[i] = ErrorBody(error=str(out), type="InvalidInput")
             else:
-                outcomes[i] = to_result(out, job.request, self.model_version or "none")
+                outcomes[i] = to_result(out, job.request, self.model_version or "none", hand)
         return [o if o is not None else ErrorBody(error="no outcome", type="InternalError") for o in outcomes]
 
 

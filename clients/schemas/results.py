@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+from typing import Annotated
+
+import numpy as np
 from pydantic import Field
 
+from clients.arrays import spec
 from clients.schemas.common import PerPoint, Points, Quaternion, Rows3, Vec3, Vector, WireModel
 
 
@@ -41,6 +45,9 @@ class Proposal(WireModel):
     joint_names: list[str]
     joint_values: Vector
     quality: Quality
+    hand_spheres: Annotated[np.ndarray, spec("S", 4)] | None = Field(
+        None, description="The hand's collision spheres at this pose: centre (world, m) and radius, for viewers."
+    )
     history: list[IterationRecord] | None = None
 
 

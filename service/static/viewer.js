@@ -65,15 +65,44 @@ function traces(scene, proposal) {
       x: [palm[0], palm[0] + a * R[0][k]], y: [palm[1], palm[1] + a * R[1][k]], z: [palm[2], palm[2] + a * R[2][k]],
       line: { color: colour, width: 8 } });
   });
-  const hx = [], hy = [], hz = [];
-  c.forEach((p) => { hx.push(palm[0], p[0], null); hy.push(palm[1], p[1], null); hz.push(palm[2], p[2], null); });
-  out.push({ type: "scatter3d", mode: "lines", name: "hand (palm → fingertips)", x: hx, y: hy, z: hz,
-    line: { color: "#8c564b", width: 10 }, opacity: 0.6 });
+  if (proposal.hand_spheres && proposal.hand_spheres.length) {
+    out.push(sphereMesh(proposal.hand_spheres));
+  } else {
+    const hx = [], hy = [], hz = [];
+    c.forEach((p) => { hx.push(palm[0], p[0], null); hy.push(palm[1], p[1], null); hz.push(palm[2], p[2], null); });
+    out.push({ type: "scatter3d", mode: "lines", name: "hand (palm → fingertips)", x: hx, y: hy, z: hz,
+      line: { color: "#8c564b", width: 10 }, opacity: 0.6 });
+  }
   out.push({ type: "scatter3d", mode: "markers", name: "palm", x: [palm[0]], y: [palm[1]], z: [palm[2]],
     marker: { size: 14, color: "#8c564b", symbol: "square" } });
   out.push({ type: "scatter3d", mode: "markers", name: "fingertips", x: col(c, 0), y: col(c, 1), z: col(c, 2),
     marker: { size: 12, color: "#ff7f0e", opacity: 0.35 } });
   return out;
+}
+
+// The hand at its solved pose as one mesh of its collision spheres ([x, y, z, r] rows, metres).
+function sphereMesh(spheres) {
+  const rings = 6, segments = 10, x = [], y = [], z = [], i = [], j = [], k = [];
+  spheres.forEach(([cx, cy, cz, r]) => {
+    const base = x.length;
+    for (let a = 0; a <= rings; a++) {
+      const theta = (Math.PI * a) / rings;
+      for (let b = 0; b < segments; b++) {
+        const phi = (2 * Math.PI * b) / segments;
+        x.push(cx + r * Math.sin(theta) * Math.cos(phi));
+        y.push(cy + r * Math.sin(theta) * Math.sin(phi));
+        z.push(cz + r * Math.cos(theta));
+      }
+    }
+    for (let a = 0; a < rings; a++) {
+      for (let b = 0; b < segments; b++) {
+        const p = base + a * segments + b, q = base + a * segments + ((b + 1) % segments);
+        i.push(p, q); j.push(p + segments, p + segments); k.push(q, q + segments);
+      }
+    }
+  });
+  return { type: "mesh3d", name: "hand (collision spheres)", showlegend: true, x, y, z, i, j, k,
+    color: "#c49c94", opacity: 0.35, flatshading: true, hoverinfo: "skip" };
 }
 
 function draw(scene, index) {

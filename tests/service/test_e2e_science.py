@@ -53,6 +53,9 @@ def test_direct_grasp_and_viewer(base: str) -> None:
     assert result.hand == hand and result.proposals
     proposal = result.proposals[0]
     assert proposal.contact_points.shape == proposal.forces.shape and len(proposal.joint_values)
+    # The worker sends the hand's collision spheres at the solved pose for the viewer to draw.
+    assert proposal.hand_spheres is not None and proposal.hand_spheres.shape[1] == 4
+    assert (proposal.hand_spheres[:, 3] > 0).all()
     job_id = response.headers["x-job-id"]
     scene = httpx.get(f"{base}/v1/jobs/{job_id}/scene").json()
     assert len(scene["points"]) == 512 and scene["job"]["result"]["proposals"]
