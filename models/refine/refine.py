@@ -66,7 +66,7 @@ class RefineConfig:
     trust_shrink: float = 0.4
     trust_max_scale: float = 4.0
     trust_min_scale: float = 1.0 / 256
-    stall_window: int = 12
+    stall_window: int = 8
     stall_tolerance: float = 0.02
     tip_sphere_allowance: float = 1e-3
     solver: str = "clarabel"
