@@ -198,7 +198,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             for k in sums:
                 sums[k] += float(terms[k].detach()) * len(idx)
             seen += len(idx)
-            bar.set_postfix(loss=f"{float(terms['loss']):.4f}", lr=f"{lr:.2e}")
+            bar.set_postfix(loss=f"{float(terms['loss'].detach()):.4f}", lr=f"{lr:.2e}")
         bar.close()
         if seen == 0:
             break
