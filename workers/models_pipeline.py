@@ -111,6 +111,21 @@ class ModelsPipeline:
         raise LookupError(f"robot.name: unknown hand {robot.name!r}; built-in: {', '.join(self._builtin)}")
 
     # ---- jobs ------------------------------------------------------------------------------------------------
+    def _prepare(self, job: JobInput) -> tuple[Any, Any]:
+        """The job's hand and core input; raises `ValueError` for what the loaded model cannot serve."""
+        from workers.convert import method_of, to_input
+
+        material = job.request.object.material.value
+        card = getattr(self.predictor, "card", None)
+        if method_of(job.request) == "network" and card is not None and material not in (card.materials or [material]):
+            raise ValueError(
+                f"object.material: '{material}' is not supported by the loaded model "
+                f"{self.model_version} (trained on: {', '.join(card.materials)}); "
+                "use options.method 'contacts', 'random_contacts' or 'direct_grasp'"
+            )
+        hand = self._hand(job)
+        return hand, to_input(job.request, hand, job.deadline)
+
     def run(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
         if self.batch_network and len(jobs) > 1:
             return self._run_batched(jobs, progress, should_cancel)
@@ -118,11 +133,10 @@ class ModelsPipeline:
 
     def _run_one(self, job: JobInput, progress: ProgressFn, should_cancel: CancelFn) -> Outcome:
         from models.pipeline import Cancelled, InvalidInput, ModelUnavailable, run_pipeline
-        from workers.convert import to_input, to_result
+        from workers.convert import to_result
 
         try:
-            hand = self._hand(job)
-            inp = to_input(job.request, hand, job.deadline)
+            hand, inp = self._prepare(job)
             out = run_pipeline(inp, self.predictor, _reporter(job, progress), lambda: should_cancel(job.id))
         except Cancelled:
             return cancelled_error()
@@ -134,14 +148,14 @@ class ModelsPipeline:
 
     def _run_batched(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
         from models.pipeline import Cancelled, ModelUnavailable, run_pipeline_batch
-        from workers.convert import to_input, to_result
+        from workers.convert import to_result
 
         outcomes: list[Outcome | None] = [None] * len(jobs)
         inputs, index, hands = [], [], []
         for i, job in enumerate(jobs):
             try:
-                hand = self._hand(job)
-                inputs.append(to_input(job.request, hand, job.deadline))
+                hand, inp = self._prepare(job)
+                inputs.append(inp)
                 index.append(i)
                 hands.append(hand)
             except (LookupError, ValueError) as exc:

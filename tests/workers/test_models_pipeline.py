@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from clients.schemas import JobState, SynthesisRequest
+from clients.schemas import JobState, Method, SynthesisRequest
 from workers.queue import create_queue
 
 from .helpers import live_workers, redis_workers, run
@@ -75,3 +75,26 @@ async def _exercise(queue: object) -> None:
         assert "trained model" in network.error.error
     finally:
         await queue.close()
+
+
+def test_shipped_model_refuses_materials_it_was_not_trained_on() -> None:
+    from workers.models_pipeline import ModelsPipeline
+    from workers.pipeline import JobInput
+
+    pipeline = ModelsPipeline(hands=["panda_gripper"])  # the shipped weights in models/weights
+    assert pipeline.model_loaded and pipeline.predictor is not None
+    trained_on = pipeline.predictor.card.materials
+    cloth = make_request("network", object={
+        "points": make_request("network").object.points, "material": "cloth", "properties": {"friction": 0.8},
+    })  # fmt: skip
+    [outcome] = pipeline.run([JobInput(id="cloth", request=cloth)], lambda *a: None, lambda job_id: False)
+    assert "cloth" not in trained_on
+    assert getattr(outcome, "type", None) == "InvalidInput"
+    assert "object.material: 'cloth' is not supported" in outcome.error  # type: ignore[union-attr]
+    # The baseline needs no network, so the same object is served with it.
+    [baseline] = pipeline.run(
+        [JobInput(id="b", request=cloth.model_copy(update={"options": cloth.options.model_copy(
+            update={"method": Method.DIRECT_GRASP})}))],
+        lambda *a: None, lambda job_id: False,
+    )  # fmt: skip
+    assert getattr(baseline, "proposals", None)
