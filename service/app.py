@@ -69,6 +69,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
         version=health.VERSION,
         description=API_DESCRIPTION,
         lifespan=lifespan,
+        docs_url=None,  # served by `pages.docs` from the installed Swagger UI bundle: no CDN
     )
     app.state.settings = settings
     app.state.metrics = metrics

@@ -11,6 +11,7 @@ import importlib.util
 from pathlib import Path
 
 from fastapi import APIRouter, Request
+from fastapi.openapi.docs import get_swagger_ui_html
 from starlette.responses import FileResponse, HTMLResponse, Response
 
 from service.dashboard import DashboardPublic
@@ -21,6 +22,7 @@ from service.responses import READ_ERRORS
 from service.scenes import ScenePublic
 
 STATIC = Path(__file__).resolve().parent.parent / "static"
+SWAGGER_FILES = frozenset({"swagger-ui-bundle.js", "swagger-ui.css", "favicon-32x32.png"})
 
 pages = APIRouter(include_in_schema=False)
 data = APIRouter(tags=["dashboard"], dependencies=[Authorized])
@@ -49,6 +51,28 @@ async def viewer(job_id: str) -> HTMLResponse:
 @pages.get("/static/plotly.min.js")
 async def plotly_js() -> FileResponse:
     return FileResponse(plotly_bundle(), media_type="text/javascript", headers={"Cache-Control": "max-age=86400"})
+
+
+@pages.get("/docs")
+async def docs() -> HTMLResponse:
+    return get_swagger_ui_html(
+        openapi_url="/openapi.json",
+        title="ManiFoundation Service — API",
+        swagger_js_url="/static/swagger/swagger-ui-bundle.js",
+        swagger_css_url="/static/swagger/swagger-ui.css",
+        swagger_favicon_url="/static/swagger/favicon-32x32.png",
+    )
+
+
+@pages.get("/static/swagger/{name}")
+async def swagger_static(name: str) -> FileResponse:
+    from swagger_ui_bundle import swagger_ui_path
+
+    path = Path(swagger_ui_path) / name
+    if name not in SWAGGER_FILES or not path.is_file():
+        raise NotFound(f"no static file {name!r}")
+    kinds = {".js": "text/javascript", ".css": "text/css", ".png": "image/png"}
+    return FileResponse(path, media_type=kinds[path.suffix], headers={"Cache-Control": "max-age=86400"})
 
 
 @pages.get("/static/{name}")
