@@ -118,6 +118,7 @@ def to_result(
                 joint_names=list(p.joint_names),
                 joint_values=np.asarray(p.joint_values, dtype=np.float64),
                 quality=quality,
+                contact_source=p.contact_source,
                 hand_spheres=None
                 if hand is None
                 else hand_spheres(hand, p.palm_position, p.palm_quaternion, p.joint_values),

@@ -45,6 +45,11 @@ class Proposal(WireModel):
     joint_names: list[str]
     joint_values: Vector
     quality: Quality
+    contact_source: str | None = Field(
+        None,
+        description="Where the contacts came from: network, given, random, direct_grasp, or random_fallback "
+        "(the network's heatmap had no point above the selection threshold, so random contacts were refined).",
+    )
     hand_spheres: Annotated[np.ndarray, spec("S", 4)] | None = Field(
         None, description="The hand's collision spheres at this pose: centre (world, m) and radius, for viewers."
     )

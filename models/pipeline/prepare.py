@@ -127,32 +127,39 @@ def network_inputs(batch: Sequence[Prepared]) -> list[Any]:
     return rows
 
 
-def contact_sets(prep: Prepared, net_out: Any | None) -> list[tuple[np.ndarray, np.ndarray, np.ndarray | None]]:
-    """One (contacts (H, 3), normals (H, 3), predicted heatmap or None) per proposal."""
+ContactSet = tuple[np.ndarray, np.ndarray, np.ndarray | None, str]
+
+
+def contact_sets(prep: Prepared, net_out: Any | None) -> list[ContactSet]:
+    """One (contacts (H, 3), normals (H, 3), predicted heatmap or None, source) per proposal.
+
+    ``source`` says where the contacts came from: "given", "random", "network", or "random_fallback" when the
+    network's heatmap had no point above the selection threshold (the answer then says so).
+    """
     inp, cloud = prep.inp, prep.cloud
     m = inp.hand.num_fingertips
     allowed = np.flatnonzero(cloud.mask) if cloud.mask is not None else np.arange(len(cloud.points))
     rng = np.random.default_rng(inp.seed)
 
-    def random_set() -> tuple[np.ndarray, np.ndarray, None]:
+    def random_set(source: str = "random") -> ContactSet:
         sub = allowed[spread_contacts(cloud.points[allowed], min(m, len(allowed)), rng)]
-        return cloud.points[sub], cloud.normals[sub], None
+        return cloud.points[sub], cloud.normals[sub], None, source
 
     if inp.method == "contacts":
         assert inp.contacts is not None
         pts = np.asarray(inp.contacts, dtype=np.float64)
         idx = cloud.nearest_index(pts)
-        return [(cloud.points[idx], cloud.normals[idx], None)] * inp.num_proposals
+        return [(cloud.points[idx], cloud.normals[idx], None, "given")] * inp.num_proposals
     if inp.method == "random_contacts" or net_out is None:
         return [random_set() for _ in range(inp.num_proposals)]
     from models.network.selection import select_contacts
 
-    sets: list[tuple[np.ndarray, np.ndarray, np.ndarray | None]] = []
+    sets: list[ContactSet] = []
     for k in range(inp.num_proposals):
         heat, force = net_out.heatmaps[k], net_out.force_maps[k]
         sel = select_contacts(cloud.points, heat, force, cloud.mask, m)
         if len(sel) == 0:  # nothing above threshold: fall back to random contacts in the region
-            sets.append(random_set())
+            sets.append(random_set("random_fallback"))
             continue
-        sets.append((sel.points, cloud.normals[sel.indices], np.asarray(heat, dtype=np.float64)))
+        sets.append((sel.points, cloud.normals[sel.indices], np.asarray(heat, dtype=np.float64), "network"))
     return sets

@@ -77,7 +77,9 @@ def _start_pose(prep: Prepared) -> HandPose:
     return HandPose(prep.centre + d * (radius + 0.1), quat, np.asarray(hand.rest, dtype=np.float64).copy())
 
 
-def _proposal(prep: Prepared, pose: HandPose, result: Any, seconds: dict[str, float]) -> ProposalOutput:
+def _proposal(
+    prep: Prepared, pose: HandPose, result: Any, seconds: dict[str, float], source: str
+) -> ProposalOutput:
     inp, hand = prep.inp, prep.inp.hand
     t0 = time.perf_counter()
     mesh = prep.mesh
@@ -108,6 +110,7 @@ def _proposal(prep: Prepared, pose: HandPose, result: Any, seconds: dict[str, fl
         joint_names=list(hand.joint_names),
         joint_values=pose.q.copy(),
         quality=quality,
+        contact_source=source,
         history=history,
     )
 
@@ -121,16 +124,19 @@ def _finish(
     _check(should_cancel)
     t0 = time.perf_counter()
     starts: list[HandPose] = []
+    sources: list[str] = []
     if inp.method == "direct_grasp":
         for k in range(inp.num_proposals):
             start = _start_pose(replace(prep, inp=replace(inp, seed=inp.seed + k)))
             starts.append(direct_grasp(hand, prep.cloud, start, prep.centre)[0])
+            sources.append("direct_grasp")
     else:
         rest = rest_geometry(hand)
         sets = contact_sets(prep, net_out)
-        for k, (points, normals, heat) in enumerate(sets):
+        for k, (points, normals, heat, source) in enumerate(sets):
             cand = initialise(hand, prep.cloud, points, normals, predicted=heat, rest=rest)
             starts.append(cand[0].pose)
+            sources.append(source)
             report("initialisation", (k + 1) / len(sets))
     timings["initialisation"] = time.perf_counter() - t0
     _check(should_cancel)
@@ -166,8 +172,8 @@ def _finish(
     timings["refinement"] = time.perf_counter() - t0
     _check(should_cancel)
     seconds: dict[str, float] = {}
-    for k, (start, res) in enumerate(zip(starts, results, strict=True)):
-        proposals.append(_proposal(prep, res.pose if res is not None else start, res, seconds))
+    for k, (start, res, source) in enumerate(zip(starts, results, sources, strict=True)):
+        proposals.append(_proposal(prep, res.pose if res is not None else start, res, seconds, source))
         report("verification", (k + 1) / len(starts))
         _check(should_cancel)
     timings["verification"] = seconds.get("verification", 0.0)

@@ -158,6 +158,7 @@ class ProposalOutput:
     joint_names: list[str]
     joint_values: np.ndarray
     quality: QualityOutput
+    contact_source: str = "given"  # given | random | network | random_fallback | direct_grasp
     history: list[IterationOutput] | None = None
 
 

@@ -110,7 +110,7 @@ function draw(scene, index) {
   const proposal = result && result.proposals.length ? result.proposals[index] : null;
   if (proposal) {
     const q = proposal.quality;
-    rows("quality", [["success", q.success], ["converged", q.converged], ["reason", q.reason],
+    rows("quality", [["success", q.success], ["contacts from", proposal.contact_source || "-"], ["converged", q.converged], ["reason", q.reason],
       ["iterations", q.iterations], ["wrench residual", fmt(q.wrench_residual)],
       ["max tip distance (m)", fmt(q.max_tip_distance)], ["penetration (m)", fmt(q.penetration_depth)],
       ["self-collision (m)", fmt(q.self_collision_depth)], ["Ferrari–Canny ε", fmt(q.epsilon)]]);

@@ -49,6 +49,7 @@ def test_contacts_closure_end_to_end(box, gripper):
     assert best.history is not None and len(best.history) == best.quality.iterations
     assert {"initialisation", "refinement", "verification"} <= set(stages)
     assert {"network", "initialisation", "refinement", "verification"} <= set(out.timings)
+    assert best.contact_source == "given"
 
 
 def test_task_from_delta_pose(box, gripper):
@@ -109,6 +110,19 @@ def test_network_batch_calls_the_predictor_once(box, gripper):
     res = run_pipeline_batch([inp, inp], fake)
     assert fake.calls == 1
     assert all(isinstance(r, SynthesisOutput) and r.heatmap is not None for r in res)
+    assert all(p.contact_source == "network" for r in res for p in r.proposals)  # type: ignore[union-attr]
+
+
+def test_a_flat_heatmap_falls_back_to_random_contacts_and_says_so(box, gripper):
+    class Flat(_FakePredictor):
+        def predict(self, batch, num_samples, seed):  # type: ignore[no-untyped-def]
+            outs = super().predict(batch, num_samples, seed)
+            for o in outs:
+                o.heatmaps = np.full_like(o.heatmaps, 0.2)  # nothing above the selection threshold
+            return outs
+
+    out = run_pipeline(_inp(box, gripper, method="network", refine=False), Flat())
+    assert [p.contact_source for p in out.proposals] == ["random_fallback"]
 
 
 def test_masked_refinement_ends_on_allowed_points(box, gripper):
