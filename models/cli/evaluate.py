@@ -15,17 +15,20 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from models.cli.eval_network import add_network_parser
+
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 
 
 def register(subparsers: Any) -> None:
-    """Add ``eval`` with its ``refine`` sub-command to ``mani`` (``eval network`` is added by the network issue)."""
+    """Add ``eval`` with its ``refine`` (Table II) and ``network`` (Table I) sub-commands to ``mani``."""
     p = subparsers.add_parser(
         "eval", help="evaluate refinement / network", description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    sub = p.add_subparsers(dest="eval_command", metavar="{refine}")
+    sub = p.add_subparsers(dest="eval_command", metavar="{refine,network}")
     add_refine(sub)
+    add_network_parser(sub)
     p.set_defaults(func=lambda args: (p.print_help(), EXIT_USAGE)[1])
 
 
