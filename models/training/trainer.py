@@ -75,6 +75,16 @@ def data_summary(train: Examples, val: Examples | None) -> dict[str, Any]:
     return out
 
 
+def _batch_loss(
+    model: ManiFoundationNet, b: Any, cfg: TrainConfig, gen: torch.Generator, device: torch.device
+) -> dict[str, torch.Tensor]:
+    """The loss terms of Eq. (3) on one batch (posterior z; the generator seeds z on the CPU)."""
+    res = model(b.obj, b.hand, b.heat, b.force, generator=gen if device.type == "cpu" else None)
+    return cvae_loss(
+        res, b.heat, b.force, model.config, lambda_c=cfg.lambda_c, lambda_s=cfg.lambda_s, lambda_kl=cfg.lambda_kl
+    )
+
+
 def evaluate_loss(
     model: ManiFoundationNet, ex: Examples, cfg: TrainConfig, device: torch.device, hand_scale: float
 ) -> dict[str, float]:
@@ -87,16 +97,7 @@ def evaluate_loss(
         for start in range(0, len(ex), cfg.batch_size):
             idx = np.arange(start, min(len(ex), start + cfg.batch_size))
             b = make_batch(ex, idx, hand_scale).to(device)
-            out = model(b.obj, b.hand, b.heat, b.force, generator=gen if device.type == "cpu" else None)
-            terms = cvae_loss(
-                out,
-                b.heat,
-                b.force,
-                model.config,
-                lambda_c=cfg.lambda_c,
-                lambda_s=cfg.lambda_s,
-                lambda_kl=cfg.lambda_kl,
-            )
+            terms = _batch_loss(model, b, cfg, gen, device)
             for k in sums:
                 sums[k] += float(terms[k].detach()) * len(idx)
             n += len(idx)
@@ -174,16 +175,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
                 break  # time budget spent: validate and save what we have
             idx = perm[step * cfg.batch_size : (step + 1) * cfg.batch_size]
             b = make_batch(train_ex, idx, hand_scale, rng if cfg.augment else None).to(device)
-            res = model(b.obj, b.hand, b.heat, b.force, generator=gen if device.type == "cpu" else None)
-            terms = cvae_loss(
-                res,
-                b.heat,
-                b.force,
-                model.config,
-                lambda_c=cfg.lambda_c,
-                lambda_s=cfg.lambda_s,
-                lambda_kl=cfg.lambda_kl,
-            )
+            terms = _batch_loss(model, b, cfg, gen, device)
             frac = (epoch - 1 + step / steps_per_epoch) / cfg.epochs
             if cfg.max_minutes is not None:  # a time budget: decay by whichever runs out first
                 frac = max(frac, (time.perf_counter() - t_start) / (cfg.max_minutes * 60))
