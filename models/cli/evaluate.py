@@ -1,9 +1,11 @@
 """`mani eval`: evaluations of the science (paper Tables I and II).
 
 ``mani eval refine`` reproduces the refinement protocol of DESIGN.md §5 (see `models.refine.evaluation` for the
-exact procedure: ground-truth poses from verified force-closure refinements on random contacts, targets those
-grasps can produce, starts retreated + rotated ≤ 60° + shifted ≤ 5 cm, fingers at rest) on the procedural test
-objects of `models.objects` (sizes 5-25 cm, kinds cycled, seeded), against the direct-grasp baseline.
+exact procedure: ground-truth poses from the data generator's verified grasp sampling (``--ground-truth
+sampled``, default; force-closure grasps for ``closure``) or from our own verified force-closure refinements
+(``--ground-truth refined``, the original protocol), targets those grasps can produce, starts retreated +
+rotated ≤ 60° + shifted ≤ 5 cm, fingers at rest) on the procedural test objects of `models.objects` (sizes
+5-25 cm, kinds cycled, seeded), against the direct-grasp baseline.
 
 Examples:
     mani eval refine --hand leap --mode task --objects 20 --grasps 2 --seed 0
@@ -43,6 +45,9 @@ def add_refine(sub: Any) -> None:
     r.add_argument("--retreat", type=float, default=0.30, help="start distance behind the feasible pose (m, paper 0.3)")
     r.add_argument("--max-iterations", type=int, default=100, help="refinement iteration cap (default 100)")
     r.add_argument("--mu", type=float, default=0.5, help="friction coefficient (default 0.5)")
+    r.add_argument("--ground-truth", choices=("sampled", "refined"), default="sampled",
+                   help="source of the known-feasible poses: the data generator's grasp sampling (default) or "
+                        "our own refinement from a random approach (the original, circular protocol)")
     r.add_argument("--json", default=None, help="also write every trial to this JSON file")
     r.set_defaults(func=run_refine)
 
@@ -80,6 +85,7 @@ def run_refine(args: argparse.Namespace) -> int:
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   console=console) as bar:
         for hand in hand_objs:
+            cache: dict[Any, Any] = {}  # sampled ground truths shared by the modes of this hand
             for mode in modes:
                 job = bar.add_task(f"{hand.name} {mode}", total=args.objects * args.grasps)
 
@@ -88,10 +94,10 @@ def run_refine(args: argparse.Namespace) -> int:
 
                 reports.append(evaluate(
                     hand, objects, mode, args.grasps, args.seed, mu=args.mu, retreat=args.retreat, config=config,
-                    on_trial=advance,
+                    on_trial=advance, ground_truth=args.ground_truth, cache=cache,
                 ))
     table = Table(title=f"refinement: {args.objects} objects x {args.grasps} grasps, seed {args.seed}, "
-                        f"retreat {args.retreat} m, mu {args.mu}")
+                        f"retreat {args.retreat} m, mu {args.mu}, ground truth {args.ground_truth}")
     for col in ("hand", "mode", "n", "skipped", "success %", "median s", "p90 s", "median it",
                 "baseline %", "baseline median s"):
         table.add_column(col, justify="right")
@@ -106,6 +112,6 @@ def run_refine(args: argparse.Namespace) -> int:
     console.print(table)
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump([{"hand": r.hand, "mode": r.mode, "summary": r.summary(),
+            json.dump([{"hand": r.hand, "mode": r.mode, "ground_truth": r.ground_truth, "summary": r.summary(),
                         "trials": [asdict(t) for t in r.trials]} for r in reports], fh, indent=1, default=float)
     return EXIT_OK

@@ -2,11 +2,27 @@
 
 Protocol, per object and grasp:
 
-1. Known-feasible palm pose: the palm faces the object centre from a random direction with a random roll about
-   it, its rest fingertips centred on the object and then backed off until no palm/finger-body sphere touches
-   (fingertips may start inside); refinement for force closure with the default settings; the first result that
-   passes verification is the ground truth (up to ``attempts`` = 10 tries, else the grasp is skipped and counted in
-   ``skipped``). (Random contacts + §III-B-1 initialisation, tried first, gave feasible grasps 3× less often.)
+1. Known-feasible ("ground-truth") palm pose, from one of two sources (``ground_truth``):
+
+   * ``"sampled"`` (default, independent of the refinement under test): the data generator's hierarchical grasp
+     sampling (`models.data.sampling.sample_grasps` on a `models.data.checks.ObjectField` of the object's mesh:
+     palms facing the surface, per-finger IK onto it, combinations, rejection by exact geometry — every pad
+     sphere on the surface, no penetration or self-collision beyond 1 mm). Sampling runs in rounds of
+     ``SAMPLER_PALMS`` palms (round r of object k draws from ``default_rng([seed, k, 1000 + r])``, at most
+     ``SAMPLER_ROUNDS`` rounds, cached per hand and object so both modes see the same grasps); the sampled grasps
+     are taken in order and each is verified with `verify` (same cloud, mesh and μ as the trial). ``closure``
+     mode keeps a grasp only when it passes `verify` for force closure (wrench residual < 1e-3 and Ferrari–Canny
+     ε > 0 at μ); ``task`` mode keeps any grasp that passes the geometric tests, draws the target wrench from its
+     contacts (step 2) and keeps it when it also passes `verify` for that task (else the next grasp). Grasp j of
+     an object takes the first eligible sampled grasp after the one grasp j − 1 took. A grasp is "skipped"
+     (``Report.skipped``) only when the sampler yields no eligible grasp within its rounds.
+   * ``"refined"`` (the original protocol, kept for comparison; circular, since objects where our refinement
+     fails are dropped): the palm faces the object centre from a random direction with a random roll about it,
+     its rest fingertips centred on the object and then backed off until no palm/finger-body sphere touches
+     (fingertips may start inside); refinement for force closure with the default settings; the first result
+     that passes verification is the ground truth (up to ``attempts`` = 10 tries, else skipped). (Random
+     contacts + §III-B-1 initialisation, tried first, gave feasible grasps 3× less often.)
+
 2. Target: force closure (w = 0), or a task wrench that the ground-truth grasp can produce: random forces in the
    friction cones at its contacts, w = Σ G_i f_i, kept when the forces that give the unit wrench w/‖w‖ respect the
    normal bound (else resampled) — the paper's data generator does the same.
@@ -17,7 +33,7 @@ Protocol, per object and grasp:
    100-iteration budget) and the direct-grasp baseline from the same start; verify both with exact geometry.
 
 Times are CPU seconds of this process (`time.process_time`, torch on one thread): on a shared machine the wall
-time also counts other processes' work.
+time also counts other processes' work. Ground-truth sampling is not timed.
 """
 
 from __future__ import annotations
@@ -37,10 +53,15 @@ from models.refine.initialise import back_off, rest_geometry
 from models.refine.refine import RefineConfig, refine
 from models.refine.state import HandPose
 from models.refine.strategy import refine_from_start
-from models.refine.verify import verify
+from models.refine.verify import Verification, verify
 from models.refine.wrench import WrenchTask, characteristic_length, closure_task, rigid_task
 
 DEFAULT_MU = 0.5
+GROUND_TRUTHS = ("sampled", "refined")
+SAMPLER_PALMS = 16  # palms per sampling round
+SAMPLER_MAX_GRASPS = 16  # feasible grasps kept per round
+SAMPLER_ROUNDS = 6  # rounds per (hand, object) at most
+GEOMETRIC_FAILURES = ("tip_distance", "penetration", "self_collision")
 
 
 @dataclass
@@ -67,6 +88,7 @@ class Report:
     mode: str
     trials: list[Trial] = field(default_factory=list)
     skipped: int = 0
+    ground_truth: str = "sampled"
 
     def summary(self) -> dict[str, float]:
         """Success rates (%), median / p90 seconds per grasp, median iterations, for ours and the baseline."""
@@ -111,6 +133,91 @@ def feasible_grasp(
         res = refine(hand, cloud, task, approach_start(hand, cloud, task.centre, rng, rest), mu, config)
         if res.converged and verify(hand, res.pose, cloud, task, mu, mesh).success:
             return res.pose
+    return None
+
+
+@dataclass
+class SampledCandidate:
+    """A sampled grasp as a pose and its verification for force closure (the geometric tests included)."""
+
+    pose: HandPose
+    verification: Verification
+
+    @property
+    def geometric_ok(self) -> bool:
+        """Pad spheres on the surface, no penetration, no self-collision (what every mode needs)."""
+        return not any(f in GEOMETRIC_FAILURES for f in self.verification.failures)
+
+    @property
+    def closure_ok(self) -> bool:
+        """Passes `verify` for force closure (ε > 0 and a closure residual within tolerance)."""
+        return self.verification.success
+
+
+class SampledGroundTruth:
+    """Protocol step 1, ``"sampled"``: the data generator's grasps on one object, sampled lazily in rounds.
+
+    ``candidate(i)`` is the i-th sampled grasp (over all rounds, in order), verified for force closure; None once
+    ``rounds`` rounds are spent. Round r draws from ``default_rng([seed, index, 1000 + r])``, so the sequence
+    depends only on the seed, the object and the hand.
+    """
+
+    def __init__(
+        self, hand: Any, obj: Any, cloud: PointCloudField, closure: WrenchTask, mu: float, seed: int, index: int,
+        rounds: int = SAMPLER_ROUNDS, palms: int = SAMPLER_PALMS, max_grasps: int = SAMPLER_MAX_GRASPS,
+    ) -> None:
+        self.hand, self.obj, self.cloud, self.closure, self.mu = hand, obj, cloud, closure, mu
+        self.seed, self.index, self.rounds, self.palms, self.max_grasps = seed, index, rounds, palms, max_grasps
+        self.candidates: list[SampledCandidate] = []
+        self.rounds_done = 0
+        self._field: Any = None
+
+    def _sample_round(self) -> None:
+        from models.data.checks import ObjectField
+        from models.data.sampling import sample_grasps
+
+        if self._field is None:
+            self._field = ObjectField(self.obj.mesh, seed=int(getattr(self.obj, "seed", 0)))
+        size = float(getattr(self.obj, "size", np.ptp(self.obj.points, axis=0).max()))
+        rng = np.random.default_rng([self.seed, self.index, 1000 + self.rounds_done])
+        self.rounds_done += 1
+        for g in sample_grasps(self.hand, self._field, size, rng, palms=self.palms, max_grasps=self.max_grasps):
+            pose = HandPose(np.asarray(g.palm_pos, np.float64), np.asarray(g.palm_quat, np.float64),
+                            np.asarray(g.q, np.float64))
+            ver = verify(self.hand, pose, self.cloud, self.closure, self.mu, self.obj.mesh)
+            self.candidates.append(SampledCandidate(pose, ver))
+
+    def candidate(self, i: int) -> SampledCandidate | None:
+        """The i-th sampled grasp, sampling further rounds as needed; None when the rounds are spent."""
+        while i >= len(self.candidates) and self.rounds_done < self.rounds:
+            self._sample_round()
+        return self.candidates[i] if i < len(self.candidates) else None
+
+
+def sampled_ground_truth(
+    sampler: SampledGroundTruth, mode: str, start: int, rng: np.random.Generator,
+) -> tuple[HandPose, WrenchTask, int] | None:
+    """The first eligible sampled grasp at index ≥ ``start`` for ``mode``, its task, and the index after it.
+
+    Closure: a grasp that passes `verify` for force closure. Task: a geometrically valid grasp with a target
+    wrench drawn from its contacts (`feasible_wrench`) that it passes `verify` for. None: the sampler is spent.
+    """
+    i = start
+    while (cand := sampler.candidate(i)) is not None:
+        i += 1
+        if mode == "closure":
+            if cand.closure_ok:
+                return cand.pose, sampler.closure, i
+            continue
+        if not cand.geometric_ok:
+            continue
+        ver = cand.verification
+        c, length = sampler.closure.centre, sampler.closure.length
+        w = feasible_wrench(ver.tips, ver.normals, sampler.mu, c, length, rng)
+        task = rigid_task(np.concatenate([w[:3], w[3:] * length]), c, length)
+        if verify(sampler.hand, cand.pose, sampler.cloud, task, sampler.mu, sampler.obj.mesh,
+                  collisions=False).success:
+            return cand.pose, task, i
     return None
 
 
@@ -179,36 +286,58 @@ def evaluate(
     retreat: float = 0.30,
     config: RefineConfig | None = None,
     on_trial: Callable[[Trial | None], None] | None = None,
+    ground_truth: str = "sampled",
+    cache: dict[Any, SampledGroundTruth] | None = None,
 ) -> Report:
-    """Run the protocol over ``objects`` (each with ``.id``, ``.points``, ``.normals``, ``.mesh``).
+    """Run the protocol over ``objects`` (each with ``.id``, ``.points``, ``.normals``, ``.mesh``; ``.size`` and
+    ``.seed`` are used by the sampler when present).
 
-    ``on_trial`` is called after every grasp (with None for a skipped one), e.g. to advance a progress bar.
+    ``ground_truth`` picks step 1's source (module doc). ``cache`` (a dict kept by the caller) shares the sampled
+    grasps between the modes of one hand. ``on_trial`` is called after every grasp (with None for a skipped one),
+    e.g. to advance a progress bar.
     """
     if mode not in ("task", "closure"):
         raise ValueError(f"mode must be 'task' or 'closure', got {mode!r}")
-    report = Report(hand=hand.name, mode=mode)
+    if ground_truth not in GROUND_TRUTHS:
+        raise ValueError(f"ground_truth must be one of {GROUND_TRUTHS}, got {ground_truth!r}")
+    cache = {} if cache is None else cache
+    report = Report(hand=hand.name, mode=mode, ground_truth=ground_truth)
     for k, obj in enumerate(objects):
         cloud = PointCloudField(obj.points, obj.normals)
         centre = np.zeros(3)  # procedural objects are centred on their centre of mass
         length = characteristic_length(obj.points, centre)
         closure = closure_task(centre, length)
+        key = (hand.name, obj.id, seed, k, mu)
+        if ground_truth == "sampled" and key not in cache:
+            cache[key] = SampledGroundTruth(hand, obj, cloud, closure, mu, seed, k)
+        next_candidate = 0
         for j in range(grasps):
             rng = np.random.default_rng([seed, k, j])
-            gt = feasible_grasp(hand, cloud, obj.mesh, closure, mu, rng)
-            if gt is None:
-                report.skipped += 1
-                if on_trial:
-                    on_trial(None)
-                continue
-            if mode == "closure":
-                task = closure
+            if ground_truth == "sampled":
+                found = sampled_ground_truth(cache[key], mode, next_candidate, rng)
+                if found is None:
+                    report.skipped += 1
+                    if on_trial:
+                        on_trial(None)
+                    continue
+                gt, task, next_candidate = found
             else:
-                import torch
+                refined = feasible_grasp(hand, cloud, obj.mesh, closure, mu, rng)
+                if refined is None:
+                    report.skipped += 1
+                    if on_trial:
+                        on_trial(None)
+                    continue
+                gt = refined
+                if mode == "closure":
+                    task = closure
+                else:
+                    import torch
 
-                with torch.no_grad():
-                    tips = hand.fingertips(*gt.tensors())[0].numpy()
-                w = feasible_wrench(tips, cloud.surface_normal(tips), mu, centre, length, rng)
-                task = rigid_task(np.concatenate([w[:3], w[3:] * length]), centre, length)
+                    with torch.no_grad():
+                        tips = hand.fingertips(*gt.tensors())[0].numpy()
+                    w = feasible_wrench(tips, cloud.surface_normal(tips), mu, centre, length, rng)
+                    task = rigid_task(np.concatenate([w[:3], w[3:] * length]), centre, length)
             start = perturb(hand, gt, rng, retreat=retreat)
             t0 = time.process_time()
             res = refine_from_start(hand, cloud, task, start, mu, config, seed=j)
