@@ -7,6 +7,7 @@ All inputs are already normalised (see normalize.py and inference.py).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import torch
@@ -18,6 +19,9 @@ from models.network.hierarchy import PointHierarchy, build_hierarchy
 from models.network.properties import PropertyEncoder
 
 SCALE_REFERENCE_M = 0.1  # the log-scale input channel is log(scale / SCALE_REFERENCE_M)
+# Initial output of the heatmap head: a ground-truth heatmap averages about 0.02 over the points, so the
+# untrained network starts there (logit) instead of at 0.5, and training spends its steps on the peaks.
+HEAT_PRIOR = 0.02
 
 
 @dataclass
@@ -68,6 +72,7 @@ class ManiFoundationNet(nn.Module):
         self.posterior = Posterior(config)
         self.contact_decoder = Decoder(config, out_dim=1, with_heatmap=False)
         self.force_decoder = Decoder(config, out_dim=3, with_heatmap=True)
+        nn.init.constant_(self.contact_decoder.out.bias, math.log(HEAT_PRIOR / (1.0 - HEAT_PRIOR)))
 
     def encode_hand(self, hand: torch.Tensor) -> torch.Tensor:
         """φ_h: hand clouds (B, M_h, 6) = (x / hand_scale_m, n) → ε^h (B, C_h)."""

@@ -34,6 +34,7 @@ class TrainConfig:
     lambda_c: float | None = None
     lambda_s: float | None = None
     lambda_kl: float | None = None
+    heat_contact_weight: float = 0.0  # α: heat MSE weighted by 1 + α·heat_gt (0: the paper's plain MSE)
     # --- run ---
     out: str = "runs/cpu"
     device: str = "auto"  # auto: cuda when available, else cpu

@@ -29,7 +29,7 @@ from models.data.dataset import Examples, load_examples, make_batch
 from models.network import ManiFoundationNet, ModelCard, create_model, cvae_loss, load_checkpoint, save_checkpoint
 from models.training.config import TrainConfig
 
-CSV_FIELDS = ("epoch", "split", "loss", "heat", "force", "kl", "lr", "seconds", "examples")
+CSV_FIELDS = ("epoch", "split", "loss", "heat", "force", "kl", "peak", "hit", "lr", "seconds", "examples")
 
 
 def pick_device(name: str) -> torch.device:
@@ -81,7 +81,14 @@ def _batch_loss(
     """The loss terms of Eq. (3) on one batch (posterior z; the generator seeds z on the CPU)."""
     res = model(b.obj, b.hand, b.heat, b.force, generator=gen if device.type == "cpu" else None)
     return cvae_loss(
-        res, b.heat, b.force, model.config, lambda_c=cfg.lambda_c, lambda_s=cfg.lambda_s, lambda_kl=cfg.lambda_kl
+        res,
+        b.heat,
+        b.force,
+        model.config,
+        lambda_c=cfg.lambda_c,
+        lambda_s=cfg.lambda_s,
+        lambda_kl=cfg.lambda_kl,
+        heat_contact_weight=cfg.heat_contact_weight,
     )
 
 
@@ -104,6 +111,33 @@ def evaluate_loss(
     return {k: v / max(n, 1) for k, v in sums.items()}
 
 
+def prior_metrics(
+    model: ManiFoundationNet, ex: Examples, cfg: TrainConfig, device: torch.device, hand_scale: float
+) -> dict[str, float]:
+    """How usable the heatmaps are at inference (one prior sample z ~ N(0, I), as the service decodes).
+
+    Returns:
+        ``peak``: mean over examples of the highest predicted heat (selection needs ≥ 0.5);
+        ``hit``: fraction of examples whose highest-heat point lies in a ground-truth contact region
+        (ground-truth heat ≥ 0.5).
+    """
+    model.eval()
+    gen = torch.Generator(device="cpu").manual_seed(cfg.seed + 1)
+    peak, hit, n = 0.0, 0.0, 0
+    with torch.no_grad():
+        for start in range(0, len(ex), cfg.batch_size):
+            idx = np.arange(start, min(len(ex), start + cfg.batch_size))
+            b = make_batch(ex, idx, hand_scale).to(device)
+            enc = model.encode(b.obj, model.encode_hand(b.hand))
+            z = torch.randn((len(idx), 1, model.config.latent_dim), generator=gen).to(device)
+            heat = model.decode(enc, z)[0][:, 0]  # (B, N)
+            top = heat.argmax(dim=1, keepdim=True)
+            peak += float(heat.max(dim=1).values.sum())
+            hit += float((b.heat.gather(1, top) >= 0.5).sum())
+            n += len(idx)
+    return {"peak": peak / max(n, 1), "hit": hit / max(n, 1)}
+
+
 def plot_curves(csv_path: Path, png_path: Path) -> None:
     """Loss curves (train and val, total and terms) from metrics.csv."""
     import matplotlib
@@ -112,15 +146,16 @@ def plot_curves(csv_path: Path, png_path: Path) -> None:
     import matplotlib.pyplot as plt
 
     rows = list(csv.DictReader(csv_path.open()))
-    fig, axes = plt.subplots(1, 4, figsize=(16, 3.5))
-    for ax, key in zip(axes, ("loss", "heat", "force", "kl"), strict=True):
+    keys = ("loss", "heat", "force", "kl", "hit")
+    fig, axes = plt.subplots(1, len(keys), figsize=(20, 3.5))
+    for ax, key in zip(axes, keys, strict=True):
         for split in ("train", "val"):
-            pts = [(int(r["epoch"]), float(r[key])) for r in rows if r["split"] == split]
+            pts = [(int(r["epoch"]), float(r[key])) for r in rows if r["split"] == split and r.get(key)]
             if pts:
                 ax.plot(*zip(*pts, strict=True), marker="o", label=split)
-        ax.set_title(key)
+        ax.set_title("val: top-heat point in a true contact region" if key == "hit" else key)
         ax.set_xlabel("epoch")
-        ax.set_yscale("log")
+        ax.set_yscale("linear" if key == "hit" else "log")
         ax.legend()
     fig.tight_layout()
     fig.savefig(png_path, dpi=80)
@@ -163,7 +198,8 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         if cfg.reload_each_epoch and epoch > start_epoch + 1:
             train_ex, val_ex = _load(cfg)
             summary = data_summary(train_ex, val_ex)
-        steps_per_epoch = math.ceil(len(train_ex) / cfg.batch_size)
+        # drop the last partial batch: BatchNorm cannot train on one example, and a tiny batch is a noisy step
+        steps_per_epoch = max(1, len(train_ex) // cfg.batch_size)
         model.train()
         t0 = time.perf_counter()
         perm = rng.permutation(len(train_ex))
@@ -197,7 +233,8 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         train_m = {k: v / seen for k, v in sums.items()}
         rows = [{"split": "train", **train_m, "examples": seen}]
         val_m = evaluate_loss(model, val_ex, cfg, device, hand_scale) if val_ex is not None else None
-        if val_m is not None:
+        if val_m is not None and val_ex is not None:
+            val_m.update(prior_metrics(model, val_ex, cfg, device, hand_scale))
             rows.append({"split": "val", **val_m, "examples": len(val_ex) if val_ex is not None else 0})
         secs = time.perf_counter() - t0
         with csv_path.open("a", newline="") as fh:
@@ -227,7 +264,8 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         )
         msg = f"epoch {epoch}: train {train_m['loss']:.4f}"
         if val_m is not None:
-            msg += f"  val {val_m['loss']:.4f} (heat {val_m['heat']:.4f}, force {val_m['force']:.4f})"
+            msg += f"  val {val_m['loss']:.4f} (heat {val_m['heat']:.4f}, force {val_m['force']:.4f}"
+            msg += f", peak {val_m.get('peak', 0.0):.2f}, hit {val_m.get('hit', 0.0):.2f})"
         print(msg + f"  [{secs:.0f} s]", flush=True)
         if cfg.max_minutes is not None and wall > cfg.max_minutes * 60:
             break
