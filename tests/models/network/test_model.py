@@ -92,3 +92,38 @@ def test_loss_weights_and_kl() -> None:
     terms = cvae_loss(out, torch.zeros(1, 4), torch.ones(1, 4, 3), get_config("cpu"), lambda_kl=0.5)
     assert terms["heat"].item() == 1.0 and terms["force"].item() == 1.0 and terms["kl"].item() == 32.0
     assert terms["loss"].item() == pytest.approx(1.0 + 1.0 + 16.0)
+
+
+def test_contact_weighted_heat_loss() -> None:
+    gt = torch.tensor([[1.0, 0.0, 0.0, 0.0]])
+    miss_contact = {"heat": torch.tensor([[0.0, 0.0, 0.0, 0.0]]), "force": torch.zeros(1, 4, 3)}
+    miss_empty = {"heat": torch.tensor([[1.0, 1.0, 0.0, 0.0]]), "force": torch.zeros(1, 4, 3)}
+    for out in (miss_contact, miss_empty):
+        out.update(mu=torch.zeros(1, 64), logvar=torch.zeros(1, 64))
+    cfg, force = get_config("cpu"), torch.zeros(1, 4, 3)
+    # α = 0 is the plain MSE: both errors cost the same
+    assert cvae_loss(miss_contact, gt, force, cfg)["heat"].item() == pytest.approx(0.25)
+    assert cvae_loss(miss_empty, gt, force, cfg)["heat"].item() == pytest.approx(0.25)
+    # α = 4: missing a contact costs 5× an equal error on an empty point (weights normalised by their mean)
+    wc = cvae_loss(miss_contact, gt, force, cfg, heat_contact_weight=4.0)["heat"].item()
+    we = cvae_loss(miss_empty, gt, force, cfg, heat_contact_weight=4.0)["heat"].item()
+    assert wc == pytest.approx(5.0 / 8.0) and we == pytest.approx(1.0 / 8.0)
+
+
+def test_untrained_heatmap_starts_at_the_prior() -> None:
+    from models.network.model import HEAT_PRIOR
+
+    model = create_model("cpu", seed=0).eval()
+    obj = ObjectTensors(
+        xyz=torch.rand(1, 256, 3) - 0.5,
+        normals=torch.nn.functional.normalize(torch.randn(1, 256, 3), dim=-1),
+        motion=torch.zeros(1, 256, 3),
+        mask=torch.ones(1, 256),
+        prop_values=torch.zeros(1, 6),
+        prop_mask=torch.zeros(1, 6, dtype=torch.bool),
+        scale=torch.ones(1),
+    )
+    with torch.no_grad():
+        enc = model.encode(obj, model.encode_hand(torch.randn(1, 64, 6)))
+        heat, _ = model.decode(enc, torch.zeros(1, 1, model.config.latent_dim))
+    assert 0.2 * HEAT_PRIOR < float(heat.mean()) < 5.0 * HEAT_PRIOR
