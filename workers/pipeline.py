@@ -33,6 +33,7 @@ class JobInput:
     request: SynthesisRequest
     deadline: float | None = None  # unix time; the pipeline stops refining when it passes
     robot: RobotRegister | None = None  # the registered description when the request names a user robot
+    request_id: str | None = None  # X-Request-ID of the HTTP request that submitted the job (for the logs)
 
 
 @runtime_checkable

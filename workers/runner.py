@@ -1,8 +1,10 @@
 """Run one micro-batch through a pipeline, backend-agnostic: drop expired and cancelled jobs first, isolate
-failures (a crashing batch is retried job by job so only the bad job fails), never raise."""
+failures (a crashing batch is retried job by job so only the bad job fails), never raise. Whatever is logged while
+a single job runs (a batch of one, or the one-by-one retries) carries its job id and request id."""
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import time
 
@@ -28,14 +30,16 @@ def run_batch(
             outcomes[job.id] = deadline_error()
         else:
             live.append(job)
+    by_id = {job.id: job for job in jobs}
     for job_id, outcome in outcomes.items():
-        with job_context(job_id):
+        with job_context(job_id, by_id[job_id].request_id):
             reason = outcome.type if isinstance(outcome, ErrorBody) else ""
             log.info("job dropped before start", extra={"reason": reason})
     if not live:
         return outcomes
     try:
-        results = _call(pipeline, live, progress, should_cancel)
+        with _context(live):
+            results = _call(pipeline, live, progress, should_cancel)
     except Exception as exc:  # a crashed pipeline call fails jobs, never the worker
         if len(live) == 1:
             outcomes[live[0].id] = _failed(live[0], exc)
@@ -43,12 +47,18 @@ def run_batch(
         log.warning("batch of %d failed (%s); retrying one by one", len(live), exc)
         for job in live:
             try:
-                outcomes[job.id] = _call(pipeline, [job], progress, should_cancel)[0]
+                with _context([job]):
+                    outcomes[job.id] = _call(pipeline, [job], progress, should_cancel)[0]
             except Exception as one:
                 outcomes[job.id] = _failed(job, one)
         return outcomes
     outcomes.update({job.id: result for job, result in zip(live, results, strict=True)})
     return outcomes
+
+
+def _context(jobs: list[JobInput]) -> contextlib.AbstractContextManager[None]:
+    """The job's log context when ``jobs`` is one job; a batch of several is nobody's in particular."""
+    return job_context(jobs[0].id, jobs[0].request_id) if len(jobs) == 1 else contextlib.nullcontext()
 
 
 def _call(pipeline: Pipeline, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
@@ -59,6 +69,6 @@ def _call(pipeline: Pipeline, jobs: list[JobInput], progress: ProgressFn, should
 
 
 def _failed(job: JobInput, exc: Exception) -> ErrorBody:
-    with job_context(job.id):
+    with job_context(job.id, job.request_id):
         log.exception("pipeline failed")
     return error_from_exception(exc)

@@ -1,4 +1,5 @@
-"""`mani worker` argument handling, settings from the environment, and JSON log lines carrying the job id."""
+"""`mani worker` argument handling, settings from the environment, and JSON log lines carrying the job id and the
+id of the HTTP request that submitted it."""
 
 from __future__ import annotations
 
@@ -9,11 +10,17 @@ import logging
 import pytest
 
 from clients.cli.main import main
+from clients.schemas import SynthesisResult
 from workers.logs import JsonFormatter, job_context
+from workers.pipeline import CancelFn, JobInput, Outcome, ProgressFn
 from workers.queue import create_queue, queue_settings
 from workers.queue.embedded import EmbeddedQueue
 from workers.queue.redis import RedisQueue
+from workers.runner import run_batch
 from workers.settings import QueueSettings
+from workers.testing import StagedPipeline
+
+from .helpers import small_request
 
 
 def test_worker_needs_redis(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]) -> None:
@@ -59,3 +66,52 @@ def test_log_lines_are_json_with_the_job_id() -> None:
     first, second = (json.loads(line) for line in stream.getvalue().splitlines())
     assert first["job_id"] == "abc123" and first["msg"] == "job started" and first["delivery"] == 2
     assert "job_id" not in second and second["level"] == "INFO"
+
+
+def test_log_lines_carry_the_request_id_next_to_the_job_id() -> None:
+    stream = io.StringIO()
+    handler = logging.StreamHandler(stream)
+    handler.setFormatter(JsonFormatter())
+    logger = logging.getLogger("workers.test")
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+    try:
+        with job_context("job-1", "abc-123"):
+            logger.info("job started")
+        with job_context("job-2"):  # a job submitted without one (an older service, a script)
+            logger.info("job started")
+        logger.info("idle")
+    finally:
+        logger.removeHandler(handler)
+    first, second, third = (json.loads(line) for line in stream.getvalue().splitlines())
+    assert (first["job_id"], first["request_id"]) == ("job-1", "abc-123")
+    assert second["job_id"] == "job-2" and "request_id" not in second
+    assert "job_id" not in third and "request_id" not in third
+
+
+class _LoggingPipeline(StagedPipeline):
+    """Logs from inside `run`, the way a real pipeline's own code would."""
+
+    def run(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
+        logging.getLogger("workers.test.pipeline").info("running %d", len(jobs))
+        return super().run(jobs, progress, should_cancel)
+
+
+def test_lines_logged_while_a_job_runs_carry_its_ids() -> None:
+    one = JobInput(id="job-1", request=small_request(1), request_id="abc-123")
+    other = JobInput(id="job-2", request=small_request(2), request_id="abc-456")
+    stream = io.StringIO()
+    handler = logging.StreamHandler(stream)
+    handler.setFormatter(JsonFormatter())  # formats at emit time, inside the job's context
+    logger = logging.getLogger("workers.test.pipeline")
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+    try:
+        outcomes = run_batch(_LoggingPipeline(), [one], lambda *_: None, lambda _: False)
+        assert isinstance(outcomes["job-1"], SynthesisResult)
+        run_batch(_LoggingPipeline(), [one, other], lambda *_: None, lambda _: False)
+    finally:
+        logger.removeHandler(handler)
+    single, batch = (json.loads(line) for line in stream.getvalue().splitlines())
+    assert (single["job_id"], single["request_id"]) == ("job-1", "abc-123")
+    assert "job_id" not in batch and "request_id" not in batch  # a batch of several is nobody's in particular
