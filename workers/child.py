@@ -122,11 +122,17 @@ def _run(pipeline: Pipeline, link: _Link, raw_jobs: list[dict[str, Any]]) -> Non
                     request=SynthesisRequest.model_validate(unpack(raw["request"])),
                     deadline=raw.get("deadline"),
                     robot=RobotRegister.model_validate(raw["robot"]) if raw.get("robot") else None,
+                    request_id=raw.get("request_id"),
                 )
             )
         except Exception as exc:  # a queue payload is input too: fail that job, not the worker
             error = error_from_exception(exc).model_dump(mode="python", exclude_none=True)
             link.send({"op": "done", "id": raw["id"], "error": error, "timings": {}})
+            with job_context(raw["id"], raw.get("request_id")):
+                log.warning("job rejected", extra={"error": error["error"]})
+            continue
+        with job_context(jobs[-1].id, jobs[-1].request_id):
+            log.info("job started")
     last: dict[str, float] = {}
 
     def progress(job_id: str, stage: Stage, fraction: float, iteration: int | None, maximum: int | None) -> None:
@@ -150,7 +156,7 @@ def _run(pipeline: Pipeline, link: _Link, raw_jobs: list[dict[str, Any]]) -> Non
         key = "error" if isinstance(outcome, ErrorBody) else "result"
         timings = {**getattr(outcome, "timings", {}), "run": elapsed}
         link.send({"op": "done", "id": job.id, key: body, "timings": timings})
-        with job_context(job.id):
+        with job_context(job.id, job.request_id):
             log.info("job finished", extra={"outcome": outcome.type if isinstance(outcome, ErrorBody) else "ok"})
         link.cancelled.discard(job.id)
 

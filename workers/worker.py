@@ -203,8 +203,9 @@ class RedisWorker:
                 self._robot(entry, fields)
                 continue
             job_id = fields[b"id"].decode()
-            with job_context(job_id):
-                job = self._start_job(entry, job_id, fields[b"p"])
+            request_id = fields[b"r"].decode() if fields.get(b"r") else None  # entries of older services lack it
+            with job_context(job_id, request_id):
+                job = self._start_job(entry, job_id, fields[b"p"], request_id)
             if job is not None:
                 jobs.append(job)
                 entry_of[job_id] = entry
@@ -221,7 +222,7 @@ class RedisWorker:
             timings["run"] = time.time() - started[job.id]
             timings["queue"] = self.queued_for.pop(job.id, 0.0)
             timings["total"] = timings["queue"] + timings["run"]
-            with job_context(job.id):
+            with job_context(job.id, job.request_id):
                 if isinstance(outcome, ErrorBody):
                     self._end(entry_of[job.id], job.id, state_for_error(outcome).value, error=outcome, timings=timings)
                 else:
@@ -232,7 +233,7 @@ class RedisWorker:
                 self.inflight.pop(entry_of[job.id], None)
             self.cancel_checked.pop(job.id, None)
 
-    def _start_job(self, entry: str, job_id: str, payload: bytes) -> JobInput | None:
+    def _start_job(self, entry: str, job_id: str, payload: bytes, request_id: str | None = None) -> JobInput | None:
         s = self.settings
         now = time.time()
         verdict, deliveries, *rest = self._begin(keys=[self.keys.job(job_id)], args=[self.id, now, s.max_deliveries])
@@ -256,7 +257,7 @@ class RedisWorker:
                 return None
             deadline = float(rest[1]) if len(rest) > 1 and rest[1] else None
             log.info("job started", extra={"delivery": int(deliveries)})
-            return JobInput(id=job_id, request=request, deadline=deadline, robot=robot)
+            return JobInput(id=job_id, request=request, deadline=deadline, robot=robot, request_id=request_id)
         if verdict == "dead":
             h = self.r.hmget(self.keys.job(job_id), ["error", "error_type"])
             message = h[0].decode() if h[0] else "failed on every delivery"  # type: ignore[union-attr]

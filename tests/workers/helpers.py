@@ -1,4 +1,4 @@
-"""Shared helpers of the workers tests: small valid requests and an asyncio runner."""
+"""Shared helpers of the workers tests: small valid requests, an asyncio runner, workers' JSON log lines."""
 
 from __future__ import annotations
 
@@ -57,14 +57,17 @@ def running(job: JobPublic) -> bool:
 
 
 @contextlib.contextmanager
-def redis_workers(url: str, prefix: str, concurrency: int = 1, **settings: Any) -> Iterator[subprocess.Popen[bytes]]:
+def redis_workers(
+    url: str, prefix: str, concurrency: int = 1, *, stderr: Any = None, **settings: Any
+) -> Iterator[subprocess.Popen[bytes]]:
     """`mani worker` (the supervisor and its worker processes) on ``url``/``prefix`` running the staged pipeline;
-    ``settings``: any `QueueSettings` field (``pipeline_options`` as a dict)."""
+    ``settings``: any `QueueSettings` field (``pipeline_options`` as a dict); ``stderr``: where their JSON log
+    lines go (a file, to read them; default: the test's own stderr)."""
     env = dict(os.environ, MANI_REDIS_URL=url, MANI_QUEUE_PREFIX=prefix, MANI_PIPELINE=STAGED, MANI_LOG_LEVEL="WARNING")
     for name, value in settings.items():
         env[f"MANI_{name.upper()}"] = json.dumps(value) if isinstance(value, dict) else str(value)
     cmd = [sys.executable, "-m", "clients.cli.main", "worker", "--concurrency", str(concurrency)]
-    proc = subprocess.Popen(cmd, env=env)
+    proc = subprocess.Popen(cmd, env=env, stderr=stderr)
     try:
         yield proc
     finally:
@@ -85,4 +88,27 @@ async def live_workers(queue: JobQueue, count: int, timeout: float = 30) -> list
             return workers
         if time.monotonic() > end:
             raise AssertionError(f"{len(workers)} of {count} workers came up")
+        await asyncio.sleep(0.05)
+
+
+def log_lines(text: str) -> list[dict[str, Any]]:
+    """The JSON log lines of a worker's stderr (other output skipped)."""
+    return [json.loads(line) for line in text.splitlines() if line.startswith("{")]
+
+
+async def logged(
+    read: Callable[[], str], check: Callable[[dict[str, Any]], bool], count: int = 1, timeout: float = 20
+) -> list[dict[str, Any]]:
+    """The log lines satisfying ``check``, once there are ``count``; ``read`` answers what was written since its last
+    call (``capfd.readouterr().err``, an open file's ``read``). A worker writes its "job finished" line just after
+    it hands the outcome back, so the line may trail the job's end by a moment."""
+    deadline = time.monotonic() + timeout
+    text = ""
+    while True:
+        text += read()
+        found = [entry for entry in log_lines(text[: text.rfind("\n") + 1]) if check(entry)]  # whole lines only
+        if len(found) >= count:
+            return found
+        if time.monotonic() > deadline:
+            raise AssertionError(f"no such log line in:\n{text[-3000:]}")
         await asyncio.sleep(0.05)

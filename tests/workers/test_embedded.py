@@ -15,7 +15,7 @@ from clients.schemas import JobState, RobotRegister, Stage
 from workers.queue import JobNotFound, QueueFull, RobotInvalid, create_queue
 from workers.queue.embedded import EmbeddedQueue
 
-from .helpers import STAGED, run, running, small_request, until
+from .helpers import STAGED, logged, run, running, small_request, until
 
 URDF = """<robot name="g"><link name="base"/><link name="tip"/>
 <joint name="j" type="revolute"><parent link="base"/><child link="tip"/><limit lower="0" upper="1"/></joint></robot>"""
@@ -137,5 +137,33 @@ def test_poison_job_goes_to_dead_letters() -> None:
             assert (await queue.wait(after, 30)).state is JobState.SUCCEEDED
         finally:
             await queue.close()
+
+    run(main())
+
+
+def test_request_id_in_the_record_and_the_worker_logs(capfd: pytest.CaptureFixture[str]) -> None:
+    """The submitting request's id is kept on each job (every job of a batch) and rides to the worker process,
+    whose log lines for the job carry it next to the job id (the worker writes to the inherited stderr)."""
+
+    async def main() -> None:
+        queue = create_queue(None, redis_url=None, concurrency=1, pipeline=STAGED, log_level="INFO")
+        assert isinstance(queue, EmbeddedQueue)
+        await queue.start()  # spawned now: its stderr is the one capfd captures
+        try:
+            [job_id] = await queue.submit([small_request(1)], request_id="abc-123")
+            batch = await queue.create_batch([small_request(i) for i in range(2)], request_id="abc-456")
+            batch_ids = await queue.batch_job_ids(batch)
+            [plain] = await queue.submit([small_request(2)])
+            ids = [job_id, *batch_ids, plain]
+            records = {i: queue._jobs[i].request_id for i in ids}
+            assert records == {job_id: "abc-123", **dict.fromkeys(batch_ids, "abc-456"), plain: None}
+            done = await asyncio.gather(*(queue.wait(i, 20) for i in ids))
+            assert {j.state for j in done} == {JobState.SUCCEEDED}
+            lines = await logged(lambda: capfd.readouterr().err, lambda e: e.get("job_id") in ids, count=2 * len(ids))
+        finally:
+            await queue.close()
+        for entry in lines:  # "job started" and "job finished" of each
+            assert entry.get("request_id") == records[entry["job_id"]] and entry["worker"], entry
+        assert {(e["msg"], e["job_id"]) for e in lines} >= {("job started", job_id), ("job finished", job_id)}
 
     run(main())

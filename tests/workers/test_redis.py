@@ -10,6 +10,7 @@ import socket
 import subprocess
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 import redis
@@ -18,7 +19,7 @@ from clients.schemas import JobState, RobotRegister, Stage
 from workers.queue import JobNotFound, QueueFull, RobotInvalid, create_queue
 from workers.queue.redis import RedisQueue
 
-from .helpers import live_workers, redis_workers, run, running, small_request, until
+from .helpers import live_workers, log_lines, logged, redis_workers, run, running, small_request, until
 
 URDF = """<robot name="g"><link name="base"/><link name="tip"/>
 <joint name="j" type="revolute"><parent link="base"/><child link="tip"/><limit lower="0" upper="1"/></joint></robot>"""
@@ -203,5 +204,47 @@ def test_redis_restart_while_idle(own_redis: tuple[str, list[subprocess.Popen[by
                 await live_workers(queue, 1)
             finally:
                 await queue.close()
+
+    run(main())
+
+
+def test_request_id_in_the_record_the_stream_entry_and_the_worker_logs(
+    redis_url: str, redis_prefix: str, tmp_path: Path
+) -> None:
+    """SUBMIT (Lua) keeps the submitting request's id in each job's hash and stream entry (every job of a batch);
+    jobs without one, like records written before it existed, read as before; the worker logs it with the job id."""
+
+    async def main() -> None:
+        queue = client(redis_url, redis_prefix)
+        r = redis.Redis.from_url(redis_url)
+        await queue.start()
+        try:
+            [job_id] = await queue.submit([small_request(1)], request_id="abc-123")
+            batch = await queue.create_batch([small_request(i) for i in range(3)], request_id="abc-456")
+            batch_ids = await queue.batch_job_ids(batch)
+            [plain] = await queue.submit([small_request(2)])
+            assert r.hget(queue.keys.job(job_id), "request_id") == b"abc-123"
+            assert [r.hget(queue.keys.job(i), "request_id") for i in batch_ids] == [b"abc-456"] * 3
+            assert r.hget(queue.keys.job(plain), "request_id") is None
+            entries = {f[b"id"].decode(): f.get(b"r") for _, f in r.xrange(queue.keys.stream)}
+            assert entries == {job_id: b"abc-123", **dict.fromkeys(batch_ids, b"abc-456"), plain: None}
+            assert {(await queue.get(i)).state for i in [job_id, *batch_ids, plain]} == {JobState.QUEUED}
+            log_path = tmp_path / "workers.log"
+            with (
+                log_path.open("wb") as sink,
+                log_path.open() as source,
+                redis_workers(redis_url, redis_prefix, stderr=sink, log_level="INFO", **FAST),
+            ):
+                done = await asyncio.gather(*(queue.wait(i, 20) for i in [job_id, *batch_ids, plain]))
+                assert {j.state for j in done} == {JobState.SUCCEEDED}
+                finished = await logged(source.read, lambda e: e.get("msg") == "job finished", count=5)
+            by_job = {e["job_id"]: e.get("request_id") for e in finished}
+            assert by_job == {job_id: "abc-123", **dict.fromkeys(batch_ids, "abc-456"), plain: None}
+            lines = log_lines(log_path.read_text())
+            started = [e for e in lines if e.get("msg") == "job started" and e.get("job_id") == job_id]
+            assert started and started[0]["request_id"] == "abc-123" and started[0]["worker"]
+        finally:
+            r.close()
+            await queue.close()
 
     run(main())

@@ -79,9 +79,14 @@ class JobQueue(ABC):
 
     @abstractmethod
     async def submit(
-        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None
-    ) -> list[str]:
+        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None,
+        request_id: str | None = None,
+    ) -> list[str]:  # fmt: skip
         """Enqueue jobs atomically (all or none); returns their ids in order.
+
+        ``request_id``: the ``X-Request-ID`` of the HTTP request submitting them (the same for every job of a
+        batch). Kept in each job's record (internal: not part of `JobPublic`) and put on every log line the
+        worker writes while it runs the job, next to ``job_id``.
 
         Raises:
             QueueFull: accepting them would exceed the queue's bound.
@@ -112,8 +117,10 @@ class JobQueue(ABC):
         """The most recently submitted jobs, newest first, without results."""
 
     @abstractmethod
-    async def create_batch(self, requests: list[SynthesisRequest], deadline: float | None = None) -> str:
-        """Submit a batch of requests; returns the batch id."""
+    async def create_batch(
+        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None
+    ) -> str:
+        """Submit a batch of requests (``request_id`` as in `submit`); returns the batch id."""
 
     @abstractmethod
     async def batch_job_ids(self, batch_id: str) -> list[str]:

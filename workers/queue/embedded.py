@@ -132,8 +132,9 @@ class EmbeddedQueue(JobQueue):
 
     # ---- submit / observe ------------------------------------------------------------------------------------
     async def submit(
-        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None
-    ) -> list[str]:
+        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None,
+        request_id: str | None = None,
+    ) -> list[str]:  # fmt: skip
         if not self._running:
             raise QueueUnavailable("the embedded queue is not running")
         payloads = [pack(r.model_dump(mode="python", exclude_none=True)) for r in requests]
@@ -142,7 +143,7 @@ class EmbeddedQueue(JobQueue):
                 raise QueueFull(f"queue holds {len(self._pending)} jobs (max {self.settings.max_queue})", 1.0)
             ids = []
             for request, payload in zip(requests, payloads, strict=True):
-                job = JobRecord(new_id(), payload, request.robot.name, deadline, batch_id)
+                job = JobRecord(new_id(), payload, request.robot.name, deadline, batch_id, request_id)
                 self._jobs[job.id] = job
                 self._pending.append(job.id)
                 ids.append(job.id)
@@ -205,9 +206,11 @@ class EmbeddedQueue(JobQueue):
             ids = list(self._jobs)[-limit:][::-1] if limit > 0 else []
             return [self._jobs[i].public(False) for i in ids]
 
-    async def create_batch(self, requests: list[SynthesisRequest], deadline: float | None = None) -> str:
+    async def create_batch(
+        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None
+    ) -> str:
         batch_id = new_id()
-        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline)
+        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id)
         with self._lock:
             self._batches[batch_id] = ids
             while len(self._batches) > self.settings.max_results:
@@ -357,11 +360,13 @@ class EmbeddedQueue(JobQueue):
                     self._finish(job, error=error)
                     self._dead.append(DeadLetter(job_id=job.id, deliveries=job.deliveries, error=error,
                                                  failed_at=time.time()))  # fmt: skip
-                    log.warning("job dead-lettered", extra={"job_id": job.id, "deliveries": job.deliveries})
+                    log.warning("job dead-lettered", extra={"job_id": job.id, "request_id": job.request_id,
+                                                           "deliveries": job.deliveries})  # fmt: skip
                 else:
                     job.state, job.progress, job.error = JobState.QUEUED, JobProgress(), error
                     self._pending.appendleft(job.id)
-                    log.warning("job re-queued after worker loss", extra={"job_id": job.id})
+                    log.warning("job re-queued after worker loss",
+                                extra={"job_id": job.id, "request_id": job.request_id})  # fmt: skip
             worker.inflight.clear()
             if self._running and worker.info is not None:
                 self._spawn()
@@ -386,7 +391,7 @@ class EmbeddedQueue(JobQueue):
                     job.timings["queue"] = now - job.created_at
                     robot = self._registered.get(job.robot or "")
                     batch.append({
-                        "id": job.id, "request": job.payload, "deadline": job.deadline,
+                        "id": job.id, "request": job.payload, "deadline": job.deadline, "request_id": job.request_id,
                         "robot": robot.model_dump(mode="python", exclude_none=True) if robot else None,
                     })  # fmt: skip
                     worker.inflight.add(job.id)

@@ -19,11 +19,15 @@ class JobRecord:
 
     __slots__ = (
         "batch_id", "cancel", "created_at", "deadline", "deliveries", "error", "finished_at", "id", "payload",
-        "progress", "result", "robot", "started_at", "state", "timings", "worker",
+        "progress", "request_id", "result", "robot", "started_at", "state", "timings", "worker",
     )  # fmt: skip
 
-    def __init__(self, job_id: str, payload: bytes, robot: str | None, deadline: float | None, batch: str | None):
+    def __init__(
+        self, job_id: str, payload: bytes, robot: str | None, deadline: float | None, batch: str | None,
+        request_id: str | None = None,
+    ) -> None:  # fmt: skip
         self.id, self.payload, self.robot, self.deadline, self.batch_id = job_id, payload, robot, deadline, batch
+        self.request_id = request_id  # X-Request-ID of the submitting HTTP request (internal: logs, operators)
         self.created_at = time.time()
         self.state = JobState.QUEUED
         self.progress = JobProgress()

@@ -153,11 +153,12 @@ class RedisQueue(JobQueue):
 
     # ---- submit / observe ------------------------------------------------------------------------------------
     async def submit(
-        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None
-    ) -> list[str]:
+        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None,
+        request_id: str | None = None,
+    ) -> list[str]:  # fmt: skip
         ids = [new_id() for _ in requests]
         args: list[Any] = [self.keys.prefix, self.settings.max_queue, int(self.settings.record_ttl), time.time()]
-        args += [len(requests), int(self.settings.result_ttl * 1000)]
+        args += [len(requests), int(self.settings.result_ttl * 1000), request_id or ""]
         for job_id, request in zip(ids, requests, strict=True):
             payload = pack(request.model_dump(mode="python", exclude_none=True))
             args += [
@@ -236,9 +237,11 @@ class RedisQueue(JobQueue):
                 jobs.append(job_from_hash(job_id, h, None, bool(has)))
         return jobs
 
-    async def create_batch(self, requests: list[SynthesisRequest], deadline: float | None = None) -> str:
+    async def create_batch(
+        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None
+    ) -> str:
         batch_id = new_id()
-        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline)
+        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id)
         async with self._guard():
             key = self.keys.batch(batch_id)
             await self._client.pipeline().rpush(key, *ids).expire(key, int(self.settings.record_ttl)).execute()
