@@ -3,18 +3,20 @@
 from __future__ import annotations
 
 import asyncio
+import logging
 import time
 
 from fastapi import APIRouter, Query, Request
 from starlette.responses import Response
 
 from clients.schemas import BatchCreate, BatchItem, BatchPublic, JobPublic, JobState
-from service.deps import Authorized, MetricsDep, QueueDep, RobotsDep, SettingsDep
+from service.deps import Authorized, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
 from service.errors import InvalidInput
 from service.negotiation import body_openapi, read_model, respond
 from service.responses import ERRORS, READ_ERRORS
 
 router = APIRouter(prefix="/v1/batches", tags=["batches"], dependencies=[Authorized])
+log = logging.getLogger("service.batches")
 
 
 @router.post(
@@ -25,7 +27,12 @@ router = APIRouter(prefix="/v1/batches", tags=["batches"], dependencies=[Authori
     responses={202: {"model": BatchPublic}, **ERRORS},
 )
 async def create_batch(
-    request: Request, queue: QueueDep, robots: RobotsDep, metrics: MetricsDep, settings: SettingsDep
+    request: Request,
+    queue: QueueDep,
+    robots: RobotsDep,
+    metrics: MetricsDep,
+    settings: SettingsDep,
+    request_id: RequestIdDep,
 ) -> Response:
     """All or none are enqueued; 202 with the batch and its first page of job ids."""
     body = await read_model(request, BatchCreate, settings.max_body_bytes)
@@ -33,7 +40,8 @@ async def create_batch(
         raise InvalidInput(f"requests: {len(body.requests)} requests, at most {settings.max_batch_size} per batch")
     for index, item in enumerate(body.requests):
         await robots.check(item, field=f"requests.{index}.robot.name")
-    batch_id = await queue.create_batch(body.requests)
+    batch_id = await queue.create_batch(body.requests, request_id=request_id)
+    log.info("batch submitted", extra={"batch_id": batch_id, "jobs": len(body.requests), "request_id": request_id})
     metrics.batch_size.observe(len(body.requests))
     metrics.jobs_submitted.labels(kind="batch").inc(len(body.requests))
     job_ids = await queue.batch_job_ids(batch_id)

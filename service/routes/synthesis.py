@@ -58,7 +58,7 @@ async def enqueue(
     body = await read_model(request, SynthesisRequest, settings.max_body_bytes)
     await robots.check(body)
     deadline = time.time() + body.options.timeout if deadline_from_timeout else None
-    (job_id,) = await queue.submit([body], deadline=deadline)
+    (job_id,) = await queue.submit([body], deadline=deadline, request_id=request_id)
     request.state.job_id = job_id
     request.app.state.scenes.put(job_id, body)
     metrics.jobs_submitted.labels(kind=kind).inc()

@@ -85,6 +85,7 @@ class FakeQueue(JobQueue):
         self.down = False
         self.jobs: dict[str, JobPublic] = {}
         self.requests: dict[str, SynthesisRequest] = {}
+        self.request_ids: dict[str, str | None] = {}  # job id -> the submitting request's id
         self.batches: dict[str, list[str]] = {}
         self.robots = [HAND]
         self.started = self.closed = False
@@ -103,8 +104,9 @@ class FakeQueue(JobQueue):
         return not self.down
 
     async def submit(
-        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None
-    ) -> list[str]:
+        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None,
+        request_id: str | None = None,
+    ) -> list[str]:  # fmt: skip
         self._check()
         if self.full:
             raise QueueFull("fake queue is full", retry_after=2.5)
@@ -115,6 +117,7 @@ class FakeQueue(JobQueue):
                 id=job_id, state=JobState.QUEUED, created_at=time.time(), deadline=deadline, batch_id=batch_id
             )
             self.requests[job_id] = request
+            self.request_ids[job_id] = request_id
             ids.append(job_id)
             if not self.hold:
                 self.finish(job_id)
@@ -158,9 +161,12 @@ class FakeQueue(JobQueue):
         jobs = sorted(self.jobs.values(), key=lambda j: j.created_at, reverse=True)[:limit]
         return [j.model_copy(update={"result": None}) for j in jobs]
 
-    async def create_batch(self, requests: list[SynthesisRequest], deadline: float | None = None) -> str:
+    async def create_batch(
+        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None
+    ) -> str:
         batch_id = uuid.uuid4().hex
-        self.batches[batch_id] = await self.submit(requests, batch_id=batch_id, deadline=deadline)
+        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id)
+        self.batches[batch_id] = ids
         return batch_id
 
     async def batch_job_ids(self, batch_id: str) -> list[str]:

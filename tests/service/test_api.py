@@ -100,6 +100,18 @@ def test_failed_job_keeps_the_error_shape() -> None:
         assert job.state == "failed" and job.error is not None and job.error.type == "InvalidPointCloud"
 
 
+def test_every_submit_route_hands_the_request_id_to_the_queue(client: TestClient, queue: FakeQueue) -> None:
+    sync = client.post("/v1/synthesize", json=request_body(), headers={"X-Request-ID": "abc-123"})
+    assert sync.headers["x-request-id"] == "abc-123"
+    assert queue.request_ids[sync.headers["x-job-id"]] == "abc-123"
+    job_id = client.post("/v1/jobs", json=request_body(), headers={"X-Request-ID": "abc-124"}).json()["id"]
+    assert queue.request_ids[job_id] == "abc-124"
+    batch = client.post("/v1/batches", json={"requests": [request_body()] * 3}, headers={"X-Request-ID": "abc-125"})
+    assert [queue.request_ids[i["job_id"]] for i in batch.json()["items"]] == ["abc-125"] * 3
+    fresh = client.post("/v1/jobs", json=request_body())  # no header: the id the service made up and echoed
+    assert queue.request_ids[fresh.json()["id"]] == fresh.headers["x-request-id"]
+
+
 def test_batches_with_paging(client: TestClient) -> None:
     response = client.post("/v1/batches", json={"requests": [request_body() for _ in range(5)]})
     assert response.status_code == 202, response.text

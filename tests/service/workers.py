@@ -22,11 +22,19 @@ STAGED = "workers.testing:StagedPipeline"
 
 @contextlib.contextmanager
 def start_queue_and_workers(
-    request: pytest.FixtureRequest, *, pipeline: str = STAGED, max_queue: int = 100, **pipeline_options: Any
+    request: pytest.FixtureRequest,
+    *,
+    pipeline: str = STAGED,
+    max_queue: int = 100,
+    worker_logs: bool = False,
+    **pipeline_options: Any,
 ) -> Iterator[JobQueue]:
-    """A queue (not yet started: the app's lifespan starts it) with one worker behind it."""
+    """A queue (not yet started: the app's lifespan starts it) with one worker behind it. ``worker_logs``: the
+    worker logs at INFO to the test's own stderr (for ``capfd``) instead of warnings only to a pipe."""
     backend = request.param if hasattr(request, "param") else "embedded"
     options: dict[str, Any] = {"pipeline": pipeline, "pipeline_options": pipeline_options, "max_queue": max_queue}
+    if worker_logs:
+        options["log_level"] = "INFO"
     if backend == "embedded":
         yield create_queue(None, redis_url=None, concurrency=1, **options)
         return
@@ -40,10 +48,11 @@ def start_queue_and_workers(
         MANI_QUEUE_PREFIX=prefix,
         MANI_PIPELINE=pipeline,
         MANI_PIPELINE_OPTIONS=json.dumps(pipeline_options),
-        MANI_LOG_LEVEL="WARNING",
+        MANI_LOG_LEVEL="INFO" if worker_logs else "WARNING",
     )
     cmd = [sys.executable, "-m", "clients.cli.main", "worker", "--redis", url, "--concurrency", "1"]
-    worker = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    stderr = None if worker_logs else subprocess.PIPE
+    worker = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=stderr)
     try:
         yield create_queue(url, queue_prefix=prefix, concurrency=0, **options)
     finally:
