@@ -2,7 +2,13 @@
 
 Greedy NMS in the request's frame:
 
-1. Candidates are the points whose heatmap value is ≥ ``threshold`` *and* whose region-mask entry is True.
+1. Candidates are the points whose region-mask entry is True and whose heatmap value is ≥ τ, with
+   τ = min(``threshold``, b + ``relative`` · (peak − b)), peak the highest and b the median heat among the
+   allowed points; a heatmap whose peak stands less than ``min_contrast`` above its median (flat: the network
+   marks no place) keeps τ = ``threshold``. The relative part makes selection independent of the network's
+   calibration: a CVAE decoded from a prior sample blurs between modes, so its peaks often sit under 0.5
+   while still marking the right places (the training log's ``hit`` column measures that).
+   ``relative=None`` gives the plain absolute threshold.
    The mask is a hard constraint: a masked-out point is never a contact, whatever the network predicted.
 2. Take the highest remaining candidate as a peak. Its group is the remaining candidates within ``radius``
    of it (the peak included). If the group has fewer than ``min_group_size`` points the peak is an isolated
@@ -22,6 +28,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 DEFAULT_THRESHOLD = 0.5
+DEFAULT_RELATIVE = 0.5
+DEFAULT_MIN_CONTRAST = 0.1
 DEFAULT_RADIUS_FRACTION = 0.1
 DEFAULT_MIN_GROUP_SIZE = 3
 
@@ -55,6 +63,8 @@ def select_contacts(
     *,
     radius: float | None = None,
     threshold: float = DEFAULT_THRESHOLD,
+    relative: float | None = DEFAULT_RELATIVE,
+    min_contrast: float = DEFAULT_MIN_CONTRAST,
     min_group_size: int = DEFAULT_MIN_GROUP_SIZE,
 ) -> ContactSelection:
     """Select at most ``max_contacts`` contacts by NMS (see the module docstring).
@@ -66,7 +76,9 @@ def select_contacts(
         mask: (N,) bool region mask (True = allowed), or None for no constraint.
         max_contacts: H, at most the number of fingertips; 0 gives an empty selection.
         radius: suppression radius in the cloud's units; default 0.1 × the longest bounding-box side.
-        threshold: minimum heatmap value of a contact.
+        threshold: heatmap value that always qualifies a point as a candidate.
+        relative: candidates also qualify at ≥ median + ``relative`` × (peak − median) (None: absolute only).
+        min_contrast: with ``relative``, a peak less than this above the median selects nothing.
         min_group_size: minimum number of candidates within ``radius`` of a peak (peak included).
 
     Returns:
@@ -84,7 +96,12 @@ def select_contacts(
         raise ValueError(f"mask must be ({n},), got {allowed.shape}")
     if radius is None:
         radius = DEFAULT_RADIUS_FRACTION * float(np.ptp(pts, axis=0).max()) if n else 0.0
-    cand = np.flatnonzero(allowed & (heat >= threshold))
+    tau = threshold
+    if relative is not None and allowed.any():
+        base, peak = float(np.median(heat[allowed])), float(heat[allowed].max())
+        if peak - base >= min_contrast:
+            tau = min(threshold, base + relative * (peak - base))
+    cand = np.flatnonzero(allowed & (heat >= tau))
     chosen: list[int] = []
     if cand.size and max_contacts > 0:
         tree = cKDTree(pts[cand])

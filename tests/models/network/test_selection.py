@@ -58,6 +58,23 @@ def test_isolated_spike_is_dropped() -> None:
     assert len(sel) >= 1 and blob[sel.indices].all()
 
 
+def test_low_but_peaked_heatmap_selects_its_peaks() -> None:
+    pts = grid(800)
+    centres = np.array([[0.2, 0.2, 0.2], [0.8, 0.8, 0.8]])
+    pts[:2] = centres
+    blobs = np.exp(-(np.linalg.norm(pts[:, None] - centres[None], axis=-1) ** 2) / 0.04).max(axis=1)
+    heat = 0.3 * blobs  # the right places, but under the absolute threshold 0.5
+    zeros = np.zeros((len(pts), 3))
+    assert len(select_contacts(pts, heat, zeros, None, 4, relative=None)) == 0
+    sel = select_contacts(pts, heat, zeros, None, 4, radius=0.3)
+    assert len(sel) == 2
+    assert np.sort(np.linalg.norm(sel.points[:, None] - centres[None], axis=-1).min(axis=1)).max() < 0.1
+    # a flat heatmap (an untrained network sits at its prior) selects nothing, whatever its level
+    for level in (0.02, 0.2, 0.45):
+        noisy = level + 0.01 * np.random.default_rng(1).random(len(pts))
+        assert len(select_contacts(pts, noisy, zeros, None, 4)) == 0
+
+
 def test_bad_shapes_raise() -> None:
     with pytest.raises(ValueError, match="heatmap"):
         select_contacts(grid(10), np.ones(9), np.ones((10, 3)), None, 2)
@@ -74,8 +91,15 @@ def test_selection_invariants(seed: int, h: int, threshold: float, min_group: in
     rng = np.random.default_rng(seed)
     pts, heat = rng.random((200, 3)), rng.random(200)
     mask = rng.random(200) > 0.5
-    sel = select_contacts(pts, heat, rng.random((200, 3)), mask, h, threshold=threshold, min_group_size=min_group)
+    forces = rng.random((200, 3))
+    sel = select_contacts(pts, heat, forces, mask, h, threshold=threshold, relative=None, min_group_size=min_group)
     assert len(sel) <= h
     assert mask[sel.indices].all()
     assert (heat[sel.indices] >= threshold).all()
+    rel = select_contacts(pts, heat * threshold, forces, mask, h, min_group_size=min_group)  # peak ≤ threshold
+    assert len(rel) <= h and mask[rel.indices].all()
+    if len(rel):  # every contact at least halfway from the median to the peak
+        scaled = heat[mask] * threshold
+        tau = np.median(scaled) + 0.5 * (scaled.max() - np.median(scaled))
+        assert (heat[rel.indices] * threshold >= min(tau, 0.5) - 1e-12).all()
     assert len(set(sel.indices.tolist())) == len(sel)
