@@ -14,6 +14,12 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "--export", default=None, help="after training, copy the best checkpoint here (e.g. models/weights/cpu)"
     )
+    p.add_argument(
+        "--export-checkpoint",
+        choices=("best", "last"),
+        default="best",
+        help="which checkpoint --export copies: lowest validation loss (default) or the last epoch",
+    )
     p.add_argument("--no-progress", action="store_true")
     p.add_argument("overrides", nargs="*", help="key=value settings overriding the config file")
     p.set_defaults(func=_train)
@@ -44,7 +50,10 @@ def _train(args: argparse.Namespace) -> int:
     if args.export:
         dst = Path(args.export)
         dst.mkdir(parents=True, exist_ok=True)
+        src = result.out / args.export_checkpoint
         for name in ("model.safetensors", "model_card.json"):
-            shutil.copy2(result.out / "best" / name, dst / name)
-        print(f"exported {result.out / 'best'} -> {dst}")
+            shutil.copy2(src / name, dst / name)
+        for name in ("metrics.csv", "curves.png"):  # the run's curves travel with the weights
+            shutil.copy2(result.out / name, dst / name)
+        print(f"exported {src} -> {dst}")
     return 0
