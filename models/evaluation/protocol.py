@@ -8,6 +8,10 @@ Methods (all through `models.pipeline.run_pipeline`, same hand, same case, same 
 - ``random_contacts``: random spread contacts → initialisation → refinement (baseline).
 - ``direct_grasp``: open hand moved to the object centre, fingers closed on contact, forces by Eq. (6).
 
+For the network methods the table also counts ``fallback`` cases, where no proposal came from the network's
+own contacts (every heatmap was flat, so the pipeline refined random contacts instead, `contact_source =
+"random_fallback"`): a network success is only a network result when that count is low.
+
 A case succeeds when its best proposal passes verification (wrench residual, tips within 5 mm, penetration and
 self-collision ≤ 1 mm). Articulated cases use the joint task (joint_motion with the case's joint).
 """
@@ -34,6 +38,7 @@ class MethodResult:
     cases: int = 0
     seconds: float = 0.0
     failures: dict[str, int] = field(default_factory=dict)
+    fallbacks: int = 0  # network methods: cases where no proposal used the network's contacts
 
     @property
     def rate(self) -> float:
@@ -97,6 +102,8 @@ def evaluate(
             r = results[m]
             r.cases += 1
             r.seconds += time.perf_counter() - t0
+            if m.startswith("network") and all(p.contact_source == "random_fallback" for p in out.proposals):
+                r.fallbacks += 1
             best = out.best
             if best is not None and best.quality.success:
                 r.successes += 1
@@ -120,6 +127,7 @@ def table(rows: list[MethodResult]) -> str:
         cells = []
         for c in cols:
             r = next((x for x in rows if x.method == m and (x.hand, x.split) == c), None)
-            cells.append(f"{r.rate:.1%} ({r.successes}/{r.cases})" if r else "")
+            fallback = f", {r.fallbacks} fallback" if r and r.fallbacks else ""
+            cells.append(f"{r.rate:.1%} ({r.successes}/{r.cases}{fallback})" if r else "")
         lines.append(f"| {m} | " + " | ".join(cells) + " |")
     return "\n".join(lines)

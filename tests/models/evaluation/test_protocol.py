@@ -42,6 +42,8 @@ def test_table_and_modes() -> None:
     rows = [MethodResult("network", "leap", "test_uo", 3, 4), MethodResult("direct_grasp", "leap", "test_uo", 1, 4)]
     text = table(rows)
     assert "75.0% (3/4)" in text and "25.0% (1/4)" in text
+    rows[0].fallbacks = 2  # a network success from random contacts must not pass for a network result
+    assert "75.0% (3/4, 2 fallback)" in table(rows)
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0.0]])
     assert _same(np.array([0, 1]), np.array([1, 0]), pts, 0.1)
     assert not _same(np.array([0, 1]), np.array([0, 2]), pts, 0.1)
