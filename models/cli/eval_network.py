@@ -14,9 +14,9 @@ def add_network_parser(eval_subparsers: Any) -> None:
     """Add ``network`` under ``mani eval``."""
     p = eval_subparsers.add_parser("network", help="network + pipeline success (paper Table I) and properties")
     p.add_argument("--weights", default="models/weights/cpu", help="checkpoint directory")
-    p.add_argument("--data", default="data/v2", help="generated data directory (test splits)")
+    p.add_argument("--data", default="data/v3", help="generated data directory (test splits)")
     p.add_argument("--splits", default="test_so,test_uo")
-    p.add_argument("--hands", default="leap,shadow", help="hands to evaluate (shadow/barrett are held out)")
+    p.add_argument("--hands", default="leap,barrett", help="hands to evaluate (shadow/barrett are held out)")
     p.add_argument("--methods", default="network,network_no_refine,random_contacts,direct_grasp")
     p.add_argument("--cases", type=int, default=20, help="cases per split")
     p.add_argument("--proposals", type=int, default=4, help="K proposals per case (network / random)")
