@@ -133,9 +133,15 @@ def _finish(
     else:
         rest = rest_geometry(hand)
         sets = contact_sets(prep, net_out)
+        seen: dict[bytes, int] = {}
         for k, (points, normals, heat, source) in enumerate(sets):
-            cand = initialise(hand, prep.cloud, points, normals, predicted=heat, rest=rest)
-            starts.append(cand[0].pose)
+            # K proposals with the same contacts (identical latent samples, or given contacts) would refine the
+            # same start K times: the n-th repeat starts from the n-th best finger assignment instead.
+            key = np.round(np.asarray(points, dtype=np.float64), 6).tobytes()
+            repeat = seen.get(key, 0)
+            seen[key] = repeat + 1
+            cand = initialise(hand, prep.cloud, points, normals, predicted=heat, rest=rest, top_k=repeat + 1)
+            starts.append(cand[min(repeat, len(cand) - 1)].pose)
             sources.append(source)
             report("initialisation", (k + 1) / len(sets))
     timings["initialisation"] = time.perf_counter() - t0

@@ -52,6 +52,14 @@ def test_contacts_closure_end_to_end(box, gripper):
     assert best.contact_source == "given"
 
 
+def test_repeated_contacts_start_from_different_finger_assignments(box, gripper):
+    out = run_pipeline(_inp(box, gripper, num_proposals=2, refine=False))
+    a, b = out.proposals
+    assert a.contact_source == b.contact_source == "given"
+    # the same two contacts, but the second proposal swaps the fingers: a different palm pose
+    assert not np.allclose(a.palm_quaternion, b.palm_quaternion, atol=1e-3)
+
+
 def test_task_from_delta_pose(box, gripper):
     inp = _inp(box, gripper, task=TaskInput("delta_pose", translation=np.array([0, 0, 0.05])), refine=False)
     out = run_pipeline(inp)
