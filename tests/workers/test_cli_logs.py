@@ -6,6 +6,9 @@ from __future__ import annotations
 import io
 import json
 import logging
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
 
 import pytest
 
@@ -50,40 +53,45 @@ def test_settings_from_env_and_factory(monkeypatch: pytest.MonkeyPatch) -> None:
     }
 
 
-def test_log_lines_are_json_with_the_job_id() -> None:
+@contextmanager
+def json_log_lines(logger: logging.Logger) -> Iterator[list[dict[str, Any]]]:
+    """Capture ``logger``'s INFO+ lines through the worker's JsonFormatter; the list is filled, parsed, on exit.
+
+    The formatter runs at emit time, so each line sees the job context active when it was logged.
+    """
     stream = io.StringIO()
     handler = logging.StreamHandler(stream)
     handler.setFormatter(JsonFormatter())
-    logger = logging.getLogger("workers.test")
     logger.addHandler(handler)
     logger.setLevel(logging.INFO)
+    lines: list[dict[str, Any]] = []
     try:
+        yield lines
+    finally:
+        logger.removeHandler(handler)
+        lines.extend(json.loads(line) for line in stream.getvalue().splitlines())
+
+
+def test_log_lines_are_json_with_the_job_id() -> None:
+    logger = logging.getLogger("workers.test")
+    with json_log_lines(logger) as lines:
         with job_context("abc123"):
             logger.info("job started", extra={"delivery": 2})
         logger.info("idle")
-    finally:
-        logger.removeHandler(handler)
-    first, second = (json.loads(line) for line in stream.getvalue().splitlines())
+    first, second = lines
     assert first["job_id"] == "abc123" and first["msg"] == "job started" and first["delivery"] == 2
     assert "job_id" not in second and second["level"] == "INFO"
 
 
 def test_log_lines_carry_the_request_id_next_to_the_job_id() -> None:
-    stream = io.StringIO()
-    handler = logging.StreamHandler(stream)
-    handler.setFormatter(JsonFormatter())
     logger = logging.getLogger("workers.test")
-    logger.addHandler(handler)
-    logger.setLevel(logging.INFO)
-    try:
+    with json_log_lines(logger) as lines:
         with job_context("job-1", "abc-123"):
             logger.info("job started")
         with job_context("job-2"):  # a job submitted without one (an older service, a script)
             logger.info("job started")
         logger.info("idle")
-    finally:
-        logger.removeHandler(handler)
-    first, second, third = (json.loads(line) for line in stream.getvalue().splitlines())
+    first, second, third = lines
     assert (first["job_id"], first["request_id"]) == ("job-1", "abc-123")
     assert second["job_id"] == "job-2" and "request_id" not in second
     assert "job_id" not in third and "request_id" not in third
@@ -100,18 +108,10 @@ class _LoggingPipeline(StagedPipeline):
 def test_lines_logged_while_a_job_runs_carry_its_ids() -> None:
     one = JobInput(id="job-1", request=small_request(1), request_id="abc-123")
     other = JobInput(id="job-2", request=small_request(2), request_id="abc-456")
-    stream = io.StringIO()
-    handler = logging.StreamHandler(stream)
-    handler.setFormatter(JsonFormatter())  # formats at emit time, inside the job's context
-    logger = logging.getLogger("workers.test.pipeline")
-    logger.addHandler(handler)
-    logger.setLevel(logging.INFO)
-    try:
+    with json_log_lines(logging.getLogger("workers.test.pipeline")) as lines:
         outcomes = run_batch(_LoggingPipeline(), [one], lambda *_: None, lambda _: False)
         assert isinstance(outcomes["job-1"], SynthesisResult)
         run_batch(_LoggingPipeline(), [one, other], lambda *_: None, lambda _: False)
-    finally:
-        logger.removeHandler(handler)
-    single, batch = (json.loads(line) for line in stream.getvalue().splitlines())
+    single, batch = lines
     assert (single["job_id"], single["request_id"]) == ("job-1", "abc-123")
     assert "job_id" not in batch and "request_id" not in batch  # a batch of several is nobody's in particular
