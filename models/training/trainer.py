@@ -92,50 +92,36 @@ def _batch_loss(
     )
 
 
-def evaluate_loss(
+def evaluate(
     model: ManiFoundationNet, ex: Examples, cfg: TrainConfig, device: torch.device, hand_scale: float
 ) -> dict[str, float]:
-    """Mean Eq. (3) terms over ``ex`` (posterior z, fixed noise seed, no augmentation)."""
+    """Validation figures over ``ex`` in one pass (no augmentation, fixed noise seeds).
+
+    Returns:
+        The mean Eq. (3) terms ``loss``, ``heat``, ``force``, ``kl`` (posterior z), and how usable the heatmaps
+        are at inference, decoded from one prior sample z ~ N(0, I) as the service does: ``peak``, the mean
+        over examples of the highest predicted heat, and ``hit``, the fraction of examples whose highest-heat
+        point lies in a ground-truth contact region (ground-truth heat ≥ 0.5).
+    """
     model.eval()
     gen = torch.Generator(device="cpu").manual_seed(cfg.seed)
-    sums: dict[str, float] = {"loss": 0.0, "heat": 0.0, "force": 0.0, "kl": 0.0}
+    prior_gen = torch.Generator(device="cpu").manual_seed(cfg.seed + 1)
+    sums: dict[str, float] = {"loss": 0.0, "heat": 0.0, "force": 0.0, "kl": 0.0, "peak": 0.0, "hit": 0.0}
     n = 0
     with torch.no_grad():
         for start in range(0, len(ex), cfg.batch_size):
             idx = np.arange(start, min(len(ex), start + cfg.batch_size))
             b = make_batch(ex, idx, hand_scale).to(device)
             terms = _batch_loss(model, b, cfg, gen, device)
-            for k in sums:
+            for k in ("loss", "heat", "force", "kl"):
                 sums[k] += float(terms[k].detach()) * len(idx)
+            enc = model.encode(b.obj, model.encode_hand(b.hand))
+            z = torch.randn((len(idx), 1, model.config.latent_dim), generator=prior_gen).to(device)
+            heat = model.decode(enc, z)[0][:, 0]  # (B, N)
+            sums["peak"] += float(heat.max(dim=1).values.sum())
+            sums["hit"] += float((b.heat.gather(1, heat.argmax(dim=1, keepdim=True)) >= 0.5).sum())
             n += len(idx)
     return {k: v / max(n, 1) for k, v in sums.items()}
-
-
-def prior_metrics(
-    model: ManiFoundationNet, ex: Examples, cfg: TrainConfig, device: torch.device, hand_scale: float
-) -> dict[str, float]:
-    """How usable the heatmaps are at inference (one prior sample z ~ N(0, I), as the service decodes).
-
-    Returns:
-        ``peak``: mean over examples of the highest predicted heat (selection needs ≥ 0.5);
-        ``hit``: fraction of examples whose highest-heat point lies in a ground-truth contact region
-        (ground-truth heat ≥ 0.5).
-    """
-    model.eval()
-    gen = torch.Generator(device="cpu").manual_seed(cfg.seed + 1)
-    peak, hit, n = 0.0, 0.0, 0
-    with torch.no_grad():
-        for start in range(0, len(ex), cfg.batch_size):
-            idx = np.arange(start, min(len(ex), start + cfg.batch_size))
-            b = make_batch(ex, idx, hand_scale).to(device)
-            enc = model.encode(b.obj, model.encode_hand(b.hand))
-            z = torch.randn((len(idx), 1, model.config.latent_dim), generator=gen).to(device)
-            heat = model.decode(enc, z)[0][:, 0]  # (B, N)
-            top = heat.argmax(dim=1, keepdim=True)
-            peak += float(heat.max(dim=1).values.sum())
-            hit += float((b.heat.gather(1, top) >= 0.5).sum())
-            n += len(idx)
-    return {"peak": peak / max(n, 1), "hit": hit / max(n, 1)}
 
 
 def plot_curves(csv_path: Path, png_path: Path) -> None:
@@ -232,10 +218,9 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             break
         train_m = {k: v / seen for k, v in sums.items()}
         rows = [{"split": "train", **train_m, "examples": seen}]
-        val_m = evaluate_loss(model, val_ex, cfg, device, hand_scale) if val_ex is not None else None
+        val_m = evaluate(model, val_ex, cfg, device, hand_scale) if val_ex is not None else None
         if val_m is not None and val_ex is not None:
-            val_m.update(prior_metrics(model, val_ex, cfg, device, hand_scale))
-            rows.append({"split": "val", **val_m, "examples": len(val_ex) if val_ex is not None else 0})
+            rows.append({"split": "val", **val_m, "examples": len(val_ex)})
         secs = time.perf_counter() - t0
         with csv_path.open("a", newline="") as fh:
             w = csv.DictWriter(fh, CSV_FIELDS)
