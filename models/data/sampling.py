@@ -26,6 +26,7 @@ from scipy.spatial.transform import Rotation
 
 from models.data.checks import PENETRATION_TOL, ObjectField, penetration_depth, self_overlap
 from models.data.ik import finger_groups, finger_joint_sets, pad_spheres, separate, solve_ik
+from models.data.pinch import sample_pinch_palms
 
 MAX_TILT = np.deg2rad(25.0)
 TIP_TOL = 4e-3  # m, pad sphere to surface, |Φ(c) − r| (DESIGN §5 allows 5 mm)
@@ -34,6 +35,8 @@ MIN_CONTACT_GAP = 0.01  # m
 CANDIDATE_RADIUS = 0.035  # m around the rest fingertip
 VORONOI_MARGIN = 0.01  # m
 PAD_FACING = 0.6  # a fingertip's pad direction must point into the surface: cos < −PAD_FACING
+CLOSURE_MIN_EPSILON = 0.01  # closure sampling: ε margin, so that the exact verification agrees
+EDGE_NEIGHBOURS, EDGE_COS = 12, np.cos(np.deg2rad(20.0))  # closure sampling: no contact where normals turn
 
 
 @dataclass(frozen=True)
@@ -161,13 +164,27 @@ def sample_grasps(
     candidates: int = 8,
     combos: int = 32,
     max_grasps: int = 8,
+    closure_mu: float | None = None,
 ) -> list[Grasp]:
-    """Feasible grasps of ``hand`` on ``obj`` by the hierarchical sampling of the module docstring."""
+    """Feasible grasps of ``hand`` on ``obj`` by the hierarchical sampling of the module docstring.
+
+    Args:
+        closure_mu: when given, aim for force closure at this friction coefficient: pinching palms across
+            antipodal pairs (`pinch.sample_pinch_palms`; fewer than ``palms``, or none, on objects the hand does
+            not span), and combinations whose pad contacts fail the verification's closure tests (`_closure_rows`)
+            dropped before the exact tests. The caller still verifies closure exactly.
+    """
     joint_sets = finger_joint_sets(hand)
     groups = finger_groups(joint_sets)
     free_palm = len(groups) == 1 and len(groups[0]) > 1
     m, D = hand.num_fingertips, hand.dof
-    palm_pos, palm_quat = sample_palms(hand, obj, size, palms, rng)
+    if closure_mu is None:
+        palm_pos, palm_quat = sample_palms(hand, obj, size, palms, rng)
+    else:
+        palm_pos, palm_quat = sample_pinch_palms(hand, obj, palms, closure_mu, rng)
+        palms = len(palm_pos)
+        if palms == 0:
+            return []
     pp = torch.as_tensor(palm_pos).repeat_interleave(candidates, 0)
     pq = torch.as_tensor(palm_quat).repeat_interleave(candidates, 0)
     q0 = torch.as_tensor(np.tile(hand.rest, (palms * candidates, 1)))
@@ -227,6 +244,8 @@ def sample_grasps(
     keep = (over <= PENETRATION_TOL) & (gaps.min(axis=(1, 2)) >= MIN_CONTACT_GAP)
     phi_fast = obj.signed_distance(pads.reshape(-1, 3))[0].reshape(-1, m) - radii[None]
     keep &= (np.abs(phi_fast) <= TIP_TOL).all(axis=1)
+    if closure_mu is not None:
+        keep &= _closure_rows(hand, obj, pads, radii, keep, closure_mu)
     idx = np.flatnonzero(keep)
     rng.shuffle(idx)
     out: list[Grasp] = []
@@ -244,6 +263,33 @@ def sample_grasps(
             out.append(Grasp(P[j].numpy(), Q[j].numpy(), J[j].numpy(), contacts, normals, pen, selfc))
             if len(out) >= max_grasps:
                 return out
+    return out
+
+
+def _closure_rows(  # type: ignore[no-untyped-def]
+    hand, obj: ObjectField, pads: np.ndarray, radii: np.ndarray, rows: np.ndarray, mu: float
+) -> np.ndarray:
+    """(R,) bool: rows (of ``rows``) whose pad contacts (R, m, 3) pass the verification's closure tests at ``mu``
+    (`models.refine.verify`: forces with Gf = 0 under the closure normalisation, and Ferrari–Canny ε above
+    ``CLOSURE_MIN_EPSILON``), on the dense cloud's normals."""
+    from models.refine.closure import ferrari_canny
+    from models.refine.forces import solve_forces
+    from models.refine.verify import RESIDUAL_SQ_TOL, torsion_for
+    from models.refine.wrench import closure_task
+
+    centre = obj.points.mean(axis=0)
+    task = closure_task(centre, float(np.max(np.linalg.norm(obj.points - centre, axis=1))))
+    out = np.zeros(len(rows), dtype=bool)
+    for r in np.flatnonzero(rows):
+        _, nrm, _ = obj.signed_distance(pads[r])
+        contacts, normals = obj.surface(pads[r] - radii[:, None] * nrm)
+        _, near = obj.tree.query(contacts, k=EDGE_NEIGHBOURS)
+        if np.min(np.einsum("mkj,mj->mk", obj.normals[near], normals)) < EDGE_COS:
+            continue  # a contact on an edge: its normal depends on the cloud, so the verification may disagree
+        if solve_forces(task, contacts, normals, mu).residual_norm ** 2 >= RESIDUAL_SQ_TOL:
+            continue
+        eps = ferrari_canny(contacts, normals, mu, task.centre, task.length, torsional=torsion_for(hand))
+        out[r] = eps >= CLOSURE_MIN_EPSILON
     return out
 
 

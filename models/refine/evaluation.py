@@ -7,9 +7,12 @@ Protocol, per object and grasp:
    * ``"sampled"`` (default, independent of the refinement under test): the data generator's hierarchical grasp
      sampling (`models.data.sampling.sample_grasps` on a `models.data.checks.ObjectField` of the object's mesh:
      palms facing the surface, per-finger IK onto it, combinations, rejection by exact geometry — every pad
-     sphere on the surface, no penetration or self-collision beyond 1 mm). Sampling runs in rounds of
-     ``SAMPLER_PALMS`` palms (round r of object k draws from ``default_rng([seed, k, 1000 + r])``, at most
-     ``SAMPLER_ROUNDS`` rounds, cached per hand and object so both modes see the same grasps); the sampled grasps
+     sphere on the surface, no penetration or self-collision beyond 1 mm). Sampling runs in rounds (at most
+     ``SAMPLER_ROUNDS``, cached per hand and object so both modes see the same grasps); round r of object k
+     samples ``SAMPLER_PALMS`` facing palms (``default_rng([seed, k, 1000 + r])``), then as many palms pinching
+     an antipodal pair the hand spans, whose contacts pass the closure tests (``closure_mu``,
+     `models.data.pinch`; ``default_rng([seed, k, 2000 + r])``) — the facing palms alone seldom give force
+     closure on objects larger than the hand. The sampled grasps
      are taken in order and each is verified with `verify` (same cloud, mesh and μ as the trial). ``closure``
      mode keeps a grasp only when it passes `verify` for force closure (wrench residual < 1e-3 and Ferrari–Canny
      ε > 0 at μ); ``task`` mode keeps any grasp that passes the geometric tests, draws the target wrench from its
@@ -179,9 +182,13 @@ class SampledGroundTruth:
         if self._field is None:
             self._field = ObjectField(self.obj.mesh, seed=int(getattr(self.obj, "seed", 0)))
         size = float(getattr(self.obj, "size", np.ptp(self.obj.points, axis=0).max()))
-        rng = np.random.default_rng([self.seed, self.index, 1000 + self.rounds_done])
+        r = self.rounds_done
         self.rounds_done += 1
-        for g in sample_grasps(self.hand, self._field, size, rng, palms=self.palms, max_grasps=self.max_grasps):
+        facing = sample_grasps(self.hand, self._field, size, np.random.default_rng([self.seed, self.index, 1000 + r]),
+                               palms=self.palms, max_grasps=self.max_grasps)
+        pinching = sample_grasps(self.hand, self._field, size, np.random.default_rng([self.seed, self.index, 2000 + r]),
+                                 palms=self.palms, max_grasps=self.max_grasps, closure_mu=self.mu)
+        for g in facing + pinching:
             pose = HandPose(np.asarray(g.palm_pos, np.float64), np.asarray(g.palm_quat, np.float64),
                             np.asarray(g.q, np.float64))
             ver = verify(self.hand, pose, self.cloud, self.closure, self.mu, self.obj.mesh)
