@@ -48,6 +48,9 @@ def add_refine(sub: Any) -> None:
     r.add_argument("--ground-truth", choices=("sampled", "refined"), default="sampled",
                    help="source of the known-feasible poses: the data generator's grasp sampling (default) or "
                         "our own refinement from a random approach (the original, circular protocol)")
+    r.add_argument("--ground-truth-cache", default=None,
+                   help="pickle file keeping the sampled ground truths between runs (read if present, then "
+                        "updated); delete it after changing the sampler")
     r.add_argument("--json", default=None, help="also write every trial to this JSON file")
     r.set_defaults(func=run_refine)
 
@@ -55,6 +58,8 @@ def add_refine(sub: Any) -> None:
 def run_refine(args: argparse.Namespace) -> int:
     """Run the protocol for every (hand, mode) and print the table."""
     import json
+    import os
+    import pickle
     from dataclasses import asdict
 
     import torch
@@ -82,6 +87,10 @@ def run_refine(args: argparse.Namespace) -> int:
     config = RefineConfig(max_iterations=args.max_iterations)
     console = Console(width=160)
     reports = []
+    store: dict[Any, Any] = {}
+    if args.ground_truth_cache and os.path.exists(args.ground_truth_cache):
+        with open(args.ground_truth_cache, "rb") as src:
+            store = pickle.load(src)
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   console=console) as bar:
         for hand in hand_objs:
@@ -94,8 +103,11 @@ def run_refine(args: argparse.Namespace) -> int:
 
                 reports.append(evaluate(
                     hand, objects, mode, args.grasps, args.seed, mu=args.mu, retreat=args.retreat, config=config,
-                    on_trial=advance, ground_truth=args.ground_truth, cache=cache,
+                    on_trial=advance, ground_truth=args.ground_truth, cache=cache, store=store,
                 ))
+                if args.ground_truth_cache:
+                    with open(args.ground_truth_cache, "wb") as dst:
+                        pickle.dump(store, dst)
     table = Table(title=f"refinement: {args.objects} objects x {args.grasps} grasps, seed {args.seed}, "
                         f"retreat {args.retreat} m, mu {args.mu}, ground truth {args.ground_truth}")
     for col in ("hand", "mode", "n", "skipped", "success %", "median s", "p90 s", "median it",

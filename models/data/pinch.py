@@ -18,30 +18,21 @@ The per-finger IK of `sampling.sample_grasps` then closes the fingertips onto th
 from __future__ import annotations
 
 import numpy as np
-import torch
 from scipy.spatial.transform import Rotation
 
 from models.data.checks import ObjectField
+from models.refine.initialise import opposition as rest_opposition
+from models.refine.initialise import rest_geometry
 
 APERTURE_SLACK = 0.03  # m: the fingers may open a little beyond the rest pose
 RAYS_PER_PALM = 8  # candidate surface points per wanted palm (most rays fail the width or cone test)
 
 
 def opposition(hand) -> tuple[np.ndarray, np.ndarray, float]:  # type: ignore[no-untyped-def]
-    """The hand's rest-pose opposition in its palm frame: thumb tip (3,), mean of the other tips (3,), aperture.
-
-    The thumb is the fingertip farthest from the mean of the others (for a two-finger gripper, the first).
-    """
-    with torch.no_grad():
-        tips = hand.fingertips(
-            torch.zeros(1, 3, dtype=torch.float64),
-            torch.tensor([[1.0, 0.0, 0.0, 0.0]], dtype=torch.float64),
-            torch.as_tensor(hand.rest[None]),
-        )[0].numpy()
-    gaps = [np.linalg.norm(tips[i] - np.delete(tips, i, axis=0).mean(axis=0)) for i in range(len(tips))]
-    thumb = int(np.argmax(gaps))
-    others = np.delete(tips, thumb, axis=0).mean(axis=0)
-    return tips[thumb], others, float(np.linalg.norm(others - tips[thumb]))
+    """Thumb tip (3,), mean of the other tips (3,) at rest in the palm frame, and their distance (the aperture);
+    `models.refine.initialise.opposition`."""
+    thumb, others = rest_opposition(rest_geometry(hand))
+    return thumb, others, float(np.linalg.norm(others - thumb))
 
 
 def antipodal_pairs(

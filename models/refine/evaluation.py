@@ -295,12 +295,15 @@ def evaluate(
     on_trial: Callable[[Trial | None], None] | None = None,
     ground_truth: str = "sampled",
     cache: dict[Any, SampledGroundTruth] | None = None,
+    store: dict[Any, tuple[list[SampledCandidate], int]] | None = None,
 ) -> Report:
     """Run the protocol over ``objects`` (each with ``.id``, ``.points``, ``.normals``, ``.mesh``; ``.size`` and
     ``.seed`` are used by the sampler when present).
 
     ``ground_truth`` picks step 1's source (module doc). ``cache`` (a dict kept by the caller) shares the sampled
-    grasps between the modes of one hand. ``on_trial`` is called after every grasp (with None for a skipped one),
+    grasps between the modes of one hand; ``store`` (a dict the caller may pickle, `mani eval refine
+    --ground-truth-cache`) keeps them across runs: its entries are restored, and updated after each object.
+    ``on_trial`` is called after every grasp (with None for a skipped one),
     e.g. to advance a progress bar.
     """
     if mode not in ("task", "closure"):
@@ -317,6 +320,8 @@ def evaluate(
         key = (hand.name, obj.id, seed, k, mu)
         if ground_truth == "sampled" and key not in cache:
             cache[key] = SampledGroundTruth(hand, obj, cloud, closure, mu, seed, k)
+            if store is not None and key in store:
+                cache[key].candidates, cache[key].rounds_done = list(store[key][0]), store[key][1]
         next_candidate = 0
         for j in range(grasps):
             rng = np.random.default_rng([seed, k, j])
@@ -362,4 +367,6 @@ def evaluate(
             report.trials.append(trial)
             if on_trial:
                 on_trial(trial)
+        if store is not None and key in cache:
+            store[key] = (cache[key].candidates, cache[key].rounds_done)
     return report

@@ -58,6 +58,17 @@ def rest_geometry(hand: Any) -> RestGeometry:
     return RestGeometry(tips, sph, on_tip)
 
 
+def opposition(rest: RestGeometry) -> tuple[np.ndarray, np.ndarray]:
+    """The hand's rest-pose opposition in its palm frame: thumb tip (3,) and mean of the other tips (3,).
+
+    The thumb is the fingertip farthest from the mean of the others (for a two-finger gripper, the first).
+    """
+    tips = rest.tips
+    gaps = [np.linalg.norm(tips[i] - np.delete(tips, i, axis=0).mean(axis=0)) for i in range(len(tips))]
+    thumb = int(np.argmax(gaps))
+    return tips[thumb], np.delete(tips, thumb, axis=0).mean(axis=0)
+
+
 def heatmap(points: np.ndarray, sources: np.ndarray, radius: float = HEAT_RADIUS) -> np.ndarray:
     """(N,) bool: object points within ``radius`` of any source point."""
     d = np.linalg.norm(points[:, None, :] - sources[None, :, :], axis=2)

@@ -7,9 +7,12 @@ minimum. `refine_from_start` therefore
 1. aligns: turns the palm (minimal rotation) so its approach axis points at the object centre and moves it along
    that axis to where its rest fingertips are centred on the object, then backs off until no palm/finger-body
    sphere touches — the paper's "move towards the object" without closing the fingers;
-2. runs the SCP; a run that stalls or fails is restarted from the aligned pose turned about the approach axis
-   (90°, 180°, 270°, then tilted approach directions) with the remaining iterations, at most ``max_iterations``
-   in total;
+2. runs the SCP, first with the palm rolled about the approach axis so that the hand's opposition (thumb → other
+   fingertips) lies across the object's thinnest extent seen along that axis (`pinch_roll`: the minor principal
+   axis of the cloud projected on the plane normal to the approach; measured on the refinement evaluation, blind
+   rolls left force-closure grasps in local minima with the fingers on one face); a run that stalls or fails is
+   restarted from the aligned pose turned about the approach axis (180°, ±90° from that roll, then tilted
+   approach directions) with the remaining iterations, at most ``max_iterations`` in total;
 3. returns the first converged result, else the one with the lowest merit.
 """
 
@@ -24,7 +27,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from models.refine.field import PointCloudField
-from models.refine.initialise import back_off, rest_geometry
+from models.refine.initialise import back_off, opposition, rest_geometry
 from models.refine.refine import RefineConfig, RefineResult, refine
 from models.refine.state import HandPose
 from models.refine.wrench import WrenchTask
@@ -51,8 +54,31 @@ def align(hand: Any, cloud: PointCloudField, start: HandPose, centre: np.ndarray
     return HandPose(t, new.as_quat()[[3, 0, 1, 2]], np.asarray(hand.rest, dtype=np.float64).copy())
 
 
-def _attempts(rng: np.random.Generator) -> list[tuple[float, np.ndarray | None]]:
-    out: list[tuple[float, np.ndarray | None]] = [(0.0, None), (np.pi / 2, None), (np.pi, None), (-np.pi / 2, None)]
+def pinch_roll(hand: Any, cloud: PointCloudField, start: HandPose, centre: np.ndarray) -> float:
+    """Roll (rad) about the aligned approach axis that lays the rest opposition axis along the minor principal axis
+    of the object's cloud projected on the plane normal to the approach."""
+    aligned = align(hand, cloud, start, centre)
+    rot = Rotation.from_quat(aligned.palm_quat[[1, 2, 3, 0]])
+    d = rot.apply(np.asarray(hand.approach_axis, dtype=np.float64))
+    d /= np.linalg.norm(d)
+    thumb, others = opposition(rest_geometry(hand))
+    u = rot.apply(others - thumb)
+    u -= (u @ d) * d
+    if np.linalg.norm(u) < 1e-9:
+        return 0.0
+    u /= np.linalg.norm(u)
+    e2 = np.cross(d, u)
+    rel = cloud.points - centre
+    coords = np.stack([rel @ u, rel @ e2], axis=1)  # in-plane coordinates, u = (1, 0)
+    _, vecs = np.linalg.eigh(coords.T @ coords)
+    minor = vecs[:, 0]
+    return float(np.arctan2(minor[1], minor[0]))
+
+
+def _attempts(rng: np.random.Generator, roll0: float = 0.0) -> list[tuple[float, np.ndarray | None]]:
+    out: list[tuple[float, np.ndarray | None]] = [
+        (roll0 + r, None) for r in (0.0, np.pi, np.pi / 2, -np.pi / 2)
+    ]
     for _ in range(8):
         v = rng.normal(size=3)
         out.append((float(rng.uniform(0, 2 * np.pi)), v / np.linalg.norm(v) * np.deg2rad(30)))
@@ -76,7 +102,7 @@ def refine_from_start(
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
     budget, best, total = cfg.max_iterations, None, 0
-    for roll, tilt in _attempts(rng):
+    for roll, tilt in _attempts(rng, pinch_roll(hand, cloud, start, task.centre)):
         if budget < MIN_ATTEMPT_ITERATIONS and best is not None:
             break
         pose = align(hand, cloud, start, task.centre, roll, tilt)

@@ -69,3 +69,16 @@ def test_evaluate_with_sampled_ground_truth_and_shared_cache(box_object, gripper
     assert len(report.trials) == 1  # the sampler has a closure grasp (first test)
     with pytest.raises(ValueError):
         evaluate(gripper, [box_object], "closure", 1, 0, ground_truth="oracle")
+
+
+def test_store_restores_sampled_ground_truths_without_sampling(box_object, gripper, sampler):
+    sampler.candidate(0)  # make sure the module's sampler holds at least one round
+    key = (gripper.name, box_object.id, 0, 0, 0.5)
+    store = {key: (sampler.candidates, sampler.rounds_done)}
+    first = evaluate(gripper, [box_object], "closure", 1, 0, store=store)
+    assert len(first.trials) == 1
+    # a store whose rounds are spent and hold no candidate: nothing is sampled, the grasp is skipped
+    empty = {key: ([], 99)}
+    skipped = evaluate(gripper, [box_object], "closure", 1, 0, store=empty)
+    assert skipped.skipped == 1 and not skipped.trials
+    assert empty[key] == ([], 99)
