@@ -64,9 +64,21 @@ def opposition(rest: RestGeometry) -> tuple[np.ndarray, np.ndarray]:
     The thumb is the fingertip farthest from the mean of the others (for a two-finger gripper, the first).
     """
     tips = rest.tips
-    gaps = [np.linalg.norm(tips[i] - np.delete(tips, i, axis=0).mean(axis=0)) for i in range(len(tips))]
-    thumb = int(np.argmax(gaps))
+    thumb = int(np.argmax(_thumb_gaps(tips)))
     return tips[thumb], np.delete(tips, thumb, axis=0).mean(axis=0)
+
+
+def distinct_opposition(rest: RestGeometry, margin: float = 1.2) -> bool:
+    """Whether `opposition` is clear-cut: two fingertips, or a thumb whose gap to the mean of the other tips is at
+    least ``margin`` times the next largest (not so for the barrett hand's near-equilateral three fingers)."""
+    if len(rest.tips) <= 2:
+        return True
+    gaps = np.sort(_thumb_gaps(rest.tips))
+    return bool(gaps[-1] >= margin * gaps[-2])
+
+
+def _thumb_gaps(tips: np.ndarray) -> np.ndarray:
+    return np.array([np.linalg.norm(tips[i] - np.delete(tips, i, axis=0).mean(axis=0)) for i in range(len(tips))])
 
 
 def heatmap(points: np.ndarray, sources: np.ndarray, radius: float = HEAT_RADIUS) -> np.ndarray:

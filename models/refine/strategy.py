@@ -29,7 +29,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from models.refine.field import PointCloudField
-from models.refine.initialise import back_off, opposition, rest_geometry
+from models.refine.initialise import back_off, distinct_opposition, opposition, rest_geometry
 from models.refine.refine import RefineConfig, RefineResult, refine
 from models.refine.state import HandPose
 from models.refine.wrench import WrenchTask
@@ -58,12 +58,15 @@ def align(hand: Any, cloud: PointCloudField, start: HandPose, centre: np.ndarray
 
 def pinch_roll(hand: Any, cloud: PointCloudField, start: HandPose, centre: np.ndarray) -> float:
     """Roll (rad) about the aligned approach axis that lays the rest opposition axis along the minor principal axis
-    of the object's cloud projected on the plane normal to the approach."""
+    of the object's cloud projected on the plane normal to the approach; 0 for hands without a clear thumb."""
+    rest = rest_geometry(hand)
+    if not distinct_opposition(rest):
+        return 0.0
     aligned = align(hand, cloud, start, centre)
     rot = Rotation.from_quat(aligned.palm_quat[[1, 2, 3, 0]])
     d = rot.apply(np.asarray(hand.approach_axis, dtype=np.float64))
     d /= np.linalg.norm(d)
-    thumb, others = opposition(rest_geometry(hand))
+    thumb, others = opposition(rest)
     u = rot.apply(others - thumb)
     u -= (u @ d) * d
     if np.linalg.norm(u) < 1e-9:

@@ -5,7 +5,7 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from models.refine.field import PointCloudField
-from models.refine.initialise import opposition, rest_geometry
+from models.refine.initialise import distinct_opposition, opposition, rest_geometry
 from models.refine.state import HandPose
 from models.refine.strategy import align, pinch_roll
 
@@ -34,3 +34,11 @@ def test_opposition_picks_the_thumb_of_a_hand():
     thumb, others = opposition(rest)
     assert np.allclose(thumb, rest.tips[3])  # allegro's thumb is its fourth fingertip
     assert np.allclose(others, rest.tips[:3].mean(axis=0))
+
+
+def test_opposition_is_distinct_for_a_thumb_not_for_barrett():
+    from models.robots import get_hand
+
+    assert distinct_opposition(rest_geometry(get_hand("allegro")))
+    assert distinct_opposition(rest_geometry(get_hand("panda_gripper")))
+    assert not distinct_opposition(rest_geometry(get_hand("barrett")))  # three fingers at near-equal gaps
