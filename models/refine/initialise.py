@@ -68,7 +68,7 @@ def opposition(rest: RestGeometry) -> tuple[np.ndarray, np.ndarray]:
     return tips[thumb], np.delete(tips, thumb, axis=0).mean(axis=0)
 
 
-def distinct_opposition(rest: RestGeometry, margin: float = 1.2) -> bool:
+def distinct_opposition(rest: RestGeometry, margin: float = 1.02) -> bool:
     """Whether `opposition` is clear-cut: two fingertips, or a thumb whose gap to the mean of the other tips is at
     least ``margin`` times the next largest (not so for the barrett hand's near-equilateral three fingers)."""
     if len(rest.tips) <= 2:

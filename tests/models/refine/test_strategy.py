@@ -41,4 +41,5 @@ def test_opposition_is_distinct_for_a_thumb_not_for_barrett():
 
     assert distinct_opposition(rest_geometry(get_hand("allegro")))
     assert distinct_opposition(rest_geometry(get_hand("panda_gripper")))
+    assert distinct_opposition(rest_geometry(get_hand("leap")))
     assert not distinct_opposition(rest_geometry(get_hand("barrett")))  # three fingers at near-equal gaps
