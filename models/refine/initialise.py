@@ -70,7 +70,7 @@ def opposition(rest: RestGeometry) -> tuple[np.ndarray, np.ndarray]:
 
 def distinct_opposition(rest: RestGeometry, margin: float = 1.02) -> bool:
     """Whether `opposition` is clear-cut: two fingertips, or a thumb whose gap to the mean of the other tips is at
-    least ``margin`` times the next largest (not so for the barrett hand's near-equilateral three fingers)."""
+    least ``margin`` times the next largest (leap: 1.04; not so for the barrett hand, whose two spread tips tie)."""
     if len(rest.tips) <= 2:
         return True
     gaps = np.sort(_thumb_gaps(rest.tips))
