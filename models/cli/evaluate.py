@@ -98,8 +98,13 @@ def run_refine(args: argparse.Namespace) -> int:
             for mode in modes:
                 job = bar.add_task(f"{hand.name} {mode}", total=args.objects * args.grasps)
 
-                def advance(_trial: Any, job: Any = job) -> None:
+                def advance(_trial: Any, job: Any = job, label: str = f"{hand.name} {mode}") -> None:
                     bar.advance(job)
+                    done = int(bar.tasks[job].completed)
+                    if not console.is_terminal and done % args.grasps == 0:
+                        # a log file gets no live bar: one line per object instead
+                        console.print(f"{label}: {done}/{args.objects * args.grasps} grasps, "
+                                      f"{bar.tasks[job].elapsed or 0.0:.0f} s")
 
                 reports.append(evaluate(
                     hand, objects, mode, args.grasps, args.seed, mu=args.mu, retreat=args.retreat, config=config,
