@@ -21,17 +21,16 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from models.data.checks import ObjectField
-from models.refine.initialise import opposition as rest_opposition
-from models.refine.initialise import rest_geometry
+from models.refine.initialise import opposition, rest_geometry
 
 APERTURE_SLACK = 0.03  # m: the fingers may open a little beyond the rest pose
 RAYS_PER_PALM = 8  # candidate surface points per wanted palm (most rays fail the width or cone test)
 
 
-def opposition(hand) -> tuple[np.ndarray, np.ndarray, float]:  # type: ignore[no-untyped-def]
+def hand_opposition(hand) -> tuple[np.ndarray, np.ndarray, float]:  # type: ignore[no-untyped-def]
     """Thumb tip (3,), mean of the other tips (3,) at rest in the palm frame, and their distance (the aperture);
     `models.refine.initialise.opposition`."""
-    thumb, others = rest_opposition(rest_geometry(hand))
+    thumb, others = opposition(rest_geometry(hand))
     return thumb, others, float(np.linalg.norm(others - thumb))
 
 
@@ -57,7 +56,7 @@ def sample_pinch_palms(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Up to ``count`` pinching palm poses: positions (B, 3), quaternions (B, 4) wxyz (B = 0 when the object
     has no antipodal pair the hand spans)."""
-    thumb, others, aperture = opposition(hand)
+    thumb, others, aperture = hand_opposition(hand)
     p1, p2 = antipodal_pairs(obj, RAYS_PER_PALM * count, mu, aperture + APERTURE_SLACK, rng)
     p1, p2 = p1[:count], p2[:count]
     axis_h = (others - thumb) / aperture

@@ -280,17 +280,28 @@ def _closure_rows(  # type: ignore[no-untyped-def]
     centre = obj.points.mean(axis=0)
     task = closure_task(centre, float(np.max(np.linalg.norm(obj.points - centre, axis=1))))
     out = np.zeros(len(rows), dtype=bool)
-    for r in np.flatnonzero(rows):
-        _, nrm, _ = obj.signed_distance(pads[r])
-        contacts, normals = obj.surface(pads[r] - radii[:, None] * nrm)
-        _, near = obj.tree.query(contacts, k=EDGE_NEIGHBOURS)
-        if np.min(np.einsum("mkj,mj->mk", obj.normals[near], normals)) < EDGE_COS:
-            continue  # a contact on an edge: its normal depends on the cloud, so the verification may disagree
-        if solve_forces(task, contacts, normals, mu).residual_norm ** 2 >= RESIDUAL_SQ_TOL:
+    idx = np.flatnonzero(rows)
+    if not idx.size:
+        return out
+    contacts, normals = _pad_contacts(obj, pads[idx].reshape(-1, 3), np.tile(radii, len(idx)))
+    _, near = obj.tree.query(contacts, k=EDGE_NEIGHBOURS)
+    # a contact on an edge: its normal depends on the cloud, so the verification may disagree
+    on_edge = (np.einsum("nkj,nj->nk", obj.normals[near], normals).min(axis=1) < EDGE_COS).reshape(len(idx), -1)
+    contacts, normals = contacts.reshape(len(idx), -1, 3), normals.reshape(len(idx), -1, 3)
+    for i, r in enumerate(idx):
+        if on_edge[i].any():
             continue
-        eps = ferrari_canny(contacts, normals, mu, task.centre, task.length, torsional=torsion_for(hand))
+        if solve_forces(task, contacts[i], normals[i], mu).residual_norm ** 2 >= RESIDUAL_SQ_TOL:
+            continue
+        eps = ferrari_canny(contacts[i], normals[i], mu, task.centre, task.length, torsional=torsion_for(hand))
         out[r] = eps >= CLOSURE_MIN_EPSILON
     return out
+
+
+def _pad_contacts(obj: ObjectField, pads: np.ndarray, radii: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Contact points (M, 3) = the surface points under pad spheres (M, 3) of radii (M,), and their normals."""
+    _, nrm, _ = obj.signed_distance(pads)
+    return obj.surface(pads - radii[:, None] * nrm)
 
 
 def exact_checks(
@@ -317,6 +328,5 @@ def exact_checks(
     selfc = float(hand_self_collision(hand, palm_pos, palm_quat, q))
     if selfc > PENETRATION_TOL:
         return None
-    _, nrm, _ = obj.signed_distance(pads)
-    surf, nrm = obj.surface(pads - radii[:, None] * nrm)
+    surf, nrm = _pad_contacts(obj, pads, radii)
     return surf, nrm, pen, selfc

@@ -41,6 +41,18 @@ def align(hand: Any, cloud: PointCloudField, start: HandPose, centre: np.ndarray
           tilt: np.ndarray | None = None) -> HandPose:
     """Step 1 of the module doc, with an extra ``roll`` (rad) about the approach axis and optional tilt rotvec."""
     rest = rest_geometry(hand)
+    new, d = _aligned_rotation(hand, start, centre, roll, tilt)
+    mat = new.as_matrix()
+    t = centre - mat @ rest.tips.mean(axis=0)
+    t = back_off(mat, t, rest, np.asarray(hand.sphere_radii), cloud, d, max_distance=0.3)
+    return HandPose(t, new.as_quat()[[3, 0, 1, 2]], np.asarray(hand.rest, dtype=np.float64).copy())
+
+
+def _aligned_rotation(
+    hand: Any, start: HandPose, centre: np.ndarray, roll: float = 0.0, tilt: np.ndarray | None = None
+) -> tuple[Rotation, np.ndarray]:
+    """The palm orientation of `align` and its approach direction (3,) (no back-off: the position is not needed)."""
+    rest = rest_geometry(hand)
     axis = np.asarray(hand.approach_axis, dtype=np.float64)
     rot = Rotation.from_quat(start.palm_quat[[1, 2, 3, 0]])
     tips_mean = rot.apply(rest.tips.mean(axis=0)) + start.palm_pos
@@ -49,11 +61,7 @@ def align(hand: Any, cloud: PointCloudField, start: HandPose, centre: np.ndarray
     if tilt is not None:
         d = Rotation.from_rotvec(tilt).apply(d)
     turn = Rotation.align_vectors([d], [rot.apply(axis)])[0]
-    new = Rotation.from_rotvec(d * roll) * turn * rot
-    mat = new.as_matrix()
-    t = centre - mat @ rest.tips.mean(axis=0)
-    t = back_off(mat, t, rest, np.asarray(hand.sphere_radii), cloud, d, max_distance=0.3)
-    return HandPose(t, new.as_quat()[[3, 0, 1, 2]], np.asarray(hand.rest, dtype=np.float64).copy())
+    return Rotation.from_rotvec(d * roll) * turn * rot, d
 
 
 def pinch_roll(hand: Any, cloud: PointCloudField, start: HandPose, centre: np.ndarray) -> float:
@@ -62,10 +70,7 @@ def pinch_roll(hand: Any, cloud: PointCloudField, start: HandPose, centre: np.nd
     rest = rest_geometry(hand)
     if not distinct_opposition(rest):
         return 0.0
-    aligned = align(hand, cloud, start, centre)
-    rot = Rotation.from_quat(aligned.palm_quat[[1, 2, 3, 0]])
-    d = rot.apply(np.asarray(hand.approach_axis, dtype=np.float64))
-    d /= np.linalg.norm(d)
+    rot, d = _aligned_rotation(hand, start, centre)
     thumb, others = opposition(rest)
     u = rot.apply(others - thumb)
     u -= (u @ d) * d

@@ -9,7 +9,7 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 from models.data.checks import ObjectField
-from models.data.pinch import antipodal_pairs, opposition, sample_pinch_palms
+from models.data.pinch import antipodal_pairs, hand_opposition, sample_pinch_palms
 from models.data.sampling import sample_grasps
 from models.objects import make_object
 from models.refine.field import PointCloudField
@@ -31,7 +31,7 @@ def test_antipodal_pairs_of_a_box_span_its_sides() -> None:
 def test_pinch_palm_puts_the_hands_opposition_on_the_segment() -> None:
     hand = get_hand("allegro")
     field = ObjectField(trimesh.creation.cylinder(radius=0.03, height=0.2), seed=0)
-    thumb, others, aperture = opposition(hand)
+    thumb, others, aperture = hand_opposition(hand)
     assert 0.05 < aperture < 0.2
     pos, quat = sample_pinch_palms(hand, field, 8, 0.5, np.random.default_rng(1))
     assert len(pos) > 0
