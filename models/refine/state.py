@@ -102,8 +102,6 @@ class Linearisation:
         return np.maximum(0.0, r - self.pair_dist)
 
 
-
-
 def sphere_allowance(hand: Any, tip_allowance: float) -> np.ndarray:
     """Per-sphere overlap (m) the non-penetration rows allow: ``tip_allowance`` for spheres on fingertip links
     (they carry the contacts), none for the others. Verification checks the real meshes."""
@@ -111,19 +109,11 @@ def sphere_allowance(hand: Any, tip_allowance: float) -> np.ndarray:
     return np.where(owner >= 0, tip_allowance, 0.0)
 
 
-_CONTACT: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+PAD_TOLERANCE = 3e-3  # m: spheres this much farther from the tip point than the nearest one also form the pad
+_CONTACT: dict[int, tuple[np.ndarray, np.ndarray, list[np.ndarray]]] = {}
 
 
-def contact_spheres(hand: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Per fingertip: the index of its pad sphere (the sphere on its link nearest to its tip point; −1 if none)
-    and that sphere's radius (0 for −1).
-
-    The fingertip is modelled by its pad sphere: its contact point is the sphere point nearest to the object,
-    ``p = c − r ∇Φ(c)``, at distance ``Φ(c) − r``. The hand's fixed tip point lies inside the fitted spheres
-    (Allegro/LEAP: 3-4 mm inside two overlapping ones), so with a fixed point the fingertip can touch only in
-    one orientation and the SCP stalled 6-20 mm off the surface in our runs; the pad model is orientation-free
-    and consistent with the non-penetration rows.
-    """
+def _contact_model(hand: Any) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
     key = id(hand)
     if key not in _CONTACT:
         pos = torch.zeros(1, 3, dtype=torch.float64)
@@ -135,20 +125,70 @@ def contact_spheres(hand: Any) -> tuple[np.ndarray, np.ndarray]:
         radius = np.asarray(hand.sphere_radii, dtype=np.float64)
         owner = np.asarray(getattr(hand, "sphere_fingertip", np.full(len(radius), -1)))
         idx = np.full(len(tips), -1)
+        pads: list[np.ndarray] = []
         for i in range(len(tips)):
             mine = np.flatnonzero(owner == i)
-            if len(mine):
-                idx[i] = mine[np.argmin(np.linalg.norm(sph[mine] - tips[i], axis=1))]
-        _CONTACT[key] = (idx, np.where(idx >= 0, radius[np.maximum(idx, 0)], 0.0))
+            if not len(mine):
+                pads.append(np.zeros(0, dtype=np.int64))
+                continue
+            dist = np.linalg.norm(sph[mine] - tips[i], axis=1)
+            idx[i] = mine[np.argmin(dist)]
+            pads.append(mine[dist <= dist.min() + PAD_TOLERANCE])
+        _CONTACT[key] = (idx, np.where(idx >= 0, radius[np.maximum(idx, 0)], 0.0), pads)
     return _CONTACT[key]
+
+
+def contact_spheres(hand: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Per fingertip: the index of its primary pad sphere (the sphere on its link nearest to its tip point; −1 if
+    none) and that sphere's radius (0 for −1). Data generation's IK drives this sphere onto the surface.
+
+    The fingertip is modelled by its pad: its contact point is the pad sphere point nearest to the object,
+    ``p = c − r ∇Φ(c)``, at distance ``Φ(c) − r``. The hand's fixed tip point lies inside the fitted spheres
+    (Allegro/LEAP: 3-4 mm inside two overlapping ones), so with a fixed point the fingertip can touch only in
+    one orientation and the SCP stalled 6-20 mm off the surface in our runs; the pad model is orientation-free
+    and consistent with the non-penetration rows. See `pad_spheres` for pads made of several spheres.
+    """
+    idx, rad, _ = _contact_model(hand)
+    return idx, rad
+
+
+def pad_spheres(hand: Any) -> list[np.ndarray]:
+    """Per fingertip, the indices of its pad spheres: those on its link whose centre (at rest) is at most
+    ``PAD_TOLERANCE`` farther from the tip point than the primary pad sphere's (empty: no sphere, the tip point).
+
+    The sphere fit may split a fingertip's end into several spheres about equally near the tip point (LEAP: two
+    side by side, 11.5 and 12.5 mm from it); the one nearest the object is the contact. With the primary sphere
+    alone, a LEAP finger touching with its other half stalled 6 mm "off" the surface (refinement evaluation,
+    blob-13c08faf).
+    """
+    return _contact_model(hand)[2]
+
+
+def select_pads(hand: Any, gap: np.ndarray) -> np.ndarray:
+    """Per fingertip, the pad sphere (index into all spheres) nearest to touching: smallest |``gap``| (S,) (its
+    Φ − r); −1 for fingertips without spheres. Not the most negative gap: the spheres over-approximate the link,
+    so one pad sphere may overlap the object by several mm (sampled LEAP grasps: 6.9 mm, no mesh penetration)
+    while its neighbour touches."""
+    out = np.full(len(pad_spheres(hand)), -1, dtype=np.int64)
+    for i, pad in enumerate(pad_spheres(hand)):
+        if len(pad):
+            out[i] = pad[np.argmin(np.abs(gap[pad]))]
+    return out
 
 
 def contact_points(
     hand: Any, field: DistanceField, tips: np.ndarray, tip_jac: np.ndarray | None, sph: np.ndarray,
     sph_jac: np.ndarray | None,
 ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]:
-    """Fingertip contact points (m, 3), their Jacobians, distances Φ(c) − r (m,) and gradients (m, 3)."""
-    idx, rad = contact_spheres(hand)
+    """Fingertip contact points (m, 3), their Jacobians, distances Φ(c) − r (m,) and gradients (m, 3), each on the
+    fingertip's pad sphere nearest to the object (`pad_spheres`)."""
+    radius = np.asarray(hand.sphere_radii, dtype=np.float64)
+    candidates = np.unique(np.concatenate([np.zeros(0, dtype=np.int64), *pad_spheres(hand)]))
+    gap = np.full(len(radius), np.inf)
+    if len(candidates):
+        gap[candidates] = field.signed_distance(sph[candidates])[0] - radius[candidates]
+    idx = select_pads(hand, gap)
+    rad = np.where(idx >= 0, radius[np.maximum(idx, 0)], 0.0)
     centres = np.where((idx >= 0)[:, None], sph[np.maximum(idx, 0)], tips)
     phi, grad, _ = field.signed_distance(centres)
     points = centres - rad[:, None] * grad

@@ -2,11 +2,11 @@
 
 Criteria (all must hold): wrench residual ‖R Σ G_i f_i − τ‖² < 1e-6 with the optimal forces of Eq. (6-8) at the
 final fingertips (unit target wrench); every fingertip within 5 mm of the surface — a fingertip is its pad sphere
-(`models.refine.state.contact_spheres`), its distance is Φ(centre) − radius with the exact mesh signed distance
-when a mesh is known, else the point field (with a region mask: its contact point within 5 mm of an allowed
-point); hand–object
-penetration ≤ 1 mm and self-collision depth ≤ 1 mm, both measured on the hand's collision meshes with fcl
-(`models.geometry`); for force closure, Ferrari–Canny ε > 0 (parallel-jaw grippers: soft-finger pads).
+nearest to touching (`models.refine.state.pad_spheres`), its distance is |Φ(centre) − radius| with the exact mesh
+signed distance when a mesh is known, else the point field (with a region mask: its contact point within 5 mm of an
+allowed point); hand–object penetration ≤ 1 mm and self-collision depth ≤ 1 mm, both measured on the hand's
+collision meshes with fcl (`models.geometry`); for force closure, Ferrari–Canny ε > 0 (parallel-jaw grippers:
+soft-finger pads).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import torch
 from models.refine.closure import ferrari_canny
 from models.refine.field import PointCloudField
 from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE, solve_forces
-from models.refine.state import HandPose, contact_points, contact_spheres
+from models.refine.state import HandPose, contact_points, pad_spheres, select_pads
 from models.refine.wrench import WrenchTask
 
 RESIDUAL_SQ_TOL = 1e-6
@@ -88,9 +88,17 @@ def verify(
     elif mesh is not None:
         import trimesh
 
-        idx, rad = contact_spheres(hand)
-        centres = np.where((idx >= 0)[:, None], sph[np.maximum(idx, 0)], fk_tips)
-        tip_dist = np.abs(-trimesh.proximity.signed_distance(mesh, centres) - rad)  # trimesh: positive inside
+        radius = np.asarray(hand.sphere_radii, dtype=np.float64)
+        pads = pad_spheres(hand)
+        candidates = np.unique(np.concatenate([np.zeros(0, dtype=np.int64), *pads]))
+        gap = np.full(len(radius), np.inf)
+        if len(candidates):  # trimesh: positive inside
+            gap[candidates] = -trimesh.proximity.signed_distance(mesh, sph[candidates]) - radius[candidates]
+        idx = select_pads(hand, gap)
+        bare = idx < 0
+        tip_dist = np.abs(gap[np.maximum(idx, 0)])
+        if bare.any():
+            tip_dist[bare] = np.abs(trimesh.proximity.signed_distance(mesh, fk_tips[bare]))
     else:
         tip_dist = np.abs(tip_phi)
     _, _, contacts = cloud.signed_distance(tips)
