@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import asdict, replace
 from pathlib import Path
 
 import numpy as np
@@ -78,3 +79,28 @@ def test_shards_are_reproducible_and_generation_resumes(tmp_path: Path) -> None:
     assert batch.obj.xyz.shape[1:] == (256, 3) and batch.hand.shape[2] == 6
     assert float(batch.obj.xyz.abs().max()) <= 0.5 + 1e-5
     assert torch.isfinite(batch.force).all() and torch.isfinite(batch.obj.motion).all()
+
+
+def test_test_objects_only_keeps_every_object_and_the_full_sets_test_examples(tmp_path: Path) -> None:
+    full = replace(CFG, objects=3, objects_per_shard=3, test_fraction=0.3)  # objects 0, 1 train; 2 test
+    only = replace(full, test_objects_only=True)
+    (tmp_path / "f").mkdir()
+    (tmp_path / "o").mkdir()
+    rf, ro = run_shard(full, 0, str(tmp_path / "f")), run_shard(only, 0, str(tmp_path / "o"))
+    zf, zo = np.load(tmp_path / "f" / rf.file), np.load(tmp_path / "o" / ro.file)
+    np.testing.assert_array_equal(zf["object_ids"], zo["object_ids"])
+    test_objects = np.flatnonzero(zo["object_split"] == "test")
+    assert 0 < len(test_objects) < 3
+    assert set(zo["obj_index"].tolist()) <= set(test_objects.tolist())
+    same = np.isin(zf["obj_index"], test_objects)
+    assert ro.examples == int(same.sum()) > 0 and rf.examples > ro.examples
+    for key in ("split", "hand", "motion", "heat", "force_map", "contacts", "q"):
+        np.testing.assert_array_equal(zf[key][same], zo[key])
+
+
+def test_a_data_set_made_before_a_setting_existed_resumes(tmp_path: Path) -> None:
+    shards = {str(k): asdict(run_shard(CFG, k, str(tmp_path))) for k in (0, 1)}
+    old = {k: v for k, v in CFG.to_dict().items() if k != "test_objects_only"}
+    (tmp_path / "manifest.json").write_text(json.dumps({"config": old, "shards": shards}))
+    manifest = generate(CFG, tmp_path, workers=1, progress=False)  # nothing to do, no "another configuration"
+    assert manifest["config"] == CFG.to_dict() and manifest["totals"]["shards"] == 2
