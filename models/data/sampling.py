@@ -272,9 +272,7 @@ def _closure_rows(  # type: ignore[no-untyped-def]
     """(R,) bool: rows (of ``rows``) whose pad contacts (R, m, 3) pass the verification's closure tests at ``mu``
     (`models.refine.verify`: forces with Gf = 0 under the closure normalisation, and Ferrari–Canny ε above
     ``CLOSURE_MIN_EPSILON``), on the dense cloud's normals."""
-    from models.refine.closure import ferrari_canny
-    from models.refine.forces import solve_forces
-    from models.refine.verify import RESIDUAL_SQ_TOL, torsion_for
+    from models.refine.verify import RESIDUAL_SQ_TOL, contact_quality
     from models.refine.wrench import closure_task
 
     centre = obj.points.mean(axis=0)
@@ -291,10 +289,8 @@ def _closure_rows(  # type: ignore[no-untyped-def]
     for i, r in enumerate(idx):
         if on_edge[i].any():
             continue
-        if solve_forces(task, contacts[i], normals[i], mu).residual_norm ** 2 >= RESIDUAL_SQ_TOL:
-            continue
-        eps = ferrari_canny(contacts[i], normals[i], mu, task.centre, task.length, torsional=torsion_for(hand))
-        out[r] = eps >= CLOSURE_MIN_EPSILON
+        sol, eps = contact_quality(hand, contacts[i], normals[i], task, mu)
+        out[r] = sol.residual_norm**2 < RESIDUAL_SQ_TOL and eps >= CLOSURE_MIN_EPSILON
     return out
 
 

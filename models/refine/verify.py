@@ -19,7 +19,7 @@ import torch
 
 from models.refine.closure import ferrari_canny
 from models.refine.field import PointCloudField
-from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE, solve_forces
+from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE, ForceSolution, solve_forces
 from models.refine.state import HandPose, contact_points, pad_spheres, select_pads
 from models.refine.wrench import WrenchTask
 
@@ -55,6 +55,18 @@ def torsion_for(hand: Any) -> float:
     return PAD_TORSION if hand.num_fingertips == 2 else 0.0
 
 
+def contact_quality(
+    hand: Any, contacts: np.ndarray, normals: np.ndarray, task: WrenchTask, mu: float,
+    max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE,
+) -> tuple[ForceSolution, float]:
+    """The contact-level tests of `verify`: the optimal forces of Eq. (6-8) (their residual is the wrench test)
+    and the Ferrari–Canny ε, for contacts (m, 3) with outward normals (m, 3). The grasp sampler's force-closure
+    pre-check calls this too, so both judge a grasp the same way."""
+    sol = solve_forces(task, contacts, normals, mu, max_normal_force)
+    eps = ferrari_canny(contacts, normals, mu, task.centre, task.length, torsional=torsion_for(hand))
+    return sol, float(eps)
+
+
 def verify(
     hand: Any,
     pose: HandPose,
@@ -82,7 +94,7 @@ def verify(
         sph = hand.spheres(*pose.tensors(), jacobian=False)[0][0].numpy()
     tips, _, tip_phi, _ = contact_points(hand, cloud, fk_tips, None, sph, None)
     normals = cloud.surface_normal(tips)
-    sol = solve_forces(task, tips, normals, mu, max_normal_force)
+    sol, eps = contact_quality(hand, tips, normals, task, mu, max_normal_force)
     if cloud.mask is not None:
         tip_dist = cloud.region_distance(tips)[0]
     elif mesh is not None:
@@ -109,7 +121,6 @@ def verify(
         geom = ObjectGeometry.from_points(cloud.points, cloud.normals, mesh)
         pen = hand_object_penetration(hand, geom, pose.palm_pos, pose.palm_quat, pose.q)
         selfc = hand_self_collision(hand, pose.palm_pos, pose.palm_quat, pose.q)
-    eps = ferrari_canny(tips, normals, mu, task.centre, task.length, torsional=torsion_for(hand))
     failures = []
     if not sol.residual_norm**2 < RESIDUAL_SQ_TOL:
         failures.append("wrench_residual")
