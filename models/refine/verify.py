@@ -96,7 +96,7 @@ def verify(
     normals = cloud.surface_normal(tips)
     sol, eps = contact_quality(hand, tips, normals, task, mu, max_normal_force)
     if cloud.mask is not None:
-        tip_dist = cloud.region_distance(tips)[0]
+        tip_dist = cloud.region_point_distance(tips)
     elif mesh is not None:
         import trimesh
 

@@ -46,3 +46,19 @@ def test_region_distance_and_normals(sphere_field):
     assert 0.3 / 0.05 < jac[0, 0, 0] < 3 / 0.05  # of the order of the curvature 1/R
     with pytest.raises(ValueError):
         PointCloudField(sphere_field.points, sphere_field.normals, np.zeros(len(sphere_field.points), bool))
+
+
+def test_region_distance_vanishes_on_the_region_and_is_continuous_across_samples(sphere_field):
+    mask = sphere_field.points[:, 2] > 0.03
+    masked = PointCloudField(sphere_field.points, sphere_field.normals, mask)
+    theta = np.linspace(0.0, 1.3, 600)  # a meridian on the surface, leaving the region at z = 0.03 (θ ≈ 0.93)
+    path = 0.05 * np.stack([np.sin(theta), np.zeros_like(theta), np.cos(theta)], axis=1)
+    value, grad = masked.region_distance(path)
+    inside = theta < 0.85
+    point = masked.region_point_distance(path[inside])
+    assert value[inside].max() < 2e-3 and value[inside].mean() < 0.5 * point.mean()  # near 0 between samples
+    assert np.all(value[inside] <= point + 1e-12)
+    assert np.max(np.abs(np.diff(value))) < 1e-3  # no jumps where the nearest sample changes
+    assert value[-1] > 0.01 and np.all(np.diff(value[theta > 1.0]) > 0)
+    np.testing.assert_allclose(np.linalg.norm(grad, axis=1), 1.0)
+    assert grad[-1] @ np.array([-np.cos(1.3), 0.0, np.sin(1.3)]) < -0.9  # outside: it points away from the region
