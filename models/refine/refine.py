@@ -39,6 +39,9 @@ class RefineConfig:
             the point cloud, which differs from the exact mesh distance the verification measures by up to a few
             mm on curved faces, so it stops at 3 mm (measured: a grasp converged at 4.9 mm on the cloud failed
             verification at 5.02 mm on the mesh).
+        region_point_tol: with a region mask, every contact point within this of an allowed sample (m): the
+            verification asks for 5 mm; the SCP's Φ^R measures to the samples' discs, up to 0.75 × the sample
+            spacing less (a masked LEAP grasp converged on Φ^R and failed verification at 5.4 mm).
         penetration_tol: sphere penetration / self-overlap allowed at convergence (m).
         max_normal_force: bound on each normal force (unit target wrench).
         tip_weight: λ (1/m²) on the squared tip distances.
@@ -56,6 +59,7 @@ class RefineConfig:
     max_iterations: int = 100
     residual_tol: float = 1e-6
     tip_tol: float = 3e-3
+    region_point_tol: float = 4.5e-3
     penetration_tol: float = 1e-3
     max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE
     tip_weight: float = 100.0
@@ -135,6 +139,7 @@ def _converged(lin: Linearisation, cfg: RefineConfig) -> bool:
     return bool(
         lin.residual_norm < cfg.residual_tol
         and np.max(np.abs(lin.tip_phi)) < cfg.tip_tol
+        and (lin.region_point is None or np.max(lin.region_point) < cfg.region_point_tol)
         and lin.penetration().max(initial=0.0) <= cfg.penetration_tol
         and lin.self_overlap().max(initial=0.0) <= cfg.penetration_tol
     )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
@@ -57,6 +58,8 @@ class Linearisation:
             is the allowed overlap (m) per sphere (fingertip spheres may touch).
         pair_idx, pair_dist, pair_dir: self-collision pairs (P, 2), their centre distances and unit directions.
         q, lower, upper: joint values and limits (D,).
+        region_point: with a region mask, each contact point's distance to the nearest allowed sample (m,) — the
+            verification's region test, which the convergence test also applies (Φ^R is to the samples' discs).
     """
 
     task: WrenchTask
@@ -81,6 +84,7 @@ class Linearisation:
     q: np.ndarray
     lower: np.ndarray
     upper: np.ndarray
+    region_point: np.ndarray | None = None
 
     @property
     def forces(self) -> np.ndarray:
@@ -178,24 +182,39 @@ def select_pads(hand: Any, gap: np.ndarray) -> np.ndarray:
 
 def contact_points(
     hand: Any, field: DistanceField, tips: np.ndarray, tip_jac: np.ndarray | None, sph: np.ndarray,
-    sph_jac: np.ndarray | None,
+    sph_jac: np.ndarray | None, tip_field: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None,
 ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, np.ndarray]:
     """Fingertip contact points (m, 3), their Jacobians, distances Φ(c) − r (m,) and gradients (m, 3), each on the
-    fingertip's pad sphere nearest to the object (`pad_spheres`)."""
+    fingertip's pad sphere nearest to the object (`pad_spheres`) — or, with ``tip_field`` (a region's Φ^R), the
+    pad sphere whose contact point is nearest to the region: the tip objective is then the minimum over the pad
+    spheres of a continuous function, so it stays continuous when the choice switches (choosing by Φ made a LEAP
+    finger's Φ^R jump by 3 mm between its two touching pad spheres, and the trust region collapsed)."""
     radius = np.asarray(hand.sphere_radii, dtype=np.float64)
     candidates = np.unique(np.concatenate([np.zeros(0, dtype=np.int64), *pad_spheres(hand)]))
-    gap = np.full(len(radius), np.inf)
+    score = np.full(len(radius), np.inf)
     if len(candidates):
-        gap[candidates] = field.signed_distance(sph[candidates])[0] - radius[candidates]
-    idx = select_pads(hand, gap)
+        c = sph[candidates]
+        phi_c, grad_c, _ = field.signed_distance(c)
+        if tip_field is None:
+            score[candidates] = phi_c - radius[candidates]
+        else:
+            score[candidates] = tip_field(c - radius[candidates, None] * _contact_normal(field, c, grad_c))[0]
+    idx = select_pads(hand, score)
     rad = np.where(idx >= 0, radius[np.maximum(idx, 0)], 0.0)
     centres = np.where((idx >= 0)[:, None], sph[np.maximum(idx, 0)], tips)
     phi, grad, _ = field.signed_distance(centres)
-    points = centres - rad[:, None] * grad
+    points = centres - rad[:, None] * _contact_normal(field, centres, grad)
     jac = None
     if tip_jac is not None and sph_jac is not None:
         jac = np.where((idx >= 0)[:, None, None], sph_jac[np.maximum(idx, 0)], tip_jac)
     return points, jac, phi - rad, grad
+
+
+def _contact_normal(field: DistanceField, centres: np.ndarray, grad: np.ndarray) -> np.ndarray:
+    """The direction from a pad centre to its contact point (reversed): the smoothed surface normal where the field
+    has one — the nearest sample's normal is piecewise constant, so the point jumped by r·Δn between samples."""
+    surface_normal = getattr(field, "surface_normal", None)
+    return np.asarray(surface_normal(centres)) if surface_normal is not None else grad
 
 
 def linearise(
@@ -225,7 +244,7 @@ def linearise(
         sph_t, sph_jac_t = hand.spheres(pos, quat, q)
     sph, sph_jac = sph_t[0].numpy(), sph_jac_t[0].numpy()
     tips, tip_jac, tip_phi, tip_grad = contact_points(
-        hand, field, tips_t[0].numpy(), tip_jac_t[0].numpy(), sph, sph_jac
+        hand, field, tips_t[0].numpy(), tip_jac_t[0].numpy(), sph, sph_jac, tip_field
     )
     assert tip_jac is not None
     phi_all, grad_all, _ = field.signed_distance(np.concatenate([tips, sph]))
@@ -236,6 +255,7 @@ def linearise(
     )
     if tip_field is not None:
         tip_phi, tip_grad = tip_field(tips)
+    point_distance = getattr(field, "region_point_distance", None) if tip_field is not None else None
     solution = solve_forces(task, tips, normals, mu, max_normal_force)
     radius = np.asarray(hand.sphere_radii, dtype=np.float64)
     pairs = np.asarray(hand.self_collision_pairs, dtype=np.int64).reshape(-1, 2)
@@ -264,4 +284,5 @@ def linearise(
         q=pose.q,
         lower=np.asarray(hand.lower, dtype=np.float64),
         upper=np.asarray(hand.upper, dtype=np.float64),
+        region_point=None if point_distance is None else np.asarray(point_distance(tips), dtype=np.float64),
     )

@@ -92,7 +92,8 @@ def verify(
     with torch.no_grad():
         fk_tips = hand.fingertips(*pose.tensors())[0].numpy()
         sph = hand.spheres(*pose.tensors(), jacobian=False)[0][0].numpy()
-    tips, _, tip_phi, _ = contact_points(hand, cloud, fk_tips, None, sph, None)
+    region = cloud.region_distance if cloud.mask is not None else None
+    tips, _, tip_phi, _ = contact_points(hand, cloud, fk_tips, None, sph, None, region)
     normals = cloud.surface_normal(tips)
     sol, eps = contact_quality(hand, tips, normals, task, mu, max_normal_force)
     if cloud.mask is not None:

@@ -69,3 +69,22 @@ def test_contact_points_use_the_pad_sphere_that_touches(leap):
     assert np.allclose(grad[0], -field.n)
     primary_gap = field.signed_distance(sph[primary[0]][None])[0][0] - radius[primary[0]]
     assert primary_gap > 5e-3  # the primary sphere alone would have called this fingertip 5+ mm off
+
+
+def test_with_a_region_the_pad_sphere_nearest_the_region_is_the_contact(leap):
+    tips, sph = _rest_spheres(leap)
+    primary, _ = contact_spheres(leap)
+    other = next(s for s in pad_spheres(leap)[0] if s != primary[0])
+    radius = np.asarray(leap.sphere_radii)
+    normal = sph[other] - sph[primary[0]]
+    field = HalfSpace(normal, float(normal @ sph[other] / np.linalg.norm(normal) + radius[other]))
+    target = sph[primary[0]] + radius[primary[0]] * field.n  # the region lies under the primary sphere
+
+    def region(x):
+        d = x - target
+        dist = np.linalg.norm(d, axis=1)
+        return dist, d / np.maximum(dist, 1e-12)[:, None]
+
+    points, _, phi, _ = contact_points(leap, field, tips, None, sph, None, region)
+    assert np.allclose(points[0], target)  # not the touching sphere: the objective is the region distance
+    assert phi[0] > 5e-3
