@@ -91,6 +91,12 @@ def run_refine(args: argparse.Namespace) -> int:
     if args.ground_truth_cache and os.path.exists(args.ground_truth_cache):
         with open(args.ground_truth_cache, "rb") as src:
             store = pickle.load(src)
+    def save_store() -> None:
+        tmp = f"{args.ground_truth_cache}.tmp"
+        with open(tmp, "wb") as dst:
+            pickle.dump(store, dst)
+        os.replace(tmp, args.ground_truth_cache)
+
     with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
                   console=console) as bar:
         for hand in hand_objs:
@@ -101,18 +107,20 @@ def run_refine(args: argparse.Namespace) -> int:
                 def advance(_trial: Any, job: Any = job, label: str = f"{hand.name} {mode}") -> None:
                     bar.advance(job)
                     done = int(bar.tasks[job].completed)
-                    if not console.is_terminal and done % args.grasps == 0:
-                        # a log file gets no live bar: one line per object instead
+                    if done % args.grasps:
+                        return
+                    if not console.is_terminal:  # a log file gets no live bar: one line per object instead
                         console.print(f"{label}: {done}/{args.objects * args.grasps} grasps, "
                                       f"{bar.tasks[job].elapsed or 0.0:.0f} s")
+                    if args.ground_truth_cache and done > args.grasps:
+                        save_store()  # the previous object's ground truths: an interrupted run resumes from here
 
                 reports.append(evaluate(
                     hand, objects, mode, args.grasps, args.seed, mu=args.mu, retreat=args.retreat, config=config,
                     on_trial=advance, ground_truth=args.ground_truth, cache=cache, store=store,
                 ))
                 if args.ground_truth_cache:
-                    with open(args.ground_truth_cache, "wb") as dst:
-                        pickle.dump(store, dst)
+                    save_store()
     table = Table(title=f"refinement: {args.objects} objects x {args.grasps} grasps, seed {args.seed}, "
                         f"retreat {args.retreat} m, mu {args.mu}, ground truth {args.ground_truth}")
     for col in ("hand", "mode", "n", "skipped", "success %", "median s", "p90 s", "median it",
