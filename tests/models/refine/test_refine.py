@@ -55,3 +55,15 @@ def test_deadline_and_cancel(setup, gripper):
     assert res.reason == "deadline" and not res.converged and res.iterations == 0
     with pytest.raises(Cancelled):
         refine(gripper, field, task, start.pose, 0.5, should_cancel=lambda: True)
+
+
+def test_masked_convergence_also_applies_the_verifications_point_test(setup, gripper):
+    mesh, field, start = setup
+    masked = PointCloudField(field.points, field.normals, np.abs(field.points[:, 0]) > 0.0199)  # the x faces
+    task = closure_task(np.zeros(3), 0.05)
+    res = refine(gripper, masked, task, start.pose, 0.5, RefineConfig(), tip_field=masked.region_distance)
+    assert res.converged, res.reason
+    assert np.max(masked.region_point_distance(res.tips)) < RefineConfig().region_point_tol
+    assert verify(gripper, res.pose, masked, task, 0.5, mesh).success
+    unattainable = RefineConfig(region_point_tol=1e-9, max_iterations=15)  # no contact lies exactly on a sample
+    assert not refine(gripper, masked, task, start.pose, 0.5, unattainable, tip_field=masked.region_distance).converged
