@@ -91,6 +91,7 @@ def run_refine(args: argparse.Namespace) -> int:
     if args.ground_truth_cache and os.path.exists(args.ground_truth_cache):
         with open(args.ground_truth_cache, "rb") as src:
             store = pickle.load(src)
+
     def save_store() -> None:
         tmp = f"{args.ground_truth_cache}.tmp"
         with open(tmp, "wb") as dst:

@@ -116,7 +116,6 @@ def run_shard(cfg: DataConfig, index: int, out_dir: str) -> ShardResult:
         obj = make_dataset_object(cfg, i)
         split = object_split(obj.id, cfg.test_fraction)
         info = ObjectInfo.from_object(obj)
-        fieldobj = ObjectField(obj.mesh, seed=obj.seed)
         for key, val in (
             ("ids", obj.id),
             ("kinds", obj.kind),
@@ -132,6 +131,7 @@ def run_shard(cfg: DataConfig, index: int, out_dir: str) -> ShardResult:
             objs[key].append(val)
         if cfg.test_objects_only and split != "test":
             continue  # the object stays in the shard (global indices unchanged), without examples
+        fieldobj = ObjectField(obj.mesh, seed=obj.seed)
         for hand_name in hands + (held if split == "test" else []):
             rng = np.random.default_rng([cfg.seed, i, all_hands.index(hand_name)])
             try:
@@ -230,9 +230,8 @@ def generate(cfg: DataConfig, out_dir: str | Path, workers: int = 1, progress: b
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     manifest = read_manifest(out)
-    if manifest["config"] is not None:  # settings added since the data set was made take their defaults
-        manifest["config"] = {**DataConfig().to_dict(), **manifest["config"]}
-    if manifest["config"] is not None and manifest["config"] != cfg.to_dict():
+    made = manifest["config"]  # settings added since the data set was made take their defaults
+    if made is not None and {**DataConfig().to_dict(), **made} != cfg.to_dict():
         raise ValueError(f"{out} holds a data set with another configuration; use a new directory")
     manifest["config"] = cfg.to_dict()
     manifest["hands_available"] = available_hands(cfg.hands) + available_hands(cfg.held_out_hands)

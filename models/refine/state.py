@@ -114,10 +114,10 @@ def sphere_allowance(hand: Any, tip_allowance: float) -> np.ndarray:
 
 
 PAD_TOLERANCE = 3e-3  # m: spheres this much farther from the tip point than the nearest one also form the pad
-_CONTACT: dict[int, tuple[np.ndarray, np.ndarray, list[np.ndarray]]] = {}
+_CONTACT: dict[int, tuple[np.ndarray, np.ndarray, list[np.ndarray], np.ndarray]] = {}
 
 
-def _contact_model(hand: Any) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+def _contact_model(hand: Any) -> tuple[np.ndarray, np.ndarray, list[np.ndarray], np.ndarray]:
     key = id(hand)
     if key not in _CONTACT:
         pos = torch.zeros(1, 3, dtype=torch.float64)
@@ -138,7 +138,8 @@ def _contact_model(hand: Any) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]
             dist = np.linalg.norm(sph[mine] - tips[i], axis=1)
             idx[i] = mine[np.argmin(dist)]
             pads.append(mine[dist <= dist.min() + PAD_TOLERANCE])
-        _CONTACT[key] = (idx, np.where(idx >= 0, radius[np.maximum(idx, 0)], 0.0), pads)
+        every = np.unique(np.concatenate([np.zeros(0, dtype=np.int64), *pads]))
+        _CONTACT[key] = (idx, np.where(idx >= 0, radius[np.maximum(idx, 0)], 0.0), pads, every)
     return _CONTACT[key]
 
 
@@ -152,7 +153,7 @@ def contact_spheres(hand: Any) -> tuple[np.ndarray, np.ndarray]:
     one orientation and the SCP stalled 6-20 mm off the surface in our runs; the pad model is orientation-free
     and consistent with the non-penetration rows. See `pad_spheres` for pads made of several spheres.
     """
-    idx, rad, _ = _contact_model(hand)
+    idx, rad, _, _ = _contact_model(hand)
     return idx, rad
 
 
@@ -166,6 +167,11 @@ def pad_spheres(hand: Any) -> list[np.ndarray]:
     blob-13c08faf).
     """
     return _contact_model(hand)[2]
+
+
+def pad_candidates(hand: Any) -> np.ndarray:
+    """The indices of every fingertip's pad spheres, sorted, without repeats (the spheres to measure)."""
+    return _contact_model(hand)[3]
 
 
 def select_pads(hand: Any, gap: np.ndarray) -> np.ndarray:
@@ -190,24 +196,27 @@ def contact_points(
     spheres of a continuous function, so it stays continuous when the choice switches (choosing by Φ made a LEAP
     finger's Φ^R jump by 3 mm between its two touching pad spheres, and the trust region collapsed)."""
     radius = np.asarray(hand.sphere_radii, dtype=np.float64)
-    candidates = np.unique(np.concatenate([np.zeros(0, dtype=np.int64), *pad_spheres(hand)]))
+    candidates = pad_candidates(hand)
     score = np.full(len(radius), np.inf)
+    phi_s, grad_s, normal_s = np.zeros(len(radius)), np.zeros((len(radius), 3)), np.zeros((len(radius), 3))
     if len(candidates):
         c = sph[candidates]
-        phi_c, grad_c, _ = field.signed_distance(c)
-        if tip_field is None:
-            score[candidates] = phi_c - radius[candidates]
-        else:
-            score[candidates] = tip_field(c - radius[candidates, None] * _contact_normal(field, c, grad_c))[0]
+        phi_s[candidates], grad_s[candidates], _ = field.signed_distance(c)
+        normal_s[candidates] = _contact_normal(field, c, grad_s[candidates])
+        below = c - radius[candidates, None] * normal_s[candidates]  # each candidate's contact point
+        score[candidates] = phi_s[candidates] - radius[candidates] if tip_field is None else tip_field(below)[0]
     idx = select_pads(hand, score)
-    rad = np.where(idx >= 0, radius[np.maximum(idx, 0)], 0.0)
-    centres = np.where((idx >= 0)[:, None], sph[np.maximum(idx, 0)], tips)
-    phi, grad, _ = field.signed_distance(centres)
-    points = centres - rad[:, None] * _contact_normal(field, centres, grad)
+    padded, sel = idx >= 0, idx[idx >= 0]
+    points = np.array(tips, dtype=np.float64)  # fingertips without spheres: the tip point itself
+    phi, grad = np.zeros(len(tips)), np.zeros((len(tips), 3))
+    points[padded] = sph[sel] - radius[sel, None] * normal_s[sel]
+    phi[padded], grad[padded] = phi_s[sel] - radius[sel], grad_s[sel]
+    if not padded.all():
+        phi[~padded], grad[~padded], _ = field.signed_distance(points[~padded])
     jac = None
     if tip_jac is not None and sph_jac is not None:
-        jac = np.where((idx >= 0)[:, None, None], sph_jac[np.maximum(idx, 0)], tip_jac)
-    return points, jac, phi - rad, grad
+        jac = np.where(padded[:, None, None], sph_jac[np.maximum(idx, 0)], tip_jac)
+    return points, jac, phi, grad
 
 
 def _contact_normal(field: DistanceField, centres: np.ndarray, grad: np.ndarray) -> np.ndarray:

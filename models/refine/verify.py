@@ -20,7 +20,7 @@ import torch
 from models.refine.closure import ferrari_canny
 from models.refine.field import PointCloudField
 from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE, ForceSolution, solve_forces
-from models.refine.state import HandPose, contact_points, pad_spheres, select_pads
+from models.refine.state import HandPose, contact_points, pad_candidates, select_pads
 from models.refine.wrench import WrenchTask
 
 RESIDUAL_SQ_TOL = 1e-6
@@ -102,8 +102,7 @@ def verify(
         import trimesh
 
         radius = np.asarray(hand.sphere_radii, dtype=np.float64)
-        pads = pad_spheres(hand)
-        candidates = np.unique(np.concatenate([np.zeros(0, dtype=np.int64), *pads]))
+        candidates = pad_candidates(hand)
         gap = np.full(len(radius), np.inf)
         if len(candidates):  # trimesh: positive inside
             gap[candidates] = -trimesh.proximity.signed_distance(mesh, sph[candidates]) - radius[candidates]
