@@ -289,7 +289,7 @@ def _closure_rows(  # type: ignore[no-untyped-def]
     for i, r in enumerate(idx):
         if on_edge[i].any():
             continue
-        sol, eps = contact_quality(hand, contacts[i], normals[i], task, mu)
+        sol, eps = contact_quality(hand, contacts[i], normals[i], task, mu, epsilon_below=RESIDUAL_SQ_TOL)
         out[r] = sol.residual_norm**2 < RESIDUAL_SQ_TOL and eps >= CLOSURE_MIN_EPSILON
     return out
 

@@ -57,12 +57,15 @@ def torsion_for(hand: Any) -> float:
 
 def contact_quality(
     hand: Any, contacts: np.ndarray, normals: np.ndarray, task: WrenchTask, mu: float,
-    max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE,
+    max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE, epsilon_below: float | None = None,
 ) -> tuple[ForceSolution, float]:
     """The contact-level tests of `verify`: the optimal forces of Eq. (6-8) (their residual is the wrench test)
     and the Ferrari–Canny ε, for contacts (m, 3) with outward normals (m, 3). The grasp sampler's force-closure
-    pre-check calls this too, so both judge a grasp the same way."""
+    pre-check calls this too, so both judge a grasp the same way. With ``epsilon_below``, ε (≈ 5 ms, 10× the
+    force problem) is only computed when the squared residual is below it, else reported as −inf."""
     sol = solve_forces(task, contacts, normals, mu, max_normal_force)
+    if epsilon_below is not None and not sol.residual_norm**2 < epsilon_below:
+        return sol, -np.inf
     eps = ferrari_canny(contacts, normals, mu, task.centre, task.length, torsional=torsion_for(hand))
     return sol, float(eps)
 
