@@ -167,3 +167,29 @@ def test_request_id_in_the_record_and_the_worker_logs(capfd: pytest.CaptureFixtu
         assert {(e["msg"], e["job_id"]) for e in lines} >= {("job started", job_id), ("job finished", job_id)}
 
     run(main())
+
+
+def test_cancel_of_an_unknown_job_answers_and_leaves_the_queue_usable() -> None:
+    """Cancelling an id the queue never saw raises JobNotFound at once; it used to deadlock on the queue's lock."""
+    import threading
+
+    outcome: list[str] = []
+
+    async def main() -> None:
+        queue = embedded(concurrency=0)
+        await queue.start()
+        try:
+            with pytest.raises(JobNotFound):
+                await queue.cancel("nope")
+            [job_id] = await queue.submit([small_request()])
+            assert (await queue.get(job_id)).state is JobState.QUEUED
+            assert (await queue.cancel(job_id)).state is JobState.CANCELLED
+            outcome.append("answered")
+        finally:
+            await queue.close()
+
+    thread = threading.Thread(target=run, args=(main(),), daemon=True)  # a deadlock must fail, not hang, the suite
+    thread.start()
+    thread.join(30)
+    assert not thread.is_alive(), "EmbeddedQueue.cancel deadlocked"
+    assert outcome == ["answered"]

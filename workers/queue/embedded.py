@@ -189,11 +189,9 @@ class EmbeddedQueue(JobQueue):
         target: WorkerHandle | None = None
         with self._lock:
             job = self._jobs.get(job_id)
-            if job is None:
-                return await self.get(job_id)
-            if job.state is JobState.QUEUED:
+            if job is not None and job.state is JobState.QUEUED:
                 self._finish(job, error=ErrorBody(error="job cancelled", type="Cancelled"))
-            elif job.state is JobState.RUNNING and not job.cancel:
+            elif job is not None and job.state is JobState.RUNNING and not job.cancel:
                 job.cancel = True
                 target = self._workers.get(job.worker or "")
         if target is not None:
