@@ -6,7 +6,8 @@ Loop: XAUTOCLAIM entries idle longer than ``visibility_timeout`` (their worker d
 jobs, marks it running; the batch runs through `workers.runner.run_batch`; the FINISH script writes the result
 (msgpack, TTL) and acks in one atomic step, only while this worker still owns the entry. A heartbeat thread
 publishes the worker's state and XCLAIMs its own in-flight entries so a long job is not stolen. SIGTERM: finish the
-current batch, then exit. Redis going away: retry with back-off, recreate the group, go on.
+current batch, then exit. Redis going away: retry with back-off, recreate the group, go on; an outcome that
+could not be written while Redis was down is retried until it is (`_end_durably`), so no job stays "running".
 
 Run as ``python -m workers.worker`` (settings as JSON in ``MANI_WORKER_SETTINGS``, else ``MANI_*``); `mani worker`
 supervises several of these.
@@ -24,7 +25,9 @@ import time
 from typing import Any
 
 import redis
+from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import RedisError, ResponseError
+from redis.exceptions import TimeoutError as RedisTimeoutError
 
 from clients.codec import pack, unpack
 from clients.schemas import DeadLetter, ErrorBody, JobProgress, RobotRegister, Stage, SynthesisRequest, WorkerPublic
@@ -38,6 +41,8 @@ from workers.settings import QueueSettings
 log = logging.getLogger("workers.worker")
 PROGRESS_S = 0.05
 """Seconds between a job's progress writes and cancel-flag reads (keeps short jobs at ~4 Redis round trips)."""
+END_RETRY_S = 30.0
+"""How long a stopping worker keeps retrying to write an outcome while Redis is unreachable."""
 
 
 class RedisWorker:
@@ -215,23 +220,52 @@ class RedisWorker:
         with self.lock:
             self.inflight.update({entry_of[j.id]: j.id for j in jobs})
         assert self.pipeline is not None
-        outcomes = run_batch(self.pipeline, jobs, self._progress(), self._should_cancel)
-        for job in jobs:
-            outcome = outcomes[job.id]
-            timings = dict(getattr(outcome, "timings", {}) or {})
-            timings["run"] = time.time() - started[job.id]
-            timings["queue"] = self.queued_for.pop(job.id, 0.0)
-            timings["total"] = timings["queue"] + timings["run"]
-            with job_context(job.id, job.request_id):
-                if isinstance(outcome, ErrorBody):
-                    self._end(entry_of[job.id], job.id, state_for_error(outcome).value, error=outcome, timings=timings)
-                else:
-                    result = pack(outcome.model_dump(mode="python", exclude_none=True))
-                    self._end(entry_of[job.id], job.id, "succeeded", result=result, timings=timings)
-                self.jobs_done += 1
+        try:
+            outcomes = run_batch(self.pipeline, jobs, self._progress(), self._should_cancel)
+            for job in jobs:
+                outcome = outcomes[job.id]
+                timings = dict(getattr(outcome, "timings", {}) or {})
+                timings["run"] = time.time() - started[job.id]
+                timings["queue"] = self.queued_for.pop(job.id, 0.0)
+                timings["total"] = timings["queue"] + timings["run"]
+                with job_context(job.id, job.request_id):
+                    if isinstance(outcome, ErrorBody):
+                        state = state_for_error(outcome).value
+                        self._end_durably(entry_of[job.id], job.id, state, error=outcome, timings=timings)
+                    else:
+                        result = pack(outcome.model_dump(mode="python", exclude_none=True))
+                        self._end_durably(entry_of[job.id], job.id, "succeeded", result=result, timings=timings)
+                    self.jobs_done += 1
+                with self.lock:
+                    self.inflight.pop(entry_of[job.id], None)
+                self.cancel_checked.pop(job.id, None)
+        finally:  # whatever was not finished is given back: no heartbeat keeps it from re-delivery any more
             with self.lock:
-                self.inflight.pop(entry_of[job.id], None)
-            self.cancel_checked.pop(job.id, None)
+                for job in jobs:
+                    self.inflight.pop(entry_of[job.id], None)
+
+    def _end_durably(self, entry: str, job_id: str, state: str, **outcome: Any) -> None:
+        """`_end`, retried with back-off while Redis is unreachable (a restart, a failover): the outcome is
+        written once Redis is back, and until then the heartbeat keeps the entry with this worker. Gives up
+        (the entry is then re-delivered) only when stopping and Redis stays away for `END_RETRY_S` seconds, or
+        when the job's stream is gone (Redis came back without its data)."""
+        backoff, give_up = 0.1, float("inf")
+        while True:
+            try:
+                self._end(entry, job_id, state, **outcome)
+                return
+            except (RedisConnectionError, RedisTimeoutError) as exc:
+                if self.stopping and give_up == float("inf"):
+                    give_up = time.monotonic() + END_RETRY_S
+                if time.monotonic() > give_up:
+                    log.error("outcome not written, Redis unreachable; the job will be re-delivered: %s", exc)
+                    raise
+                log.warning("outcome not written yet (%s); retrying in %.1f s", exc, backoff)
+                time.sleep(backoff)
+                backoff = min(backoff * 2, 2.0)
+            except ResponseError as exc:  # NOGROUP: Redis restarted without persistence, the job is gone
+                log.error("outcome discarded: the job's stream entry is gone (%s)", exc)
+                return
 
     def _start_job(self, entry: str, job_id: str, payload: bytes, request_id: str | None = None) -> JobInput | None:
         s = self.settings

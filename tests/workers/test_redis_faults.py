@@ -1,0 +1,52 @@
+"""The Redis backend under faults, each on a private redis-server: Redis restarts while jobs run (with AOF),
+a poison job among innocent batch-mates, a dead worker's jobs redelivered by heartbeat, a hung (SIGSTOPped)
+Redis."""
+
+from __future__ import annotations
+
+import asyncio
+import signal
+from pathlib import Path
+
+import pytest
+
+from clients.schemas import JobState
+from workers.queue import create_queue
+from workers.queue.redis import RedisQueue
+
+from .helpers import live_workers, redis_workers, run, running, small_request, until
+from .redis_server import redis_server
+
+FAST = {"heartbeat_interval": 0.2, "visibility_timeout": 1.5}
+
+
+def client(url: str, **options: object) -> RedisQueue:
+    queue = create_queue(url, queue_prefix="mani:", **options)
+    assert isinstance(queue, RedisQueue)
+    return queue
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["sigterm", "kill-9"])
+def test_jobs_running_through_a_redis_restart_finish(tmp_path: Path, sig: int) -> None:
+    """Redis (AOF) goes away while a batch runs and comes back: the worker writes the results it could not
+    write while Redis was down; nothing stays "running" and nothing runs twice."""
+
+    async def main() -> None:
+        with redis_server(tmp_path, appendonly=True) as server:
+            queue = client(server.url)
+            await queue.start()
+            options = {"stage_seconds": 0.1, "iterations": 3}
+            with redis_workers(server.url, "mani:", pipeline_options=options, batch_size=4, **FAST):
+                try:
+                    await live_workers(queue, 1)
+                    ids = await queue.submit([small_request(i) for i in range(4)])
+                    await asyncio.gather(*(until(queue, i, running) for i in ids))
+                    server.stop(sig)
+                    await asyncio.sleep(3.0)  # the batch (≈ 2 s) ends while Redis is down
+                    server.start()
+                    jobs = await asyncio.gather(*(queue.wait(i, 20) for i in ids))
+                    assert [(j.state, j.deliveries) for j in jobs] == [(JobState.SUCCEEDED, 1)] * 4
+                finally:
+                    await queue.close()
+
+    run(main())
