@@ -1,6 +1,7 @@
 """A Redis Streams worker process: load the pipeline (model) once, then consume micro-batches.
 
-Loop: XAUTOCLAIM entries idle longer than ``visibility_timeout`` (their worker died), else XREADGROUP COUNT =
+Loop: XAUTOCLAIM entries idle longer than ``visibility_timeout`` (their worker died), one at a time (a
+re-delivered job runs alone, so a job that kills its worker takes no batch-mate down), else XREADGROUP COUNT =
 ``batch_size`` (waiting up to ``max_wait_ms`` to fill a batch); for each job the BEGIN script counts the delivery
 (beyond ``max_deliveries`` → dead-letter stream, the job failed with its last error), drops expired or cancelled
 jobs, marks it running; the batch runs through `workers.runner.run_batch`; the FINISH script writes the result
@@ -175,14 +176,15 @@ class RedisWorker:
         if now - self._last_claim > min(1.0, self.settings.visibility_timeout / 4):
             self._last_claim = now
             idle = int(self.settings.visibility_timeout * 1000)
-            try:
-                claimed = self.r.xautoclaim(self.keys.stream, GROUP, self.id, idle, "0-0", count=size)
+            try:  # one at a time: a re-delivered job runs alone, so a poison job fails no batch-mate
+                claimed = self.r.xautoclaim(self.keys.stream, GROUP, self.id, idle, "0-0", count=1)
             except ResponseError:  # NOGROUP after a Redis restart
                 self._connect()
                 return []
             entries = [(e, f) for e, f in claimed[1] if f]
             if entries:
-                log.info("re-delivering %d entries of stopped workers", len(entries))
+                self._last_claim = 0.0  # look for the next one at once
+                log.info("re-delivering an entry of a stopped worker")
                 return entries
         try:
             got = self.r.xreadgroup(GROUP, self.id, {self.keys.stream: ">"}, count=size, block=1000)

@@ -141,6 +141,26 @@ def test_poison_job_goes_to_dead_letters() -> None:
     run(main())
 
 
+def test_poison_job_fails_no_batch_mate() -> None:
+    """A job that kills its worker in a micro-batch of 4: only it is dead-lettered; its three batch-mates are
+    given back, run alone, and succeed on their second delivery."""
+
+    async def main() -> None:
+        queue = embedded(pipeline_options={"crash_seed": 666}, batch_size=4)
+        await queue.start()
+        try:
+            ids = await queue.submit([small_request(s) for s in (1, 2, 666, 3)])
+            jobs = {j.id: j for j in await asyncio.gather(*(queue.wait(i, 60) for i in ids))}
+            poison = jobs.pop(ids[2])
+            assert poison.state is JobState.FAILED and poison.error and poison.error.type == "WorkerLost"
+            assert [(j.state, j.deliveries) for j in jobs.values()] == [(JobState.SUCCEEDED, 2)] * 3
+            assert [d.job_id for d in await queue.dead_letters()] == [ids[2]]
+        finally:
+            await queue.close()
+
+    run(main())
+
+
 def test_request_id_in_the_record_and_the_worker_logs(capfd: pytest.CaptureFixture[str]) -> None:
     """The submitting request's id is kept on each job (every job of a batch) and rides to the worker process,
     whose log lines for the job carry it next to the job id (the worker writes to the inherited stderr)."""

@@ -50,3 +50,26 @@ def test_jobs_running_through_a_redis_restart_finish(tmp_path: Path, sig: int) -
                     await queue.close()
 
     run(main())
+
+
+def test_poison_job_fails_no_batch_mate(tmp_path: Path) -> None:
+    """A job that kills its worker in a micro-batch of 4: only it is dead-lettered; its batch-mates are
+    re-delivered one at a time, run alone and succeed."""
+
+    async def main() -> None:
+        with redis_server(tmp_path) as server:
+            queue = client(server.url)
+            await queue.start()
+            try:
+                ids = await queue.submit([small_request(s) for s in (1, 2, 666, 3)])  # queued before any worker
+                opts = {"crash_seed": 666}
+                with redis_workers(server.url, "mani:", pipeline_options=opts, batch_size=4, **FAST):
+                    jobs = {j.id: j for j in await asyncio.gather(*(queue.wait(i, 90) for i in ids))}
+                poison = jobs.pop(ids[2])
+                assert poison.state is JobState.FAILED and poison.error and poison.error.type == "WorkerLost"
+                assert [(j.state, j.deliveries) for j in jobs.values()] == [(JobState.SUCCEEDED, 2)] * 3
+                assert [d.job_id for d in await queue.dead_letters()] == [ids[2]]
+            finally:
+                await queue.close()
+
+    run(main())

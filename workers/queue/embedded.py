@@ -5,7 +5,8 @@ Jobs, results and dead letters live in this process's memory: they are lost when
 answers state "expired" (a bounded list of tombstones), never "unknown". One pump thread talks to the workers
 over one duplex pipe each (`workers.child`): it dispatches up to ``batch_size`` queued jobs to an idle worker,
 takes progress and outcomes back, and notices a dead worker (EOF): its jobs go back to the queue until they have
-been delivered ``max_deliveries`` times, then to the dead letters with the error; a replacement is spawned.
+been delivered ``max_deliveries`` times, then to the dead letters with the error; a replacement is spawned. A job
+given back that way runs alone (a micro-batch of one), so a job that kills its worker fails no batch-mate.
 """
 
 from __future__ import annotations
@@ -381,9 +382,13 @@ class EmbeddedQueue(JobQueue):
             for worker in idle:
                 batch: list[dict[str, Any]] = []
                 while self._pending and len(batch) < self.settings.batch_size:
-                    job = self._jobs.get(self._pending.popleft())
+                    job = self._jobs.get(self._pending[0])
                     if job is None or job.state is not JobState.QUEUED:
+                        self._pending.popleft()
                         continue
+                    if job.deliveries and batch:
+                        break  # a job whose worker died runs alone: a poison job takes no batch-mate down
+                    self._pending.popleft()
                     job.state, job.worker, job.deliveries = JobState.RUNNING, worker.id, job.deliveries + 1
                     job.started_at = now
                     job.timings["queue"] = now - job.created_at
@@ -393,6 +398,8 @@ class EmbeddedQueue(JobQueue):
                         "robot": robot.model_dump(mode="python", exclude_none=True) if robot else None,
                     })  # fmt: skip
                     worker.inflight.add(job.id)
+                    if job.deliveries > 1:
+                        break
                 if not batch:
                     break
                 sends.append((worker, batch))
