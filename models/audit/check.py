@@ -1,0 +1,308 @@
+"""`audit_grasp`: an independent physical check of one grasp proposal.
+
+Criteria (each reported with its measured values; ``passed`` is true when none fails):
+
+* joints: the reported joint names are the hand's, reported coupled joints agree with the description's
+  couplings, every moving joint below the palm is given or derivable, all within their limits (1e-4 slack);
+* (a) contact: each contact point lies within ``contact_tol`` of the posed surface of its fingertip link
+  (exact point-to-mesh distance) and within ``contact_tol`` of the object's surface;
+* (b) penetration: hand and object overlap by at most ``penetration_tol``, measured both ways on the exact
+  meshes (:mod:`models.audit.penetration`);
+* (c) friction: each force pushes into the object (normal component ``f·(−n) ≥ 0``) with
+  ``tangential ≤ μ · normal`` (relative slack 1e-6); ``n`` is the caller's normal of the nearest given object
+  point when ``object_points``/``object_normals`` are given, else the mesh's face normal at the closest point;
+* (d) wrench: with ``target_wrench`` ``[F (N), τ (N·m)]``, the cosine between the achieved total wrench and the
+  target, both scaled as ``[F, τ / L]``, is at least ``cosine_tol``; with ``closure``, the contacts are in force
+  closure (the origin strictly inside the hull of the 8-sided friction pyramids' primitive wrenches).
+
+The centre of the wrenches is ``centre`` if given, else the mesh's centre of mass (its vertex centroid when not
+watertight), else the centroid of ``object_points``. ``L`` is ``length`` if given, else the object's
+bounding-sphere radius about that centre (the largest distance from the centre to a mesh vertex or point).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import trimesh
+from scipy.spatial import cKDTree
+
+from models.audit.hands import AuditHand, load_hand
+from models.audit.penetration import PenetrationAudit, measure_penetration
+from models.audit.wrench import closure_epsilon, contact_wrenches, cosine, friction_components, scaled_wrench
+
+FRICTION_SLACK = 1e-6
+LIMIT_TOL = 1e-4
+
+
+@dataclass
+class AuditedGrasp:
+    """One grasp as the service reports it (plain numpy).
+
+    Attributes:
+        contact_points: (m, 3) world contact points (m).
+        forces: (m, 3) forces the fingertips apply ON the object (N).
+        fingertips: (m,) link name per contact.
+        palm_position: (3,) world position of the palm frame.
+        palm_quaternion: (4,) its orientation ``(w, x, y, z)``.
+        joint_names: (n,) reported (free) joints.
+        joint_values: (n,) their values.
+    """
+
+    contact_points: np.ndarray
+    forces: np.ndarray
+    fingertips: list[str]
+    palm_position: np.ndarray
+    palm_quaternion: np.ndarray
+    joint_names: list[str]
+    joint_values: np.ndarray
+
+    @classmethod
+    def from_mapping(cls, proposal: Mapping[str, Any]) -> AuditedGrasp:
+        """From a mapping with the fields above (e.g. a decoded proposal; extra keys are ignored)."""
+        return cls(
+            contact_points=np.asarray(proposal["contact_points"], dtype=np.float64).reshape(-1, 3),
+            forces=np.asarray(proposal["forces"], dtype=np.float64).reshape(-1, 3),
+            fingertips=[str(f) for f in proposal["fingertips"]],
+            palm_position=np.asarray(proposal["palm_position"], dtype=np.float64),
+            palm_quaternion=np.asarray(proposal["palm_quaternion"], dtype=np.float64),
+            joint_names=[str(n) for n in proposal["joint_names"]],
+            joint_values=np.asarray(proposal["joint_values"], dtype=np.float64),
+        )
+
+
+@dataclass
+class ContactAudit:
+    """Measurements at one contact.
+
+    Attributes:
+        link: its fingertip link.
+        finger_distance: distance from the point to the posed link surface (m; inf if the link is unknown).
+        object_distance: distance from the point to the object surface (m).
+        normal: (3,) outward object normal used.
+        normal_force: ``f·(−n)`` (N; negative: pulling).
+        tangential_force: ``‖f_t‖`` (N).
+        friction_ratio: tangential / normal (inf when not pushing; 0 for a zero force).
+    """
+
+    link: str
+    finger_distance: float
+    object_distance: float
+    normal: np.ndarray
+    normal_force: float
+    tangential_force: float
+    friction_ratio: float
+
+
+@dataclass
+class AuditReport:
+    """The audit's verdict and its measurements.
+
+    Attributes:
+        passed: no criterion failed.
+        failures: one message per failed check.
+        notes: caveats (approximations used, checks not possible).
+        contacts: per-contact measurements.
+        penetration: the penetration found (``None`` without an object mesh or a pose).
+        joint_values: every moving joint's value used for the pose (reported and derived).
+        limit_violations: joint → excess over its limits.
+        wrench: (6,) achieved total scaled wrench ``[F, τ / L]``.
+        target_cosine: cosine with the scaled target (``None`` without a target).
+        closure_epsilon: ε of the linearised cones (``None`` unless closure was asked).
+        centre: (3,) the wrench reference point.
+        length: the torque scale L (m).
+    """
+
+    passed: bool
+    failures: list[str]
+    notes: list[str] = field(default_factory=list)
+    contacts: list[ContactAudit] = field(default_factory=list)
+    penetration: PenetrationAudit | None = None
+    joint_values: dict[str, float] = field(default_factory=dict)
+    limit_violations: dict[str, float] = field(default_factory=dict)
+    wrench: np.ndarray | None = None
+    target_cosine: float | None = None
+    closure_epsilon: float | None = None
+    centre: np.ndarray | None = None
+    length: float | None = None
+
+    @property
+    def finger_distances(self) -> np.ndarray:
+        """(m,) contact → fingertip surface distances."""
+        return np.array([c.finger_distance for c in self.contacts])
+
+    @property
+    def object_distances(self) -> np.ndarray:
+        """(m,) contact → object surface distances."""
+        return np.array([c.object_distance for c in self.contacts])
+
+    @property
+    def friction_ratios(self) -> np.ndarray:
+        """(m,) tangential / normal force."""
+        return np.array([c.friction_ratio for c in self.contacts])
+
+    @property
+    def normal_forces(self) -> np.ndarray:
+        """(m,) pushing force components (N)."""
+        return np.array([c.normal_force for c in self.contacts])
+
+
+def _finger_distances(hand: AuditHand, grasp: AuditedGrasp, poses: dict[str, np.ndarray]) -> np.ndarray:
+    out = np.full(len(grasp.fingertips), np.inf)
+    for link in set(grasp.fingertips):
+        if link not in hand.links or link not in poses:
+            continue
+        idx = [i for i, f in enumerate(grasp.fingertips) if f == link]
+        T = poses[link]
+        local = (grasp.contact_points[idx] - T[:3, 3]) @ T[:3, :3]
+        _, dist, _ = trimesh.proximity.closest_point(hand.links[link].mesh, local)
+        out[idx] = dist
+    return out
+
+
+def _centre_and_length(
+    mesh: trimesh.Trimesh | None, points: np.ndarray | None, centre: np.ndarray | None, length: float | None
+) -> tuple[np.ndarray, float]:
+    cloud = np.asarray(mesh.vertices) if mesh is not None else np.asarray(points, dtype=np.float64)
+    if centre is None:
+        if mesh is not None:
+            centre = np.asarray(mesh.center_mass if mesh.is_watertight else cloud.mean(axis=0))
+        else:
+            centre = cloud.mean(axis=0)
+    c = np.asarray(centre, dtype=np.float64)
+    return c, float(length) if length is not None else float(np.linalg.norm(cloud - c, axis=1).max())
+
+
+def audit_grasp(
+    hand_name: str | AuditHand,
+    grasp: AuditedGrasp,
+    object_mesh: trimesh.Trimesh | None,
+    object_points: np.ndarray | None = None,
+    object_normals: np.ndarray | None = None,
+    *,
+    mu: float,
+    target_wrench: np.ndarray | None = None,
+    closure: bool = False,
+    contact_tol: float = 5e-3,
+    penetration_tol: float = 1e-3,
+    cosine_tol: float = 0.99,
+    centre: np.ndarray | None = None,
+    length: float | None = None,
+    sample_spacing: float = 1e-3,
+    seed: int = 0,
+) -> AuditReport:
+    """Audit one grasp against the hand's real geometry and the object's exact surface.
+
+    Args:
+        hand_name: a built-in hand name, or an :class:`AuditHand`.
+        grasp: the proposal.
+        object_mesh: the object in the world frame (watertight for exact penetration); ``None``: distances to
+            ``object_points`` only and no penetration check.
+        object_points: (N, 3) object surface points (optional; required without a mesh).
+        object_normals: (N, 3) their outward normals (with ``object_points``: used for the friction cones).
+        mu: friction coefficient.
+        target_wrench: (6,) ``[F (N), τ (N·m)]`` the forces should achieve (optional).
+        closure: also require force closure.
+        contact_tol: contact distance tolerance (m).
+        penetration_tol: penetration tolerance (m).
+        cosine_tol: least cosine with the target wrench.
+        centre: (3,) wrench reference point (default: see the module docstring).
+        length: torque scale L (default: the object's bounding-sphere radius about ``centre``).
+        sample_spacing: penetration sample spacing (m).
+        seed: penetration sampling seed.
+
+    Returns:
+        The report.
+    """
+    hand = load_hand(hand_name) if isinstance(hand_name, str) else hand_name
+    if object_mesh is None and (object_points is None or object_normals is None):
+        raise ValueError("give an object mesh, or object points with their normals")
+    points = np.asarray(grasp.contact_points, dtype=np.float64).reshape(-1, 3)
+    forces = np.asarray(grasp.forces, dtype=np.float64).reshape(-1, 3)
+    failures: list[str] = []
+    notes: list[str] = []
+    if len(forces) != len(points) or len(grasp.fingertips) != len(points):
+        msg = f"{len(points)} contact points, {len(forces)} forces, {len(grasp.fingertips)} fingertips"
+        return AuditReport(False, [msg])
+    unknown = sorted({f for f in grasp.fingertips if f not in hand.links})
+    if unknown:
+        failures.append(f"fingertip links without geometry in {hand.name}: {unknown}")
+
+    q, missing, problems = hand.joint_values(grasp.joint_names, grasp.joint_values)
+    failures += problems
+    if missing:
+        failures.append(f"joints neither reported nor derivable: {missing}")
+        return AuditReport(False, failures, notes)
+    violations = hand.limit_violations(q, LIMIT_TOL)
+    failures += [f"joint {j} outside its limits by {v:.3g}" for j, v in violations.items()]
+    poses = hand.link_poses(grasp.palm_position, grasp.palm_quaternion, q)
+
+    # (a) contact distances
+    finger = _finger_distances(hand, grasp, poses)
+    if object_mesh is not None:
+        _, obj_dist, tri = trimesh.proximity.closest_point(object_mesh, points)
+        normals = np.asarray(object_mesh.face_normals)[tri]
+    else:
+        notes.append("no object mesh: object distances are to the nearest given object point")
+        obj_dist, _ = cKDTree(np.asarray(object_points)).query(points)
+    if object_points is not None and object_normals is not None:
+        _, nearest = cKDTree(np.asarray(object_points, dtype=np.float64)).query(points)
+        normals = np.asarray(object_normals, dtype=np.float64)[nearest]
+    normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    for k in np.flatnonzero(finger > contact_tol):
+        failures.append(f"contact {k} is {finger[k] * 1e3:.2f} mm from {grasp.fingertips[k]}'s surface")
+    for k in np.flatnonzero(np.asarray(obj_dist) > contact_tol):
+        failures.append(f"contact {k} is {obj_dist[k] * 1e3:.2f} mm from the object surface")
+
+    # (c) friction cones
+    contacts = []
+    for i in range(len(points)):
+        fn, ft = friction_components(forces[i], normals[i])
+        scale = float(np.linalg.norm(forces[i]))
+        ratio = 0.0 if scale == 0.0 else (ft / fn if fn > 0.0 else np.inf)
+        contacts.append(
+            ContactAudit(grasp.fingertips[i], float(finger[i]), float(obj_dist[i]), normals[i], fn, ft, ratio)
+        )
+        if fn < -FRICTION_SLACK * scale:
+            failures.append(f"contact {i} pulls the object (normal force {fn:.3g} N)")
+        elif ft > mu * fn + FRICTION_SLACK * scale:
+            failures.append(f"contact {i} leaves its friction cone (tangential/normal {ratio:.3g} > μ = {mu})")
+
+    # (d) wrench
+    c, L = _centre_and_length(object_mesh, object_points, centre, length)
+    wrench = contact_wrenches(points, forces, c, L).sum(axis=0) if len(points) else np.zeros(6)
+    report = AuditReport(False, failures, notes, contacts, None, q, violations, wrench, None, None, c, L)
+    if target_wrench is not None:
+        report.target_cosine = cosine(wrench, scaled_wrench(np.asarray(target_wrench), L))
+        if report.target_cosine < cosine_tol:
+            failures.append(f"wrench cosine with the target {report.target_cosine:.4f} < {cosine_tol}")
+    if closure:
+        report.closure_epsilon = closure_epsilon(points, normals, mu, c, L)
+        if report.closure_epsilon <= 0.0:
+            failures.append("contacts are not in force closure (linearised cones, 8-sided pyramids)")
+
+    # (b) penetration
+    if object_mesh is None:
+        notes.append("no object mesh: penetration not measured")
+    else:
+        if not object_mesh.is_watertight:
+            notes.append("object mesh is not watertight: inside tests on it are approximate")
+        report.penetration = measure_penetration(hand.links, poses, object_mesh, spacing=sample_spacing, seed=seed)
+        pen = report.penetration
+        if pen.hulled_links:
+            notes.append(f"non-watertight link meshes tested by their convex hulls: {pen.hulled_links}")
+        if pen.depth > penetration_tol:
+            where = np.round(pen.point, 4).tolist() if pen.point is not None else None
+            failures.append(f"{pen.link} and the object overlap by {pen.depth * 1e3:.2f} mm ({pen.kind} at {where})")
+    report.passed = not failures
+    return report
+
+
+def audit_many(
+    hand_name: str | AuditHand, grasps: Sequence[AuditedGrasp], object_mesh: trimesh.Trimesh | None, **kwargs: Any
+) -> list[AuditReport]:
+    """:func:`audit_grasp` for several grasps on one object (same keyword arguments)."""
+    return [audit_grasp(hand_name, g, object_mesh, **kwargs) for g in grasps]
