@@ -97,14 +97,19 @@ class History:
         done = (last.completed_total + last.failed_total) - (first.completed_total + first.failed_total)
         return max(0.0, done / dt) if dt > 0 else 0.0
 
-    async def snapshot(self, recent: int = 25) -> DashboardPublic:
-        """Everything the page shows."""
+    async def snapshot(self, recent: int = 25, owner: str | None = None) -> DashboardPublic:
+        """Everything the page shows; with ``owner`` (a tenant's key) only that tenant's jobs and dead letters,
+        and no worker's current job (the queue-wide counts and the series stay: they name no job)."""
         now = time.time()
         try:
             stats = await self.queue.stats()
-            jobs = await self.queue.list_recent(limit=200)
+            jobs = await self.queue.list_recent(limit=200, owner=owner)
             workers = await self.queue.workers()
             dead = await self.queue.dead_letters(limit=20)
+            if owner is not None:
+                mine = {j.id for j in jobs}
+                dead = [d for d in dead if d.job_id in mine]
+                workers = [w.model_copy(update={"current_job": None}) for w in workers]
         except Exception as exc:
             log.warning("dashboard: queue did not answer: %s", exc)
             return DashboardPublic(now=now, backend=self.queue.backend, queue_up=False, series=list(self.samples))

@@ -10,7 +10,7 @@ from service.dashboard import History
 from service.errors import Unavailable
 from service.metrics import Metrics
 from service.robots import RobotCatalog
-from service.security import RateLimiter, check_key
+from service.security import Caller, RateLimiter, check_key, tenant_of
 from service.settings import Settings
 from workers.queue import JobQueue
 
@@ -50,14 +50,19 @@ HistoryDep = Annotated[History, Depends(get_history)]
 RequestIdDep = Annotated[str, Depends(get_request_id)]
 
 
-async def authorize(request: Request, settings: SettingsDep) -> None:
-    """Bearer key when keys are configured (except on ``open_paths``), then the caller's token bucket."""
+async def authorize(request: Request, settings: SettingsDep) -> Caller:
+    """Bearer key when keys are configured (except on ``open_paths``), then the caller's token bucket; answers
+    who is calling (FastAPI runs it once per request however many routes' parameters ask for it)."""
     identity = request.client.host if request.client else "unknown"
+    caller = Caller()
     if settings.auth_enabled and request.url.path not in settings.open_paths:
-        key = check_key(request.headers.get("authorization"), settings.api_keys)
+        key = check_key(request.headers.get("authorization"), settings.all_keys)
         identity = "key:" + key
+        caller = Caller(tenant=tenant_of(key), admin=key in settings.admin_keys)
     limiter: RateLimiter = request.app.state.limiter
     limiter.take(identity)
+    return caller
 
 
 Authorized = Depends(authorize)
+CallerDep = Annotated[Caller, Depends(authorize)]

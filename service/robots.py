@@ -1,4 +1,4 @@
-"""The hand catalogue as the API sees it: the queue's list, cached briefly, for lookups and 404s."""
+"""The hand catalogue as the API sees it: the queue's list per tenant, cached briefly, for lookups and 404s."""
 
 from __future__ import annotations
 
@@ -10,48 +10,50 @@ from workers.queue import JobQueue
 
 
 class RobotCatalog:
-    """`queue.list_robots()` cached for ``ttl`` seconds; a miss refreshes once before answering 404."""
+    """`queue.list_robots(owner=...)` cached for ``ttl`` seconds per owner; a miss refreshes once before 404."""
 
     def __init__(self, queue: JobQueue, ttl: float) -> None:
         self.queue = queue
         self.ttl = ttl
-        self._robots: list[RobotPublic] = []
-        self._stamp = float("-inf")
+        self._robots: dict[str | None, tuple[float, list[RobotPublic]]] = {}
 
-    async def all(self, *, fresh: bool = False) -> list[RobotPublic]:
-        """Every hand (built-in and registered), sorted by name."""
-        if fresh or time.monotonic() - self._stamp > self.ttl:
-            self._robots = sorted(await self.queue.list_robots(), key=lambda r: r.name)
-            self._stamp = time.monotonic()
-        return self._robots
+    async def all(self, owner: str | None = None, *, fresh: bool = False) -> list[RobotPublic]:
+        """Every hand ``owner`` may use (built-in and its registered ones), sorted by name."""
+        stamp, robots = self._robots.get(owner, (float("-inf"), []))
+        if fresh or time.monotonic() - stamp > self.ttl:
+            robots = sorted(await self.queue.list_robots(owner=owner), key=lambda r: r.name)
+            self._robots[owner] = (time.monotonic(), robots)
+            while len(self._robots) > 10_000:  # bounded: one entry per tenant seen recently
+                self._robots.pop(next(iter(self._robots)))
+        return robots
 
-    async def find(self, name: str) -> RobotPublic | None:
-        """The hand called ``name``, or None."""
+    async def find(self, name: str, owner: str | None = None) -> RobotPublic | None:
+        """The hand called ``name`` that ``owner`` may use, or None."""
         for fresh in (False, True):
-            found = next((r for r in await self.all(fresh=fresh) if r.name == name), None)
+            found = next((r for r in await self.all(owner, fresh=fresh) if r.name == name), None)
             if found is not None:
                 return found
         return None
 
-    async def get(self, name: str) -> RobotPublic:
+    async def get(self, name: str, owner: str | None = None) -> RobotPublic:
         """The hand called ``name``. Raises `NotFound`."""
-        found = await self.find(name)
+        found = await self.find(name, owner)
         if found is None:
             raise NotFound(f"unknown hand {name!r}", detail=[FieldError(field="name", problem="unknown hand")])
         return found
 
-    async def check(self, request: SynthesisRequest, field: str = "robot.name") -> None:
-        """404 when the request names a hand nobody knows. Skipped while no worker has published its hands."""
+    async def check(self, request: SynthesisRequest, owner: str | None = None, field: str = "robot.name") -> None:
+        """404 when the request names a hand ``owner`` cannot use. Skipped while no worker has published hands."""
         name = request.robot.name
-        if name is None or not await self.all():
+        if name is None or not await self.all(owner):
             return
-        if await self.find(name) is None:
-            known = ", ".join(r.name for r in self._robots)
+        if await self.find(name, owner) is None:
+            known = ", ".join(r.name for r in await self.all(owner))
             raise NotFound(
                 f"{field}: unknown hand {name!r} (known: {known})",
                 detail=[FieldError(field=field, problem=f"unknown hand {name!r}")],
             )
 
-    def forget(self) -> None:
-        """Drop the cache (after a registration)."""
-        self._stamp = float("-inf")
+    def forget(self, owner: str | None = None) -> None:
+        """Drop ``owner``'s cache (after a registration or removal)."""
+        self._robots.pop(owner, None)

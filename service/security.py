@@ -1,7 +1,15 @@
-"""Optional bearer API keys and a per-key token bucket (per client address when keys are off)."""
+"""Optional bearer API keys, the tenant each key is, and a per-key token bucket (per client address when keys
+are off).
+
+Tenancy: with keys configured every key is a tenant; its id is a hash of the key (stable across replicas and
+restarts, never the key itself), stored with each job, batch and registered robot it creates. A tenant's reads see
+only its own (anything else answers 404, like an unknown id); an admin key (``MANI_ADMIN_KEYS``) reads everyone's.
+Without keys there is one tenant, ``None``, and everything is visible, as before.
+"""
 
 from __future__ import annotations
 
+import hashlib
 import hmac
 import time
 from collections import OrderedDict
@@ -28,6 +36,24 @@ def check_key(authorization: str | None, keys: list[str]) -> str:
         if hmac.compare_digest(key.encode(), token.encode()):
             return key
     raise Unauthorized("unknown API key")
+
+
+@dataclass(frozen=True)
+class Caller:
+    """Who is calling: ``tenant`` (None without keys) and whether the key is an admin's."""
+
+    tenant: str | None = None
+    admin: bool = False
+
+    @property
+    def scope(self) -> str | None:
+        """The owner filter of reads: the tenant, or None (everything) for an admin or without keys."""
+        return None if self.admin else self.tenant
+
+
+def tenant_of(key: str) -> str:
+    """The tenant id of an API key: 16 hex characters of its SHA-256 (not reversible to the key)."""
+    return hashlib.sha256(key.encode()).hexdigest()[:16]
 
 
 @dataclass

@@ -37,6 +37,9 @@ class Settings(BaseSettings):
     api_keys: Annotated[list[str], NoDecode] = Field(
         default_factory=list, description="Bearer tokens; empty: no auth. Comma-separated in the env."
     )
+    admin_keys: Annotated[list[str], NoDecode] = Field(
+        default_factory=list, description="Bearer tokens that also read every tenant's jobs (operators)."
+    )
     open_paths: Annotated[list[str], NoDecode] = Field(
         default_factory=lambda: ["/healthz", "/readyz", "/metrics"],
         description="Paths served without a key when keys are set (the HTML shells are always open).",
@@ -60,14 +63,14 @@ class Settings(BaseSettings):
     dashboard_sample_s: float = Field(2.0, gt=0, le=60, description="Dashboard time-series sampling period.")
     dashboard_history: int = Field(900, ge=10, le=100_000, description="Samples kept for the dashboard.")
 
-    @field_validator("api_keys", "open_paths", mode="before")
+    @field_validator("api_keys", "admin_keys", "open_paths", mode="before")
     @classmethod
     def _split_csv(cls, value: object) -> object:
         if isinstance(value, str):
             return [part.strip() for part in value.split(",") if part.strip()]
         return value
 
-    @field_validator("api_keys")
+    @field_validator("api_keys", "admin_keys")
     @classmethod
     def _keys_are_long_enough(cls, value: list[str]) -> list[str]:
         short = [k for k in value if len(k) < 8]
@@ -82,8 +85,13 @@ class Settings(BaseSettings):
 
     @property
     def auth_enabled(self) -> bool:
-        """Whether `/v1` routes need a bearer key."""
-        return bool(self.api_keys)
+        """Whether `/v1` routes need a bearer key (then every key is its own tenant)."""
+        return bool(self.api_keys or self.admin_keys)
+
+    @property
+    def all_keys(self) -> list[str]:
+        """Every accepted key: the tenants' and the operators'."""
+        return [*self.api_keys, *(k for k in self.admin_keys if k not in self.api_keys)]
 
     def queue_settings(self) -> QueueSettings:
         """The queue's settings: env ``MANI_*`` for its own knobs, our Redis URL and worker count on top."""

@@ -5,7 +5,8 @@ initialisation, refinement k/max, verification) sleeping ``stage_seconds`` per s
 between stages and deadlines, and answers a `SynthesisResult` with no proposals and ``model_version``
 "staged-test". It is NOT the science: it exists so the queue mechanics can be tested the way arq tests use a burst
 worker. Fault injection for tests: a request whose ``options.seed`` equals ``crash_seed`` kills its worker
-process (SIGKILL), one equal to ``fail_seed`` raises.
+process (SIGKILL), one equal to ``fail_seed`` raises. A job given a registered robot reports its joint count as
+``timings["robot_dof"]``, so tests can tell which registration (whose URDF) a job ran with.
 """
 
 from __future__ import annotations
@@ -107,4 +108,7 @@ class StagedPipeline:
             time.sleep(self.stage_seconds)
             timings[stage.value] = timings.get(stage.value, 0.0) + time.perf_counter() - t0
         hand = job.request.robot.name or "inline"
+        if job.robot is not None:
+            root = ET.fromstring(job.robot.urdf)
+            timings["robot_dof"] = float(sum(j.get("type") in ("revolute", "prismatic") for j in root.iter("joint")))
         return SynthesisResult(hand=hand, model_version=self.model_version or "", proposals=[], timings=timings)

@@ -34,7 +34,7 @@ from clients.codec import pack, unpack
 from clients.schemas import DeadLetter, ErrorBody, JobProgress, RobotRegister, Stage, SynthesisRequest, WorkerPublic
 from workers.logs import job_context, setup_logging
 from workers.pipeline import JobInput, Pipeline, error_from_exception, load_pipeline
-from workers.queue.records import new_id, state_for_error
+from workers.queue.records import new_id, scoped_robot, state_for_error
 from workers.queue.redis_lua import BEGIN, FINISH, GROUP, TOUCH, Keys
 from workers.runner import run_batch
 from workers.settings import QueueSettings
@@ -211,8 +211,9 @@ class RedisWorker:
                 continue
             job_id = fields[b"id"].decode()
             request_id = fields[b"r"].decode() if fields.get(b"r") else None  # entries of older services lack it
+            owner = fields[b"o"].decode() if fields.get(b"o") else None
             with job_context(job_id, request_id):
-                job = self._start_job(entry, job_id, fields[b"p"], request_id)
+                job = self._start_job(entry, job_id, fields[b"p"], request_id, owner)
             if job is not None:
                 jobs.append(job)
                 entry_of[job_id] = entry
@@ -269,7 +270,9 @@ class RedisWorker:
                 log.error("outcome discarded: the job's stream entry is gone (%s)", exc)
                 return
 
-    def _start_job(self, entry: str, job_id: str, payload: bytes, request_id: str | None = None) -> JobInput | None:
+    def _start_job(
+        self, entry: str, job_id: str, payload: bytes, request_id: str | None = None, owner: str | None = None
+    ) -> JobInput | None:
         s = self.settings
         now = time.time()
         verdict, deliveries, *rest = self._begin(keys=[self.keys.job(job_id)], args=[self.id, now, s.max_deliveries])
@@ -285,7 +288,7 @@ class RedisWorker:
                 if (
                     request.robot.name
                     and not builtin
-                    and (raw := self.r.hget(self.keys.robot_urdf, request.robot.name))
+                    and (raw := self.r.hget(self.keys.robot_urdf, scoped_robot(owner, request.robot.name)))
                 ):
                     robot = RobotRegister.model_validate(unpack(raw))  # type: ignore[arg-type]
             except Exception as exc:  # a queue payload is input too
@@ -365,9 +368,10 @@ class RedisWorker:
             robot = RobotRegister.model_validate(unpack(fields[b"p"]))
             public = self.pipeline.validate_robot(robot)
             answer: dict[str, Any] = {"robot": public.model_dump(mode="python", exclude_none=True)}
+            key = scoped_robot(fields[b"o"].decode() if fields.get(b"o") else None, robot.name)
             pipe = self.r.pipeline()
-            pipe.hset(self.keys.robots, robot.name, pack(answer["robot"]))
-            pipe.hset(self.keys.robot_urdf, robot.name, fields[b"p"])
+            pipe.hset(self.keys.robots, key, pack(answer["robot"]))
+            pipe.hset(self.keys.robot_urdf, key, fields[b"p"])
             pipe.execute()
         except Exception as exc:
             answer = {"error": str(exc) or exc.__class__.__name__}

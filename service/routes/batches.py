@@ -10,7 +10,7 @@ from fastapi import APIRouter, Query, Request
 from starlette.responses import Response
 
 from clients.schemas import BatchCreate, BatchItem, BatchPublic, JobPublic, JobState
-from service.deps import Authorized, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
+from service.deps import Authorized, CallerDep, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
 from service.errors import InvalidInput
 from service.negotiation import body_openapi, read_model, respond
 from service.responses import ERRORS, READ_ERRORS
@@ -33,18 +33,19 @@ async def create_batch(
     metrics: MetricsDep,
     settings: SettingsDep,
     request_id: RequestIdDep,
+    caller: CallerDep,
 ) -> Response:
-    """All or none are enqueued; 202 with the batch and its first page of job ids."""
+    """All or none are enqueued (owned by the caller); 202 with the batch and its first page of job ids."""
     body = await read_model(request, BatchCreate, settings.max_body_bytes)
     if len(body.requests) > settings.max_batch_size:
         raise InvalidInput(f"requests: {len(body.requests)} requests, at most {settings.max_batch_size} per batch")
     for index, item in enumerate(body.requests):
-        await robots.check(item, field=f"requests.{index}.robot.name")
-    batch_id = await queue.create_batch(body.requests, request_id=request_id)
+        await robots.check(item, caller.tenant, field=f"requests.{index}.robot.name")
+    batch_id = await queue.create_batch(body.requests, request_id=request_id, owner=caller.tenant)
     log.info("batch submitted", extra={"batch_id": batch_id, "jobs": len(body.requests), "request_id": request_id})
     metrics.batch_size.observe(len(body.requests))
     metrics.jobs_submitted.labels(kind="batch").inc(len(body.requests))
-    job_ids = await queue.batch_job_ids(batch_id)
+    job_ids = await queue.batch_job_ids(batch_id, owner=caller.tenant)
     limit = min(100, len(job_ids))
     items = [BatchItem(index=i, job_id=j, state=JobState.QUEUED) for i, j in enumerate(job_ids[:limit])]
     batch = BatchPublic(
@@ -71,10 +72,11 @@ async def get_batch(
     batch_id: str,
     queue: QueueDep,
     settings: SettingsDep,
+    caller: CallerDep,
     offset: int = Query(0, ge=0),
     limit: int = Query(100, ge=1, le=1000),
 ) -> Response:
-    job_ids = await queue.batch_job_ids(batch_id)
+    job_ids = await queue.batch_job_ids(batch_id, owner=caller.scope)
     limit = min(limit, settings.batch_page_max)
     states = await asyncio.gather(*(queue.get(j, with_result=False) for j in job_ids))
     page_ids = job_ids[offset : offset + limit]

@@ -10,7 +10,7 @@ from fastapi import APIRouter, Query, Request
 from starlette.responses import Response, StreamingResponse
 
 from clients.schemas import JobPublic, WireModel
-from service.deps import Authorized, MetricsDep, QueueDep, SettingsDep
+from service.deps import Authorized, CallerDep, MetricsDep, QueueDep, SettingsDep
 from service.negotiation import respond
 from service.responses import READ_ERRORS
 
@@ -27,8 +27,10 @@ class JobList(WireModel):
 
 
 @router.get("", summary="Recent jobs, newest first", responses={200: {"model": JobList}, **READ_ERRORS})
-async def list_jobs(request: Request, queue: QueueDep, limit: int = Query(50, ge=1, le=500)) -> Response:
-    return respond(request, JobList(jobs=await queue.list_recent(limit=limit)))
+async def list_jobs(
+    request: Request, queue: QueueDep, caller: CallerDep, limit: int = Query(50, ge=1, le=500)
+) -> Response:
+    return respond(request, JobList(jobs=await queue.list_recent(limit=limit, owner=caller.scope)))
 
 
 @router.get(
@@ -36,8 +38,8 @@ async def list_jobs(request: Request, queue: QueueDep, limit: int = Query(50, ge
     summary="A job: state, stage, progress, timings, result or error",
     responses={200: {"model": JobPublic}, **READ_ERRORS},
 )
-async def get_job(request: Request, job_id: str, queue: QueueDep, metrics: MetricsDep) -> Response:
-    job = await queue.get(job_id)
+async def get_job(request: Request, job_id: str, queue: QueueDep, metrics: MetricsDep, caller: CallerDep) -> Response:
+    job = await queue.get(job_id, owner=caller.scope)
     metrics.observe_job(job)
     return respond(request, job)
 
@@ -47,8 +49,8 @@ async def get_job(request: Request, job_id: str, queue: QueueDep, metrics: Metri
     summary="Cancel a queued or running job (no-op when it has ended)",
     responses={200: {"model": JobPublic}, **READ_ERRORS},
 )
-async def cancel_job(request: Request, job_id: str, queue: QueueDep) -> Response:
-    return respond(request, await queue.cancel(job_id))
+async def cancel_job(request: Request, job_id: str, queue: QueueDep, caller: CallerDep) -> Response:
+    return respond(request, await queue.cancel(job_id, owner=caller.scope))
 
 
 @router.get(
@@ -60,9 +62,11 @@ async def cancel_job(request: Request, job_id: str, queue: QueueDep) -> Response
         **READ_ERRORS,
     },
 )
-async def job_events(request: Request, job_id: str, queue: QueueDep, settings: SettingsDep) -> StreamingResponse:
+async def job_events(
+    request: Request, job_id: str, queue: QueueDep, settings: SettingsDep, caller: CallerDep
+) -> StreamingResponse:
     """``event: progress`` with the job (no result) on every change, then ``event: end`` with the full job."""
-    await queue.get(job_id, with_result=False)  # 404 before the stream starts
+    await queue.get(job_id, with_result=False, owner=caller.scope)  # 404 (unknown or another's) before the stream
     return StreamingResponse(
         _stream(request, queue, job_id, settings.sse_interval),
         media_type="text/event-stream",

@@ -1,8 +1,10 @@
-"""The operator's dashboard (`GET /`) and the result viewer (`GET /v1/jobs/{id}/view`), offline: plotly's
-bundle is served from the installed package (`/static/plotly.min.js`), never from a CDN.
+"""The operator's dashboard (`GET /`) and the result viewer (`GET /view/{id}`, `GET /v1/jobs/{id}/view`),
+offline: plotly's bundle is served from the installed package (`/static/plotly.min.js`), never from a CDN.
 
-The HTML shells carry no data and are open; the data they fetch (`/dashboard/data`, `/v1/jobs/{id}/scene`)
-needs a key when keys are set; the pages read it from the URL fragment (``#key=...``, never sent to a server).
+The HTML shells `/` and `/view/{id}` carry no data and are open (the same page whatever the id: nothing about a job
+leaks); the data they fetch (`/dashboard/data`, `/v1/jobs/{id}/scene`) needs a key when keys are set, and the
+pages read it from the URL fragment (``#key=...``, never sent to a server). `/v1/jobs/{id}/view` is the same page
+under `/v1`: with keys set it needs the key and answers 404 for another tenant's job, like every `/v1` route.
 """
 
 from __future__ import annotations
@@ -15,7 +17,7 @@ from fastapi.openapi.docs import get_swagger_ui_html
 from starlette.responses import FileResponse, HTMLResponse, Response
 
 from service.dashboard import DashboardPublic
-from service.deps import Authorized, HistoryDep, QueueDep
+from service.deps import Authorized, CallerDep, HistoryDep, QueueDep, SettingsDep
 from service.errors import NotFound
 from service.negotiation import respond
 from service.responses import READ_ERRORS
@@ -43,8 +45,15 @@ async def dashboard() -> HTMLResponse:
     return HTMLResponse((STATIC / "dashboard.html").read_text())
 
 
-@pages.get("/v1/jobs/{job_id}/view")
-async def viewer(job_id: str) -> HTMLResponse:
+@pages.get("/view/{job_id}")
+async def viewer_shell(job_id: str) -> HTMLResponse:
+    return HTMLResponse((STATIC / "viewer.html").read_text())
+
+
+@data.get("/v1/jobs/{job_id}/view", include_in_schema=False)
+async def viewer(job_id: str, queue: QueueDep, settings: SettingsDep, caller: CallerDep) -> HTMLResponse:
+    if settings.auth_enabled:
+        await queue.get(job_id, with_result=False, owner=caller.scope)  # 404: unknown, or another tenant's
     return HTMLResponse((STATIC / "viewer.html").read_text())
 
 
@@ -87,8 +96,9 @@ async def static(name: str) -> Response:
 @data.get(
     "/dashboard/data", summary="What the dashboard draws", responses={200: {"model": DashboardPublic}, **READ_ERRORS}
 )
-async def dashboard_data(request: Request, history: HistoryDep) -> Response:
-    return respond(request, await history.snapshot())
+async def dashboard_data(request: Request, history: HistoryDep, caller: CallerDep) -> Response:
+    """Everything for an admin key (or without keys); a tenant's key sees only its own jobs (see `History`)."""
+    return respond(request, await history.snapshot(owner=caller.scope))
 
 
 @data.get(
@@ -96,6 +106,6 @@ async def dashboard_data(request: Request, history: HistoryDep) -> Response:
     summary="A job with its object, for the viewer",
     responses={200: {"model": ScenePublic}, **READ_ERRORS},
 )
-async def scene(request: Request, job_id: str, queue: QueueDep) -> Response:
-    job = await queue.get(job_id)
+async def scene(request: Request, job_id: str, queue: QueueDep, caller: CallerDep) -> Response:
+    job = await queue.get(job_id, owner=caller.scope)
     return respond(request, request.app.state.scenes.view(job))

@@ -6,7 +6,7 @@ from fastapi import APIRouter, Request
 from starlette.responses import Response
 
 from clients.schemas import ErrorBody, RobotPublic, RobotRegister, WireModel
-from service.deps import Authorized, QueueDep, RobotsDep, SettingsDep
+from service.deps import Authorized, CallerDep, QueueDep, RobotsDep, SettingsDep
 from service.errors import Conflict
 from service.negotiation import body_openapi, read_model, respond
 from service.responses import ERRORS, READ_ERRORS
@@ -21,8 +21,8 @@ class RobotList(WireModel):
 
 
 @router.get("", summary="Built-in and registered hands", responses={200: {"model": RobotList}, **READ_ERRORS})
-async def list_robots(request: Request, robots: RobotsDep) -> Response:
-    return respond(request, RobotList(robots=await robots.all(fresh=True)))
+async def list_robots(request: Request, robots: RobotsDep, caller: CallerDep) -> Response:
+    return respond(request, RobotList(robots=await robots.all(caller.tenant, fresh=True)))
 
 
 @router.get(
@@ -30,8 +30,8 @@ async def list_robots(request: Request, robots: RobotsDep) -> Response:
     summary="One hand: DoF, joints, limits, fingertips",
     responses={200: {"model": RobotPublic}, **READ_ERRORS},
 )
-async def get_robot(request: Request, name: str, robots: RobotsDep) -> Response:
-    return respond(request, await robots.get(name))
+async def get_robot(request: Request, name: str, robots: RobotsDep, caller: CallerDep) -> Response:
+    return respond(request, await robots.get(name, caller.tenant))
 
 
 @router.post(
@@ -41,12 +41,15 @@ async def get_robot(request: Request, name: str, robots: RobotsDep) -> Response:
     openapi_extra=body_openapi("RobotRegister"),
     responses={201: {"model": RobotPublic}, 409: {"model": ErrorBody, "description": "A built-in name"}, **ERRORS},
 )
-async def register_robot(request: Request, queue: QueueDep, robots: RobotsDep, settings: SettingsDep) -> Response:
+async def register_robot(
+    request: Request, queue: QueueDep, robots: RobotsDep, settings: SettingsDep, caller: CallerDep
+) -> Response:
+    """Registered in the caller's namespace: another key's hand of the same name is another hand."""
     body = await read_model(request, RobotRegister, settings.max_robot_bytes)
-    existing = await robots.find(body.name)
+    existing = await robots.find(body.name, caller.tenant)
     if existing is not None and existing.builtin:
         raise Conflict(f"name: {body.name!r} is a built-in hand; choose another name")
-    robot = await queue.register_robot(body, timeout=settings.robot_register_timeout)
-    robots.forget()
+    robot = await queue.register_robot(body, timeout=settings.robot_register_timeout, owner=caller.tenant)
+    robots.forget(caller.tenant)
     url = str(request.url_for("get_robot", name=robot.name))
     return respond(request, robot, status=201, headers={"Location": url})

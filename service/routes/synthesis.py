@@ -10,7 +10,7 @@ from fastapi import APIRouter, Request
 from starlette.responses import Response
 
 from clients.schemas import ErrorBody, JobCreated, JobPublic, SynthesisRequest, SynthesisResult
-from service.deps import Authorized, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
+from service.deps import Authorized, CallerDep, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
 from service.errors import Unavailable
 from service.negotiation import body_openapi, read_model, respond
 from service.responses import ERRORS
@@ -53,12 +53,13 @@ async def enqueue(
     kind: str,
     settings: SettingsDep,
     deadline_from_timeout: bool,
+    caller: CallerDep,
 ) -> tuple[SynthesisRequest, str]:
-    """Read + validate the body, check the hand, submit; returns the request and its job id."""
+    """Read + validate the body, check the hand, submit (owned by the caller); returns the request and its id."""
     body = await read_model(request, SynthesisRequest, settings.max_body_bytes)
-    await robots.check(body)
+    await robots.check(body, caller.tenant)
     deadline = time.time() + body.options.timeout if deadline_from_timeout else None
-    (job_id,) = await queue.submit([body], deadline=deadline, request_id=request_id)
+    (job_id,) = await queue.submit([body], deadline=deadline, request_id=request_id, owner=caller.tenant)
     request.state.job_id = job_id
     request.app.state.scenes.put(job_id, body)
     metrics.jobs_submitted.labels(kind=kind).inc()
@@ -79,10 +80,11 @@ async def synthesize(
     metrics: MetricsDep,
     settings: SettingsDep,
     request_id: RequestIdDep,
+    caller: CallerDep,
 ) -> Response:
     """Enqueue, wait up to ``options.timeout`` (capped by the server's ``sync_wait_max``): 200 with the result
     when it finishes in time, else 202 with the job's URL. The job's deadline is ``options.timeout`` from now."""
-    body, job_id = await enqueue(request, queue, robots, metrics, request_id, "sync", settings, True)
+    body, job_id = await enqueue(request, queue, robots, metrics, request_id, "sync", settings, True, caller)
     wait = min(body.options.timeout, settings.sync_wait_max)
     job = await wait_for(request, queue, job_id, wait)
     if not job.state.terminal:
@@ -125,7 +127,8 @@ async def create_job(
     metrics: MetricsDep,
     settings: SettingsDep,
     request_id: RequestIdDep,
+    caller: CallerDep,
 ) -> Response:
     """202 with the job's URL at once (no deadline: an asynchronous caller comes back for it)."""
-    _, job_id = await enqueue(request, queue, robots, metrics, request_id, "async", settings, False)
+    _, job_id = await enqueue(request, queue, robots, metrics, request_id, "async", settings, False, caller)
     return job_created(request, job_id)

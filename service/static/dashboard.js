@@ -6,7 +6,7 @@ const PERIOD_MS = 2000;
 
 function jobLink(id) {
   const a = document.createElement("a");
-  a.href = "/v1/jobs/" + encodeURIComponent(id) + "/view" + mani.suffix;
+  a.href = "/view/" + encodeURIComponent(id) + mani.suffix;
   a.textContent = id;
   a.className = "mono job-link";
   return a;

@@ -2,7 +2,8 @@
 // Draws one job's result: the object's points coloured by the contact heatmap, the contacts, the force arrows,
 // and the hand at its solved pose (palm frame from palm_position + palm_quaternion, a link from the palm to
 // each fingertip at its contact, fingertip spheres); with the proposal's quality figures.
-const jobId = decodeURIComponent(window.location.pathname.split("/")[3]);
+const pathParts = window.location.pathname.split("/"); // /view/{id} or /v1/jobs/{id}/view
+const jobId = decodeURIComponent(pathParts[1] === "view" ? pathParts[2] : pathParts[3]);
 document.getElementById("job-id").textContent = jobId;
 document.getElementById("back").href = "/" + mani.suffix;
 

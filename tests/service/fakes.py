@@ -86,6 +86,7 @@ class FakeQueue(JobQueue):
         self.jobs: dict[str, JobPublic] = {}
         self.requests: dict[str, SynthesisRequest] = {}
         self.request_ids: dict[str, str | None] = {}  # job id -> the submitting request's id
+        self.owners: dict[str, str | None] = {}  # job or batch id -> its owner
         self.batches: dict[str, list[str]] = {}
         self.robots = [HAND]
         self.started = self.closed = False
@@ -105,7 +106,7 @@ class FakeQueue(JobQueue):
 
     async def submit(
         self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None,
-        request_id: str | None = None,
+        request_id: str | None = None, owner: str | None = None,
     ) -> list[str]:  # fmt: skip
         self._check()
         if self.full:
@@ -118,6 +119,7 @@ class FakeQueue(JobQueue):
             )
             self.requests[job_id] = request
             self.request_ids[job_id] = request_id
+            self.owners[job_id] = owner
             ids.append(job_id)
             if not self.hold:
                 self.finish(job_id)
@@ -135,9 +137,9 @@ class FakeQueue(JobQueue):
             job.state = JobState.FAILED
             job.error = error
 
-    async def get(self, job_id: str, *, with_result: bool = True) -> JobPublic:
+    async def get(self, job_id: str, *, with_result: bool = True, owner: str | None = None) -> JobPublic:
         self._check()
-        if job_id not in self.jobs:
+        if job_id not in self.jobs or (owner is not None and self.owners.get(job_id) != owner):
             raise JobNotFound(f"no job {job_id!r}")
         job = self.jobs[job_id]
         return job if with_result else job.model_copy(update={"result": None})
@@ -148,30 +150,33 @@ class FakeQueue(JobQueue):
             await asyncio.sleep(0.01)
         return job
 
-    async def cancel(self, job_id: str) -> JobPublic:
-        job = await self.get(job_id)
+    async def cancel(self, job_id: str, *, owner: str | None = None) -> JobPublic:
+        job = await self.get(job_id, owner=owner)
         if not job.state.terminal:
             job.state = JobState.CANCELLED
             job.error = ErrorBody(error="job cancelled", type="Cancelled")
             job.finished_at = time.time()
         return job
 
-    async def list_recent(self, limit: int = 50) -> list[JobPublic]:
+    async def list_recent(self, limit: int = 50, *, owner: str | None = None) -> list[JobPublic]:
         self._check()
-        jobs = sorted(self.jobs.values(), key=lambda j: j.created_at, reverse=True)[:limit]
+        mine = [j for j in self.jobs.values() if owner is None or self.owners.get(j.id) == owner]
+        jobs = sorted(mine, key=lambda j: j.created_at, reverse=True)[:limit]
         return [j.model_copy(update={"result": None}) for j in jobs]
 
     async def create_batch(
-        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None
-    ) -> str:
+        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None,
+        owner: str | None = None,
+    ) -> str:  # fmt: skip
         batch_id = uuid.uuid4().hex
-        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id)
+        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id, owner=owner)
         self.batches[batch_id] = ids
+        self.owners[batch_id] = owner
         return batch_id
 
-    async def batch_job_ids(self, batch_id: str) -> list[str]:
+    async def batch_job_ids(self, batch_id: str, *, owner: str | None = None) -> list[str]:
         self._check()
-        if batch_id not in self.batches:
+        if batch_id not in self.batches or (owner is not None and self.owners.get(batch_id) != owner):
             raise JobNotFound(f"no batch {batch_id!r}")
         return self.batches[batch_id]
 
@@ -206,11 +211,13 @@ class FakeQueue(JobQueue):
     async def dead_letters(self, limit: int = 50) -> list[DeadLetter]:
         return []
 
-    async def list_robots(self) -> list[RobotPublic]:
+    async def list_robots(self, *, owner: str | None = None) -> list[RobotPublic]:
         self._check()
-        return list(self.robots)
+        return [r for r in self.robots if r.builtin or self.owners.get("robot:" + r.name) == owner]
 
-    async def register_robot(self, robot: RobotRegister, timeout: float = 30.0) -> RobotPublic:
+    async def register_robot(
+        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None
+    ) -> RobotPublic:
         if "<robot" not in robot.urdf:
             raise RobotInvalid("malformed URDF: no <robot> element")
         public = RobotPublic(
@@ -224,4 +231,5 @@ class FakeQueue(JobQueue):
             source="user",
         )
         self.robots.append(public)
+        self.owners["robot:" + robot.name] = owner
         return public

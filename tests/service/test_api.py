@@ -208,8 +208,10 @@ def test_auth_on() -> None:
         assert_error(client.get("/v1/jobs", headers={"Authorization": f"Basic {KEY}"}), 401, "Unauthorized")
         assert client.get("/v1/jobs", headers={"Authorization": f"Bearer {KEY}"}).status_code == 200
         assert_error(client.get("/dashboard/data"), 401, "Unauthorized")
-        for path in ("/healthz", "/readyz", "/metrics", "/", "/v1/jobs/x/view", "/static/plotly.min.js"):
+        for path in ("/healthz", "/readyz", "/metrics", "/", "/view/x", "/static/plotly.min.js"):
             assert client.get(path).status_code == 200, path
+        assert_error(client.get("/v1/jobs/x/view"), 401, "Unauthorized")  # under /v1: the key, then 404
+        assert_error(client.get("/v1/jobs/x/view", headers={"Authorization": f"Bearer {KEY}"}), 404, "NotFound")
     with make_client(api_keys=[KEY], open_paths=["/healthz"]) as client:
         assert client.get("/metrics").status_code == 401
 

@@ -41,7 +41,7 @@ def embedded(request: pytest.FixtureRequest) -> Iterator[str]:
 
 
 def test_pages_load_nothing_from_outside(service: str) -> None:
-    for path in ("/", "/v1/jobs/x/view"):
+    for path in ("/", "/view/x"):
         html = httpx.get(service + path).text
         sources = re.findall(r'(?:src|href)="([^"]+)"', html)
         assert sources and all(s.startswith("/") for s in sources), sources
@@ -64,7 +64,7 @@ def test_viewer_draws_the_result(service: str) -> None:
     auth = {"Authorization": f"Bearer {KEY}"}
     response = httpx.post(f"{service}/v1/synthesize", json=request_body(return_heatmap=True), headers=auth)
     job_id = response.headers["x-job-id"]
-    url = f"{service}/v1/jobs/{job_id}/view#key={KEY}"
+    url = f"{service}/view/{job_id}#key={KEY}"
     dom = dump_dom(url, budget_ms=4000)
     assert "could not load" not in dom
     assert "Ferrari–Canny ε" in dom and "converged" in dom and "fake_hand" in dom
@@ -75,5 +75,5 @@ def test_viewer_draws_the_result(service: str) -> None:
 
 @pytest.mark.slow
 def test_viewer_without_key_says_why(service: str) -> None:
-    dom = dump_dom(f"{service}/v1/jobs/whatever/view")
+    dom = dump_dom(f"{service}/view/whatever")
     assert "could not load the job" in dom and "API key" in dom

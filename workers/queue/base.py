@@ -1,8 +1,13 @@
 """The queue interface that the service talks to and both backends implement.
 
 Two backends (DESIGN.md §3): embedded (in-process queue feeding spawned worker processes; the default, not
-durable) and Redis Streams (a consumer group; durable, scale-out). The service only ever sees `JobQueue`.
-Everything here is torch-free.
+durable) and Redis Streams (a consumer group; durable as far as Redis's own persistence goes, scale-out). The
+service only ever sees `JobQueue`. Everything here is torch-free.
+
+Tenancy: every job, batch and registered robot may carry an ``owner`` (an opaque tenant id; the service derives it
+from the API key). Reads given an ``owner`` see only that owner's jobs and batches (anything else is
+`JobNotFound`, exactly like an unknown id); ``owner=None`` on a read sees everything (single-tenant, operators).
+Robots are namespaced: ``owner=None`` is the shared (single-tenant) namespace, built-in hands are everyone's.
 """
 
 from __future__ import annotations
@@ -80,9 +85,12 @@ class JobQueue(ABC):
     @abstractmethod
     async def submit(
         self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None,
-        request_id: str | None = None,
+        request_id: str | None = None, owner: str | None = None,
     ) -> list[str]:  # fmt: skip
         """Enqueue jobs atomically (all or none); returns their ids in order.
+
+        ``owner``: the tenant the jobs belong to (None: nobody in particular); their registered robot is looked
+        up in that owner's namespace.
 
         ``request_id``: the ``X-Request-ID`` of the HTTP request submitting them (the same for every job of a
         batch). Kept in each job's record (internal: not part of `JobPublic`) and put on every log line the
@@ -92,12 +100,18 @@ class JobQueue(ABC):
             QueueFull: accepting them would exceed the queue's bound.
         """
 
+    async def room(self, count: int = 1) -> bool:
+        """Whether ``count`` more jobs would fit now (a cheap admission check before a body is read; `submit`
+        still decides). Default: always."""
+        return True
+
     @abstractmethod
-    async def get(self, job_id: str, *, with_result: bool = True) -> JobPublic:
+    async def get(self, job_id: str, *, with_result: bool = True, owner: str | None = None) -> JobPublic:
         """The job's state, progress, timings, and result or error.
 
         Raises:
-            JobNotFound: unknown id. An expired result still reports state ``expired``.
+            JobNotFound: unknown id, or (``owner`` given) a job of another owner. An expired result still reports
+                state ``expired``.
         """
 
     @abstractmethod
@@ -109,22 +123,27 @@ class JobQueue(ABC):
         return _poll_events(self, job_id, interval)
 
     @abstractmethod
-    async def cancel(self, job_id: str) -> JobPublic:
-        """Cancel a queued or running job (honoured between pipeline stages); no-op when terminal."""
+    async def cancel(self, job_id: str, *, owner: str | None = None) -> JobPublic:
+        """Cancel a queued or running job (honoured between pipeline stages); no-op when terminal.
+
+        Raises:
+            JobNotFound: as `get`.
+        """
 
     @abstractmethod
-    async def list_recent(self, limit: int = 50) -> list[JobPublic]:
-        """The most recently submitted jobs, newest first, without results."""
+    async def list_recent(self, limit: int = 50, *, owner: str | None = None) -> list[JobPublic]:
+        """The most recently submitted jobs (of ``owner`` when given), newest first, without results."""
 
     @abstractmethod
     async def create_batch(
-        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None
-    ) -> str:
-        """Submit a batch of requests (``request_id`` as in `submit`); returns the batch id."""
+        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None,
+        owner: str | None = None,
+    ) -> str:  # fmt: skip
+        """Submit a batch of requests (``request_id``, ``owner`` as in `submit`); returns the batch id."""
 
     @abstractmethod
-    async def batch_job_ids(self, batch_id: str) -> list[str]:
-        """The job ids of a batch in request order. Raises `JobNotFound`."""
+    async def batch_job_ids(self, batch_id: str, *, owner: str | None = None) -> list[str]:
+        """The job ids of a batch in request order. Raises `JobNotFound` (also for another owner's batch)."""
 
     @abstractmethod
     async def stats(self) -> QueueStats:
@@ -139,12 +158,15 @@ class JobQueue(ABC):
         """Jobs that failed on every delivery, newest first."""
 
     @abstractmethod
-    async def list_robots(self) -> list[RobotPublic]:
-        """Built-in hands (published by the workers at start-up) and registered ones."""
+    async def list_robots(self, *, owner: str | None = None) -> list[RobotPublic]:
+        """Built-in hands (published by the workers at start-up) and the ones ``owner`` registered."""
 
     @abstractmethod
-    async def register_robot(self, robot: RobotRegister, timeout: float = 30.0) -> RobotPublic:
-        """Have a worker validate the URDF with the hardened loader, then store it for every worker.
+    async def register_robot(
+        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None
+    ) -> RobotPublic:
+        """Have a worker validate the URDF with the hardened loader, then store it in ``owner``'s namespace for
+        every worker (registering a name again replaces that owner's robot of that name).
 
         Raises:
             RobotInvalid: the description was rejected (message says why).

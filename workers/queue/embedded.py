@@ -41,7 +41,7 @@ from clients.schemas import (
 )
 from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
 from workers.queue.embedded_parts import ChildProcess, JobRecord, WorkerHandle, settle
-from workers.queue.records import new_id, result_expired_error, state_for_error, worker_lost_error
+from workers.queue.records import new_id, result_expired_error, scoped_robot, state_for_error, worker_lost_error
 from workers.settings import QueueSettings
 
 log = logging.getLogger("workers.queue.embedded")
@@ -60,11 +60,11 @@ class EmbeddedQueue(JobQueue):
         self._jobs: dict[str, JobRecord] = {}
         self._pending: deque[str] = deque()
         self._finished: OrderedDict[str, None] = OrderedDict()
-        self._tombstones: OrderedDict[str, tuple[float, str | None]] = OrderedDict()
-        self._batches: OrderedDict[str, list[str]] = OrderedDict()
+        self._tombstones: OrderedDict[str, tuple[float, str | None, str | None]] = OrderedDict()
+        self._batches: OrderedDict[str, tuple[str | None, list[str]]] = OrderedDict()
         self._waiters: dict[str, list[tuple[asyncio.AbstractEventLoop, asyncio.Future[None]]]] = {}
         self._workers: dict[str, WorkerHandle] = {}
-        self._robots: dict[str, RobotPublic] = {}
+        self._robots: dict[str, RobotPublic] = {}  # by `scoped_robot(owner, name)`; built-ins by name
         self._registered: dict[str, RobotRegister] = {}
         self._robot_replies: dict[str, tuple[asyncio.AbstractEventLoop, asyncio.Future[dict[str, Any]]]] = {}
         self._dead: deque[DeadLetter] = deque(maxlen=1000)
@@ -134,7 +134,7 @@ class EmbeddedQueue(JobQueue):
     # ---- submit / observe ------------------------------------------------------------------------------------
     async def submit(
         self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None,
-        request_id: str | None = None,
+        request_id: str | None = None, owner: str | None = None,
     ) -> list[str]:  # fmt: skip
         if not self._running:
             raise QueueUnavailable("the embedded queue is not running")
@@ -144,22 +144,26 @@ class EmbeddedQueue(JobQueue):
                 raise QueueFull(f"queue holds {len(self._pending)} jobs (max {self.settings.max_queue})", 1.0)
             ids = []
             for request, payload in zip(requests, payloads, strict=True):
-                job = JobRecord(new_id(), payload, request.robot.name, deadline, batch_id, request_id)
+                job = JobRecord(new_id(), payload, request.robot.name, deadline, batch_id, request_id, owner)
                 self._jobs[job.id] = job
                 self._pending.append(job.id)
                 ids.append(job.id)
         self._wake()
         return ids
 
-    async def get(self, job_id: str, *, with_result: bool = True) -> JobPublic:
+    async def room(self, count: int = 1) -> bool:
+        with self._lock:
+            return len(self._pending) + count <= self.settings.max_queue
+
+    async def get(self, job_id: str, *, with_result: bool = True, owner: str | None = None) -> JobPublic:
         with self._lock:
             job = self._jobs.get(job_id)
-            if job is not None:
+            if job is not None and (owner is None or job.owner == owner):
                 return job.public(with_result)
-            gone = self._tombstones.get(job_id)
-        if gone is None:
+            gone = None if job is not None else self._tombstones.get(job_id)
+        if gone is None or (owner is not None and gone[2] != owner):
             raise JobNotFound(f"no job {job_id}")
-        created, batch = gone
+        created, batch, _ = gone
         return JobPublic(id=job_id, state=JobState.EXPIRED, created_at=created, batch_id=batch,
                          error=result_expired_error())  # fmt: skip
 
@@ -186,7 +190,8 @@ class EmbeddedQueue(JobQueue):
                         self._waiters.pop(job_id, None)
         return await self.get(job_id)
 
-    async def cancel(self, job_id: str) -> JobPublic:
+    async def cancel(self, job_id: str, *, owner: str | None = None) -> JobPublic:
+        await self.get(job_id, with_result=False, owner=owner)  # JobNotFound for an unknown or foreign job
         target: WorkerHandle | None = None
         with self._lock:
             job = self._jobs.get(job_id)
@@ -200,28 +205,36 @@ class EmbeddedQueue(JobQueue):
                 target.send({"op": "cancel", "id": job_id})
         return await self.get(job_id, with_result=False)
 
-    async def list_recent(self, limit: int = 50) -> list[JobPublic]:
+    async def list_recent(self, limit: int = 50, *, owner: str | None = None) -> list[JobPublic]:
+        if limit <= 0:
+            return []
         with self._lock:
-            ids = list(self._jobs)[-limit:][::-1] if limit > 0 else []
-            return [self._jobs[i].public(False) for i in ids]
+            out: list[JobPublic] = []
+            for job in reversed(self._jobs.values()):
+                if owner is None or job.owner == owner:
+                    out.append(job.public(False))
+                    if len(out) == limit:
+                        break
+            return out
 
     async def create_batch(
-        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None
-    ) -> str:
+        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None,
+        owner: str | None = None,
+    ) -> str:  # fmt: skip
         batch_id = new_id()
-        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id)
+        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id, owner=owner)
         with self._lock:
-            self._batches[batch_id] = ids
+            self._batches[batch_id] = (owner, ids)
             while len(self._batches) > self.settings.max_results:
                 self._batches.popitem(last=False)
         return batch_id
 
-    async def batch_job_ids(self, batch_id: str) -> list[str]:
+    async def batch_job_ids(self, batch_id: str, *, owner: str | None = None) -> list[str]:
         with self._lock:
-            ids = self._batches.get(batch_id)
-        if ids is None:
+            found = self._batches.get(batch_id)
+        if found is None or (owner is not None and found[0] != owner):
             raise JobNotFound(f"no batch {batch_id}")
-        return list(ids)
+        return list(found[1])
 
     async def stats(self) -> QueueStats:
         with self._lock:
@@ -251,11 +264,14 @@ class EmbeddedQueue(JobQueue):
         with self._lock:
             return list(self._dead)[::-1][:limit]
 
-    async def list_robots(self) -> list[RobotPublic]:
+    async def list_robots(self, *, owner: str | None = None) -> list[RobotPublic]:
         with self._lock:
-            return sorted(self._robots.values(), key=lambda r: (not r.builtin, r.name))
+            mine = [r for key, r in self._robots.items() if r.builtin or key == scoped_robot(owner, r.name)]
+        return sorted(mine, key=lambda r: (not r.builtin, r.name))
 
-    async def register_robot(self, robot: RobotRegister, timeout: float = 30.0) -> RobotPublic:
+    async def register_robot(
+        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None
+    ) -> RobotPublic:
         with self._lock:
             ready = [w for w in self._workers.values() if w.info is not None]
             existing = self._robots.get(robot.name)
@@ -279,9 +295,10 @@ class EmbeddedQueue(JobQueue):
         if "error" in reply:
             raise RobotInvalid(reply["error"])
         public = RobotPublic.model_validate(reply["robot"])
+        key = scoped_robot(owner, robot.name)
         with self._lock:
-            self._registered[robot.name] = robot
-            self._robots[robot.name] = public
+            self._registered[key] = robot
+            self._robots[key] = public
         return public
 
     # ---- pump thread -----------------------------------------------------------------------------------------
@@ -392,7 +409,7 @@ class EmbeddedQueue(JobQueue):
                     job.state, job.worker, job.deliveries = JobState.RUNNING, worker.id, job.deliveries + 1
                     job.started_at = now
                     job.timings["queue"] = now - job.created_at
-                    robot = self._registered.get(job.robot or "")
+                    robot = self._registered.get(scoped_robot(job.owner, job.robot or ""))
                     batch.append({
                         "id": job.id, "request": job.payload, "deadline": job.deadline, "request_id": job.request_id,
                         "robot": robot.model_dump(mode="python", exclude_none=True) if robot else None,
@@ -423,7 +440,7 @@ class EmbeddedQueue(JobQueue):
                     break
                 self._finished.popitem(last=False)
                 del self._jobs[oldest]
-                self._tombstones[oldest] = (job.created_at, job.batch_id)
+                self._tombstones[oldest] = (job.created_at, job.batch_id, job.owner)
                 if len(self._tombstones) > _TOMBSTONES_PER_RESULT * self.settings.max_results:
                     self._tombstones.popitem(last=False)
 

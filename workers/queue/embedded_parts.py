@@ -18,16 +18,17 @@ class JobRecord:
     """A job as the embedded queue keeps it (payload dropped once terminal)."""
 
     __slots__ = (
-        "batch_id", "cancel", "created_at", "deadline", "deliveries", "error", "finished_at", "id", "payload",
-        "progress", "request_id", "result", "robot", "started_at", "state", "timings", "worker",
+        "batch_id", "cancel", "created_at", "deadline", "deliveries", "error", "finished_at", "id", "owner",
+        "payload", "progress", "request_id", "result", "robot", "started_at", "state", "timings", "worker",
     )  # fmt: skip
 
     def __init__(
         self, job_id: str, payload: bytes, robot: str | None, deadline: float | None, batch: str | None,
-        request_id: str | None = None,
+        request_id: str | None = None, owner: str | None = None,
     ) -> None:  # fmt: skip
         self.id, self.payload, self.robot, self.deadline, self.batch_id = job_id, payload, robot, deadline, batch
         self.request_id = request_id  # X-Request-ID of the submitting HTTP request (internal: logs, operators)
+        self.owner = owner  # the tenant (internal: never in JobPublic)
         self.created_at = time.time()
         self.state = JobState.QUEUED
         self.progress = JobProgress()

@@ -49,3 +49,8 @@ def worker_lost_error(detail: str, delivery: int, max_deliveries: int) -> ErrorB
 def new_id() -> str:
     """A job / batch / worker id: 32 hex characters."""
     return uuid.uuid4().hex
+
+
+def scoped_robot(owner: str | None, name: str) -> str:
+    """The key of a registered robot in its owner's namespace (hand names never contain "/")."""
+    return f"{owner}/{name}" if owner else name

@@ -37,7 +37,7 @@ from clients.schemas import (
     WorkerPublic,
 )
 from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
-from workers.queue.records import CANCELLED, DEADLINE_EXCEEDED, new_id, result_expired_error
+from workers.queue.records import CANCELLED, DEADLINE_EXCEEDED, new_id, result_expired_error, scoped_robot
 from workers.queue.redis_lua import CANCEL, GROUP, SUBMIT, Keys
 from workers.settings import QueueSettings
 
@@ -154,11 +154,11 @@ class RedisQueue(JobQueue):
     # ---- submit / observe ------------------------------------------------------------------------------------
     async def submit(
         self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None,
-        request_id: str | None = None,
+        request_id: str | None = None, owner: str | None = None,
     ) -> list[str]:  # fmt: skip
         ids = [new_id() for _ in requests]
         args: list[Any] = [self.keys.prefix, self.settings.max_queue, int(self.settings.record_ttl), time.time()]
-        args += [len(requests), int(self.settings.result_ttl * 1000), request_id or ""]
+        args += [len(requests), int(self.settings.result_ttl * 1000), request_id or "", owner or ""]
         for job_id, request in zip(ids, requests, strict=True):
             payload = pack(request.model_dump(mode="python", exclude_none=True))
             args += [
@@ -175,13 +175,17 @@ class RedisQueue(JobQueue):
             raise QueueFull(f"queue holds {depth} jobs (max {self.settings.max_queue})", retry_after=1.0)
         return ids
 
-    async def get(self, job_id: str, *, with_result: bool = True) -> JobPublic:
+    async def room(self, count: int = 1) -> bool:
+        async with self._guard():
+            return int(await self._client.xlen(self.keys.stream)) + count <= self.settings.max_queue
+
+    async def get(self, job_id: str, *, with_result: bool = True, owner: str | None = None) -> JobPublic:
         async with self._guard():
             pipe = self._client.pipeline(transaction=False)
             pipe.hgetall(self.keys.job(job_id))
             pipe.get(self.keys.result(job_id)) if with_result else pipe.exists(self.keys.result(job_id))
             h, result = await pipe.execute()
-        if not h:
+        if not h or (owner is not None and h.get(b"owner", b"").decode() != owner):
             raise JobNotFound(f"no job {job_id}")
         job = job_from_hash(job_id, h, result if with_result else None, bool(result))
         if job.state is JobState.QUEUED and job.deadline is not None and job.deadline <= time.time():
@@ -215,16 +219,18 @@ class RedisQueue(JobQueue):
                 if not waiters:
                     self._waiters.pop(job_id, None)
 
-    async def cancel(self, job_id: str) -> JobPublic:
+    async def cancel(self, job_id: str, *, owner: str | None = None) -> JobPublic:
+        if owner is not None:
+            await self.get(job_id, with_result=False, owner=owner)  # JobNotFound for another owner's job
         if await self._end_queued(job_id, JobState.CANCELLED, "job cancelled", CANCELLED) == "missing":
             raise JobNotFound(f"no job {job_id}")
         return await self.get(job_id, with_result=False)
 
-    async def list_recent(self, limit: int = 50) -> list[JobPublic]:
+    async def list_recent(self, limit: int = 50, *, owner: str | None = None) -> list[JobPublic]:
         if limit <= 0:
             return []
         async with self._guard():
-            ids = [i.decode() for i in await self._client.zrevrange(self.keys.recent, 0, limit - 1)]
+            ids = [i.decode() for i in await self._client.zrevrange(self.keys.recent_of(owner), 0, limit - 1)]
             pipe = self._client.pipeline(transaction=False)
             for job_id in ids:
                 pipe.hgetall(self.keys.job(job_id))
@@ -238,19 +244,25 @@ class RedisQueue(JobQueue):
         return jobs
 
     async def create_batch(
-        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None
-    ) -> str:
+        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None,
+        owner: str | None = None,
+    ) -> str:  # fmt: skip
         batch_id = new_id()
-        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id)
+        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id, owner=owner)
         async with self._guard():
-            key = self.keys.batch(batch_id)
-            await self._client.pipeline().rpush(key, *ids).expire(key, int(self.settings.record_ttl)).execute()
+            key, ttl = self.keys.batch(batch_id), int(self.settings.record_ttl)
+            pipe = self._client.pipeline().rpush(key, *ids).expire(key, ttl)
+            if owner:
+                pipe.set(self.keys.batch_owner(batch_id), owner, ex=ttl)
+            await pipe.execute()
         return batch_id
 
-    async def batch_job_ids(self, batch_id: str) -> list[str]:
+    async def batch_job_ids(self, batch_id: str, *, owner: str | None = None) -> list[str]:
         async with self._guard():
-            ids = await self._client.lrange(self.keys.batch(batch_id), 0, -1)
-        if not ids:
+            pipe = self._client.pipeline(transaction=False)
+            pipe.lrange(self.keys.batch(batch_id), 0, -1).get(self.keys.batch_owner(batch_id))
+            ids, holder = await pipe.execute()
+        if not ids or (owner is not None and (holder or b"").decode() != owner):
             raise JobNotFound(f"no batch {batch_id}")
         return [i.decode() for i in ids]
 
@@ -289,13 +301,19 @@ class RedisQueue(JobQueue):
             entries = await self._client.xrevrange(self.keys.dead, count=limit)
         return [DeadLetter.model_validate(unpack(fields[b"d"])) for _, fields in entries]
 
-    async def list_robots(self) -> list[RobotPublic]:
+    async def list_robots(self, *, owner: str | None = None) -> list[RobotPublic]:
         async with self._guard():
-            blobs = await self._client.hvals(self.keys.robots)
-        robots = [RobotPublic.model_validate(unpack(b)) for b in blobs]
+            blobs = await self._client.hgetall(self.keys.robots)
+        robots = []
+        for field, blob in blobs.items():
+            robot = RobotPublic.model_validate(unpack(blob))
+            if robot.builtin or field.decode() == scoped_robot(owner, robot.name):
+                robots.append(robot)
         return sorted(robots, key=lambda r: (not r.builtin, r.name))
 
-    async def register_robot(self, robot: RobotRegister, timeout: float = 30.0) -> RobotPublic:
+    async def register_robot(
+        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None
+    ) -> RobotPublic:
         async with self._guard():
             existing = await self._client.hget(self.keys.robots, robot.name)
         if existing and RobotPublic.model_validate(unpack(existing)).builtin:
@@ -306,7 +324,8 @@ class RedisQueue(JobQueue):
         payload = pack(robot.model_dump(mode="python", exclude_none=True))
         loop, end = asyncio.get_running_loop(), time.monotonic() + timeout
         async with self._guard():
-            await self._client.xadd(self.keys.stream, {"k": "robot", "id": rid, "p": payload})
+            fields = {"k": "robot", "id": rid, "p": payload} | ({"o": owner} if owner else {})
+            await self._client.xadd(self.keys.stream, fields)  # type: ignore[arg-type]
             while True:
                 future: asyncio.Future[None] = loop.create_future()
                 self._waiters.setdefault(f"robot:{rid}", []).append(future)

@@ -1,12 +1,14 @@
 """Redis key layout and the Lua scripts that keep each state change atomic (shared by client and worker).
 
 Keys under the prefix P: ``P:jobs`` (stream, one consumer group "workers"; entries ``k`` job|robot, ``id``,
-``p`` msgpack payload, ``r`` the submitting HTTP request's id when there is one; deleted once acked, so XLEN =
-queued + running), ``P:job:ID`` (hash: the job's record, ``request_id`` among its fields when known, TTL
-``record_ttl``), ``P:result:ID`` (msgpack result, TTL ``result_ttl``), ``P:recent`` (zset of ids by
-submit order, ``P:seq``), ``P:batch:ID`` (list), ``P:dead`` (stream of dead letters), ``P:counts`` (hash of totals),
-``P:workers`` (zset by last heartbeat) + ``P:worker:ID`` (msgpack, TTL), ``P:robots`` / ``P:robot_urdf`` (hashes),
-``P:robotreply:RID``; channel ``P:done`` announces finished job ids (and ``robot:RID``).
+``p`` msgpack payload, ``r`` the submitting HTTP request's id when there is one, ``o`` the owner (tenant) when
+there is one; deleted once acked, so XLEN = queued + running), ``P:job:ID`` (hash: the job's record,
+``request_id`` and ``owner`` among its fields when known, TTL ``record_ttl``), ``P:result:ID`` (msgpack result, TTL
+``result_ttl``), ``P:recent`` (zset of ids by submit order, ``P:seq``) and ``P:recent:OWNER`` (the same per
+owner), ``P:batch:ID`` (list) + ``P:batchowner:ID``, ``P:dead`` (stream of dead letters), ``P:counts`` (hash of
+totals), ``P:workers`` (zset by last heartbeat) + ``P:worker:ID`` (msgpack, TTL), ``P:robots`` / ``P:robot_urdf``
+(hashes; field = the hand's name, ``OWNER/name`` for a tenant's registered hand), ``P:robotreply:RID``; channel
+``P:done`` announces finished job ids (and ``robot:RID``).
 """
 
 from __future__ import annotations
@@ -38,6 +40,12 @@ class Keys:
     def batch(self, batch_id: str) -> str:
         return f"{self.prefix}batch:{batch_id}"
 
+    def batch_owner(self, batch_id: str) -> str:
+        return f"{self.prefix}batchowner:{batch_id}"
+
+    def recent_of(self, owner: str | None) -> str:
+        return f"{self.prefix}recent:{owner}" if owner else self.recent
+
     def worker(self, worker_id: str) -> str:
         return f"{self.prefix}worker:{worker_id}"
 
@@ -46,36 +54,51 @@ class Keys:
 
 
 # KEYS: stream, recent. ARGV: prefix, max_queue, record_ttl, now, n, result_ttl (ms: the submitter decides how long
-# results are kept), request_id ('' = none; the same for every job of the call), then n × (id, payload, deadline,
-# batch, robot). Returns n, or -(depth + 1) when the jobs do not fit.
+# results are kept), request_id ('' = none; the same for every job of the call), owner ('' = none), then
+# n × (id, payload, deadline, batch, robot). Returns n, or -(depth + 1) when the jobs do not fit.
 SUBMIT = (
     """
 local n = tonumber(ARGV[5])
 local depth = redis.call('XLEN', KEYS[1])
 if depth + n > tonumber(ARGV[2]) then return -(depth + 1) end
 local rid = ARGV[7]
+local owner = ARGV[8]
+local mine = ARGV[1] .. 'recent:' .. owner
 for i = 0, n - 1 do
-  local b = 8 + i * 5
+  local b = 9 + i * 5
   local id = ARGV[b]
   local key = ARGV[1] .. 'job:' .. id
   redis.call('HSET', key, 'state', 'queued', 'created_at', ARGV[4], 'deliveries', 0, 'ttl', ARGV[6])
   if ARGV[b + 2] ~= '' then redis.call('HSET', key, 'deadline', ARGV[b + 2]) end
   if ARGV[b + 3] ~= '' then redis.call('HSET', key, 'batch_id', ARGV[b + 3]) end
   if ARGV[b + 4] ~= '' then redis.call('HSET', key, 'robot', ARGV[b + 4]) end
-  local entry
+  local fields = {'k', 'job', 'id', id, 'p', ARGV[b + 1]}
   if rid ~= '' then
     redis.call('HSET', key, 'request_id', rid)
-    entry = redis.call('XADD', KEYS[1], '*', 'k', 'job', 'id', id, 'p', ARGV[b + 1], 'r', rid)
-  else
-    entry = redis.call('XADD', KEYS[1], '*', 'k', 'job', 'id', id, 'p', ARGV[b + 1])
+    table.insert(fields, 'r')
+    table.insert(fields, rid)
   end
+  if owner ~= '' then
+    redis.call('HSET', key, 'owner', owner)
+    table.insert(fields, 'o')
+    table.insert(fields, owner)
+  end
+  local entry = redis.call('XADD', KEYS[1], '*', unpack(fields))
   redis.call('HSET', key, 'entry', entry)
   redis.call('EXPIRE', key, ARGV[3])
-  redis.call('ZADD', KEYS[2], redis.call('INCR', ARGV[1] .. 'seq'), id)
+  local seq = redis.call('INCR', ARGV[1] .. 'seq')
+  redis.call('ZADD', KEYS[2], seq, id)
+  if owner ~= '' then redis.call('ZADD', mine, seq, id) end
 end
 redis.call('ZREMRANGEBYRANK', KEYS[2], 0, -("""
     + str(RECENT_MAX)
     + """ + 1))
+if owner ~= '' then
+  redis.call('ZREMRANGEBYRANK', mine, 0, -("""
+    + str(RECENT_MAX)
+    + """ + 1))
+  redis.call('EXPIRE', mine, ARGV[3])
+end
 return n
 """
 )
