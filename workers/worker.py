@@ -55,7 +55,11 @@ class RedisWorker:
         self.settings = settings
         self.id = worker_id or f"{socket.gethostname()}-{os.getpid()}-{new_id()[:6]}"
         self.keys = Keys(settings.queue_prefix)
-        self.r: Any = redis.Redis.from_url(settings.redis_url, socket_connect_timeout=2, socket_timeout=30)
+        limit = settings.redis_timeout
+        blocking = 1.0 + settings.max_wait_ms / 1000  # XREADGROUP BLOCK waits that long beyond the round trip
+        self.r: Any = redis.Redis.from_url(
+            settings.redis_url, socket_connect_timeout=limit, socket_timeout=limit + blocking
+        )
         self.stopping = False
         self.inflight: dict[str, str] = {}  # entry id -> job id
         self.lock = threading.Lock()
@@ -132,7 +136,8 @@ class RedisWorker:
 
     # ---- heartbeats ------------------------------------------------------------------------------------------
     def _heartbeat_loop(self) -> None:
-        client = redis.Redis.from_url(self.settings.redis_url or "", socket_connect_timeout=2, socket_timeout=5)
+        limit = self.settings.redis_timeout
+        client = redis.Redis.from_url(self.settings.redis_url or "", socket_connect_timeout=limit, socket_timeout=limit)
         touch = client.register_script(TOUCH)
         while not self.stopping:
             time.sleep(self.settings.heartbeat_interval)

@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import asyncio
 import signal
+import time
 from pathlib import Path
 
 import pytest
 
 from clients.schemas import JobState
-from workers.queue import create_queue
+from workers.queue import QueueUnavailable, create_queue
 from workers.queue.redis import RedisQueue
 
 from .helpers import live_workers, redis_workers, run, running, small_request, until
@@ -70,6 +71,43 @@ def test_poison_job_fails_no_batch_mate(tmp_path: Path) -> None:
                 assert [(j.state, j.deliveries) for j in jobs.values()] == [(JobState.SUCCEEDED, 2)] * 3
                 assert [d.job_id for d in await queue.dead_letters()] == [ids[2]]
             finally:
+                await queue.close()
+
+    run(main())
+
+
+def test_a_hung_redis_answers_unavailable_within_the_timeout(tmp_path: Path) -> None:
+    """SIGSTOPped Redis (the port open, nothing answering): every call fails with QueueUnavailable within
+    OP_ROUNDS × redis_timeout, and the queue works again once Redis resumes."""
+
+    async def main() -> None:
+        with redis_server(tmp_path) as server:
+            queue = client(server.url, redis_timeout=0.5)
+            await queue.start()
+            try:
+                [job_id] = await queue.submit([small_request()])
+                server.pause()
+                t0 = time.monotonic()
+                assert not await queue.ping()
+                assert time.monotonic() - t0 < 1.5
+                calls = {
+                    "submit": queue.submit([small_request()]),
+                    "get": queue.get(job_id),
+                    "list_recent": queue.list_recent(10),
+                    "stats": queue.stats(),
+                    "list_robots": queue.list_robots(),
+                    "room": queue.room(),
+                }
+                for name, call in calls.items():
+                    t0 = time.monotonic()
+                    with pytest.raises(QueueUnavailable):
+                        await call
+                    assert time.monotonic() - t0 < 2.5, name
+                server.resume()
+                assert (await queue.get(job_id)).state is JobState.QUEUED
+                assert len(await queue.submit([small_request()])) == 1
+            finally:
+                server.resume()
                 await queue.close()
 
     run(main())

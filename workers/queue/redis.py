@@ -4,6 +4,9 @@ One stream with one consumer group; a job's record is a hash, its result a separ
 finished job whose result key is gone reports "expired"); see `workers.queue.redis_lua` for the key layout and
 the atomic scripts, `workers.worker` for the consumer side (XREADGROUP, XAUTOCLAIM, heartbeats, dead letters).
 Waiting uses a pub/sub channel with polling as a fallback, so a lost message only delays, never hangs.
+Every call is bounded in time: connect and command timeouts of ``redis_timeout`` seconds, one retry after a
+reconnect, and a deadline of ``OP_ROUNDS × redis_timeout`` on each guarded step, so a hung Redis (SIGSTOP, a
+black-holed network) answers `QueueUnavailable` (503) in seconds instead of hanging requests.
 """
 
 from __future__ import annotations
@@ -42,6 +45,8 @@ from workers.queue.redis_lua import CANCEL, GROUP, SUBMIT, Keys
 from workers.settings import QueueSettings
 
 log = logging.getLogger("workers.queue.redis")
+OP_ROUNDS = 2
+"""A guarded step (a few pipelined round trips) may take this many ``redis_timeout``s in all."""
 
 
 async def ensure_group(client: Any, keys: Keys) -> None:
@@ -95,15 +100,17 @@ class RedisQueue(JobQueue):
     # ---- lifecycle -------------------------------------------------------------------------------------------
     async def start(self) -> None:
         assert self.settings.redis_url is not None
+        limit = self.settings.redis_timeout
         pool = aioredis.BlockingConnectionPool.from_url(
-            self.settings.redis_url, max_connections=64, timeout=20,
-            socket_connect_timeout=2, socket_timeout=10, health_check_interval=10,
-            retry=Retry(ExponentialBackoff(cap=0.5, base=0.05), 3),
+            self.settings.redis_url, max_connections=64, timeout=limit,
+            socket_connect_timeout=limit, socket_timeout=limit, health_check_interval=10,
+            retry=Retry(ExponentialBackoff(cap=0.5, base=0.05), 1),
             retry_on_error=[RedisConnectionError, RedisTimeoutError],
         )  # fmt: skip
         self._client = aioredis.Redis(connection_pool=pool)
-        with contextlib.suppress(RedisError):
-            await ensure_group(self._client, self.keys)
+        with contextlib.suppress(RedisError, OSError):
+            async with asyncio.timeout(OP_ROUNDS * limit):
+                await ensure_group(self._client, self.keys)
         self._submit = self._client.register_script(SUBMIT)
         self._cancel = self._client.register_script(CANCEL)
         self._listener = asyncio.create_task(self._listen(), name="mani-redis-queue-listener")
@@ -119,8 +126,9 @@ class RedisQueue(JobQueue):
 
     async def ping(self) -> bool:
         try:
-            return bool(await self._client.ping())
-        except (RedisError, OSError, AttributeError):
+            async with asyncio.timeout(self.settings.redis_timeout):
+                return bool(await self._client.ping())
+        except (RedisError, OSError, AttributeError):  # TimeoutError is an OSError
             return False
 
     async def _listen(self) -> None:
@@ -146,8 +154,12 @@ class RedisQueue(JobQueue):
     async def _guard(self) -> AsyncIterator[None]:
         if self._client is None:
             raise QueueUnavailable("the Redis queue is not started")
+        limit = OP_ROUNDS * self.settings.redis_timeout
         try:
-            yield
+            async with asyncio.timeout(limit):
+                yield
+        except TimeoutError as exc:
+            raise QueueUnavailable(f"Redis did not answer within {limit:g} s") from exc
         except (RedisError, OSError) as exc:
             raise QueueUnavailable(f"Redis unavailable: {exc}") from exc
 
@@ -326,15 +338,16 @@ class RedisQueue(JobQueue):
         async with self._guard():
             fields = {"k": "robot", "id": rid, "p": payload} | ({"o": owner} if owner else {})
             await self._client.xadd(self.keys.stream, fields)  # type: ignore[arg-type]
-            while True:
-                future: asyncio.Future[None] = loop.create_future()
-                self._waiters.setdefault(f"robot:{rid}", []).append(future)
+        while True:
+            future: asyncio.Future[None] = loop.create_future()
+            self._waiters.setdefault(f"robot:{rid}", []).append(future)
+            async with self._guard():  # each read bounded; the wait for the worker's verdict is `timeout`
                 reply = await self._client.get(self.keys.robot_reply(rid))
-                if reply is not None or time.monotonic() >= end:
-                    self._waiters.pop(f"robot:{rid}", None)
-                    break
-                with contextlib.suppress(TimeoutError):
-                    await asyncio.wait_for(future, min(1.0, end - time.monotonic()))
+            if reply is not None or time.monotonic() >= end:
+                self._waiters.pop(f"robot:{rid}", None)
+                break
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(future, min(1.0, end - time.monotonic()))
         if reply is None:
             raise QueueUnavailable(f"no worker validated the robot within {timeout} s")
         answer = unpack(reply)
