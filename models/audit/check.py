@@ -28,6 +28,7 @@ from typing import Any
 
 import numpy as np
 import trimesh
+from numpy.typing import ArrayLike
 from scipy.spatial import cKDTree
 
 from models.audit.hands import AuditHand, load_hand
@@ -60,18 +61,20 @@ class AuditedGrasp:
     joint_names: list[str]
     joint_values: np.ndarray
 
+    def __post_init__(self) -> None:
+        self.contact_points = np.asarray(self.contact_points, dtype=np.float64).reshape(-1, 3)
+        self.forces = np.asarray(self.forces, dtype=np.float64).reshape(-1, 3)
+        self.fingertips = [str(f) for f in self.fingertips]
+        self.palm_position = np.asarray(self.palm_position, dtype=np.float64)
+        self.palm_quaternion = np.asarray(self.palm_quaternion, dtype=np.float64)
+        self.joint_names = [str(n) for n in self.joint_names]
+        self.joint_values = np.asarray(self.joint_values, dtype=np.float64)
+
     @classmethod
     def from_mapping(cls, proposal: Mapping[str, Any]) -> AuditedGrasp:
         """From a mapping with the fields above (e.g. a decoded proposal; extra keys are ignored)."""
-        return cls(
-            contact_points=np.asarray(proposal["contact_points"], dtype=np.float64).reshape(-1, 3),
-            forces=np.asarray(proposal["forces"], dtype=np.float64).reshape(-1, 3),
-            fingertips=[str(f) for f in proposal["fingertips"]],
-            palm_position=np.asarray(proposal["palm_position"], dtype=np.float64),
-            palm_quaternion=np.asarray(proposal["palm_quaternion"], dtype=np.float64),
-            joint_names=[str(n) for n in proposal["joint_names"]],
-            joint_values=np.asarray(proposal["joint_values"], dtype=np.float64),
-        )
+        keys = ("contact_points", "forces", "fingertips", "palm_position", "palm_quaternion", "joint_names")
+        return cls(**{k: proposal[k] for k in (*keys, "joint_values")})
 
 
 @dataclass
@@ -164,7 +167,7 @@ def _finger_distances(hand: AuditHand, grasp: AuditedGrasp, poses: dict[str, np.
 
 
 def _centre_and_length(
-    mesh: trimesh.Trimesh | None, points: np.ndarray | None, centre: np.ndarray | None, length: float | None
+    mesh: trimesh.Trimesh | None, points: ArrayLike | None, centre: ArrayLike | None, length: float | None
 ) -> tuple[np.ndarray, float]:
     cloud = np.asarray(mesh.vertices) if mesh is not None else np.asarray(points, dtype=np.float64)
     if centre is None:
@@ -180,16 +183,16 @@ def audit_grasp(
     hand_name: str | AuditHand,
     grasp: AuditedGrasp,
     object_mesh: trimesh.Trimesh | None,
-    object_points: np.ndarray | None = None,
-    object_normals: np.ndarray | None = None,
+    object_points: ArrayLike | None = None,
+    object_normals: ArrayLike | None = None,
     *,
     mu: float,
-    target_wrench: np.ndarray | None = None,
+    target_wrench: ArrayLike | None = None,
     closure: bool = False,
     contact_tol: float = 5e-3,
     penetration_tol: float = 1e-3,
     cosine_tol: float = 0.99,
-    centre: np.ndarray | None = None,
+    centre: ArrayLike | None = None,
     length: float | None = None,
     sample_spacing: float = 1e-3,
     seed: int = 0,
@@ -273,6 +276,9 @@ def audit_grasp(
 
     # (d) wrench
     c, L = _centre_and_length(object_mesh, object_points, centre, length)
+    if not L > 0.0:
+        notes.append(f"degenerate torque scale L = {L}: 1 m used")
+        L = 1.0
     wrench = contact_wrenches(points, forces, c, L).sum(axis=0) if len(points) else np.zeros(6)
     report = AuditReport(False, failures, notes, contacts, None, q, violations, wrench, None, None, c, L)
     if target_wrench is not None:

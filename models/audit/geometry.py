@@ -20,6 +20,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import trimesh
+from numpy.typing import ArrayLike
 
 from models.audit.urdf import GeometryElement, UrdfModel
 
@@ -27,9 +28,10 @@ SECTIONS = 96
 SPHERE_SUBDIVISIONS = 4
 
 
-def pose_matrix(position: np.ndarray, quaternion: np.ndarray) -> np.ndarray:
+def pose_matrix(position: ArrayLike, quaternion: ArrayLike) -> np.ndarray:
     """(4, 4) pose of a position and a unit quaternion ``(w, x, y, z)`` (normalised here)."""
-    w, x, y, z = np.asarray(quaternion, dtype=np.float64) / np.linalg.norm(quaternion)
+    quat = np.asarray(quaternion, dtype=np.float64)
+    w, x, y, z = quat / np.linalg.norm(quat)
     T = np.eye(4)
     T[:3, :3] = [
         [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
