@@ -14,6 +14,7 @@ from pydantic.json_schema import models_json_schema
 
 from clients.schemas import BatchCreate, ErrorBody, RobotRegister, SynthesisRequest
 from service import errors, logs
+from service.bodies import BodyPool
 from service.dashboard import History
 from service.metrics import Metrics
 from service.middleware import RequestContext
@@ -62,6 +63,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
             with contextlib.suppress(asyncio.CancelledError):
                 await sampler
             await the_queue.close()
+            app.state.bodies.close()
             log.info("service stopped")
 
     app = FastAPI(
@@ -75,6 +77,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
     app.state.metrics = metrics
     app.state.limiter = RateLimiter(settings.rate_limit_per_s, settings.rate_limit_burst)
     app.state.scenes = SceneStore()
+    app.state.bodies = BodyPool(settings.parse_offload_bytes, settings.large_body_slots, settings.body_timeout)
     app.state.shutting_down = False
     errors.install(app)
     for router in (

@@ -4,6 +4,7 @@
     ├── BadRequest          400   malformed body (not JSON/msgpack), bad query parameter
     ├── Unauthorized        401   missing or unknown API key
     ├── NotFound            404   unknown job, batch or hand
+    ├── RequestTimeout      408   the body did not arrive in time
     ├── Conflict            409   e.g. registering a built-in hand's name
     ├── PayloadTooLarge     413   body over the limit (the message gives the limit)
     ├── UnsupportedMediaType 415  a body that is neither JSON nor msgpack
@@ -66,6 +67,10 @@ class Unauthorized(ApiError):
 
 class NotFound(ApiError):
     status, type = 404, "NotFound"
+
+
+class RequestTimeout(ApiError):
+    status, type = 408, "RequestTimeout"
 
 
 class Conflict(ApiError):

@@ -1,18 +1,23 @@
 """JSON and msgpack both ways: read a body by its Content-Type, answer in the encoding the Accept header asks for.
 
 Bodies are read here (not by FastAPI) so that msgpack works and the size limit holds while streaming: a body
-over the limit is refused as soon as its Content-Length (or its running size) says so.
+over the limit is refused as soon as its Content-Length (or its running size) says so; a sender too slow is cut
+off (408); a large body is decoded off the event loop (`service.bodies`).
 """
 
 from __future__ import annotations
 
+import asyncio
 from typing import Any, TypeVar
 
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel
 from starlette.requests import Request
 from starlette.responses import Response
 
-from clients.codec import JSON, MSGPACK, DecodeError, dump_model, load_model, media_type
+from clients.codec import JSON, MSGPACK, dump_model, media_type
+from clients.schemas import FieldError
+from clients.validation import summary
+from service.bodies import BodyPool, decode
 
 ModelT = TypeVar("ModelT", bound=BaseModel)
 BODY_MEDIA_TYPES = (JSON, MSGPACK)
@@ -51,21 +56,45 @@ def respond(
     return Response(dump_model(model, kind), status_code=status, media_type=kind, headers=headers)
 
 
-async def read_bytes(request: Request, limit: int) -> bytes:
-    """The raw body, refusing more than ``limit`` bytes (413)."""
+def declared_length(request: Request, limit: int) -> int | None:
+    """The body's Content-Length (None when not declared). Raises 400 when malformed, 413 when over ``limit``:
+    both before a byte of the body is read."""
     from service.errors import BadRequest, PayloadTooLarge
 
     declared = request.headers.get("content-length")
-    if declared is not None:
-        try:
-            size = int(declared)
-        except ValueError as exc:
-            raise BadRequest("Content-Length is not a number") from exc
-        if size > limit:
-            raise PayloadTooLarge(f"body of {size} bytes exceeds the limit of {limit} bytes")
+    if declared is None:
+        return None
+    try:
+        size = int(declared)
+    except ValueError as exc:
+        raise BadRequest("Content-Length is not a number") from exc
+    if size < 0:
+        raise BadRequest("Content-Length is negative")
+    if size > limit:
+        raise PayloadTooLarge(f"body of {size} bytes exceeds the limit of {limit} bytes")
+    return size
+
+
+async def read_bytes(request: Request, limit: int, timeout: float = 60.0, idle: float = 10.0) -> bytes:
+    """The raw body, refusing more than ``limit`` bytes (413) and a sender slower than ``timeout`` seconds in
+    all or ``idle`` seconds between two chunks (408: a slow client never holds a connection for ever)."""
+    from service.errors import PayloadTooLarge, RequestTimeout
+
+    declared_length(request, limit)
     chunks: list[bytes] = []
     total = 0
-    async for chunk in request.stream():
+    loop = asyncio.get_running_loop()
+    end = loop.time() + timeout
+    stream = request.stream().__aiter__()
+    while True:
+        left = end - loop.time()
+        try:
+            chunk = await asyncio.wait_for(stream.__anext__(), min(idle, left) if left > 0 else 0)
+        except StopAsyncIteration:
+            break
+        except TimeoutError as exc:
+            why = f"no body byte for {idle:g} s" if left > idle else f"body not received within {timeout:g} s"
+            raise RequestTimeout(why) from exc
         total += len(chunk)
         if total > limit:
             raise PayloadTooLarge(f"body exceeds the limit of {limit} bytes")
@@ -74,24 +103,39 @@ async def read_bytes(request: Request, limit: int) -> bytes:
 
 
 async def read_model(request: Request, cls: type[ModelT], limit: int) -> ModelT:
-    """Read, decode and validate a body of ``cls`` (400 malformed, 413 too big, 415 other type, 422 invalid)."""
-    from service.errors import BadRequest, InvalidInput, UnsupportedMediaType
+    """Read, decode and validate a body of ``cls`` (400 malformed, 408 too slow, 413 too big, 415 other type,
+    422 invalid). A large body waits for a slot and is decoded in a worker process (`service.bodies`)."""
+    from service.errors import UnsupportedMediaType
 
     content_type = request.headers.get("content-type")
     base = (content_type or JSON).split(";", 1)[0].strip().lower()
     if base not in (JSON, "text/json") and media_type(base) != MSGPACK and not base.endswith("+json"):
         raise UnsupportedMediaType(f"Content-Type {base!r} is not supported; use {JSON} or {MSGPACK}")
-    data = await read_bytes(request, limit)
-    if not data:
+    settings = request.app.state.settings
+    bodies: BodyPool | None = getattr(request.app.state, "bodies", None)
+    if bodies is None or not bodies.large(declared_length(request, limit)):
+        data = await read_bytes(request, limit, settings.body_timeout, settings.body_idle_timeout)
+        if bodies is None or len(data) <= bodies.offload_bytes:
+            return _answer(decode(cls, data, content_type) if data else ("empty", ""))
+    async with bodies.slot():
+        data = await read_bytes(request, limit, settings.body_timeout, settings.body_idle_timeout)
+        if len(data) <= bodies.offload_bytes:
+            return _answer(decode(cls, data, content_type) if data else ("empty", ""))
+        return _answer(await bodies.decode(cls, data, content_type))
+
+
+def _answer(outcome: tuple[str, Any]) -> Any:
+    from service.errors import BadRequest, InvalidInput
+
+    kind, value = outcome
+    if kind == "ok":
+        return value
+    if kind == "invalid":
+        return_errors: list[FieldError] = value
+        raise InvalidInput(summary(return_errors), detail=return_errors)
+    if kind == "empty":
         raise BadRequest("empty body; send a JSON or msgpack object")
-    try:
-        return load_model(cls, data, content_type)
-    except DecodeError as exc:
-        raise BadRequest(str(exc)) from exc
-    except ValidationError as exc:
-        raise InvalidInput.from_pydantic(exc) from exc
-    except (ValueError, TypeError, RecursionError) as exc:
-        raise BadRequest(f"body could not be read: {exc}") from exc
+    raise BadRequest(str(value))
 
 
 def body_openapi(schema_ref: str, description: str = "") -> dict[str, Any]:

@@ -12,6 +12,7 @@ _ERROR_TEXT = {
     400: "Malformed body or parameter",
     401: "Missing or unknown API key",
     404: "Unknown job, batch or hand",
+    408: "The body did not arrive in time",
     413: "Body over the size limit",
     415: "Body neither JSON nor msgpack",
     422: "Validation failed: `detail` names each field and problem",

@@ -56,6 +56,12 @@ class Settings(BaseSettings):
     robots_cache_s: float = Field(5.0, ge=0, description="How long the hand list is cached for 404 checks.")
     sse_interval: float = Field(0.25, gt=0, le=10, description="Polling interval of the events stream, s.")
     robot_register_timeout: float = Field(30.0, gt=0, le=600)
+    body_timeout: float = Field(60.0, gt=0, le=3600, description="A request body must arrive within this, s (408).")
+    body_idle_timeout: float = Field(10.0, gt=0, le=600, description="Longest pause within a body, s (408).")
+    parse_offload_bytes: int = Field(
+        1024 * 1024, ge=0, description="Bodies larger than this are decoded in a worker process, off the event loop."
+    )
+    large_body_slots: int = Field(2, ge=1, le=64, description="Large bodies read and decoded at once (the rest wait).")
 
     # --- observability
     log_level: str = Field("INFO", pattern=r"^(DEBUG|INFO|WARNING|ERROR|CRITICAL)$")

@@ -14,6 +14,7 @@ from service.deps import Authorized, CallerDep, MetricsDep, QueueDep, RequestIdD
 from service.errors import InvalidInput
 from service.negotiation import body_openapi, read_model, respond
 from service.responses import ERRORS, READ_ERRORS
+from service.routes.synthesis import admit
 
 router = APIRouter(prefix="/v1/batches", tags=["batches"], dependencies=[Authorized])
 log = logging.getLogger("service.batches")
@@ -36,6 +37,7 @@ async def create_batch(
     caller: CallerDep,
 ) -> Response:
     """All or none are enqueued (owned by the caller); 202 with the batch and its first page of job ids."""
+    await admit(queue)
     body = await read_model(request, BatchCreate, settings.max_body_bytes)
     if len(body.requests) > settings.max_batch_size:
         raise InvalidInput(f"requests: {len(body.requests)} requests, at most {settings.max_batch_size} per batch")

@@ -14,6 +14,7 @@ from service.deps import Authorized, CallerDep, MetricsDep, QueueDep, RequestIdD
 from service.errors import Unavailable
 from service.negotiation import body_openapi, read_model, respond
 from service.responses import ERRORS
+from workers.queue import QueueFull
 
 router = APIRouter(prefix="/v1", tags=["synthesis"], dependencies=[Authorized])
 log = logging.getLogger("service.synthesis")
@@ -37,6 +38,12 @@ JOB_ERROR_STATUS = {
 }
 
 
+async def admit(queue: QueueDep, count: int = 1) -> None:
+    """429 `QueueFull` before reading a body the queue has no room for (`submit` still decides, atomically)."""
+    if not await queue.room(count):
+        raise QueueFull("the queue is full; retry later", retry_after=1.0)
+
+
 def job_created(request: Request, job_id: str, job: JobPublic | None = None) -> Response:
     """202 with the job's URL (in the body and in Location)."""
     url = str(request.url_for("get_job", job_id=job_id))
@@ -55,7 +62,9 @@ async def enqueue(
     deadline_from_timeout: bool,
     caller: CallerDep,
 ) -> tuple[SynthesisRequest, str]:
-    """Read + validate the body, check the hand, submit (owned by the caller); returns the request and its id."""
+    """Refuse at once when the queue is full (before the body is read), read + validate the body, check the
+    hand, submit (owned by the caller); returns the request and its id."""
+    await admit(queue)
     body = await read_model(request, SynthesisRequest, settings.max_body_bytes)
     await robots.check(body, caller.tenant)
     deadline = time.time() + body.options.timeout if deadline_from_timeout else None

@@ -1,11 +1,17 @@
-"""The API under faults of what it waits on: a hung Redis (SIGSTOP) must give 503s within seconds."""
+"""The API under faults and hostile clients: a hung Redis (SIGSTOP) gives 503s within seconds; large bodies do
+not stall the event loop; a full queue refuses before a body is read; a slow body is cut off."""
 
 from __future__ import annotations
 
+import contextlib
+import json
+import socket
+import threading
 import time
 from pathlib import Path
 
 import httpx
+import numpy as np
 
 from service.app import create_app
 from service.settings import Settings
@@ -39,3 +45,79 @@ def test_hung_redis_gives_503_within_seconds(tmp_path: Path) -> None:
             finally:
                 server.resume()
             assert http.get("/v1/jobs").status_code == 200
+
+
+def big_body(points: int = 150_000) -> bytes:
+    """A valid request of ``points`` points with normals: ≈ 60 bytes a point as JSON."""
+    rng = np.random.default_rng(0)
+    p = rng.normal(size=(points, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    body = request_body("test_gripper")
+    body["object"] = {"points": (0.04 * p).tolist(), "normals": p.tolist()}
+    return json.dumps(body).encode()
+
+
+def test_large_bodies_do_not_stall_the_event_loop() -> None:
+    """Three ≈ 9 MB bodies at once: /healthz keeps answering quickly (they are decoded in worker processes, at
+    most two at a time), and all three are accepted."""
+    data = big_body()
+    queue = create_queue(None, redis_url=None, concurrency=0, max_queue=100)
+    app = create_app(Settings(rate_limit_per_s=0), queue=queue)
+    with serving(app) as base, httpx.Client(base_url=base, timeout=60) as http:
+        http.post("/v1/jobs", content=data, headers={"Content-Type": "application/json"})  # warm the pool
+        answers: list[int] = []
+
+        def post() -> None:
+            with httpx.Client(base_url=base, timeout=60) as own:
+                answers.append(own.post("/v1/jobs", content=data, headers={"Content-Type": "application/json"})
+                               .status_code)  # fmt: skip
+
+        threads = [threading.Thread(target=post) for _ in range(3)]
+        for thread in threads:
+            thread.start()
+        worst = 0.0
+        while any(t.is_alive() for t in threads):
+            t0 = time.monotonic()
+            assert http.get("/healthz").status_code == 200
+            worst = max(worst, time.monotonic() - t0)
+            time.sleep(0.02)
+        for thread in threads:
+            thread.join()
+    assert answers == [202, 202, 202]
+    assert worst < 0.5, f"/healthz took {worst:.2f} s while large bodies were decoded"
+
+
+def test_full_queue_refuses_before_reading_the_body() -> None:
+    queue = create_queue(None, redis_url=None, concurrency=0, max_queue=1)
+    app = create_app(Settings(rate_limit_per_s=0), queue=queue)
+    with serving(app) as base, httpx.Client(base_url=base, timeout=60) as http:
+        assert http.post("/v1/jobs", json=request_body("test_gripper")).status_code == 202
+        with socket.create_connection((base.split("//")[1].split(":")[0], int(base.rsplit(":", 1)[1]))) as sock:
+            t0 = time.monotonic()  # a 50 MB body announced, none of it sent: the answer comes at once
+            sock.sendall(b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                         b"Content-Length: 50000000\r\n\r\n")  # fmt: skip
+            sock.settimeout(5)
+            head = sock.recv(4096)
+            assert head.startswith(b"HTTP/1.1 429") and b"retry-after" in head.lower(), head
+            assert time.monotonic() - t0 < 1.0
+
+
+def test_a_slow_body_is_cut_off() -> None:
+    """One byte now and then never holds a request open: 408 after the idle (and total) body timeout."""
+    queue = create_queue(None, redis_url=None, concurrency=0, max_queue=10)
+    app = create_app(Settings(rate_limit_per_s=0, body_idle_timeout=0.5, body_timeout=2), queue=queue)
+    with serving(app) as base:
+        host, port = base.split("//")[1].split(":")
+        for pause in (0.8, 0.3):  # idle past 0.5 s; then one byte every 0.3 s, past the 2 s total
+            with socket.create_connection((host, int(port))) as sock:
+                sock.sendall(b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nContent-Type: application/json\r\n"
+                             b"Content-Length: 1000\r\n\r\n{")  # fmt: skip
+                sock.settimeout(0.05)
+                t0, head = time.monotonic(), b""
+                while not head and time.monotonic() - t0 < 5:
+                    time.sleep(pause)
+                    with contextlib.suppress(OSError):
+                        sock.sendall(b" ")
+                    with contextlib.suppress(TimeoutError):
+                        head = sock.recv(4096)
+                assert head.startswith(b"HTTP/1.1 408"), (pause, head)
