@@ -59,28 +59,54 @@ TIP_WEIGHT = 0.3  # weight of the contact point's rows; the pad-centre rows have
 def tip_points(hand) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:  # type: ignore[no-untyped-def]
     """Bodies (m,), contact points (m, 3) and pad centres (m, 3) in their body frames, and the pad radii (m,).
 
-    The pad of a fingertip is the project's pad sphere (`models.refine.state.contact_spheres`: the sphere on
-    its link nearest the tip point), so labels, refinement and verification share one fingertip model. Driving
-    the pad centre to ``target + radius · n`` makes the pad touch the surface at the target whatever the
-    finger's orientation. Hands without a pad sphere use the tip point (radius 0).
+    The pad of a fingertip is the sphere that best fits its real surface near the tip point (`fit_pad`, on the
+    samples of `models.robots.pads`, the contact model refinement and verification use): driving its centre to
+    ``target + radius · n`` puts the real fingertip surface on the target whatever the finger's orientation. Flat
+    pads use the sphere tangent to them at the tip (`fit_pad`).
     """
-    from models.refine.state import contact_spheres
-
-    idx, rad = contact_spheres(hand)
-    bodies, tips, pads = [], [], []
+    bodies, tips, pads, radii = [], [], [], []
     for i, link in enumerate(hand.fingertip_links):
         b, T = hand.tree.link_body[link]
         tip = T[:3, :3] @ hand.tip_offsets[i] + T[:3, 3]
-        pad = tip
-        if idx[i] >= 0:
-            bs, Ts = hand.tree.link_body[hand.sphere_links[idx[i]]]
-            if bs == b:
-                pad = Ts[:3, :3] @ np.asarray(hand.sphere_centres[idx[i]]) + Ts[:3, 3]
+        centre, radius = fit_pad(hand, i, tip)
         bodies.append(b)
         tips.append(tip)
-        pads.append(pad)
-    radii = np.where(idx >= 0, rad, 0.0)
+        pads.append(centre)
+        radii.append(radius)
     return np.asarray(bodies, dtype=np.int64), np.asarray(tips), np.asarray(pads), np.asarray(radii, dtype=float)
+
+
+PAD_FIT_RADIUS = 0.01
+"""m: pad samples this close to the sample nearest the tip point define the fitted pad sphere."""
+PAD_FIT_MAX_RADIUS = 0.03
+PAD_FIT_MAX_RMS = 1e-3
+PAD_FLAT_RADIUS = 0.01
+CONTACT_STANDOFF = 1.5e-3
+"""m: the pads are driven this far outside the surface: the fitted pad sphere is not the real surface (a flat pad
+tilted by a few degrees dips its edge into the object), and the verification's contact tolerance is 5 mm."""
+"""m: a flat pad is modelled by the sphere of this radius tangent to it at the sample nearest the tip point."""
+
+
+def fit_pad(hand, fingertip: int, tip: np.ndarray) -> tuple[np.ndarray, float]:  # type: ignore[no-untyped-def]
+    """The sphere (centre (3,) body frame, radius) fitted (algebraic least squares) to fingertip ``fingertip``'s
+    surface samples within ``PAD_FIT_RADIUS`` of the sample nearest its tip point; the nearest sample with radius 0
+    when the surface there is flat (radius > ``PAD_FIT_MAX_RADIUS``) or no sphere fits (rms > ``PAD_FIT_MAX_RMS``):
+    then the sphere of radius ``PAD_FLAT_RADIUS`` tangent to the surface at the sample nearest the tip point."""
+    surf = hand.contact_surface
+    mine = np.flatnonzero(surf.fingertip == fingertip)
+    pts = surf.local[mine]
+    anchor = pts[np.argmin(np.linalg.norm(pts - tip, axis=1))]
+    near = pts[np.linalg.norm(pts - anchor, axis=1) <= PAD_FIT_RADIUS]
+    if len(near) >= 8:
+        A = np.hstack([2 * near, np.ones((len(near), 1))])
+        sol, *_ = np.linalg.lstsq(A, (near**2).sum(axis=1), rcond=None)
+        centre = sol[:3]
+        radius = float(np.sqrt(max(sol[3] + centre @ centre, 0.0)))
+        rms = float(np.sqrt(np.mean((np.linalg.norm(near - centre, axis=1) - radius) ** 2)))
+        if radius <= PAD_FIT_MAX_RADIUS and rms <= PAD_FIT_MAX_RMS:
+            return centre, radius
+    normal = surf.normals[mine][np.argmin(np.linalg.norm(pts - tip, axis=1))]
+    return anchor - PAD_FLAT_RADIUS * normal, PAD_FLAT_RADIUS
 
 
 def pad_spheres(
@@ -147,7 +173,7 @@ def solve_ik(
     local = torch.as_tensor(np.concatenate([tip_local, pad_local]), dtype=q.dtype)
     bodies2 = np.concatenate([bodies, bodies])
     weights = torch.cat([torch.full((3 * m,), TIP_WEIGHT, dtype=q.dtype), torch.ones(3 * m, dtype=q.dtype)])
-    depth = torch.as_tensor(radii, dtype=q.dtype)[None, :, None]
+    depth = torch.as_tensor(radii + CONTACT_STANDOFF, dtype=q.dtype)[None, :, None]
     _, tgt_normals = surface(targets.reshape(-1, 3).numpy())
     tgt_normals_t = torch.as_tensor(tgt_normals, dtype=q.dtype).reshape(B, m, 3)
     for it in range(iters_target + iters_project):
@@ -213,7 +239,8 @@ def separate(
             break
         pads, jt = _points_and_jacobian(hand, palm_pos, palm_quat, q, bodies, pad_local)
         near, nrm = surface(pads.reshape(-1, 3).numpy())
-        goal = torch.as_tensor(near + np.tile(radii_np, B)[:, None] * nrm, dtype=q.dtype).reshape(B, m, 3)
+        goal = torch.as_tensor(near + np.tile(radii_np + CONTACT_STANDOFF, B)[:, None] * nrm, dtype=q.dtype)
+        goal = goal.reshape(B, m, 3)
         rows_t = jt[..., 6:].reshape(B, 3 * m, -1)
         err_t = (goal - pads).reshape(B, 3 * m)
         u = diff / dist.clamp_min(1e-9)[..., None]

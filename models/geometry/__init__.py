@@ -1,6 +1,11 @@
 """Object geometry: KD-tree signed distance, mass properties, rigid fits, fcl verification of hand poses."""
 
-from models.geometry.collision import hand_object_penetration, hand_self_collision
+from models.geometry.collision import (
+    hand_field_penetration,
+    hand_mesh_penetration,
+    hand_object_penetration,
+    hand_self_collision,
+)
 from models.geometry.object import DEFAULT_DENSITY, InvalidPointCloud, MassProperties, ObjectGeometry
 from models.geometry.rigid import RigidFit, fit_rigid_motion, rotation_vector
 
@@ -11,6 +16,8 @@ __all__ = [
     "ObjectGeometry",
     "RigidFit",
     "fit_rigid_motion",
+    "hand_field_penetration",
+    "hand_mesh_penetration",
     "hand_object_penetration",
     "hand_self_collision",
     "rotation_vector",

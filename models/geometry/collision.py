@@ -17,7 +17,9 @@ the rest pose; depth = the larger depth of either body's samples inside the othe
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Protocol
 
 import fcl
 import numpy as np
@@ -26,6 +28,21 @@ import trimesh
 
 from models.geometry.object import ObjectGeometry
 from models.robots.hand import ADJACENT_HOPS, Hand
+
+
+class SignedDistance(Protocol):
+    """An object surface known by oriented points (`models.refine.field.PointCloudField` satisfies it)."""
+
+    points: np.ndarray
+
+    def signed_distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(M, 3) → Φ (M,) negative inside, ∇Φ (M, 3), nearest point (M, 3)."""
+        ...
+
+    def robust_signed_distance(self, x: np.ndarray) -> np.ndarray:
+        """(M, 3) → Φ (M,) with the side from the points' winding number."""
+        ...
+
 
 BODY_SAMPLES = 600
 PREFILTER = 0.01
@@ -102,9 +119,12 @@ def _hits(a: fcl.CollisionObject, b: fcl.CollisionObject) -> bool:
 
 
 def hand_object_penetration(
-    hand: Hand, geometry: ObjectGeometry, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray
-) -> float:
-    """Penetration depth (m, ≥ 0) between the hand's collision meshes and the object's watertight mesh."""
+    hand: Hand, geometry: ObjectGeometry, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray,
+    rank: Callable[[np.ndarray], np.ndarray] | None = None,
+) -> float:  # fmt: skip
+    """Penetration depth (m, ≥ 0) between the hand's collision meshes and the object's watertight mesh.
+
+    ``rank`` orders hand samples by estimated depth (default: the KD-tree Φ of the oriented points)."""
     poses = _poses(hand, palm_pos, palm_quat, q)
     mesh = geometry.mesh
     obj = _obj(_bvh(mesh), np.eye(4))
@@ -115,7 +135,7 @@ def hand_object_penetration(
         if not _hits(_obj(body.bvh, T), obj):
             continue
         world = body.samples @ T[:3, :3].T + T[:3, 3]
-        phi, _, _ = geometry.signed_distance(world)  # cheap KD-tree estimate ...
+        phi = geometry.signed_distance(world)[0] if rank is None else rank(world)  # cheap estimate ...
         order = np.argsort(phi)[:EXACT_CANDIDATES]
         near = world[order[phi[order] < PREFILTER]]  # ... then exact distances for the deepest candidates
         if len(near):
@@ -124,6 +144,64 @@ def hand_object_penetration(
         local = (obj_pts - T[:3, 3]) @ T[:3, :3]
         depth = max(depth, _inside_depth(body.planes, local, body.bounds))
     return depth
+
+
+def hand_mesh_penetration(
+    hand: Hand, mesh: trimesh.Trimesh, points: np.ndarray, palm_pos: np.ndarray, palm_quat: np.ndarray,
+    q: np.ndarray,
+) -> float:  # fmt: skip
+    """Penetration depth (m, ≥ 0) between the hand's collision meshes and a watertight object ``mesh`` (exact; the
+    object's points (N, 3) are tested inside the hand bodies too)."""
+    pts = np.asarray(points, dtype=np.float64)
+    normals = np.zeros_like(pts)  # unused by the depth test: only the KD-tree prefilter's ranking needs points
+    from scipy.spatial import cKDTree
+
+    geometry = ObjectGeometry(pts, normals, mesh, cKDTree(pts))
+    return hand_object_penetration(hand, geometry, palm_pos, palm_quat, q, rank=_mesh_rank(mesh))
+
+
+def hand_field_penetration(
+    hand: Hand, field: SignedDistance, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray,
+    margin: float = 0.005,
+) -> float:  # fmt: skip
+    """Penetration depth (m, ≥ 0) of the hand's collision meshes into the surface of an object known only by its
+    oriented points: the deepest body sample by the points' signed distance (``field``: negative inside, the side
+    confirmed by the winding number; it keeps concavities, unlike a convex hull), and the deepest object point
+    inside a body's convex hull."""
+    poses = _poses(hand, palm_pos, palm_quat, q)
+    obj_pts = np.asarray(field.points, dtype=np.float64)
+    depth = 0.0
+    for body in _bodies(hand):
+        T = poses[body.name]
+        world = body.samples @ T[:3, :3].T + T[:3, 3]
+        centre = world.mean(0)
+        reach = float(np.linalg.norm(world - centre, axis=1).max())
+        if field.signed_distance(centre[None])[0][0] > reach + margin:
+            continue
+        phi = field.signed_distance(world)[0]
+        behind = np.flatnonzero(phi < 0)  # the discs' side errs beside sharp edges: confirm by winding number
+        if len(behind):
+            depth = max(depth, float(max(-field.robust_signed_distance(world[behind]).min(), 0.0)))
+        local = (obj_pts - T[:3, 3]) @ T[:3, :3]
+        depth = max(depth, _inside_depth(body.planes, local, body.bounds))
+    return depth
+
+
+def _mesh_rank(mesh: trimesh.Trimesh) -> Callable[[np.ndarray], np.ndarray]:
+    """A cheap ranking of hand samples by depth in ``mesh``: the distance to the nearest vertex, signed by the
+    vertex normal (the exact signed distance is then taken on the deepest)."""
+    from scipy.spatial import cKDTree
+
+    verts = np.asarray(mesh.vertices)
+    vnorm = np.asarray(mesh.vertex_normals)
+    tree = cKDTree(verts)
+
+    def rank(x: np.ndarray) -> np.ndarray:
+        dist, idx = tree.query(x)
+        side = np.einsum("ij,ij->i", x - verts[idx], vnorm[idx])
+        return np.where(side < 0, -dist, dist)
+
+    return rank
 
 
 def self_collision_body_pairs(hand: Hand) -> list[tuple[int, int]]:

@@ -16,8 +16,9 @@ from typing import Any
 import numpy as np
 import torch
 
+from models.refine.contact import surface_contacts
 from models.refine.field import PointCloudField
-from models.refine.state import HandPose, sphere_allowance
+from models.refine.state import HandPose, body_spheres
 
 CONTACT = 2e-3
 
@@ -26,8 +27,13 @@ def _spheres_touch(hand: Any, pose: HandPose, cloud: PointCloudField, which: np.
     with torch.no_grad():
         sph = hand.spheres(*pose.tensors(), jacobian=False)[0][0].numpy()
     phi = cloud.signed_distance(sph[which])[0]
-    radius = np.asarray(hand.sphere_radii)[which] - sphere_allowance(hand, 1e-3)[which]
-    return np.asarray(phi <= radius)
+    return np.asarray(phi <= np.asarray(hand.sphere_radii)[which])
+
+
+def _fingertips_touch(hand: Any, pose: HandPose, cloud: PointCloudField) -> np.ndarray:
+    """(m,) each fingertip's real surface is within ``CONTACT`` of the object."""
+    found = surface_contacts(hand, pose.tensors(), cloud, jacobian=False)
+    return np.asarray(found.gap <= CONTACT)
 
 
 def direct_grasp(
@@ -36,8 +42,7 @@ def direct_grasp(
     """Run the baseline from ``start``; returns (final pose, seconds)."""
     t0 = time.perf_counter()
     pose = HandPose(start.palm_pos.copy(), start.palm_quat.copy(), np.asarray(hand.rest, dtype=np.float64).copy())
-    owner = np.asarray(getattr(hand, "sphere_fingertip", np.full(len(hand.sphere_radii), -1)))
-    all_spheres = np.arange(len(owner))
+    others = body_spheres(hand)
     n = 6 + hand.dof
     # approach
     for _ in range(max_steps):
@@ -45,11 +50,7 @@ def direct_grasp(
         dist = float(np.linalg.norm(to_centre))
         if dist < 5e-3:
             break
-        with torch.no_grad():
-            tips = hand.fingertips(*pose.tensors())[0].numpy()
-        if np.any(cloud.signed_distance(tips)[0] <= CONTACT) or np.any(
-            _spheres_touch(hand, pose, cloud, all_spheres)
-        ):
+        if np.any(_fingertips_touch(hand, pose, cloud)) or np.any(_spheres_touch(hand, pose, cloud, others)):
             break
         delta = np.zeros(n)
         delta[:3] = to_centre / dist * min(5e-3, dist)
@@ -63,10 +64,11 @@ def direct_grasp(
         with torch.no_grad():
             tips_t, jac_t = hand.fingertip_jacobians(*pose.tensors())
         tips, jac = tips_t[0].numpy(), jac_t[0].numpy()
-        phi, grad, _ = cloud.signed_distance(tips)
+        _, grad, _ = cloud.signed_distance(tips)
+        touching = _fingertips_touch(hand, pose, cloud)
         delta = np.zeros(n)
         for i in np.flatnonzero(~done):
-            if phi[i] <= CONTACT or np.any(_spheres_touch(hand, pose, cloud, np.flatnonzero(owner == i))):
+            if touching[i]:
                 done[i] = True
                 continue
             cols = np.flatnonzero(np.abs(jac[i, :, 6:]).sum(axis=0) > 1e-9) + 6

@@ -38,28 +38,73 @@ class PointCloudField:
     def signed_distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Φ (M,), ∇Φ (M, 3) (= n̄ near the surface), nearest sample p̄ (M, 3).
 
-        Beyond a disc the side (sign) comes from the weighted mean of n_j·(x − p_j) over the 8 nearest samples,
-        not from the nearest one alone: next to an edge the nearest sample's normal is almost perpendicular to
-        x − p̄ and its sign flips under millimetre moves (a 16 mm jump of Φ in our runs).
+        |Φ| is the distance to the nearest of the 8 nearest samples' discs (the minimum of continuous functions,
+        so it does not jump when the nearest sample changes). The side (sign) comes from those discs, each
+        weighted by how close it is compared with the nearest one: Σ_j w_j a_j / d_j with a_j = n_j·(x − p_j), d_j
+        the distance to disc j and w_j = exp(−((d_j − d_min)/h)²). Outside a box's edge the nearest *samples* may
+        lie on the face whose plane x is behind; their discs are farther than the other face's, so they no longer
+        outvote it (sign errors on a box: 22 of 2 419 test points with weights by point distance, 0 with these).
         """
-        x = np.asarray(x, dtype=np.float64)
+        x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
         k = min(8, len(self.points))
-        dist, idx = self._tree.query(x, k=k)
-        near, nrm = self.points[idx[:, 0]], self.normals[idx[:, 0]]
-        d = x - near
-        a = np.einsum("ij,ij->i", d, nrm)
-        tang = d - a[:, None] * nrm
-        b = np.linalg.norm(tang, axis=1)
+        _, idx = self._tree.query(x, k=k)
+        idx = np.asarray(idx).reshape(len(x), k)
+        p, n = self.points[idx], self.normals[idx]  # (M, k, 3)
+        d = x[:, None, :] - p
+        a = np.einsum("mka,mka->mk", d, n)
+        tang = d - a[..., None] * n
+        b = np.linalg.norm(tang, axis=2)
         excess = np.maximum(b - self.disc_radius, 0.0)
-        w = np.exp(-((dist - dist[:, :1]) ** 2) / (2.0 * self.disc_radius) ** 2)
-        side = np.einsum("mk,mka,mka->m", w, self.normals[idx], x[:, None, :] - self.points[idx])
-        sign = np.where(excess > 0, np.where(side < 0, -1.0, 1.0), np.where(a < 0, -1.0, 1.0))
-        radial = np.sqrt(a**2 + excess**2)
-        phi = np.where(excess > 0, sign * radial, a)
-        t_hat = tang / np.maximum(b, 1e-12)[:, None]
-        far = sign[:, None] * (a[:, None] * nrm + excess[:, None] * t_hat) / np.maximum(radial, 1e-12)[:, None]
-        grad = np.where((excess > 0)[:, None], far, nrm)
-        return phi, grad, near
+        value = np.sqrt(a**2 + excess**2)
+        best = np.argmin(value, axis=1)
+        rows = np.arange(len(x))
+        nearest = value[rows, best]
+        w = np.exp(-(((value - nearest[:, None]) / self.disc_radius) ** 2))
+        cos = a / np.maximum(value, 1e-12)  # 1: x faces the disc squarely, 0: x lies beside its rim
+        side = np.sum(w * cos * np.abs(cos), axis=1)
+        sign = np.where(side < 0, -1.0, 1.0)
+        a_b, e_b, n_b = a[rows, best], excess[rows, best], n[rows, best]
+        t_hat = tang[rows, best] / np.maximum(b[rows, best], 1e-12)[:, None]
+        inside_disc = e_b <= 0
+        phi = sign * nearest
+        far = sign[:, None] * (a_b[:, None] * n_b + e_b[:, None] * t_hat) / np.maximum(nearest, 1e-12)[:, None]
+        grad = np.where(inside_disc[:, None], sign[:, None] * np.sign(a_b + 1e-300)[:, None] * n_b, far)
+        return phi, grad, p[rows, best]
+
+    def winding_number(self, x: np.ndarray, chunk: int = 512) -> np.ndarray:
+        """Generalised winding number (M,) of the oriented points around x (Barill et al. 2018, for clouds):
+        w(x) = Σ_j a_j n_j·(p_j − x) / (4π |p_j − x|³), a_j the area each sample stands for. ≈ 1 inside, ≈ 0
+        outside, robust where the discs of `signed_distance` spill
+        over a sharp edge (they read up to 4 mm of false penetration beside a box's edge)."""
+        x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
+        area = self._sample_area()
+        out = np.empty(len(x))
+        for start in range(0, len(x), chunk):
+            d = self.points[None] - x[start : start + chunk, None]  # (c, N, 3)
+            r = np.maximum(np.linalg.norm(d, axis=2), 0.5 * self.disc_radius)
+            out[start : start + chunk] = (np.einsum("cna,na->cn", d, self.normals) * area / r**3).sum(1)
+        return out / (4.0 * np.pi)
+
+    def _sample_area(self) -> np.ndarray:
+        """(N,) the surface area each sample stands for: π r_8² / 8, r_8 the distance to its 8th neighbour (a
+        local density estimate; unbiased for uniform random sampling, unlike the nearest-neighbour spacing)."""
+        if not hasattr(self, "_area"):
+            k = min(9, len(self.points))
+            r = self._tree.query(self.points, k=k)[0][:, -1]
+            self._area = np.pi * r**2 / (k - 1)
+        return self._area
+
+    def robust_signed_distance(self, x: np.ndarray) -> np.ndarray:
+        """Φ (M,) with the side from the winding number (inside where w > 1/2) and the magnitude of
+        `signed_distance`: what verification measures penetration with when no mesh is known."""
+        phi = self.signed_distance(x)[0]
+        inside = self.winding_number(x) > 0.5
+        return np.where(inside, -np.abs(phi), np.abs(phi))
+
+    def given_normal(self, x: np.ndarray) -> np.ndarray:
+        """The caller's outward normal (M, 3) of the sample nearest each x: what friction cones are built on
+        (a re-estimated or smoothed normal differed from the caller's by a median 19° on third-party objects)."""
+        return np.asarray(self.normals[self.nearest_index(x)])
 
     def surface_normal(self, x: np.ndarray) -> np.ndarray:
         """Smoothed outward normal (M, 3) at x: Gaussian-weighted mean of the 16 nearest samples' normals (σ = 2 ×

@@ -51,7 +51,6 @@ class RefineConfig:
             keeps the initial region (the paper's fixed s_q, s_f).
         stall_window, stall_tolerance: stop ("stalled") when the merit fell by less than this fraction over the
             last ``stall_window`` iterations (a local minimum: more iterations only cost time).
-        tip_sphere_allowance: overlap allowed for spheres on fingertip links (m).
         solver: ``"clarabel"`` (native, default) or ``"cvxpy"`` (the reference, slow).
         history: keep per-iteration records.
     """
@@ -75,7 +74,6 @@ class RefineConfig:
     trust_min_scale: float = 1.0 / 256
     stall_window: int = 8
     stall_tolerance: float = 0.02
-    tip_sphere_allowance: float = 1e-3
     solver: str = "clarabel"
     history: bool = False
 
@@ -183,9 +181,7 @@ def refine(
     step_fn = solve_step if cfg.solver == "clarabel" else solve_step_cvxpy
 
     def lin_at(pose: HandPose) -> Linearisation:
-        return linearise(
-            hand, pose, field_, task, mu, cfg.max_normal_force, tip_field, cfg.tip_sphere_allowance
-        )
+        return linearise(hand, pose, field_, task, mu, cfg.max_normal_force, tip_field)
 
     pose, lin = start, lin_at(start)
     value = merit(lin, cfg)
@@ -249,7 +245,8 @@ def refine(
             progress(it, cfg.max_iterations)
     if reason != "converged" and not reason.startswith("solver_failed") and _converged(lin, cfg):
         reason = "converged"
-    _, _, nearest = field_.signed_distance(lin.tips)
+    phi, grad, _ = field_.signed_distance(lin.tips)
+    nearest = lin.tips - phi[:, None] * grad
     return RefineResult(
         pose=pose,
         forces=lin.forces.copy(),

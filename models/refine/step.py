@@ -4,7 +4,7 @@
     s.t. f_i ∈ FC(μ) (exact SOC), f_i·(−n_i) ≤ f_max, [closure: Σ f_i·(−n_i) = 1, shares and narrowed cones
          as in `models.refine.forces`]
          q_min ≤ q + δq ≤ q_max,  |δq| ≤ s_q,  |δf| ≤ s_f
-         Φ(c_k) + ∇Φ(c_k)ᵀ J_k δq + σ_k ≥ ε_k − a_k           (active spheres; a_k: fingertip allowance)
+         Φ(c_k) − r_k + ∇Φ(c_k)ᵀ J_k δq + σ_k ≥ 0              (active guards: surface samples r = 0, spheres)
          ‖c_i − c_j‖ + u_ijᵀ (J_i − J_j) δq + σ_ij ≥ ε_i + ε_j   (active pairs, linearised Eq. 15)
 
 B = R Σ_i ([0; −[f_i*]× J_i / ρ] + G_i (−[f_i*]× [n_i]× ∂n_i/∂p J_i)) is ∂(R G(p) f*)/∂q: the contact moves
@@ -35,7 +35,7 @@ class StepParams:
         trust_force: bound on each |δf| component.
         tip_weight: λ on the squared tip distances (1/m²).
         penalty: ρ on the slacks (per metre of violation).
-        active_margin: spheres farther than this from the object are left out (m).
+        active_margin: guards farther than this from the object are left out (m).
         pair_margin: self-collision pairs with a larger gap are left out (m).
         regularisation: ε on (δq_j / s_j)².
     """
@@ -71,10 +71,10 @@ def _model_terms(lin: Linearisation, params: StepParams) -> dict[str, np.ndarray
     dforce = np.einsum("mab,mbn->man", turn, lin.tip_jac)
     g = grasp_maps(lin.tips, task.centre, task.length)
     bmat = bmat + task.projection @ np.einsum("mia,man->in", g, dforce)
-    tip_rows = np.einsum("ma,man->mn", lin.tip_grad, lin.tip_jac)
-    active = np.flatnonzero(lin.sph_phi - lin.sph_radius < params.active_margin)
-    sph_rows = np.einsum("sa,san->sn", lin.sph_grad[active], lin.sph_jac[active])
-    sph_rhs = lin.sph_phi[active] - lin.sph_radius[active] + lin.sph_allow[active]  # row·δq + σ ≥ −rhs
+    tip_rows = np.einsum("ma,man->mn", lin.tip_grad, lin.gap_jac)
+    active = np.flatnonzero(lin.clear < params.active_margin)
+    sph_rows = np.einsum("sa,san->sn", lin.clear_grad[active], lin.clear_jac[active])
+    sph_rhs = lin.clear[active]  # row·δq + σ ≥ −rhs
     if len(lin.pair_idx):
         gap = lin.pair_dist - lin.sph_radius[lin.pair_idx].sum(axis=1)
         pairs = np.flatnonzero(gap < params.pair_margin)

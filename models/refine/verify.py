@@ -1,12 +1,21 @@
-"""Verification of a hand pose with exact geometry (DESIGN.md §5), shared by refinement and the baseline.
+"""Verification of a hand pose on exact geometry (DESIGN.md §5), shared by refinement and the baseline.
 
-Criteria (all must hold): wrench residual ‖R Σ G_i f_i − τ‖² < 1e-6 with the optimal forces of Eq. (6-8) at the
-final fingertips (unit target wrench); every fingertip within 5 mm of the surface — a fingertip is its pad sphere
-nearest to touching (`models.refine.state.pad_spheres`), its distance is |Φ(centre) − radius| with the exact mesh
-signed distance when a mesh is known, else the point field (with a region mask: its contact point within 5 mm of an
-allowed point); hand–object penetration ≤ 1 mm and self-collision depth ≤ 1 mm, both measured on the hand's
-collision meshes with fcl (`models.geometry`); for force closure, Ferrari–Canny ε > 0 (parallel-jaw grippers:
-soft-finger pads).
+Nothing here is judged on the optimiser's proxies (collision spheres, the sampled contact surface's distances):
+
+- contacts: each fingertip's contact sample (`models.refine.contact`) gives the place; the contact point is the
+  object's surface point nearest to it — on the sent mesh (exact closest point) or, without a mesh, on the oriented
+  points' surface (`PointCloudField`, which keeps concavities; never a convex hull);
+- tip distance: the exact distance from each contact point to the posed fingertip body's collision mesh (trimesh
+  closest point): the contact lies on the object by construction and must lie on the finger within 5 mm; with a
+  region mask it must also lie within 5 mm of an allowed point;
+- friction cones and the wrench use the object's normals as given: the sent mesh's face normal at the contact,
+  else the caller's normal of the nearest point; forces solve Eq. (6-8) (normal components ≥ 0 by the cones),
+  residual ‖R Σ G_i f_i − τ‖² < 1e-6 for the unit target; for force closure Ferrari–Canny ε > 0 (parallel-jaw
+  grippers: soft-finger pads);
+- hand–object penetration ≤ 1 mm on the hand's collision meshes against the mesh (fcl + exact signed distance) or
+  the points' surface; self-collision depth ≤ 1 mm on the meshes (`models.geometry`).
+
+``geometry`` says which object surface was used: ``"mesh"`` or ``"points"``.
 """
 
 from __future__ import annotations
@@ -18,9 +27,10 @@ import numpy as np
 import torch
 
 from models.refine.closure import ferrari_canny
+from models.refine.contact import surface_contacts
 from models.refine.field import PointCloudField
 from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE, ForceSolution, solve_forces
-from models.refine.state import HandPose, contact_points, pad_candidates, select_pads
+from models.refine.state import HandPose
 from models.refine.wrench import WrenchTask
 
 RESIDUAL_SQ_TOL = 1e-6
@@ -43,6 +53,8 @@ class Verification:
     tips: np.ndarray
     contacts: np.ndarray
     normals: np.ndarray
+    geometry: str = "points"
+    finger_distances: np.ndarray = field(default_factory=lambda: np.zeros(0))
     failures: list[str] = field(default_factory=list)
 
     @property
@@ -88,41 +100,35 @@ def verify(
         cloud: the object's oriented points (and region mask, if any).
         task: the task the forces must produce.
         mu: friction coefficient.
-        mesh: the object's watertight trimesh (exact distances and penetration); None: convex hull of the points.
+        mesh: the object's watertight trimesh (exact distances and penetration); None: the points' surface.
         max_normal_force: force bound of Eq. (6-8).
         collisions: measure penetration and self-collision with fcl (False: skip, reported as 0).
     """
-    with torch.no_grad():
-        fk_tips = hand.fingertips(*pose.tensors())[0].numpy()
-        sph = hand.spheres(*pose.tensors(), jacobian=False)[0][0].numpy()
     region = cloud.region_distance if cloud.mask is not None else None
-    tips, _, tip_phi, _ = contact_points(hand, cloud, fk_tips, None, sph, None, region)
-    normals = cloud.surface_normal(tips)
-    sol, eps = contact_quality(hand, tips, normals, task, mu, max_normal_force)
-    if cloud.mask is not None:
-        tip_dist = cloud.region_point_distance(tips)
-    elif mesh is not None:
+    found = surface_contacts(hand, pose.tensors(), cloud, region, jacobian=False)
+    samples = found.points
+    if mesh is not None:
         import trimesh
 
-        radius = np.asarray(hand.sphere_radii, dtype=np.float64)
-        candidates = pad_candidates(hand)
-        gap = np.full(len(radius), np.inf)
-        if len(candidates):  # trimesh: positive inside
-            gap[candidates] = -trimesh.proximity.signed_distance(mesh, sph[candidates]) - radius[candidates]
-        idx = select_pads(hand, gap)
-        bare = idx < 0
-        tip_dist = np.abs(gap[np.maximum(idx, 0)])
-        if bare.any():
-            tip_dist[bare] = np.abs(trimesh.proximity.signed_distance(mesh, fk_tips[bare]))
+        contacts, _, faces = trimesh.proximity.closest_point(mesh, samples)
+        normals = np.asarray(mesh.face_normals)[faces]
     else:
-        tip_dist = np.abs(tip_phi)
-    _, _, contacts = cloud.signed_distance(tips)
+        contacts = found.object_points(cloud)
+        normals = cloud.given_normal(contacts)
+    contacts = np.asarray(contacts, dtype=np.float64)
+    finger = finger_surface_distances(hand, pose, contacts)
+    tip_dist = finger.copy()
+    if cloud.mask is not None:
+        tip_dist = np.maximum(tip_dist, cloud.region_point_distance(contacts))
+    sol, eps = contact_quality(hand, contacts, normals, task, mu, max_normal_force)
     pen = selfc = 0.0
     if collisions:
-        from models.geometry import ObjectGeometry, hand_object_penetration, hand_self_collision
+        from models.geometry import hand_field_penetration, hand_mesh_penetration, hand_self_collision
 
-        geom = ObjectGeometry.from_points(cloud.points, cloud.normals, mesh)
-        pen = hand_object_penetration(hand, geom, pose.palm_pos, pose.palm_quat, pose.q)
+        if mesh is not None:
+            pen = hand_mesh_penetration(hand, mesh, cloud.points, pose.palm_pos, pose.palm_quat, pose.q)
+        else:
+            pen = hand_field_penetration(hand, cloud, pose.palm_pos, pose.palm_quat, pose.q)
         selfc = hand_self_collision(hand, pose.palm_pos, pose.palm_quat, pose.q)
     failures = []
     if not sol.residual_norm**2 < RESIDUAL_SQ_TOL:
@@ -142,8 +148,33 @@ def verify(
         self_collision=float(selfc),
         epsilon=float(eps),
         forces=sol.forces,
-        tips=tips,
-        contacts=np.asarray(contacts),
-        normals=normals,
+        tips=samples,
+        contacts=contacts,
+        normals=np.asarray(normals, dtype=np.float64),
+        geometry="mesh" if mesh is not None else "points",
+        finger_distances=finger,
         failures=failures,
     )
+
+
+def finger_surface_distances(hand: Any, pose: HandPose, points: np.ndarray) -> np.ndarray:
+    """Exact distance (m,) from each contact point (m, 3) to its posed fingertip body's collision mesh."""
+    with torch.no_grad():
+        poses = hand.link_poses(*pose.tensors())
+    out = np.zeros(len(points))
+    for i, body in enumerate(hand.fingertip_bodies):
+        T = poses[body][0].numpy()
+        local = (points[i] - T[:3, 3]) @ T[:3, :3]
+        query = _proximity(hand, body)
+        out[i] = float(query.on_surface(local[None])[1][0]) if query is not None else np.inf
+    return out
+
+
+def _proximity(hand: Any, body: str) -> Any:
+    import trimesh
+
+    cache = hand.__dict__.setdefault("_proximity_cache", {})
+    if body not in cache:
+        mesh = hand.collision_meshes.get(body)
+        cache[body] = trimesh.proximity.ProximityQuery(mesh) if mesh is not None and len(mesh.faces) else None
+    return cache[body]

@@ -21,6 +21,7 @@ import trimesh
 
 from models.robots.description import HandLoadError, RobotDescription
 from models.robots.kinematics import KinematicTree, quat_exp, quat_multiply
+from models.robots.pads import ContactSurface, build_contact_surface
 from models.robots.spheres import fit_spheres, sample_surface
 
 SURFACE_POINTS = 1024
@@ -175,6 +176,38 @@ class Hand:
             mm.apply_transform(poses[link][0].numpy())
             meshes.append(mm)
         return sample_surface(meshes, SURFACE_POINTS)
+
+    @cached_property
+    def contact_surface(self) -> ContactSurface:
+        """Samples of the fingertip bodies' real meshes: contact candidates (pads) and their guards
+        (`models.robots.pads`)."""
+        meshes = {self.tree.body_names.index(name): mesh for name, mesh in self.collision_meshes.items()}
+        return build_contact_surface(meshes, self._tip_body, self._tip_local)
+
+    @property
+    def fingertip_bodies(self) -> list[str]:
+        """(m,) the body (link with fixed children merged) of each fingertip, keys of ``collision_meshes``."""
+        return [self.tree.body_names[b] for b in self._tip_body]
+
+    def surface_samples(
+        self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor, index: np.ndarray | None = None,
+        jacobian: bool = True,
+    ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:  # fmt: skip
+        """World positions (B, k, 3), outward normals (B, k, 3) and Jacobians (B, k, 3, 6 + D) (None without
+        ``jacobian``) of the contact-surface samples ``index`` (default: all K)."""
+        self._check(palm_pos, palm_quat, q)
+        surf = self.contact_surface
+        idx = np.arange(len(surf)) if index is None else np.asarray(index, dtype=np.int64)
+        T = self.tree.body_poses(palm_pos, palm_quat, q)
+        bodies = surf.body[idx]
+        Tb = T[:, torch.as_tensor(bodies, device=q.device)]
+        local = torch.as_tensor(surf.local[idx], dtype=q.dtype, device=q.device)
+        nrm = torch.as_tensor(surf.normals[idx], dtype=q.dtype, device=q.device)
+        pts = (Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]
+        normals = (Tb[..., :3, :3] @ nrm[..., None])[..., 0]
+        if not jacobian:
+            return pts, normals, None
+        return pts, normals, self.tree.point_jacobian(T, bodies, pts, palm_pos)
 
     @property
     def surface_points(self) -> np.ndarray:

@@ -245,10 +245,11 @@ class KinematicTree:
             axis_w = (T[..., :3, :3] @ c.axis[..., None])[..., 0]  # (B, nb, 3)
             o_w = T[..., :3, 3]
             rev, pris = c.rev[:, None], c.pris[:, None]
-            A = torch.einsum("jkd,bkc->bjdc", c.body_weights, axis_w * rev)  # (B, nb, D, 3)
-            C = torch.einsum(
-                "jkd,bkc->bjdc", c.body_weights, torch.linalg.cross(axis_w, o_w, dim=-1) * rev - axis_w * pris
-            )
+            nb = axis_w.shape[1]
+            # Σ_k W[j,k,d] x_k as one matrix product ((nb·D, nb) @ (B, nb, 3)): einsum took 2.5 ms a call here
+            W = c.body_weights.permute(0, 2, 1).reshape(nb * D, nb)
+            A = (W @ (axis_w * rev)).reshape(B, nb, D, 3)
+            C = (W @ (torch.linalg.cross(axis_w, o_w, dim=-1) * rev - axis_w * pris)).reshape(B, nb, D, 3)
             idx = torch.as_tensor(bodies, device=points.device)
             Ap, Cp = A[:, idx], C[:, idx]  # (B, n, D, 3)
             Jq = torch.linalg.cross(Ap, points[:, :, None, :].expand_as(Ap), dim=-1) - Cp

@@ -62,3 +62,51 @@ def test_region_distance_vanishes_on_the_region_and_is_continuous_across_samples
     assert value[-1] > 0.01 and np.all(np.diff(value[theta > 1.0]) > 0)
     np.testing.assert_allclose(np.linalg.norm(grad, axis=1), 1.0)
     assert grad[-1] @ np.array([-np.cos(1.3), 0.0, np.sin(1.3)]) < -0.9  # outside: it points away from the region
+
+
+def _concave_shapes():
+    import trimesh
+
+    cup = trimesh.creation.annulus(r_min=0.03, r_max=0.036, height=0.08)
+    torus = trimesh.creation.torus(0.04, 0.012)
+    return [("cup", cup), ("torus", torus), ("L", _l_prism())]
+
+
+def _l_prism():
+    """A watertight L-shaped part (8 × 7 cm, 2 cm arms, 3 cm thick), triangulated by hand."""
+    import trimesh
+
+    outline = np.array([[0, 0], [0.08, 0], [0.08, 0.02], [0.02, 0.02], [0.02, 0.07], [0, 0.07]])
+    verts = np.vstack([np.c_[outline, np.zeros(6)], np.c_[outline, np.full(6, 0.03)]])
+    cap = [[0, 1, 2], [0, 2, 3], [0, 3, 4], [0, 4, 5]]
+    faces = [f[::-1] for f in cap] + [[a + 6, b + 6, c + 6] for a, b, c in cap]
+    for i in range(6):
+        j = (i + 1) % 6
+        faces += [[i, j, j + 6], [i, j + 6, i + 6]]
+    mesh = trimesh.Trimesh(verts, np.asarray(faces))
+    trimesh.repair.fix_normals(mesh)
+    assert mesh.is_watertight and mesh.volume > 0
+    return mesh
+
+
+@pytest.mark.parametrize("index", [0, 1, 2])
+def test_points_surface_keeps_concavities(index):
+    """Inside a cup's opening, a torus' hole and an L's inner corner, points that are outside the exact mesh read
+    outside (a convex hull calls them 15-20 mm deep), and the depth error stays within the sample spacing."""
+    import trimesh
+
+    name, mesh = _concave_shapes()[index]
+    pts, faces = trimesh.sample.sample_surface(mesh, 4096, seed=0)
+    field = PointCloudField(pts, mesh.face_normals[faces])
+    rng = np.random.default_rng(0)
+    probe, _ = trimesh.sample.sample_surface(mesh, 2000, seed=1)
+    probe = probe + rng.normal(size=probe.shape) * 0.004
+    exact = -trimesh.proximity.signed_distance(mesh, probe)  # trimesh: positive inside
+    hull = -trimesh.proximity.signed_distance(mesh.convex_hull, probe)
+    phi = field.signed_distance(probe)[0]
+    concave = (exact > 0.003) & (hull < -0.003)  # outside the object, inside its hull
+    assert concave.sum() > 20, name
+    assert np.all(phi[concave] > 0), name
+    clear = np.abs(exact) > 0.0015
+    assert np.mean(np.sign(phi[clear]) == np.sign(exact[clear])) > 0.995, name
+    assert np.percentile(np.abs(phi - exact), 99) < 2.5e-3, name
