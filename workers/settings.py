@@ -34,7 +34,9 @@ class QueueSettings(BaseSettings):
     concurrency: int = Field(1, ge=0, le=64, description="Worker processes (embedded: spawned by the queue).")
     batch_size: int = Field(4, ge=1, le=64, description="Jobs a worker takes at once (network micro-batch).")
     max_wait_ms: float = Field(0.0, ge=0, le=10_000, description="How long a worker waits to fill a batch.")
-    visibility_timeout: float = Field(60.0, gt=0, description="A job silent this long is re-delivered.")
+    visibility_timeout: float = Field(
+        60.0, gt=0, description="A job silent this long is re-delivered (a dead worker's: after heartbeat_timeout)."
+    )
     heartbeat_interval: float = Field(2.0, gt=0, description="Seconds between worker heartbeats.")
     max_deliveries: int = Field(3, ge=1, le=100, description="Deliveries before a job goes to dead letters.")
     pipeline: str = Field("workers.models_pipeline:ModelsPipeline", description="module:attr of the Pipeline.")

@@ -71,7 +71,9 @@ class RedisWorker:
         self.info: WorkerPublic | None = None
         self._begin, self._finish = self.r.register_script(BEGIN), self.r.register_script(FINISH)
         self._last_claim = 0.0
+        self._last_orphans = 0.0
         self._last_tidy = time.monotonic()
+        self._healthy_since = time.monotonic()  # since the last Redis error: other workers had time to beat
 
     # ---- lifecycle -------------------------------------------------------------------------------------------
     def run(self) -> None:
@@ -95,6 +97,7 @@ class RedisWorker:
                 backoff = 0.1
             except RedisError as exc:
                 log.warning("redis error, retrying in %.1f s: %s", backoff, exc)
+                self._healthy_since = time.monotonic()
                 time.sleep(backoff)
                 backoff = min(backoff * 2, 5.0)
                 self._connect(quiet=True)
@@ -171,6 +174,26 @@ class RedisWorker:
             if name != self.id and int(consumer["pending"]) == 0 and int(consumer["idle"]) > idle_ms:
                 self.r.xgroup_delconsumer(self.keys.stream, GROUP, name)
 
+    def _orphan(self) -> list[tuple[bytes, dict[bytes, bytes]]]:
+        """One entry of a consumer whose heartbeat key has expired (its worker died): claimed within seconds of
+        the death instead of after the visibility timeout. Only once this worker has been talking to Redis for a
+        heartbeat timeout (after a Redis restart every worker's key is gone until its next beat), and only an
+        entry idle that long too (a live worker's heartbeat keeps resetting its entries' idle time)."""
+        timeout = self.settings.heartbeat_timeout
+        if time.monotonic() - self._healthy_since < timeout + self.settings.heartbeat_interval:
+            return []
+        for consumer in self.r.xinfo_consumers(self.keys.stream, GROUP):
+            name = consumer["name"].decode() if isinstance(consumer["name"], bytes) else consumer["name"]
+            if name == self.id or int(consumer["pending"]) == 0 or self.r.exists(self.keys.worker(name)):
+                continue
+            for pending in self.r.xpending_range(self.keys.stream, GROUP, "-", "+", 1, consumername=name):
+                claimed = self.r.xclaim(self.keys.stream, GROUP, self.id, int(timeout * 1000), [pending["message_id"]])
+                entries = [(e, f) for e, f in claimed if f]
+                if entries:
+                    log.info("re-delivering an entry of dead worker %s (no heartbeat)", name)
+                    return entries
+        return []
+
     def _take(self) -> list[tuple[bytes, dict[bytes, bytes]]]:
         size = self.settings.batch_size
         now = time.monotonic()
@@ -178,6 +201,13 @@ class RedisWorker:
             self._last_tidy = now
             with contextlib.suppress(ResponseError):
                 self._tidy()
+        if now - self._last_orphans > self.settings.heartbeat_interval:
+            self._last_orphans = now
+            with contextlib.suppress(ResponseError):
+                orphan = self._orphan()
+                if orphan:
+                    self._last_orphans = 0.0  # look for the next one at once
+                    return orphan
         if now - self._last_claim > min(1.0, self.settings.visibility_timeout / 4):
             self._last_claim = now
             idle = int(self.settings.visibility_timeout * 1000)

@@ -9,7 +9,7 @@ import time
 from fastapi import APIRouter, Query, Request
 from starlette.responses import Response
 
-from clients.schemas import BatchCreate, BatchItem, BatchPublic, JobPublic, JobState
+from clients.schemas import BatchCreate, BatchItem, BatchPublic, FieldError, JobPublic, JobState
 from service.deps import Authorized, CallerDep, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
 from service.errors import InvalidInput
 from service.negotiation import body_openapi, read_model, respond
@@ -41,6 +41,12 @@ async def create_batch(
     body = await read_model(request, BatchCreate, settings.max_body_bytes)
     if len(body.requests) > settings.max_batch_size:
         raise InvalidInput(f"requests: {len(body.requests)} requests, at most {settings.max_batch_size} per batch")
+    if queue.capacity is not None and len(body.requests) > queue.capacity:
+        raise InvalidInput(
+            f"requests: {len(body.requests)} requests can never fit: the queue holds at most {queue.capacity} jobs"
+            " (MANI_MAX_QUEUE); split the batch",
+            detail=[FieldError(field="requests", problem=f"more than the queue's capacity of {queue.capacity}")],
+        )
     for index, item in enumerate(body.requests):
         await robots.check(item, caller.tenant, field=f"requests.{index}.robot.name")
     batch_id = await queue.create_batch(body.requests, request_id=request_id, owner=caller.tenant)

@@ -121,3 +121,12 @@ def test_a_slow_body_is_cut_off() -> None:
                     with contextlib.suppress(TimeoutError):
                         head = sock.recv(4096)
                 assert head.startswith(b"HTTP/1.1 408"), (pause, head)
+
+
+def test_a_batch_larger_than_the_queue_is_422_not_429_for_ever() -> None:
+    queue = create_queue(None, redis_url=None, concurrency=0, max_queue=3)
+    with serving(create_app(Settings(rate_limit_per_s=0), queue=queue)) as base:
+        answer = httpx.post(f"{base}/v1/batches", json={"requests": [request_body("test_gripper")] * 4}, timeout=30)
+        assert answer.status_code == 422 and "at most 3 jobs" in answer.json()["error"], answer.text
+        fits = httpx.post(f"{base}/v1/batches", json={"requests": [request_body("test_gripper")] * 3}, timeout=30)
+        assert fits.status_code == 202, fits.text

@@ -5,6 +5,7 @@ Redis."""
 from __future__ import annotations
 
 import asyncio
+import os
 import signal
 import time
 from pathlib import Path
@@ -109,5 +110,32 @@ def test_a_hung_redis_answers_unavailable_within_the_timeout(tmp_path: Path) -> 
             finally:
                 server.resume()
                 await queue.close()
+
+    run(main())
+
+
+def test_a_dead_workers_job_is_redelivered_by_heartbeat_not_visibility_timeout(tmp_path: Path) -> None:
+    """kill -9 of the worker running a job, visibility timeout 60 s: a live worker sees the dead one's heartbeat
+    key expire (1 s here) and takes the job over within seconds."""
+
+    async def main() -> None:
+        with redis_server(tmp_path) as server:
+            queue = client(server.url)
+            await queue.start()
+            slow = {"stage_seconds": 0.2, "iterations": 10}
+            settings = {"heartbeat_interval": 0.2, "visibility_timeout": 60, "batch_size": 1}
+            with redis_workers(server.url, "mani:", 2, pipeline_options=slow, **settings):
+                try:
+                    await live_workers(queue, 2)
+                    [job_id] = await queue.submit([small_request(1, max_iterations=3)])
+                    job = await until(queue, job_id, running)
+                    victim = next(w for w in await queue.workers() if w.id == job.worker)
+                    os.kill(victim.pid, signal.SIGKILL)
+                    t0 = time.monotonic()
+                    job = await queue.wait(job_id, 30)
+                    assert job.state is JobState.SUCCEEDED and job.deliveries == 2 and job.worker != victim.id
+                    assert time.monotonic() - t0 < 10, "re-delivered by the visibility timeout, not the heartbeat"
+                finally:
+                    await queue.close()
 
     run(main())

@@ -100,6 +100,12 @@ class JobQueue(ABC):
             QueueFull: accepting them would exceed the queue's bound.
         """
 
+    @property
+    def capacity(self) -> int | None:
+        """The most jobs the queue ever holds (``max_queue``); None: unbounded. A batch larger than this can never
+        be accepted (the service answers 422 instead of 429 for ever)."""
+        return None
+
     async def room(self, count: int = 1) -> bool:
         """Whether ``count`` more jobs would fit now (a cheap admission check before a body is read; `submit`
         still decides). Default: always."""

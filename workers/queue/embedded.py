@@ -151,6 +151,10 @@ class EmbeddedQueue(JobQueue):
         self._wake()
         return ids
 
+    @property
+    def capacity(self) -> int | None:
+        return self.settings.max_queue
+
     async def room(self, count: int = 1) -> bool:
         with self._lock:
             return len(self._pending) + count <= self.settings.max_queue

@@ -187,6 +187,10 @@ class RedisQueue(JobQueue):
             raise QueueFull(f"queue holds {depth} jobs (max {self.settings.max_queue})", retry_after=1.0)
         return ids
 
+    @property
+    def capacity(self) -> int | None:
+        return self.settings.max_queue
+
     async def room(self, count: int = 1) -> bool:
         async with self._guard():
             return int(await self._client.xlen(self.keys.stream)) + count <= self.settings.max_queue
