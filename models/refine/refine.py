@@ -57,7 +57,7 @@ class RefineConfig:
 
     max_iterations: int = 100
     residual_tol: float = 1e-6
-    tip_tol: float = 3e-3
+    tip_tol: float = 2e-3
     region_point_tol: float = 4.5e-3
     penetration_tol: float = 1e-3
     max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE

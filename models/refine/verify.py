@@ -34,7 +34,7 @@ from models.refine.state import HandPose
 from models.refine.wrench import WrenchTask
 
 RESIDUAL_SQ_TOL = 1e-6
-TIP_TOL = 5e-3
+TIP_TOL = 4e-3
 PENETRATION_TOL = 1e-3
 SELF_COLLISION_TOL = 1e-3
 PAD_TORSION = 0.005  # m: soft-finger torsional coefficient used for two-fingertip (parallel-jaw) hands

@@ -95,6 +95,12 @@ class Hand:
             self.collision_meshes[tree.body_names[b]] = cast(trimesh.Trimesh, trimesh.util.concatenate(meshes))
         if not self.collision_meshes:
             raise HandLoadError("the hand has no collision geometry (user URDFs need box/sphere/cylinder shapes)")
+        # each fingertip link's own geometry, in its body's frame: the pad (a merged parent's geometry is not)
+        self._tip_link_meshes: list[trimesh.Trimesh | None] = []
+        for link in self.fingertip_links:
+            _, T = tree.link_body[link]
+            own = [m.copy().apply_transform(T) for m in desc.links.get(link, [])]
+            self._tip_link_meshes.append(cast(trimesh.Trimesh, trimesh.util.concatenate(own)) if own else None)
         # fingertip points in their bodies
         tip_body, tip_local = [], []
         for link, off in zip(self.fingertip_links, self.tip_offsets, strict=True):
@@ -182,7 +188,7 @@ class Hand:
         """Samples of the fingertip bodies' real meshes: contact candidates (pads) and their guards
         (`models.robots.pads`)."""
         meshes = {self.tree.body_names.index(name): mesh for name, mesh in self.collision_meshes.items()}
-        return build_contact_surface(meshes, self._tip_body, self._tip_local)
+        return build_contact_surface(meshes, self._tip_body, self._tip_local, pad_meshes=self._tip_link_meshes)
 
     @property
     def fingertip_bodies(self) -> list[str]:

@@ -108,6 +108,7 @@ def _thin(points: np.ndarray, spacing: float) -> np.ndarray:
 def build_contact_surface(
     body_meshes: dict[int, trimesh.Trimesh], tip_body: np.ndarray, tip_local: np.ndarray,
     spacing: float = SAMPLE_SPACING, pad_radius: float = PAD_RADIUS,
+    pad_meshes: list[trimesh.Trimesh | None] | None = None,
 ) -> ContactSurface:  # fmt: skip
     """Sample every fingertip body (see module doc).
 
@@ -115,6 +116,9 @@ def build_contact_surface(
         body_meshes: body index -> mesh in that body's frame, for (at least) the fingertip bodies.
         tip_body: (m,) body index of each fingertip; tip_local: (m, 3) its tip point in the body frame.
         spacing: sample spacing (m). pad_radius: pad extent around the tip point (m).
+        pad_meshes: per fingertip, the fingertip link's own geometry in the body frame (None: the whole body may
+            carry the pad). A body merges fixed children into its link: Allegro's fingertip link is the 12 mm
+            tip sphere on the distal phalanx, and a contact on the phalanx is not on the fingertip.
     """
     body, local, normals, owner, pad, reach = [], [], [], [], [], []
     centres, radii = [], []
@@ -125,6 +129,11 @@ def build_contact_surface(
         else:
             pts, nrm = sample_evenly(mesh, spacing)
         near = np.linalg.norm(pts - tip, axis=1) <= pad_radius
+        own = pad_meshes[i] if pad_meshes is not None else None
+        if own is not None and len(own.faces):
+            on_link = np.abs(trimesh.proximity.ProximityQuery(own).signed_distance(pts)) <= 0.25 * spacing
+            if (near & on_link).any():
+                near &= on_link
         if not near.any():  # a tip point far from its mesh: the nearest samples are the pad
             near = np.linalg.norm(pts - tip, axis=1) <= np.linalg.norm(pts - tip, axis=1).min() + pad_radius
         body.append(np.full(len(pts), int(b)))
