@@ -89,8 +89,9 @@ tilted by a few degrees dips its edge into the object), and the verification's c
 
 def fit_pad(hand, fingertip: int, tip: np.ndarray) -> tuple[np.ndarray, float]:  # type: ignore[no-untyped-def]
     """The sphere (centre (3,) body frame, radius) fitted (algebraic least squares) to fingertip ``fingertip``'s
-    surface samples within ``PAD_FIT_RADIUS`` of the sample nearest its tip point; where the surface there is flat
-    (radius > ``PAD_FIT_MAX_RADIUS``) or no sphere fits (rms > ``PAD_FIT_MAX_RMS``), the sphere of radius ``PAD_FLAT_RADIUS`` tangent to the surface at the sample nearest the tip point."""
+    surface samples within ``PAD_FIT_RADIUS`` of the sample nearest its tip point. Where the surface there is flat
+    (radius > ``PAD_FIT_MAX_RADIUS``) or no sphere fits (rms > ``PAD_FIT_MAX_RMS``): the sphere of radius
+    ``PAD_FLAT_RADIUS`` tangent to the surface at the sample nearest the tip point."""
     surf = hand.contact_surface
     mine = np.flatnonzero(surf.fingertip == fingertip)
     pts = surf.local[mine]
