@@ -50,10 +50,11 @@ def audit_service(
     points, normals = obj.sample(num_points, seed)
     kind = TaskInput("force_closure") if task == "closure" else TaskInput(
         "delta_pose", translation=LIFT, rotation=np.array([1.0, 0.0, 0.0, 0.0]))  # fmt: skip
-    extra = {"mesh_vertices": np.asarray(obj.mesh.vertices), "mesh_faces": np.asarray(obj.mesh.faces)}
     inp = SynthesisInput(
         points=points, normals=normals, hand=get_hand(hand_name), task=kind, method=method,
-        num_proposals=proposals, seed=seed, properties={"friction": mu}, **(extra if send_mesh else {}),
+        num_proposals=proposals, seed=seed, properties={"friction": mu},
+        mesh_vertices=np.asarray(obj.mesh.vertices) if send_mesh else None,
+        mesh_faces=np.asarray(obj.mesh.faces) if send_mesh else None,
     )  # fmt: skip
     out = run_pipeline(inp)
     target = None if task == "closure" else np.r_[LIFT / np.linalg.norm(LIFT), np.zeros(3)]
