@@ -21,11 +21,14 @@ import mujoco
 import numpy as np
 import trimesh
 from numpy.typing import ArrayLike
+from scipy.spatial import cKDTree
 
+from models.audit.inside import InsideTest
 from models.audit.urdf import GeometryElement, UrdfModel
 
 SECTIONS = 96
 SPHERE_SUBDIVISIONS = 4
+MAX_VERTICES_KEPT = 3000
 
 
 def pose_matrix(position: ArrayLike, quaternion: ArrayLike) -> np.ndarray:
@@ -119,6 +122,7 @@ class LinkGeometry:
     solids: list[trimesh.Trimesh] = field(init=False)
     hulled: list[bool] = field(init=False)
     _samples: dict[tuple[float, int], np.ndarray] = field(init=False, default_factory=dict, repr=False)
+    _trees: dict[tuple[float, int], list[cKDTree]] = field(init=False, default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         self.hulled = [not p.is_watertight for p in self.pieces]
@@ -130,12 +134,17 @@ class LinkGeometry:
         return stack_meshes(self.pieces) if len(self.pieces) > 1 else self.pieces[0]
 
     @functools.cached_property
+    def inside_tests(self) -> list[InsideTest]:
+        """Point-in-solid tests, one per solid (built on first use)."""
+        return [InsideTest(solid) for solid in self.solids]
+
+    @functools.cached_property
     def area(self) -> float:
         """Total surface area of the pieces (m²)."""
         return float(sum(p.area for p in self.pieces))
 
     def surface_points(self, spacing: float, seed: int = 0) -> np.ndarray:
-        """Dense points on the link's surface: its vertices and area-uniform samples (cached).
+        """Dense points on the link's surface: area-uniform samples and, for coarse meshes, the vertices (cached).
 
         Args:
             spacing: about one sample per ``spacing²`` of area (between 256 and 20000 samples).
@@ -146,10 +155,25 @@ class LinkGeometry:
         """
         key = (spacing, seed)
         if key not in self._samples:
-            count = int(np.clip(self.area / spacing**2, 256, 20000))
-            samples, _ = trimesh.sample.sample_surface(self.mesh, count, seed=seed)
-            self._samples[key] = np.concatenate([np.asarray(self.mesh.vertices), samples], axis=0)
+            self._samples[key] = _dense_points(self.mesh, spacing, seed)
         return self._samples[key]
+
+    def solid_trees(self, spacing: float, seed: int = 0) -> list[cKDTree]:
+        """k-d trees of dense points on each solid's surface (cached), for depth bounds."""
+        key = (spacing, seed)
+        if key not in self._trees:
+            self._trees[key] = [cKDTree(_dense_points(s, spacing, seed)) for s in self.solids]
+        return self._trees[key]
+
+
+def _dense_points(mesh: trimesh.Trimesh, spacing: float, seed: int) -> np.ndarray:
+    """Area-uniform samples about one per ``spacing²`` (256 to 20000), plus the vertices of coarse meshes
+    (corners and edges of primitives; fine meshes' vertices are dense already)."""
+    count = int(np.clip(mesh.area / spacing**2, 256, 20000))
+    samples, _ = trimesh.sample.sample_surface(mesh, count, seed=seed)
+    if len(mesh.vertices) > MAX_VERTICES_KEPT:
+        return np.asarray(samples)
+    return np.concatenate([np.asarray(mesh.vertices), samples], axis=0)
 
 
 def _choose(collision: list, visual: list, prefer: str) -> tuple[str, list]:

@@ -1,14 +1,19 @@
 """Hand–object penetration on exact geometry, measured both ways.
 
 1. Hand in object: dense points of every posed link surface (its vertices and samples about one per
-   ``spacing²``) are tested inside the object mesh (``trimesh`` ray-parity ``contains``, exact for a watertight
-   object); the depth of an inside point is its distance to the object surface.
+   ``spacing²``) are tested inside the object mesh (ray parity, :mod:`models.audit.inside`: exact for a
+   watertight object); the depth of an inside point is its distance to the object surface.
 2. Object in hand: object surface samples are tested inside each link's solids (the watertight pieces
    themselves, convex hulls of the others, see :class:`models.audit.geometry.LinkGeometry`); the depth of an
    inside point is its distance to that solid's surface.
 
 Only links whose posed bounding box comes within ``margin`` of the object's are tested (others cannot touch it).
 Queries run in each link's own frame (points are moved by ``inv(world_T_link)``; distances are rigid-invariant).
+
+Exact point-to-mesh distances are computed for the inside points that can be the deepest: the distance to the
+nearest surface sample bounds each point's true depth from above, and from below up to the samples' covering
+radius (taken as ``2 · spacing``), so only points within that slack of the largest bound are measured exactly
+(at most :data:`MAX_EXACT` of them, the largest bounds first).
 """
 
 from __future__ import annotations
@@ -17,8 +22,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import trimesh
+from scipy.spatial import cKDTree
 
 from models.audit.geometry import LinkGeometry
+from models.audit.inside import InsideTest
+
+
+MAX_EXACT = 2000
 
 
 @dataclass
@@ -67,6 +77,16 @@ def _to_local(points: np.ndarray, T: np.ndarray) -> np.ndarray:
     return (points - T[:3, 3]) @ T[:3, :3]
 
 
+def _depths(points: np.ndarray, tree: cKDTree, surface: trimesh.Trimesh, slack: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact depths of the inside ``points`` (N, 3) that can be the deepest, and their indices."""
+    bound, _ = tree.query(points)
+    keep = np.flatnonzero(bound >= bound.max() - slack)
+    if len(keep) > MAX_EXACT:
+        keep = keep[np.argsort(bound[keep])[-MAX_EXACT:]]
+    _, dist, _ = trimesh.proximity.closest_point(surface, points[keep])
+    return np.asarray(dist), keep
+
+
 def measure_penetration(
     links: dict[str, LinkGeometry],
     poses: dict[str, np.ndarray],
@@ -90,10 +110,13 @@ def measure_penetration(
         The penetration found.
     """
     out = PenetrationAudit()
+    obj_inside = InsideTest(object_mesh)
     obj_box = np.asarray(object_mesh.bounds, dtype=np.float64)
     count = int(np.clip(object_mesh.area / spacing**2, 1000, 60000))
     obj_samples, _ = trimesh.sample.sample_surface(object_mesh, count, seed=seed)
     obj_points = np.concatenate([np.asarray(object_mesh.vertices), obj_samples], axis=0)
+    obj_tree = cKDTree(obj_points)
+    slack = 2 * spacing
     for name, geom in links.items():
         T = poses[name]
         box = _world_box(np.asarray(geom.mesh.bounds, dtype=np.float64), T)
@@ -108,19 +131,20 @@ def measure_penetration(
         world = local @ T[:3, :3].T + T[:3, 3]
         world = world[_within(world, obj_box, margin)]
         if len(world):
-            inside = object_mesh.contains(world)
+            inside = obj_inside.contains(world)
             if inside.any():
                 pts = world[inside]
-                _, dist, _ = trimesh.proximity.closest_point(object_mesh, pts)
-                out.record(name, np.asarray(dist), pts, "hand_in_object")
+                depth, keep = _depths(pts, obj_tree, object_mesh, slack)
+                out.record(name, depth, pts[keep], "hand_in_object")
         # 2. the object's surface inside the link's solids
         near = obj_points[_within(obj_points, box, margin)]
         if not len(near):
             continue
         near_local = _to_local(near, T)
-        for solid in geom.solids:
-            inside = solid.contains(near_local)
+        trees = geom.solid_trees(spacing, seed)
+        for solid, test, tree in zip(geom.solids, geom.inside_tests, trees, strict=True):
+            inside = test.contains(near_local)
             if inside.any():
-                _, dist, _ = trimesh.proximity.closest_point(solid, near_local[inside])
-                out.record(name, np.asarray(dist), near[inside], "object_in_link")
+                depth, keep = _depths(near_local[inside], tree, solid, slack)
+                out.record(name, depth, near[inside][keep], "object_in_link")
     return out
