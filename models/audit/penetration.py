@@ -27,7 +27,6 @@ from scipy.spatial import cKDTree
 from models.audit.geometry import LinkGeometry
 from models.audit.inside import InsideTest
 
-
 MAX_EXACT = 2000
 
 

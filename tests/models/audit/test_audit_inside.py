@@ -25,14 +25,15 @@ def test_box_and_l_shape_match_their_analytic_interiors() -> None:
     clear = gap > 1e-9  # points on the surface may go either way
     np.testing.assert_array_equal(InsideTest(box).contains(pts)[clear], truth[clear])
     shape = concave_test_shapes()["l_shape"]  # 8 × 6 cm, arms 2 cm thick, 3 cm deep, centred
-    x, y, z = (_queries(shape.bounds) + [0.04, 0.03, 0.015]).T
+    offset = np.array([0.04, 0.03, 0.015])
+    x, y, z = (_queries(shape.bounds) + offset).T
     inside_xy = ((x > 0) & (x < 0.08) & (y > 0) & (y < 0.02)) | ((x > 0) & (x < 0.02) & (y > 0) & (y < 0.06))
     truth = inside_xy & (z > 0) & (z < 0.03)
     on = np.zeros_like(x, dtype=bool)
     for coord, planes in ((x, (0, 0.02, 0.08)), (y, (0, 0.02, 0.06)), (z, (0, 0.03))):
         for c in planes:
             on |= np.abs(coord - c) < 1e-9
-    got = InsideTest(shape).contains(np.c_[x, y, z] - [0.04, 0.03, 0.015])
+    got = InsideTest(shape).contains(np.c_[x, y, z] - offset)
     np.testing.assert_array_equal(got[~on], truth[~on])
 
 
