@@ -2,10 +2,12 @@
 
 Criteria (each reported with its measured values; ``passed`` is true when none fails):
 
-* joints: the reported joint names are the hand's, reported coupled joints agree with the description's
-  couplings, every moving joint below the palm is given or derivable, all within their limits (1e-4 slack);
+* pose: finite values, a unit palm quaternion (±1e-3); the reported joint names are the hand's, reported coupled
+  joints agree with the description's couplings, every moving joint below the palm is given or derivable, all
+  within their limits (1e-4 slack);
 * (a) contact: each contact point lies within ``contact_tol`` of the posed surface of its fingertip link
-  (exact point-to-mesh distance) and within ``contact_tol`` of the object's surface;
+  (exact point-to-mesh distance; computed in the link's frame, the point moved by ``inv(world_T_link)``, which
+  equals the distance to the posed mesh) and within ``contact_tol`` of the object's surface;
 * (b) penetration: hand and object overlap by at most ``penetration_tol``, measured both ways on the exact
   meshes (:mod:`models.audit.penetration`);
 * (c) friction: each force pushes into the object (normal component ``f·(−n) ≥ 0``) with
@@ -37,6 +39,7 @@ from models.audit.wrench import closure_epsilon, contact_wrenches, cosine, frict
 
 FRICTION_SLACK = 1e-6
 LIMIT_TOL = 1e-4
+QUATERNION_TOL = 1e-3
 
 
 @dataclass
@@ -230,6 +233,11 @@ def audit_grasp(
     if len(forces) != len(points) or len(grasp.fingertips) != len(points):
         msg = f"{len(points)} contact points, {len(forces)} forces, {len(grasp.fingertips)} fingertips"
         return AuditReport(False, [msg])
+    arrays = (points, forces, grasp.palm_position, grasp.palm_quaternion, grasp.joint_values)
+    if not all(np.all(np.isfinite(a)) for a in arrays) or grasp.palm_quaternion.shape != (4,):
+        return AuditReport(False, ["non-finite values or a malformed palm pose in the proposal"])
+    if abs(float(np.linalg.norm(grasp.palm_quaternion)) - 1.0) > QUATERNION_TOL:
+        failures.append(f"palm quaternion is not a unit quaternion (norm {np.linalg.norm(grasp.palm_quaternion):.6g})")
     unknown = sorted({f for f in grasp.fingertips if f not in hand.links})
     if unknown:
         failures.append(f"fingertip links without geometry in {hand.name}: {unknown}")

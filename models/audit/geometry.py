@@ -2,9 +2,10 @@
 
 A link's geometry is the list of its pieces (one per ``<collision>``/``<visual>`` element or MJCF geom) in the
 link frame, with the source used: ``"collision"`` when the link has collision elements (URDF ``<collision>``;
-MJCF geoms with ``contype | conaffinity ≠ 0``), else ``"visual"`` (URDF ``<visual>``; MJCF visual-only geoms),
-unless a source is forced. Primitives are tessellated finely (spheres: icospheres of 5120 faces; cylinders and
-capsules: 96 sections), which puts their surfaces within about 0.05 mm of the exact shapes.
+MJCF geoms with ``contype | conaffinity ≠ 0``), else ``"visual"`` (URDF ``<visual>``; MJCF visual-only geoms);
+``prefer="visual"`` reverses the preference (visual where the link has it, else collision). Primitives are
+tessellated finely (spheres: icospheres of 5120 faces; cylinders and capsules: 96 sections), which puts their
+surfaces within about 0.05 mm of the exact shapes.
 
 Inside tests use each piece as a solid: watertight pieces as they are, others by their convex hull (flagged in
 :attr:`LinkGeometry.hulled`; the inside test is then conservative: it may see penetration in a concavity).
@@ -177,10 +178,11 @@ def _dense_points(mesh: trimesh.Trimesh, spacing: float, seed: int) -> np.ndarra
 
 
 def _choose(collision: list, visual: list, prefer: str) -> tuple[str, list]:
-    if prefer == "collision":
-        return "collision", collision
+    """The preferred source where the link has it, else the other one."""
+    if prefer not in ("auto", "collision", "visual"):
+        raise ValueError(f"prefer must be 'auto', 'collision' or 'visual', not {prefer!r}")
     if prefer == "visual":
-        return "visual", visual
+        return ("visual", visual) if visual else ("collision", collision)
     return ("collision", collision) if collision else ("visual", visual)
 
 
@@ -193,7 +195,8 @@ def urdf_link_geometry(
         model: the parsed URDF.
         link: the link.
         resolve: mesh ``filename`` as written in the URDF → file path.
-        prefer: ``"auto"`` (collision elements if any, else visual), ``"collision"`` or ``"visual"``.
+        prefer: ``"auto"`` or ``"collision"`` (collision elements if any, else visual), or ``"visual"``
+            (visual elements if any, else collision).
 
     Returns:
         The link's geometry, or ``None`` when the chosen source has no element.

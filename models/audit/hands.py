@@ -119,8 +119,8 @@ class AuditHand:
 
         Args:
             spec: the hand.
-            prefer: geometry source, ``"auto"`` (collision where the link has it, else visual), ``"collision"``
-                or ``"visual"``.
+            prefer: geometry source, ``"auto"``/``"collision"`` (collision where the link has it, else visual)
+                or ``"visual"`` (visual where the link has it, else collision).
         """
         self.spec = spec
         self.kinematics: Kinematics

@@ -230,3 +230,31 @@ def test_fingertip_surface_distance_matches_the_description(
         assert report.finger_distances[0] == pytest.approx(gap, abs=5e-5)
         assert report.passed is (gap < 5e-3), report.failures
         assert "no object mesh: penetration not measured" in report.notes
+
+
+def test_malformed_proposals_fail() -> None:
+    half = PAD_FACE
+    grasp = _panda_grasp(half)
+    fields = {**grasp.__dict__, "palm_quaternion": [2.0, 0.0, 0.0, 0.0]}
+    report = audit_grasp("panda_gripper", AuditedGrasp.from_mapping(fields), _box(half), mu=0.5)
+    assert any("not a unit quaternion" in f for f in report.failures)
+    fields = {**grasp.__dict__, "forces": [[np.nan, 0, 0], [0, 1, 0]], "extra": 1}
+    report = audit_grasp("panda_gripper", AuditedGrasp.from_mapping(fields), _box(half), mu=0.5)
+    assert not report.passed and "non-finite" in report.failures[0]
+    ok = audit_grasp("panda_gripper", AuditedGrasp.from_mapping(grasp.__dict__), _box(half), mu=0.5)
+    assert ok.passed, ok.failures
+
+
+def test_visual_geometry_can_be_preferred() -> None:
+    collision, visual = load_hand("allegro"), load_hand("allegro", prefer="visual")
+    tip = "link_3.0_tip"
+    assert collision.links[tip].source == "collision" and visual.links[tip].source == "visual"
+    assert len(collision.links[tip].pieces) == 1 and len(visual.links[tip].mesh.faces) == 1438  # link_3.0_tip.STL
+    # the URDF's collision sphere (r 12 mm, on the link origin) and the STL (its base is cut flat at z = -11 mm)
+    point = np.array([[0.0, 0.0, -0.0125]])
+    d_sphere = trimesh.proximity.closest_point(collision.links[tip].mesh, point)[1][0]
+    assert d_sphere == pytest.approx(5e-4, abs=5e-5)
+    assert trimesh.proximity.closest_point(visual.links[tip].mesh, point)[1][0] == pytest.approx(1.5e-3, abs=1e-6)
+    assert load_hand("barrett", prefer="visual").links["bh_f1_distal"].source == "collision"  # no visuals there
+    with pytest.raises(ValueError, match="prefer"):
+        load_hand("kinova3f", prefer="mesh")
