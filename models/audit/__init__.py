@@ -7,11 +7,13 @@ FK rooted at the palm with the descriptions' own joint couplings, :mod:`.geometr
 trimesh and MuJoCo only. :mod:`.objects` provides third-party object meshes and concave test shapes.
 """
 
-from models.audit.check import AuditedGrasp, AuditReport, ContactAudit, audit_grasp, audit_many
+from models.audit.check import audit_grasp, audit_many
 from models.audit.geometry import LinkGeometry, pose_matrix
 from models.audit.hands import AuditHand, HandSpec, hand_specs, load_hand
+from models.audit.inside import InsideTest
 from models.audit.objects import ThirdPartyObject, concave_test_shapes, sample_surface, third_party_objects
 from models.audit.penetration import PenetrationAudit, measure_penetration
+from models.audit.report import AuditedGrasp, AuditReport, ContactAudit
 from models.audit.wrench import closure_epsilon, contact_wrenches, friction_components, in_cone, primitive_wrenches
 
 __all__ = [
@@ -20,6 +22,7 @@ __all__ = [
     "AuditedGrasp",
     "ContactAudit",
     "HandSpec",
+    "InsideTest",
     "LinkGeometry",
     "PenetrationAudit",
     "ThirdPartyObject",
