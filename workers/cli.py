@@ -64,7 +64,24 @@ def main(args: argparse.Namespace) -> int:
         )
         return 2
     setup_logging(settings.log_level, f"supervisor-{os.getpid()}")
+    warn_without_persistence(settings.redis_url, settings.redis_timeout)
     return supervise(settings.model_dump_json(), max(1, settings.concurrency))
+
+
+def warn_without_persistence(url: str, timeout: float) -> None:
+    """Log a warning when the Redis at ``url`` would lose the queue on a restart (no AOF, no snapshots)."""
+    import redis
+
+    from workers.queue.persistence import check_persistence
+    from workers.queue.redis import _safe_url
+
+    client = redis.Redis.from_url(url, socket_connect_timeout=timeout, socket_timeout=timeout)
+    try:
+        check_persistence(client, _safe_url(url))
+    except redis.RedisError as exc:  # not up yet: the workers wait for it
+        log.warning("Redis at %s does not answer yet: %s", _safe_url(url), exc)
+    finally:
+        client.close()
 
 
 def supervise(settings_json: str, concurrency: int) -> int:

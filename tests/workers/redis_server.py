@@ -28,7 +28,7 @@ def free_port() -> int:
 class RedisServer:
     """One redis-server process at a time, restartable on the same port and data directory."""
 
-    def __init__(self, directory: Path, *, appendonly: bool = False) -> None:
+    def __init__(self, directory: Path, *, appendonly: bool = False, extra: tuple[str, ...] = ()) -> None:
         binary = shutil.which("redis-server")
         if binary is None:
             pytest.skip("redis-server is not installed")
@@ -36,6 +36,7 @@ class RedisServer:
         self.url = f"redis://127.0.0.1:{self.port}/0"
         self.cmd = [binary, "--port", str(self.port), "--bind", "127.0.0.1", "--dir", str(directory), "--save", ""]
         self.cmd += ["--appendonly", "yes", "--appendfsync", "always"] if appendonly else ["--appendonly", "no"]
+        self.cmd += list(extra)
         self.proc: subprocess.Popen[bytes] | None = None
 
     def start(self) -> None:
@@ -74,9 +75,9 @@ class RedisServer:
 
 
 @contextlib.contextmanager
-def redis_server(directory: Path, *, appendonly: bool = False) -> Iterator[RedisServer]:
-    """A started `RedisServer`, killed at the end."""
-    server = RedisServer(directory, appendonly=appendonly)
+def redis_server(directory: Path, *, appendonly: bool = False, extra: tuple[str, ...] = ()) -> Iterator[RedisServer]:
+    """A started `RedisServer` (``extra``: more redis-server arguments), killed at the end."""
+    server = RedisServer(directory, appendonly=appendonly, extra=extra)
     server.start()
     try:
         yield server

@@ -1,4 +1,4 @@
-"""Redis Streams backend: durable, scale-out. The service enqueues; `mani worker` processes anywhere consume.
+"""Redis Streams backend: scale-out, as durable as the Redis behind it (AOF: see workers/README.md). The service enqueues; `mani worker` processes anywhere consume.
 
 One stream with one consumer group; a job's record is a hash, its result a separate msgpack key with a TTL (a
 finished job whose result key is gone reports "expired"); see `workers.queue.redis_lua` for the key layout and
@@ -40,6 +40,7 @@ from clients.schemas import (
     WorkerPublic,
 )
 from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
+from workers.queue.persistence import check_persistence_async
 from workers.queue.records import CANCELLED, DEADLINE_EXCEEDED, new_id, result_expired_error, scoped_robot
 from workers.queue.redis_lua import CANCEL, GROUP, SUBMIT, Keys
 from workers.settings import QueueSettings
@@ -53,6 +54,12 @@ async def ensure_group(client: Any, keys: Keys) -> None:
     """Create the stream and its consumer group if missing (from the start, so no queued job is skipped)."""
     with contextlib.suppress(ResponseError):  # BUSYGROUP: exists already
         await client.xgroup_create(keys.stream, GROUP, id="0", mkstream=True)
+
+
+def _safe_url(url: str) -> str:
+    """The URL without its password (for logs)."""
+    head, sep, tail = url.rpartition("@")
+    return f"{head.split('://')[0]}://***@{tail}" if sep else url
 
 
 def _s(value: bytes | None) -> str | None:
@@ -96,10 +103,12 @@ class RedisQueue(JobQueue):
         self._client: Any = None
         self._listener: asyncio.Task[None] | None = None
         self._waiters: dict[str, list[asyncio.Future[None]]] = {}
+        self._closing = False
 
     # ---- lifecycle -------------------------------------------------------------------------------------------
     async def start(self) -> None:
         assert self.settings.redis_url is not None
+        self._closing = False
         limit = self.settings.redis_timeout
         pool = aioredis.BlockingConnectionPool.from_url(
             self.settings.redis_url, max_connections=64, timeout=limit,
@@ -111,15 +120,17 @@ class RedisQueue(JobQueue):
         with contextlib.suppress(RedisError, OSError):
             async with asyncio.timeout(OP_ROUNDS * limit):
                 await ensure_group(self._client, self.keys)
+                await check_persistence_async(self._client, _safe_url(self.settings.redis_url))
         self._submit = self._client.register_script(SUBMIT)
         self._cancel = self._client.register_script(CANCEL)
         self._listener = asyncio.create_task(self._listen(), name="mani-redis-queue-listener")
 
     async def close(self) -> None:
+        self._closing = True
         if self._listener is not None:
-            self._listener.cancel()
-            with contextlib.suppress(asyncio.CancelledError, RedisError):
-                await self._listener
+            self._listener.cancel()  # redis-py may swallow one cancellation inside a read: the flag ends the loop
+            await asyncio.wait({self._listener}, timeout=OP_ROUNDS * self.settings.redis_timeout + 1.0)
+            self._listener = None
         if self._client is not None:
             await self._client.aclose()
             self._client = None
@@ -133,11 +144,11 @@ class RedisQueue(JobQueue):
 
     async def _listen(self) -> None:
         """Wake waiters when the workers announce finished jobs; reconnects after Redis goes away."""
-        while True:
+        while not self._closing:
             pubsub = self._client.pubsub(ignore_subscribe_messages=True)
             try:
                 await pubsub.subscribe(self.keys.done)
-                while True:
+                while not self._closing:
                     message = await pubsub.get_message(ignore_subscribe_messages=True, timeout=1.0)
                     if message is None:
                         continue
