@@ -7,9 +7,10 @@ Factory::
 ``settings`` is a `QueueSettings`, any object with matching attributes (e.g. the service's own settings: the
 fields it shares with `QueueSettings`, such as ``redis_url``, are taken), a Redis URL string, or None (read
 ``MANI_*`` from the environment). ``options`` override single fields (``concurrency=2``, ``max_queue=100``,
-``pipeline="workers.testing:StagedPipeline"``, ...). With a ``redis_url`` the answer is a `RedisQueue` (durable with AOF,
-scale-out: run `mani worker` processes against the same URL and ``queue_prefix``); without one an `EmbeddedQueue`
-that spawns ``concurrency`` worker processes in `start()` (non-durable: jobs and results live in memory).
+``pipeline="workers.testing:StagedPipeline"``, ...). With a ``redis_url`` the answer is a `RedisQueue` (durable
+with AOF, scale-out: run `mani worker` processes against the same URL and ``queue_prefix``); without one an
+`EmbeddedQueue` that spawns ``concurrency`` worker processes in `start()` (non-durable: jobs and results live in
+memory).
 Call ``await queue.start()`` before use and ``await queue.close()`` at the end.
 """
 

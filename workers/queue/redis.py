@@ -1,4 +1,5 @@
-"""Redis Streams backend: scale-out, as durable as the Redis behind it (AOF: see workers/README.md). The service enqueues; `mani worker` processes anywhere consume.
+"""Redis Streams backend: scale-out, as durable as the Redis behind it (AOF: see workers/README.md). The service
+enqueues; `mani worker` processes anywhere consume.
 
 One stream with one consumer group; a job's record is a hash, its result a separate msgpack key with a TTL (a
 finished job whose result key is gone reports "expired"); see `workers.queue.redis_lua` for the key layout and
