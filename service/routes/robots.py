@@ -49,7 +49,33 @@ async def register_robot(
     existing = await robots.find(body.name, caller.tenant)
     if existing is not None and existing.builtin:
         raise Conflict(f"name: {body.name!r} is a built-in hand; choose another name")
+    if existing is None:
+        mine = [r for r in await robots.all(caller.tenant, fresh=True) if not r.builtin]
+        if len(mine) >= settings.max_robots:
+            raise Conflict(
+                f"{len(mine)} hands registered, at most {settings.max_robots} per key (MANI_MAX_ROBOTS); "
+                "DELETE /v1/robots/{name} one first"
+            )
     robot = await queue.register_robot(body, timeout=settings.robot_register_timeout, owner=caller.tenant)
     robots.forget(caller.tenant)
     url = str(request.url_for("get_robot", name=robot.name))
     return respond(request, robot, status=201, headers={"Location": url})
+
+
+@router.delete(
+    "/{name}",
+    status_code=204,
+    summary="Remove a hand this key registered (jobs naming it afterwards: 404)",
+    responses={
+        204: {"description": "Removed"},
+        409: {"model": ErrorBody, "description": "A built-in hand"},
+        **READ_ERRORS,
+    },
+)
+async def delete_robot(name: str, queue: QueueDep, robots: RobotsDep, caller: CallerDep) -> Response:
+    existing = await robots.find(name, caller.tenant)
+    if existing is not None and existing.builtin:
+        raise Conflict(f"name: {name!r} is a built-in hand; it cannot be removed")
+    await queue.delete_robot(name, owner=caller.tenant)
+    robots.forget(caller.tenant)
+    return Response(status_code=204)

@@ -91,6 +91,7 @@ def routes(world: World) -> list[tuple[str, str]]:
         ("DELETE", f"/v1/jobs/{world.long_job}"),
         ("GET", f"/v1/batches/{batch}"),
         ("GET", "/v1/robots/only-a"),
+        ("DELETE", "/v1/robots/only-a"),
     ]
 
 

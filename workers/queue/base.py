@@ -178,6 +178,14 @@ class JobQueue(ABC):
             RobotInvalid: the description was rejected (message says why).
         """
 
+    async def delete_robot(self, name: str, *, owner: str | None = None) -> None:
+        """Remove ``owner``'s registered robot ``name`` (built-ins cannot be removed).
+
+        Raises:
+            JobNotFound: no such registered robot of ``owner``.
+        """
+        raise JobNotFound(f"no registered robot {name!r}")
+
 
 async def _poll_events(queue: JobQueue, job_id: str, interval: float) -> AsyncIterator[JobPublic]:
     import asyncio

@@ -305,6 +305,15 @@ class EmbeddedQueue(JobQueue):
             self._robots[key] = public
         return public
 
+    async def delete_robot(self, name: str, *, owner: str | None = None) -> None:
+        key = scoped_robot(owner, name)
+        with self._lock:
+            robot = self._robots.get(key)
+            if robot is None or robot.builtin:
+                raise JobNotFound(f"no registered robot {name!r}")
+            del self._robots[key]
+            self._registered.pop(key, None)
+
     # ---- pump thread -----------------------------------------------------------------------------------------
     def _wake(self) -> None:
         with contextlib.suppress(OSError):

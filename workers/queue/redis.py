@@ -370,3 +370,11 @@ class RedisQueue(JobQueue):
         if "error" in answer:
             raise RobotInvalid(answer["error"])
         return RobotPublic.model_validate(answer["robot"])
+
+    async def delete_robot(self, name: str, *, owner: str | None = None) -> None:
+        key = scoped_robot(owner, name)
+        async with self._guard():
+            blob = await self._client.hget(self.keys.robots, key)
+            if blob is None or RobotPublic.model_validate(unpack(blob)).builtin:
+                raise JobNotFound(f"no registered robot {name!r}")
+            await self._client.pipeline().hdel(self.keys.robots, key).hdel(self.keys.robot_urdf, key).execute()
