@@ -46,6 +46,25 @@ def settings_from(args: argparse.Namespace) -> Any:
     return Settings(**{k: v for k, v in given.items() if v is not None})
 
 
+def uvicorn_config(app: Any, settings: Any) -> Any:
+    """uvicorn's configuration for ``app``: X-Forwarded-For believed only from ``forwarded_allow_ips`` (uvicorn's
+    default believes it from 127.0.0.1, so any local client could pose as any address)."""
+    import uvicorn
+
+    return uvicorn.Config(
+        app,
+        host=settings.host,
+        port=settings.port,
+        access_log=False,
+        log_config=None,
+        timeout_graceful_shutdown=10,
+        timeout_keep_alive=5,
+        lifespan="on",
+        proxy_headers=settings.forwarded_allow_ips is not None,
+        forwarded_allow_ips=settings.forwarded_allow_ips or "",
+    )
+
+
 def serve(args: argparse.Namespace) -> int:
     """Run uvicorn until SIGINT/SIGTERM; new `/v1` requests get 503 as soon as shutdown starts."""
     import sys
@@ -68,15 +87,6 @@ def serve(args: argparse.Namespace) -> int:
             app.state.shutting_down = True
             super().handle_exit(sig, frame)
 
-    config = uvicorn.Config(
-        app,
-        host=settings.host,
-        port=settings.port,
-        access_log=False,
-        log_config=None,
-        timeout_graceful_shutdown=10,
-        lifespan="on",
-    )
-    server = Server(config)
+    server = Server(uvicorn_config(app, settings))
     server.run()
     return 0 if server.started else 1

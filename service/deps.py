@@ -7,7 +7,7 @@ from typing import Annotated
 from fastapi import Depends, Request
 
 from service.dashboard import History
-from service.errors import Unavailable
+from service.errors import RateLimited, Unauthorized, Unavailable
 from service.metrics import Metrics
 from service.robots import RobotCatalog
 from service.security import Caller, RateLimiter, check_key, tenant_of
@@ -56,7 +56,14 @@ async def authorize(request: Request, settings: SettingsDep) -> Caller:
     identity = request.client.host if request.client else "unknown"
     caller = Caller()
     if settings.auth_enabled and request.url.path not in settings.open_paths:
-        key = check_key(request.headers.get("authorization"), settings.all_keys)
+        failures: RateLimiter = request.app.state.auth_failures
+        if wait := failures.blocked(identity):  # too many wrong keys from this address: no more guesses
+            raise RateLimited("too many requests with a wrong API key from this address", wait)
+        try:
+            key = check_key(request.headers.get("authorization"), settings.all_keys)
+        except Unauthorized:
+            failures.take(identity)
+            raise
         identity = "key:" + key
         caller = Caller(tenant=tenant_of(key), admin=key in settings.admin_keys)
     limiter: RateLimiter = request.app.state.limiter

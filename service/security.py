@@ -75,6 +75,15 @@ class RateLimiter:
         """Whether requests are limited at all (rate 0: off)."""
         return self.rate > 0
 
+    def blocked(self, identity: str, now: float | None = None) -> float:
+        """Seconds until ``identity`` has a token again (0: it has one now); takes nothing."""
+        if not self.enabled or identity not in self._buckets:
+            return 0.0
+        now = time.monotonic() if now is None else now
+        bucket = self._buckets[identity]
+        tokens = min(self.burst, bucket.tokens + (now - bucket.stamp) * self.rate)
+        return 0.0 if tokens >= 1.0 else (1.0 - tokens) / self.rate
+
     def take(self, identity: str, now: float | None = None) -> None:
         """Take one token for ``identity``.
 

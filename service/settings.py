@@ -46,6 +46,13 @@ class Settings(BaseSettings):
     )
     rate_limit_per_s: float = Field(100.0, ge=0, description="Token refill per key (or client IP); 0: off.")
     rate_limit_burst: int = Field(200, ge=1, description="Token bucket size.")
+    auth_failures_per_s: float = Field(1.0, ge=0, description="Wrong-key attempts per client address; 0: off.")
+    auth_failures_burst: int = Field(10, ge=1, description="Wrong keys in a row before an address gets 429.")
+    forwarded_allow_ips: str | None = Field(
+        None,
+        description="Proxies whose X-Forwarded-For is believed (uvicorn's forwarded_allow_ips); unset: none, the "
+        "client address is the peer's (per-address limits cannot be dodged with a forged header).",
+    )
 
     # --- request handling
     sync_wait_max: float = Field(30.0, gt=0, le=600, description="Cap on how long /v1/synthesize waits.")
