@@ -62,7 +62,7 @@ def unpack(data: bytes, max_bytes: int = MAX_BODY_BYTES) -> Any:
             max_ext_len=0,
         )
     except (msgpack.ExtraData, msgpack.FormatError, msgpack.StackError, ValueError, TypeError) as exc:
-        raise DecodeError(f"malformed msgpack body: {exc}") from exc
+        raise DecodeError(f"malformed msgpack body: {str(exc) or exc.__class__.__name__}") from exc
 
 
 def dump_model(model: BaseModel, content_type: str) -> bytes:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import logging
 import math
+from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -139,6 +140,9 @@ def from_exception(exc: Exception) -> ApiError:
         return NotFound(str(exc) or "not found")
     if isinstance(exc, RobotInvalid):
         message = str(exc) or "robot description rejected"
+        field, sep, problem = message.partition(": ")
+        if sep and field.replace("_", "").replace(".", "").isalnum():  # the worker named the field already
+            return InvalidInput(message, detail=[FieldError(field=field, problem=problem)])
         return InvalidInput(f"urdf: {message}", detail=[FieldError(field="urdf", problem=message)])
     if isinstance(exc, QueueUnavailable):
         return Unavailable(str(exc) or "queue unavailable")
@@ -158,9 +162,33 @@ def from_exception(exc: Exception) -> ApiError:
     return ApiError("internal error")
 
 
+def route_table(app: Any) -> list[tuple[str, Any, set[str]]]:
+    """``(path template, path regex, methods)`` of every route, included routers' too (FastAPI ≥ 0.165 keeps an
+    included router as one entry of ``app.routes`` and exposes its routes as "effective candidates")."""
+    table = []
+    for route in app.routes:
+        contexts = route.effective_candidates() if hasattr(route, "effective_candidates") else [route]
+        for ctx in contexts:
+            regex, methods = getattr(ctx, "path_regex", None), getattr(ctx, "methods", None)
+            if regex is not None:
+                table.append((str(getattr(ctx, "path", "")), regex, set(methods or ())))
+    return table
+
+
+def allowed_methods(request: Request) -> list[str]:
+    """Every method some route serves at this path (Starlette's 405 names only the first matching route's)."""
+    methods: set[str] = set()
+    for _, regex, served in route_table(request.app):
+        if regex.match(request.url.path):
+            methods |= served
+    return sorted(methods)
+
+
 async def handle(request: Request, exc: Exception) -> Response:
     """The one exception handler: every error becomes ``ErrorBody`` in the negotiated encoding."""
     error = from_exception(exc)
+    if error.status == 405:
+        error.headers["Allow"] = ", ".join(allowed_methods(request))
     if error.status >= 500 and not isinstance(error, Unavailable):
         log.error("unhandled error", exc_info=exc)
     request.state.error_type = error.type

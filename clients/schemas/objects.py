@@ -87,7 +87,7 @@ class ArticulationJoint(WireModel):
 class ObjectIn(WireModel):
     """An object: N points (64 ≤ N ≤ 200 000), metres, with optional outward unit normals."""
 
-    points: Points
+    points: Points = Field(..., json_schema_extra={"minItems": MIN_POINTS, "maxItems": MAX_POINTS})
     normals: Points | None = None
     mesh: MeshIn | None = None
     material: Material = Material.RIGID
@@ -105,6 +105,9 @@ class ObjectIn(WireModel):
         n = self.num_points
         if not MIN_POINTS <= n <= MAX_POINTS:
             raise ValueError(f"points: {n} points given, need {MIN_POINTS}..{MAX_POINTS}")
+        spread = np.linalg.svd(self.points - self.points.mean(axis=0), compute_uv=False)
+        if spread[0] < 1e-9 or spread[1] < 1e-6 * spread[0]:
+            raise ValueError("points: all points lie on one line (or coincide); an object needs a 2D or 3D extent")
         if self.normals is not None:
             if self.normals.shape != self.points.shape:
                 raise ValueError(f"normals: shape {self.normals.shape} does not match points {self.points.shape}")

@@ -52,3 +52,6 @@ class RobotPublic(WireModel):
     fingertips: list[str]
     num_spheres: int | None = None
     source: str | None = Field(None, description="Where the description comes from (package or 'user').")
+    warnings: list[str] = Field(
+        default_factory=list, description="What of a registered URDF was not used (e.g. mesh files: never read)."
+    )

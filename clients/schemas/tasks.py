@@ -5,13 +5,26 @@ from __future__ import annotations
 from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import ConfigDict, Field, model_validator
+from pydantic.config import JsonDict
 
 from clients.schemas.common import Points, Quaternion, Vec3, Vec6, WireModel
 
 
+def _kind_required(schema: JsonDict) -> None:
+    """``kind`` is the union's discriminator: a body must name it, whatever the Python default."""
+    required = schema.setdefault("required", [])
+    if isinstance(required, list) and "kind" not in required:
+        required.insert(0, "kind")
+
+
+KIND_REQUIRED = ConfigDict(json_schema_extra=_kind_required)
+
+
 class DeltaPoseTask(WireModel):
     """Move the object rigidly: translate by ``translation`` (m) and rotate by ``rotation`` about its centre."""
+
+    model_config = KIND_REQUIRED
 
     kind: Literal["delta_pose"] = "delta_pose"
     translation: Vec3 = Field(default_factory=lambda: np.zeros(3))
@@ -28,6 +41,8 @@ class DeltaPoseTask(WireModel):
 class PointMotionTask(WireModel):
     """Per-point target motion M (N, 3), metres; for deformables the motion each point should make."""
 
+    model_config = KIND_REQUIRED
+
     kind: Literal["point_motion"] = "point_motion"
     motion: Points
 
@@ -35,12 +50,16 @@ class PointMotionTask(WireModel):
 class TargetPointsTask(WireModel):
     """The object's target point cloud (N, 3), point-to-point with the input points."""
 
+    model_config = KIND_REQUIRED
+
     kind: Literal["target_points"] = "target_points"
     targets: Points
 
 
 class WrenchTask(WireModel):
     """A target wrench (force N, torque N·m) about the object's centre of mass, world frame."""
+
+    model_config = KIND_REQUIRED
 
     kind: Literal["wrench"] = "wrench"
     wrench: Vec6
@@ -55,11 +74,15 @@ class WrenchTask(WireModel):
 class ForceClosureTask(WireModel):
     """Hold the object: a grasp that can resist any wrench (w = 0, f ≠ 0)."""
 
+    model_config = KIND_REQUIRED
+
     kind: Literal["force_closure"] = "force_closure"
 
 
 class JointMotionTask(WireModel):
     """Articulated objects: move the joint by ``delta`` (rad for revolute, m for prismatic)."""
+
+    model_config = KIND_REQUIRED
 
     kind: Literal["joint_motion"] = "joint_motion"
     delta: float = Field(..., description="Signed joint displacement.")

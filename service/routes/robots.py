@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import re
+
 from fastapi import APIRouter, Request
 from starlette.responses import Response
 
@@ -11,6 +13,7 @@ from service.errors import Conflict
 from service.negotiation import body_openapi, read_model, respond
 from service.responses import ERRORS, READ_ERRORS
 
+MESH_FILE = re.compile(r"<mesh\b[^>]*\bfilename\s*=\s*[\"']([^\"']{1,300})[\"']")
 router = APIRouter(prefix="/v1/robots", tags=["robots"], dependencies=[Authorized])
 
 
@@ -58,6 +61,11 @@ async def register_robot(
             )
     robot = await queue.register_robot(body, timeout=settings.robot_register_timeout, owner=caller.tenant)
     robots.forget(caller.tenant)
+    meshes = sorted(set(MESH_FILE.findall(body.urdf)))
+    if meshes:  # the hardened loader never opens files: say so rather than drop them silently
+        shown = ", ".join(meshes[:5]) + (f" and {len(meshes) - 5} more" if len(meshes) > 5 else "")
+        note = f"urdf: {len(meshes)} mesh file(s) not loaded ({shown}): the hardened loader reads no files"
+        robot = robot.model_copy(update={"warnings": [*robot.warnings, note]})
     url = str(request.url_for("get_robot", name=robot.name))
     return respond(request, robot, status=201, headers={"Location": url})
 

@@ -33,11 +33,21 @@ def test_valid_object_defaults() -> None:
 
 @given(st.integers(min_value=1, max_value=300))
 def test_point_count_bounds(n: int) -> None:
-    points = np.zeros((n, 3))
+    points = np.random.default_rng(0).normal(size=(n, 3))
     if n >= 64:
         assert ObjectIn(points=points).num_points == n
     else:
         assert _errors({"points": points}) == [("points", f"{n} points given, need 64..200000")]
+
+
+def test_collinear_or_coincident_points_are_refused() -> None:
+    line = np.outer(np.linspace(0, 1, 100), [1.0, 2.0, 3.0])
+    assert _errors({"points": line}) == [
+        ("points", "all points lie on one line (or coincide); an object needs a 2D or 3D extent")
+    ]
+    assert _errors({"points": np.zeros((100, 3))})[0][0] == "points"
+    plate = np.random.default_rng(0).normal(size=(100, 3)) * [1.0, 1.0, 0.0]  # a flat object is fine
+    assert ObjectIn(points=plate).num_points == 100
 
 
 def test_too_many_points() -> None:
