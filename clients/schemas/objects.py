@@ -105,7 +105,11 @@ class ObjectIn(WireModel):
         n = self.num_points
         if not MIN_POINTS <= n <= MAX_POINTS:
             raise ValueError(f"points: {n} points given, need {MIN_POINTS}..{MAX_POINTS}")
-        spread = np.linalg.svd(self.points - self.points.mean(axis=0), compute_uv=False)
+        with np.errstate(all="ignore"):
+            centred = self.points - self.points.mean(axis=0)
+        if not np.all(np.isfinite(centred)) or np.abs(centred).max() > 1e6:
+            raise ValueError("points: coordinates beyond ±1000 km; points are in metres")
+        spread = np.linalg.svd(centred, compute_uv=False)
         if spread[0] < 1e-9 or spread[1] < 1e-6 * spread[0]:
             raise ValueError("points: all points lie on one line (or coincide); an object needs a 2D or 3D extent")
         if self.normals is not None:

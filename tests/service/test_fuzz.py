@@ -1,5 +1,6 @@
 """Fuzz the API from its own OpenAPI schema (schemathesis): whatever arrives, never a 5xx, and every answer
-matches its documented schema. Bounded: ~15 cases per operation by default (a few hundred in all); the
+matches its documented schema; against the in-memory fake queue and the real embedded queue (a worker process
+running the staged pipeline). Bounded: 10 cases per operation and backend by default (a few hundred in all); the
 `slow` run does 200 per operation."""
 
 from __future__ import annotations
@@ -17,11 +18,13 @@ from schemathesis.config import SchemathesisConfig
 from clients.codec import pack
 from service.app import create_app
 from service.settings import Settings
+from workers.queue import create_queue
 
 from .fakes import FakeQueue
 from .server import serving
 
 KEY = "fuzz-test-key-1"
+STAGED = "workers.testing:StagedPipeline"
 
 
 @schemathesis.serializer("application/msgpack")
@@ -32,8 +35,9 @@ def _msgpack(ctx: Any, value: Any) -> bytes:
         return json.dumps(value).encode()  # e.g. an int beyond 64 bits: the server must answer 400, not 500
 
 
-def _app() -> Any:
-    return create_app(Settings(api_keys=[KEY], rate_limit_per_s=0, sync_wait_max=1), queue=FakeQueue())
+def _app(queue: Any = None) -> Any:
+    settings = Settings(api_keys=[KEY], rate_limit_per_s=0, sync_wait_max=1, auth_failures_per_s=0)
+    return create_app(settings, queue=queue or FakeQueue())
 
 
 # The coverage phase enumerates every boundary of every field (thousands of cases for the request schema);
@@ -42,9 +46,12 @@ CONFIG = SchemathesisConfig.from_dict({"phases": {"coverage": {"enabled": False}
 schema = schemathesis.openapi.from_dict(_app().openapi(), config=CONFIG)
 
 
-@pytest.fixture(scope="module")
-def base_url() -> Iterator[str]:
-    with serving(_app()) as base:
+@pytest.fixture(scope="module", params=["fake", "embedded"])
+def base_url(request: pytest.FixtureRequest) -> Iterator[str]:
+    queue = None
+    if request.param == "embedded":
+        queue = create_queue(None, redis_url=None, concurrency=1, pipeline=STAGED, max_queue=1000, log_level="ERROR")
+    with serving(_app(queue)) as base:
         yield base
 
 
@@ -58,7 +65,7 @@ def _check(case: Any, base_url: str) -> None:
 
 
 @schema.parametrize()
-@settings(max_examples=15, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
+@settings(max_examples=10, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
 def test_no_server_errors(case: Any, base_url: str) -> None:
     _check(case, base_url)
 
