@@ -1,0 +1,346 @@
+"""`mani bench faults`: what holds under faults and hostile load, measured (bounded in count and time, loopback only).
+
+Four scenarios, each on its own private processes (a `redis-server` on a free port with AOF in a temporary
+directory, `mani worker` / `mani serve` children), all killed at the end:
+
+- soak: N jobs through Redis with 2 workers (batch 4) while workers are killed (kill -9) and Redis is killed and
+  restarted: jobs lost (404), duplicated (two "succeeded" log lines), stuck (not terminal at the end), failed,
+  and the longest redelivery delay (kill → the job's next start).
+- poison: a crashing job in every micro-batch of 4: how many jobs were dead-lettered, and whether all were poison.
+- large bodies: C concurrent valid bodies of S MB against `mani serve`: /healthz latency meanwhile, API RSS.
+- full queue: C concurrent posts (small and large bodies) against a full queue: 429 latency.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import json
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+from service.bench import _free_port, request_body, rss_mb
+
+STAGED = "workers.testing:StagedPipeline"
+EXAMPLE = """example (the README's figures):
+  mani bench faults --jobs 120 --kills 4 --restarts 2 --poison-batches 4 --bodies 100 --body-mb 8"""
+
+
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``faults`` to the ``mani bench`` sub-commands."""
+    parser = subparsers.add_parser(
+        "faults",
+        help="soak with kills and Redis restarts, poison jobs, large bodies, full queue",
+        description=(__doc__ or "").splitlines()[0],
+        epilog=EXAMPLE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--jobs", type=int, default=120, help="soak: jobs (120)")
+    parser.add_argument("--kills", type=int, default=4, help="soak: workers killed with kill -9 (4)")
+    parser.add_argument("--restarts", type=int, default=2, help="soak: Redis kill -9 + restarts (2)")
+    parser.add_argument("--poison-batches", type=int, default=4, help="poison: batches of 4 with one crasher (4)")
+    parser.add_argument("--bodies", type=int, default=100, help="large bodies / full-queue posts at once (100)")
+    parser.add_argument("--body-mb", type=float, default=8.0, help="size of each large body, MB (8)")
+    parser.add_argument("--budget", type=float, default=240.0, help="seconds per scenario at most (240)")
+    parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
+    parser.set_defaults(func=run)
+
+
+class RedisProcess:
+    """A private redis-server (AOF, fsync every second: the docker-compose setting) on a free port."""
+
+    def __init__(self, directory: str) -> None:
+        binary = shutil.which("redis-server")
+        if binary is None:
+            raise SystemExit("mani bench faults: redis-server is not installed")
+        self.port = _free_port()
+        self.url = f"redis://127.0.0.1:{self.port}/0"
+        self.cmd = [binary, "--port", str(self.port), "--bind", "127.0.0.1", "--dir", directory, "--save", "",
+                    "--appendonly", "yes", "--appendfsync", "everysec"]  # fmt: skip
+        self.proc: subprocess.Popen[bytes] | None = None
+
+    def start(self) -> None:
+        import redis
+
+        self.proc = subprocess.Popen(self.cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        end = time.monotonic() + 20
+        while True:
+            with contextlib.suppress(redis.RedisError):
+                if redis.Redis.from_url(self.url, socket_connect_timeout=0.5).ping():
+                    return
+            if time.monotonic() > end:
+                raise RuntimeError("redis-server did not start")
+            time.sleep(0.05)
+
+    def kill(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(10)
+
+
+def _stop(proc: subprocess.Popen[bytes], grace: float = 30) -> None:
+    if proc.poll() is None:
+        proc.terminate()
+        try:
+            proc.wait(grace)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def _workers(url: str, prefix: str, log: Path, options: dict[str, Any], **env: str) -> subprocess.Popen[bytes]:
+    environ = dict(os.environ, MANI_REDIS_URL=url, MANI_QUEUE_PREFIX=prefix, MANI_PIPELINE=STAGED,
+                   MANI_PIPELINE_OPTIONS=json.dumps(options), MANI_LOG_LEVEL="INFO", MANI_BATCH_SIZE="4",
+                   MANI_HEARTBEAT_INTERVAL="0.5", **env)  # fmt: skip
+    cmd = [sys.executable, "-m", "clients.cli.main", "worker", "--concurrency", "2"]
+    return subprocess.Popen(cmd, env=environ, stdout=subprocess.DEVNULL, stderr=log.open("wb"))
+
+
+def _small(seed: int) -> Any:
+    from clients.schemas import SynthesisRequest
+
+    body = request_body(64, "test_gripper", "direct_grasp", seed)
+    body["options"]["max_iterations"] = 2
+    return SynthesisRequest.model_validate(body)
+
+
+async def _all_states(queue: Any, ids: list[str]) -> dict[str, Any]:
+    from workers.queue import JobNotFound
+
+    out: dict[str, Any] = {}
+    for job_id in ids:
+        try:
+            out[job_id] = await queue.get(job_id, with_result=False)
+        except JobNotFound:
+            out[job_id] = None
+    return out
+
+
+async def soak(args: argparse.Namespace, directory: str) -> dict[str, Any]:
+    """N jobs, random kill -9 of busy workers and kill -9 + restart of Redis; see the module doc."""
+    from workers.queue import QueueUnavailable, create_queue
+
+    server = RedisProcess(directory)
+    server.start()
+    log = Path(directory) / "soak-workers.log"
+    options = {"stage_seconds": 0.02, "iterations": 2}
+    workers = _workers(server.url, "soak:", log, options, MANI_MAX_DELIVERIES="5", MANI_VISIBILITY_TIMEOUT="30")
+    queue = create_queue(server.url, queue_prefix="soak:", max_queue=args.jobs + 10)
+    await queue.start()
+    rng = random.Random(0)
+    kills: list[tuple[float, str]] = []
+    try:
+        while len(await queue.workers()) < 2:
+            await asyncio.sleep(0.1)
+        ids = await queue.submit([_small(i) for i in range(args.jobs)])
+        t0, end = time.monotonic(), time.monotonic() + args.budget
+        events = ["kill"] * args.kills + ["restart"] * args.restarts
+        rng.shuffle(events)
+        pending, states = set(ids), {}
+        while time.monotonic() < end and pending:
+            await asyncio.sleep(rng.uniform(0.5, 1.5))
+            with contextlib.suppress(QueueUnavailable):
+                if events and events[0] == "restart":
+                    events.pop(0)
+                    server.kill()
+                    await asyncio.sleep(2.0)
+                    server.start()
+                elif events:
+                    busy = [w for w in await queue.workers() if w.current_job]
+                    if busy:
+                        victim = rng.choice(busy)
+                        with contextlib.suppress(ProcessLookupError):
+                            os.kill(victim.pid, signal.SIGKILL)
+                            kills.append((time.time(), victim.current_job or ""))
+                            events.pop(0)
+                states = await _all_states(queue, sorted(pending))
+                pending = {i for i, j in states.items() if j is not None and not j.state.terminal}
+        elapsed = time.monotonic() - t0
+        final = await _all_states(queue, ids)
+    finally:
+        await queue.close()
+        _stop(workers)
+        server.kill()
+    finished: Counter[str] = Counter()
+    for line in log.read_text().splitlines():
+        if line.startswith("{"):
+            entry = json.loads(line)
+            if entry.get("msg") == "job finished" and entry.get("state") == "succeeded":
+                finished[entry["job_id"]] += 1
+    delays = [final[j].started_at - t for t, j in kills if final.get(j) and (final[j].started_at or 0) > t]
+    return {
+        "jobs": args.jobs, "kills": len(kills), "restarts": args.restarts, "seconds": round(elapsed, 1),
+        "lost": sum(j is None for j in final.values()),
+        "stuck": sum(j is not None and not j.state.terminal for j in final.values()),
+        "failed": sum(j is not None and j.state.value == "failed" for j in final.values()),
+        "duplicated": sum(n > 1 for n in finished.values()),
+        "max_redelivery_s": round(max(delays), 2) if delays else None,
+    }  # fmt: skip
+
+
+async def poison(args: argparse.Namespace, directory: str) -> dict[str, Any]:
+    """A crashing job (seed 666) first in every batch of 4, queued before the workers start."""
+    from workers.queue import create_queue
+
+    server = RedisProcess(directory)
+    server.start()
+    queue = create_queue(server.url, queue_prefix="poison:")
+    await queue.start()
+    seeds = [666 if i % 4 == 0 else i for i in range(4 * args.poison_batches)]
+    ids = await queue.submit([_small(s) for s in seeds])
+    t0 = time.monotonic()
+    workers = _workers(server.url, "poison:", Path(directory) / "poison-workers.log", {"crash_seed": 666})
+    try:
+        jobs = await asyncio.gather(*(queue.wait(i, args.budget) for i in ids))
+        dead = {d.job_id for d in await queue.dead_letters(limit=1000)}
+    finally:
+        await queue.close()
+        _stop(workers)
+        server.kill()
+    poisoned = {i for i, s in zip(ids, seeds, strict=True) if s == 666}
+    return {
+        "jobs": len(ids), "poison": len(poisoned), "dead_lettered": len(dead), "only_poison": dead == poisoned,
+        "innocent_succeeded": sum(j.state.value == "succeeded" for j in jobs if j.id not in poisoned),
+        "seconds": round(time.monotonic() - t0, 1),
+    }  # fmt: skip
+
+
+def _serve(max_queue: int, stage_seconds: float) -> tuple[subprocess.Popen[bytes], str]:
+    import httpx
+
+    port = _free_port()
+    env = dict(os.environ, MANI_PIPELINE=STAGED, MANI_PIPELINE_OPTIONS=json.dumps({"stage_seconds": stage_seconds}),
+               MANI_MAX_QUEUE=str(max_queue), MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING", MANI_WORKERS="1",
+               MANI_BODY_TIMEOUT="120")  # fmt: skip
+    env.pop("MANI_REDIS_URL", None)
+    proc = subprocess.Popen([sys.executable, "-m", "clients.cli.main", "serve", "--port", str(port)], env=env,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    base = f"http://127.0.0.1:{port}"
+    end = time.monotonic() + 120
+    while time.monotonic() < end:
+        with contextlib.suppress(httpx.HTTPError):
+            if httpx.get(f"{base}/readyz", timeout=2).status_code == 200:
+                return proc, base
+        time.sleep(0.2)
+    _stop(proc)
+    raise RuntimeError("mani serve did not become ready")
+
+
+def _large_body(mb: float) -> bytes:
+    import numpy as np
+
+    n = min(200_000, max(64, int(mb * 1e6 / 60)))
+    rng = np.random.default_rng(0)
+    p = rng.normal(size=(n, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    body = request_body(64, "test_gripper", "direct_grasp")
+    body["object"] = {"points": (0.04 * p).round(6).tolist(), "normals": p.round(6).tolist()}
+    return json.dumps(body).encode()
+
+
+def _pct(values: list[float], q: float) -> float | None:
+    from service.dashboard import percentile
+
+    found = percentile(values, q)
+    return None if found is None else round(found * 1000, 1)
+
+
+async def _posts(base: str, bodies: list[bytes], timeout: float) -> list[tuple[int, float]]:
+    import httpx
+
+    async with httpx.AsyncClient(base_url=base, timeout=timeout, limits=httpx.Limits(max_connections=1000)) as http:
+
+        async def one(data: bytes) -> tuple[int, float]:
+            t0 = time.perf_counter()
+            try:
+                answer = await http.post("/v1/jobs", content=data, headers={"Content-Type": "application/json"})
+                return answer.status_code, time.perf_counter() - t0
+            except httpx.HTTPError:
+                return 0, time.perf_counter() - t0
+
+        return await asyncio.gather(*(one(b) for b in bodies))
+
+
+async def large_bodies(args: argparse.Namespace) -> dict[str, Any]:
+    """``--bodies`` concurrent bodies of ``--body-mb`` MB; /healthz polled every 20 ms meanwhile."""
+    import httpx
+
+    data = _large_body(args.body_mb)
+    proc, base = _serve(max_queue=10 * args.bodies, stage_seconds=0.0)
+    health: list[float] = []
+    try:
+        async with httpx.AsyncClient(base_url=base, timeout=60) as http:
+            posting = asyncio.ensure_future(_posts(base, [data] * args.bodies, args.budget))
+            peak = 0.0
+            while not posting.done():
+                t0 = time.perf_counter()
+                await http.get("/healthz")
+                health.append(time.perf_counter() - t0)
+                peak = max(peak, rss_mb(proc.pid).get("VmRSS", 0.0))
+                await asyncio.sleep(0.02)
+            answers = posting.result()
+        await asyncio.sleep(2.0)
+        after = rss_mb(proc.pid)
+    finally:
+        _stop(proc)
+    return {
+        "bodies": args.bodies, "body_mb": round(len(data) / 1e6, 1), "answers": dict(Counter(s for s, _ in answers)),
+        "healthz_p50_ms": _pct(health, 0.5), "healthz_p99_ms": _pct(health, 0.99),
+        "healthz_max_ms": _pct(health, 1.0), "api_rss_peak_mb": round(max(peak, after.get("VmHWM", 0.0)), 0),
+        "api_rss_after_mb": round(after.get("VmRSS", 0.0), 0),
+        "seconds": round(max((t for _, t in answers), default=0.0), 1),
+    }  # fmt: skip
+
+
+async def full_queue(args: argparse.Namespace) -> dict[str, Any]:
+    """The queue full (10 slow jobs), then ``--bodies`` small and as many large posts at once: 429 latency."""
+    import httpx
+
+    proc, base = _serve(max_queue=10, stage_seconds=5.0)
+    small = json.dumps(request_body(256, "test_gripper", "direct_grasp")).encode()
+    large = _large_body(args.body_mb)
+    try:
+        with httpx.Client(base_url=base, timeout=30) as http:
+            while http.post("/v1/jobs", content=small, headers={"Content-Type": "application/json"}).status_code == 202:
+                pass
+        out: dict[str, Any] = {"max_queue": 10, "posts": args.bodies}
+        for name, data in (("small", small), ("large", large)):
+            answers = await _posts(base, [data] * args.bodies, args.budget)
+            refused = [t for s, t in answers if s == 429]
+            out[f"{name}_429"] = len(refused)
+            out[f"{name}_p50_ms"], out[f"{name}_p99_ms"] = _pct(refused, 0.5), _pct(refused, 0.99)
+    finally:
+        _stop(proc)
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the four scenarios and print a table of what held."""
+    figures: dict[str, Any] = {}
+    with tempfile.TemporaryDirectory(prefix="mani-bench-faults-") as directory:
+        for name, scenario in (("soak", soak), ("poison", poison)):
+            figures[name] = asyncio.run(scenario(args, tempfile.mkdtemp(dir=directory)))
+            print(f"{name}: {figures[name]}", flush=True)
+    figures["large_bodies"] = asyncio.run(large_bodies(args))
+    print(f"large_bodies: {figures['large_bodies']}", flush=True)
+    figures["full_queue"] = asyncio.run(full_queue(args))
+    print(f"full_queue: {figures['full_queue']}", flush=True)
+    print()
+    print("| scenario | figures |")
+    print("|---|---|")
+    for name, values in figures.items():
+        print(f"| {name} | " + ", ".join(f"{k} {v}" for k, v in values.items()) + " |")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(figures, indent=2))
+    return 0
