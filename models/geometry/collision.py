@@ -6,8 +6,8 @@ gives no depth). We use it as the narrow-phase test per hand body, then measure 
 - hand → object: the largest depth of the hand body's surface samples (its vertices + ``BODY_SAMPLES`` area
   samples, seed 0) inside the object's watertight mesh (exact mesh signed distance, trimesh, evaluated only on
   the ``EXACT_CANDIDATES`` samples per body that the KD-tree Φ ranks deepest, if below ``PREFILTER``);
-- object → hand: the largest depth of object points (cloud + mesh vertices) inside the body's convex hull
-  (half-space distance, exact for a convex body, an over-estimate for a non-convex one).
+- object → hand: the largest depth of object points (cloud + mesh vertices) inside the convex hulls of the body's
+  connected parts (half-space distance, exact for convex parts, an over-estimate for a non-convex one).
 
 Depth = the larger of the two. Its error is bounded by the sample spacing (a few mm² per sample on our hands):
 e.g. a sphere of radius r pushed d into a box face reads d within ~s²/(2r) (test: < 0.5 mm).
@@ -28,6 +28,7 @@ import trimesh
 
 from models.geometry.object import ObjectGeometry
 from models.robots.hand import ADJACENT_HOPS, Hand
+from models.robots.pads import convex_parts
 
 
 class SignedDistance(Protocol):
@@ -56,8 +57,7 @@ class _BodyGeom:
     name: str
     bvh: fcl.BVHModel
     samples: np.ndarray  # (k, 3) body frame
-    planes: np.ndarray  # (f, 4) hull half-spaces n·x <= d, body frame
-    bounds: np.ndarray  # (2, 3) axis-aligned bounds, body frame
+    parts: list[tuple[np.ndarray, np.ndarray]]  # per convex part: hull half-spaces (f, 4) n·x <= d, bounds (2, 3)
 
 
 def _bvh(mesh: trimesh.Trimesh) -> fcl.BVHModel:
@@ -73,6 +73,11 @@ def _planes(mesh: trimesh.Trimesh) -> np.ndarray:
     n = np.asarray(hull.face_normals)
     d = np.einsum("ij,ij->i", n, np.asarray(hull.triangles_center))
     return np.hstack([n, d[:, None]])
+
+
+def _parts_depth(parts: list[tuple[np.ndarray, np.ndarray]], x: np.ndarray) -> float:
+    """Largest depth (≥ 0) of points x (k, 3) inside any of the convex ``parts``."""
+    return max((_inside_depth(planes, x, bounds) for planes, bounds in parts), default=0.0)
 
 
 def _inside_depth(planes: np.ndarray, x: np.ndarray, bounds: np.ndarray | None = None) -> float:
@@ -95,7 +100,7 @@ def _bodies(hand: Hand) -> list[_BodyGeom]:
                 continue
             samples, _ = trimesh.sample.sample_surface(mesh, BODY_SAMPLES, seed=0)
             pts = np.vstack([np.asarray(mesh.vertices), samples])
-            out.append(_BodyGeom(name, _bvh(mesh), pts, _planes(mesh), np.asarray(mesh.bounds)))
+            out.append(_BodyGeom(name, _bvh(mesh), pts, convex_parts(mesh)))
         cache["bodies"] = out
     return cache["bodies"]
 
@@ -142,7 +147,7 @@ def hand_object_penetration(
             sd = trimesh.proximity.signed_distance(mesh, near)  # exact, positive inside
             depth = max(depth, float(max(sd.max(), 0.0)))
         local = (obj_pts - T[:3, 3]) @ T[:3, :3]
-        depth = max(depth, _inside_depth(body.planes, local, body.bounds))
+        depth = max(depth, _parts_depth(body.parts, local))
     return depth
 
 
@@ -183,7 +188,7 @@ def hand_field_penetration(
         if len(behind):
             depth = max(depth, float(max(-field.robust_signed_distance(world[behind]).min(), 0.0)))
         local = (obj_pts - T[:3, 3]) @ T[:3, :3]
-        depth = max(depth, _inside_depth(body.planes, local, body.bounds))
+        depth = max(depth, _parts_depth(body.parts, local))
     return depth
 
 
@@ -233,8 +238,8 @@ def _pair_depth(a: _BodyGeom, b: _BodyGeom, poses: dict[str, np.ndarray]) -> flo
         return 0.0
     T_ba = np.linalg.inv(Tb) @ Ta  # a's frame -> b's frame
     T_ab = np.linalg.inv(T_ba)
-    d1 = _inside_depth(b.planes, a.samples @ T_ba[:3, :3].T + T_ba[:3, 3], b.bounds)
-    d2 = _inside_depth(a.planes, b.samples @ T_ab[:3, :3].T + T_ab[:3, 3], a.bounds)
+    d1 = _parts_depth(b.parts, a.samples @ T_ba[:3, :3].T + T_ba[:3, 3])
+    d2 = _parts_depth(a.parts, b.samples @ T_ab[:3, :3].T + T_ab[:3, 3])
     return max(d1, d2, 1e-9)
 
 

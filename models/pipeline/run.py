@@ -104,7 +104,7 @@ def _proposal(
         contact_points=ver.contacts,
         contact_normals=ver.normals,
         forces=ver.forces,
-        fingertips=list(hand.fingertip_links),
+        fingertips=ver.links or list(hand.fingertip_links),
         palm_position=pose.palm_pos.copy(),
         palm_quaternion=pose.palm_quat.copy(),
         joint_names=list(hand.joint_names),

@@ -10,8 +10,57 @@ paper's Φ; away from it the Euclidean distance to the samples, without jumps la
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 from scipy.spatial import cKDTree
+
+WINDING_FROM = 0.5
+"""Points farther than this many disc radii from the nearest disc take their side from the winding number ..."""
+WINDING_TO = 0.05
+WINDING_BELOW = 0.9
+"""... where the discs' vote is less clear than this (|Σ w cos|cos|| / Σ w)."""
+"""... up to this distance (m); farther points are far from any contact and keep the discs' side."""
+
+
+WINDING_FAR = 2.0
+WINDING_CELLS = 8
+"""Cells per side of the object's bounding box for the winding number's far field."""
+
+
+@dataclass(frozen=True)
+class _Cells:
+    """Samples grouped in grid cells, padded: centre (C, 3), radius (C,), moment (C, 3) = Σ a_j n_j, points
+    (C, S, 3) and weighted normals a_j n_j (C, S, 3) (zeros pad the short cells)."""
+
+    centre: np.ndarray
+    radius: np.ndarray
+    moment: np.ndarray
+    points: np.ndarray
+    weighted: np.ndarray
+
+    @classmethod
+    def build(cls, points: np.ndarray, weighted: np.ndarray) -> _Cells:
+        lo, hi = points.min(0), points.max(0)
+        size = max(float((hi - lo).max()) / WINDING_CELLS, 1e-6)
+        key = np.floor((points - lo) / size).astype(np.int64)
+        _, cell = np.unique(key, axis=0, return_inverse=True)
+        cell = cell.reshape(-1)
+        count = np.bincount(cell)
+        C, S = len(count), int(count.max())
+        order = np.argsort(cell, kind="stable")
+        slot = np.arange(len(points)) - np.repeat(np.cumsum(count) - count, count)
+        pts, wts = np.zeros((C, S, 3)), np.zeros((C, S, 3))
+        pts[cell[order], slot] = points[order]
+        wts[cell[order], slot] = weighted[order]
+        area = np.linalg.norm(weighted, axis=1)
+        centre = np.stack([np.bincount(cell, area * points[:, k]) for k in range(3)], 1) / np.bincount(cell, area)[
+            :, None
+        ]
+        radius = np.zeros(C)
+        np.maximum.at(radius, cell, np.linalg.norm(points - centre[cell], axis=1))
+        moment = np.stack([np.bincount(cell, weighted[:, k]) for k in range(3)], 1)
+        return cls(centre, radius, moment, pts, wts)
 
 
 class PointCloudField:
@@ -63,6 +112,10 @@ class PointCloudField:
         cos = a / np.maximum(value, 1e-12)  # 1: x faces the disc squarely, 0: x lies beside its rim
         side = np.sum(w * cos * np.abs(cos), axis=1)
         sign = np.where(side < 0, -1.0, 1.0)
+        confident = np.abs(side) > WINDING_BELOW * np.sum(w, axis=1)  # every near disc agrees and faces x
+        off = np.flatnonzero(~confident & (nearest > WINDING_FROM * self.disc_radius) & (nearest < WINDING_TO))
+        if len(off):  # off the surface the discs' side can flip (a finger 5 mm inside near an edge read outside)
+            sign[off] = np.where(self.winding_number(x[off]) > 0.5, -1.0, 1.0)
         a_b, e_b, n_b = a[rows, best], excess[rows, best], n[rows, best]
         t_hat = tang[rows, best] / np.maximum(b[rows, best], 1e-12)[:, None]
         inside_disc = e_b <= 0
@@ -71,11 +124,33 @@ class PointCloudField:
         grad = np.where(inside_disc[:, None], sign[:, None] * np.sign(a_b + 1e-300)[:, None] * n_b, far)
         return phi, grad, p[rows, best]
 
-    def winding_number(self, x: np.ndarray, chunk: int = 512) -> np.ndarray:
+    def winding_number(self, x: np.ndarray) -> np.ndarray:
         """Generalised winding number (M,) of the oriented points around x (Barill et al. 2018, for clouds):
         w(x) = Σ_j a_j n_j·(p_j − x) / (4π |p_j − x|³), a_j the area each sample stands for. ≈ 1 inside, ≈ 0
-        outside, robust where the discs of `signed_distance` spill
-        over a sharp edge (they read up to 4 mm of false penetration beside a box's edge)."""
+        outside, robust where the discs of `signed_distance` spill over a sharp edge (they read up to 4 mm of
+        false penetration beside a box's edge).
+
+        Samples are grouped in grid cells; a cell farther than ``WINDING_FAR`` × its radius from x contributes its
+        dipole (Σ a_j n_j at its area centroid), nearer cells their samples exactly (`winding_number_exact` is
+        the plain sum; they agree to 1e-2 in the tests, ~20x faster for a 2 048-point cloud).
+        """
+        x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
+        cells = self._cells()
+        diff = cells.centre[None] - x[:, None]  # (M, C, 3)
+        dist = np.linalg.norm(diff, axis=2)
+        far = dist > WINDING_FAR * cells.radius[None] + 1e-9
+        out = np.einsum("mca,ca->mc", diff, cells.moment) / np.maximum(dist, 1e-12) ** 3
+        out = np.where(far, out, 0.0).sum(axis=1)
+        qi, ci = np.nonzero(~far)
+        if len(qi):
+            d = cells.points[ci] - x[qi, None]  # (P, S, 3)
+            r = np.maximum(np.linalg.norm(d, axis=2), 0.5 * self.disc_radius)
+            near = (np.einsum("psa,psa->ps", d, cells.weighted[ci]) / r**3).sum(axis=1)
+            np.add.at(out, qi, near)
+        return out / (4.0 * np.pi)
+
+    def winding_number_exact(self, x: np.ndarray, chunk: int = 512) -> np.ndarray:
+        """The winding number of `winding_number` summed over every sample (M × N work)."""
         x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
         area = self._sample_area()
         out = np.empty(len(x))
@@ -84,6 +159,11 @@ class PointCloudField:
             r = np.maximum(np.linalg.norm(d, axis=2), 0.5 * self.disc_radius)
             out[start : start + chunk] = (np.einsum("cna,na->cn", d, self.normals) * area / r**3).sum(1)
         return out / (4.0 * np.pi)
+
+    def _cells(self) -> _Cells:
+        if not hasattr(self, "_cell_cache"):
+            self._cell_cache = _Cells.build(self.points, self.normals * self._sample_area()[:, None])
+        return self._cell_cache
 
     def _sample_area(self) -> np.ndarray:
         """(N,) the surface area each sample stands for: π r_8² / 8, r_8 the distance to its 8th neighbour (a

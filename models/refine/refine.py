@@ -42,7 +42,8 @@ class RefineConfig:
         region_point_tol: with a region mask, every contact point within this of an allowed sample (m): the
             verification asks for 5 mm; the SCP's Φ^R measures to the samples' discs, up to 0.75 × the sample
             spacing less (a masked LEAP grasp converged on Φ^R and failed verification at 5.4 mm).
-        penetration_tol: sphere penetration / self-overlap allowed at convergence (m).
+        penetration_tol: guard penetration / self-overlap allowed at convergence (m): half the verification's 1 mm,
+            which measures on the meshes (the guards sample them).
         max_normal_force: bound on each normal force (unit target wrench).
         tip_weight: λ (1/m²) on the squared tip distances.
         penalty: ρ on constraint slacks and in the merit.
@@ -59,7 +60,7 @@ class RefineConfig:
     residual_tol: float = 1e-6
     tip_tol: float = 2e-3
     region_point_tol: float = 4.5e-3
-    penetration_tol: float = 1e-3
+    penetration_tol: float = 5e-4
     max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE
     tip_weight: float = 100.0
     penalty: float = 10.0

@@ -48,8 +48,9 @@ class Linearisation:
     """Everything the SCP step needs at one iterate (all numpy, float64).
 
     Attributes:
-        tips, tip_jac: (m, 3), (m, 3, n) each fingertip's contact sample on its real surface and its Jacobian
-            (n = 6 + D) (`models.refine.contact`).
+        tips, tip_jac: (m, 3), (m, 3, n) each fingertip's contact: its contact sample on the real finger surface
+            (`models.refine.contact`) projected onto the object (where the force acts, as verification has it), and
+            the sample's Jacobian (n = 6 + D).
         tip_phi, tip_grad, gap_jac: (m,), (m, 3), (m, 3, n) distance the objective drives to zero (Φ, or Φ^R with a
             mask) at each pad's sample nearest the object, its gradient and that sample's Jacobian.
         normals: (m, 3) the object's given outward normal at each contact (grasp maps, friction cones).
@@ -149,16 +150,15 @@ def linearise(
     normals = field.given_normal(on_object)  # type: ignore[attr-defined]
     normal_jac = field.normal_jacobian(tips) if hasattr(field, "normal_jacobian") else np.zeros((len(tips), 3, 3))
     point_distance = getattr(field, "region_point_distance", None) if tip_field is not None else None
-    solution = solve_forces(task, tips, normals, mu, max_normal_force)
+    solution = solve_forces(task, on_object, normals, mu, max_normal_force)  # where verification applies them
     pairs = np.asarray(hand.self_collision_pairs, dtype=np.int64).reshape(-1, 2)
     diff = sph[pairs[:, 0]] - sph[pairs[:, 1]] if len(pairs) else np.zeros((0, 3))
     dist = np.linalg.norm(diff, axis=1)
-    rows = contacts.guard_rows
     return Linearisation(
         task=task,
         mu=mu,
         max_normal_force=max_normal_force,
-        tips=tips,
+        tips=on_object,
         tip_jac=contacts.jac,
         tip_phi=contacts.phi,
         tip_grad=contacts.grad,
@@ -166,8 +166,8 @@ def linearise(
         normals=np.asarray(normals, dtype=np.float64),
         normal_jac=normal_jac,
         solution=solution,
-        clear=np.concatenate([contacts.guard_phi[rows], sph_phi - radius[guard]]),
-        clear_grad=np.concatenate([contacts.row_grad, sph_grad]),
+        clear=np.concatenate([contacts.clear, sph_phi - radius[guard]]),
+        clear_grad=np.concatenate([contacts.clear_grad, sph_grad]),
         clear_jac=np.concatenate([contacts.row_jac, sph_jac[guard]]),
         sph=sph,
         sph_jac=sph_jac,

@@ -95,12 +95,16 @@ class Hand:
             self.collision_meshes[tree.body_names[b]] = cast(trimesh.Trimesh, trimesh.util.concatenate(meshes))
         if not self.collision_meshes:
             raise HandLoadError("the hand has no collision geometry (user URDFs need box/sphere/cylinder shapes)")
-        # each fingertip link's own geometry, in its body's frame: the pad (a merged parent's geometry is not)
-        self._tip_link_meshes: list[trimesh.Trimesh | None] = []
+        # each fingertip body's links with geometry, in the body frame: a contact names the link it lies on
+        self._tip_link_meshes: list[dict[str, trimesh.Trimesh]] = []
         for link in self.fingertip_links:
-            _, T = tree.link_body[link]
-            own = [m.copy().apply_transform(T) for m in desc.links.get(link, [])]
-            self._tip_link_meshes.append(cast(trimesh.Trimesh, trimesh.util.concatenate(own)) if own else None)
+            b, _ = tree.link_body[link]
+            parts: dict[str, trimesh.Trimesh] = {}
+            for name, (bb, T) in tree.link_body.items():
+                own = [m.copy().apply_transform(T) for m in desc.links.get(name, [])] if bb == b else []
+                if own:
+                    parts[name] = cast(trimesh.Trimesh, trimesh.util.concatenate(own))
+            self._tip_link_meshes.append(parts)
         # fingertip points in their bodies
         tip_body, tip_local = [], []
         for link, off in zip(self.fingertip_links, self.tip_offsets, strict=True):
@@ -188,7 +192,15 @@ class Hand:
         """Samples of the fingertip bodies' real meshes: contact candidates (pads) and their guards
         (`models.robots.pads`)."""
         meshes = {self.tree.body_names.index(name): mesh for name, mesh in self.collision_meshes.items()}
-        return build_contact_surface(meshes, self._tip_body, self._tip_local, pad_meshes=self._tip_link_meshes)
+        return build_contact_surface(meshes, self._tip_body, self._tip_local, link_meshes=self._tip_link_meshes)
+
+    @cached_property
+    def fingertip_parts(self) -> list[list[tuple[np.ndarray, np.ndarray]]]:
+        """Per fingertip, the convex parts of its body's mesh: half-spaces (f, 4) ``n·x ≤ d`` of each connected
+        part's hull and its bounds (2, 3), body frame (object points inside them are penetrations)."""
+        from models.robots.pads import convex_parts
+
+        return [convex_parts(self.collision_meshes[b]) for b in self.fingertip_bodies]
 
     @property
     def fingertip_bodies(self) -> list[str]:

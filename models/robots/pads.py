@@ -41,6 +41,7 @@ class ContactSurface:
         pad: (K,) bool, the sample may carry the fingertip's contact (within ``PAD_RADIUS`` of the tip point).
         tip_distance: (K,) each sample's distance to its fingertip's tip point (ties between pad samples equally
             near the object, e.g. a flat pad on a flat face, go to the one nearest the tip point).
+        link: (K,) name of the link (of the body's merged links) each sample lies on ("" when unknown).
         bound_centre, bound_radius: (m, 3) body-frame centre and (m,) radius of a sphere around each fingertip's
             samples (cheap culling before distance queries).
     """
@@ -51,6 +52,7 @@ class ContactSurface:
     fingertip: np.ndarray
     pad: np.ndarray
     tip_distance: np.ndarray
+    link: np.ndarray
     bound_centre: np.ndarray
     bound_radius: np.ndarray
 
@@ -108,7 +110,7 @@ def _thin(points: np.ndarray, spacing: float) -> np.ndarray:
 def build_contact_surface(
     body_meshes: dict[int, trimesh.Trimesh], tip_body: np.ndarray, tip_local: np.ndarray,
     spacing: float = SAMPLE_SPACING, pad_radius: float = PAD_RADIUS,
-    pad_meshes: list[trimesh.Trimesh | None] | None = None,
+    link_meshes: list[dict[str, trimesh.Trimesh]] | None = None,
 ) -> ContactSurface:  # fmt: skip
     """Sample every fingertip body (see module doc).
 
@@ -116,11 +118,11 @@ def build_contact_surface(
         body_meshes: body index -> mesh in that body's frame, for (at least) the fingertip bodies.
         tip_body: (m,) body index of each fingertip; tip_local: (m, 3) its tip point in the body frame.
         spacing: sample spacing (m). pad_radius: pad extent around the tip point (m).
-        pad_meshes: per fingertip, the fingertip link's own geometry in the body frame (None: the whole body may
-            carry the pad). A body merges fixed children into its link: Allegro's fingertip link is the 12 mm
-            tip sphere on the distal phalanx, and a contact on the phalanx is not on the fingertip.
+        link_meshes: per fingertip, the geometry of each link of its body (link name -> mesh, body frame): each
+            sample is labelled with the link it lies on (a body merges fixed children into its link: Allegro's
+            fingertip link is the 12 mm tip sphere on the distal phalanx link), so a contact names its link.
     """
-    body, local, normals, owner, pad, reach = [], [], [], [], [], []
+    body, local, normals, owner, pad, reach, labels = [], [], [], [], [], [], []
     centres, radii = [], []
     for i, (b, tip) in enumerate(zip(tip_body, tip_local, strict=True)):
         mesh = body_meshes.get(int(b))
@@ -129,11 +131,14 @@ def build_contact_surface(
         else:
             pts, nrm = sample_evenly(mesh, spacing)
         near = np.linalg.norm(pts - tip, axis=1) <= pad_radius
-        own = pad_meshes[i] if pad_meshes is not None else None
-        if own is not None and len(own.faces):
-            on_link = np.abs(trimesh.proximity.ProximityQuery(own).signed_distance(pts)) <= 0.25 * spacing
-            if (near & on_link).any():
-                near &= on_link
+        parts = link_meshes[i] if link_meshes is not None else {}
+        names = list(parts) or [""]
+        if len(names) > 1:
+            gaps = np.stack([np.abs(trimesh.proximity.ProximityQuery(m).signed_distance(pts)) for m in parts.values()])
+            which = np.argmin(gaps, axis=0)
+        else:
+            which = np.zeros(len(pts), dtype=np.int64)
+        labels.append(np.asarray([names[k] for k in which], dtype=object))
         if not near.any():  # a tip point far from its mesh: the nearest samples are the pad
             near = np.linalg.norm(pts - tip, axis=1) <= np.linalg.norm(pts - tip, axis=1).min() + pad_radius
         body.append(np.full(len(pts), int(b)))
@@ -152,6 +157,25 @@ def build_contact_surface(
         fingertip=np.concatenate(owner).astype(np.int64),
         pad=np.concatenate(pad),
         tip_distance=np.concatenate(reach),
+        link=np.concatenate(labels),
         bound_centre=np.asarray(centres),
         bound_radius=np.asarray(radii),
     )
+
+
+def convex_parts(mesh: trimesh.Trimesh) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Half-spaces (f, 4) ``n·x ≤ d`` and bounds (2, 3) of the convex hull of each connected part of ``mesh``: a
+    body merges several links' shapes (LEAP: a convex hull per visual mesh), and the hull of their union reached
+    2 mm beyond them."""
+    parts = mesh.split(only_watertight=False) if len(mesh.faces) else []
+    pieces = [m for m in parts if len(m.faces) >= 4] or [mesh]
+    out = []
+    for piece in pieces:
+        try:
+            hull = piece.convex_hull
+        except Exception:  # a flat or degenerate piece has no hull volume: it cannot contain a point
+            continue
+        n = np.asarray(hull.face_normals)
+        d = np.einsum("ij,ij->i", n, np.asarray(hull.triangles_center))
+        out.append((np.hstack([n, d[:, None]]), np.asarray(piece.bounds)))
+    return out
