@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from clients.schemas import (
+    HandMesh,
     IterationRecord,
     Method,
     Proposal,
@@ -87,6 +88,58 @@ def hand_spheres(hand: Any, palm_position: np.ndarray, palm_quaternion: np.ndarr
     return np.hstack([centres[0].numpy(), np.asarray(hand.sphere_radii, dtype=np.float64)[:, None]])
 
 
+VIEW_FACES_PER_BODY = 400
+"""A body mesh with more faces is drawn as the convex hulls of its parts (LEAP's fingertips: 7 000 faces) ..."""
+VIEW_VERTICES_PER_PART = 48
+"""... each hull of at most this many of the part's vertices (spread by farthest-point sampling)."""
+
+
+def hand_mesh(hand: Any, palm_position: np.ndarray, palm_quaternion: np.ndarray, q: np.ndarray) -> HandMesh:
+    """The hand's collision meshes posed at a proposal, merged into one mesh (world frame) for viewers."""
+    import torch
+
+    def row(a: np.ndarray) -> torch.Tensor:
+        return torch.as_tensor(np.asarray(a, dtype=np.float64))[None]
+
+    with torch.no_grad():
+        poses = hand.link_poses(row(palm_position), row(palm_quaternion), row(q))
+    verts, faces, offset = [], [], 0
+    for body, (v, f) in _view_meshes(hand).items():
+        T = poses[body][0].numpy()
+        verts.append(v @ T[:3, :3].T + T[:3, 3])
+        faces.append(f + offset)
+        offset += len(v)
+    return HandMesh(vertices=np.vstack(verts).astype(np.float64), faces=np.vstack(faces).astype(np.int64))
+
+
+def _view_meshes(hand: Any) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    cache = hand.__dict__.setdefault("_view_meshes", {})
+    if not cache:
+        for body, mesh in hand.collision_meshes.items():
+            if len(mesh.faces) > VIEW_FACES_PER_BODY:
+                pieces = [p for p in mesh.split(only_watertight=False) if len(p.faces) >= 4] or [mesh]
+                parts = [_coarse_hull(np.asarray(p.vertices)) for p in pieces]
+                v = np.vstack([np.asarray(p.vertices) for p in parts])
+                counts = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
+                f = np.vstack([np.asarray(p.faces) + c for p, c in zip(parts, counts, strict=True)])
+            else:
+                v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+            cache[body] = (v, f)
+    return cache
+
+
+def _coarse_hull(vertices: np.ndarray) -> Any:
+    """The convex hull of at most ``VIEW_VERTICES_PER_PART`` of ``vertices`` (farthest-point sampling)."""
+    import trimesh
+
+    pick = [0]
+    dist = np.linalg.norm(vertices - vertices[0], axis=1)
+    while len(pick) < min(VIEW_VERTICES_PER_PART, len(vertices)):
+        pick.append(int(np.argmax(dist)))
+        dist = np.minimum(dist, np.linalg.norm(vertices - vertices[pick[-1]], axis=1))
+    return trimesh.convex.convex_hull(vertices[pick])
+
+
 def to_result(
     output: SynthesisOutput, request: SynthesisRequest, model_version: str, hand: Any = None
 ) -> SynthesisResult:
@@ -102,6 +155,7 @@ def to_result(
             wrench_residual=_finite(q.wrench_residual), max_tip_distance=_finite(q.max_tip_distance),
             penetration_depth=_finite(q.penetration_depth), self_collision_depth=_finite(q.self_collision_depth),
             epsilon=None if q.epsilon is None or not np.isfinite(q.epsilon) else float(q.epsilon),
+            failures=list(q.failures), geometry=q.geometry,
         )  # fmt: skip
         history = None
         if request.options.return_history and p.history is not None:
@@ -122,6 +176,9 @@ def to_result(
                 hand_spheres=None
                 if hand is None
                 else hand_spheres(hand, p.palm_position, p.palm_quaternion, p.joint_values),
+                hand_mesh=None
+                if hand is None or not request.options.return_hand_mesh
+                else hand_mesh(hand, p.palm_position, p.palm_quaternion, p.joint_values),
                 history=history,
             )
         )

@@ -133,6 +133,7 @@ def build_request(args: argparse.Namespace, path: Path | None = None) -> Any:
         max_iterations=args.max_iterations,
         refine=not args.no_refine,
         return_heatmap=args.heatmap,
+        return_hand_mesh=getattr(args, "view", None) is not None,  # --view draws the posed hand's meshes
     )
 
 

@@ -32,7 +32,7 @@ from clients.schemas.objects import (
     PhysicalProperties,
 )
 from clients.schemas.requests import ContactsIn, Method, SynthesisOptions, SynthesisRequest
-from clients.schemas.results import IterationRecord, Proposal, Quality, SynthesisResult
+from clients.schemas.results import HandMesh, IterationRecord, Proposal, Quality, SynthesisResult
 from clients.schemas.robots import MAX_URDF_BYTES, RobotIn, RobotPublic, RobotRegister
 from clients.schemas.tasks import (
     DeltaPoseTask,
@@ -62,6 +62,7 @@ __all__ = [
     "ErrorBody",
     "FieldError",
     "ForceClosureTask",
+    "HandMesh",
     "IterationRecord",
     "JobCreated",
     "JobProgress",

@@ -36,6 +36,11 @@ class SynthesisOptions(WireModel):
     return_heatmap: bool = False
     return_force_map: bool = False
     return_history: bool = False
+    return_hand_mesh: bool = Field(
+        False,
+        description="Return each proposal's posed hand collision meshes (`hand_mesh`, for viewers; about "
+        "100-400 kB a proposal).",
+    )
 
 
 class ContactsIn(WireModel):

@@ -23,6 +23,16 @@ class Quality(WireModel):
     penetration_depth: float = Field(..., ge=0, description="Deepest hand–object penetration (exact), m.")
     self_collision_depth: float = Field(..., ge=0, description="Deepest hand self-penetration, m.")
     epsilon: float | None = Field(None, description="Ferrari–Canny ε (force closure), > 0 when closed.")
+    failures: list[str] = Field(
+        default_factory=list,
+        description="The verification criteria the proposal misses (empty when it succeeds): wrench_residual, "
+        "tip_distance, penetration, self_collision, not_force_closure, friction_cone.",
+    )
+    geometry: str | None = Field(
+        None,
+        description="The object surface verification measured on: 'mesh' (the sent mesh) or 'points' (the "
+        "oriented points' surface, which keeps concavities).",
+    )
 
 
 class IterationRecord(WireModel):
@@ -31,6 +41,13 @@ class IterationRecord(WireModel):
     residual: float
     tip_distance: float
     step: float
+
+
+class HandMesh(WireModel):
+    """The hand's collision meshes posed at a proposal (world frame, m), merged, for viewers."""
+
+    vertices: Annotated[np.ndarray, spec("V", 3)]
+    faces: Annotated[np.ndarray, spec("F", 3, kind="int")]
 
 
 class Proposal(WireModel):
@@ -52,6 +69,9 @@ class Proposal(WireModel):
     )
     hand_spheres: Annotated[np.ndarray, spec("S", 4)] | None = Field(
         None, description="The hand's collision spheres at this pose: centre (world, m) and radius, for viewers."
+    )
+    hand_mesh: HandMesh | None = Field(
+        None, description="The hand's collision meshes at this pose (what the contacts were verified on)."
     )
     history: list[IterationRecord] | None = None
 

@@ -74,7 +74,8 @@ def result_figure(
 
     The object's points are coloured by the contact heatmap when the result has one (else by the region mask,
     else by height); then the contacts labelled with their fingertips, the force arrows, the palm frame, and the
-    hand as links from the palm to each fingertip at its contact.
+    hand: its posed collision meshes when the result has them (``options.return_hand_mesh``), else links from the
+    palm to each fingertip at its contact.
 
     Args:
         result: the answer of `synthesize`.
@@ -170,18 +171,27 @@ def _grasp_traces(fig: Any, p: Proposal, size: float, force_scale: float | None)
                 showlegend=axis == 0,
             )
         )
-    xs, ys, zs = _segments(np.repeat(palm[None], len(c), axis=0), c)
-    fig.add_trace(
-        go.Scatter3d(
-            x=xs,
-            y=ys,
-            z=zs,
-            mode="lines",
-            line={"color": "#8c564b", "width": 10},
-            opacity=0.6,
-            name="hand (palm → fingertips)",
+    if p.hand_mesh is not None and len(p.hand_mesh.vertices):
+        v, tri = p.hand_mesh.vertices, p.hand_mesh.faces
+        fig.add_trace(
+            go.Mesh3d(
+                x=v[:, 0], y=v[:, 1], z=v[:, 2], i=tri[:, 0], j=tri[:, 1], k=tri[:, 2], color="#c49c94",
+                opacity=0.55, flatshading=True, hoverinfo="skip", name="hand (collision meshes)", showlegend=True,
+            )
+        )  # fmt: skip
+    else:
+        xs, ys, zs = _segments(np.repeat(palm[None], len(c), axis=0), c)
+        fig.add_trace(
+            go.Scatter3d(
+                x=xs,
+                y=ys,
+                z=zs,
+                mode="lines",
+                line={"color": "#8c564b", "width": 10},
+                opacity=0.6,
+                name="hand (palm → fingertips)",
+            )
         )
-    )
     fig.add_trace(
         go.Scatter3d(
             x=[palm[0]],

@@ -17,20 +17,22 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from models.cli.eval_audit import add_audit_parser
 from models.cli.eval_network import add_network_parser
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 
 
 def register(subparsers: Any) -> None:
-    """Add ``eval`` with its ``refine`` (Table II) and ``network`` (Table I) sub-commands to ``mani``."""
+    """Add ``eval`` with its ``refine`` (Table II), ``network`` (Table I) and ``audit`` sub-commands to ``mani``."""
     p = subparsers.add_parser(
         "eval", help="evaluate refinement / network", description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    sub = p.add_subparsers(dest="eval_command", metavar="{refine,network}")
+    sub = p.add_subparsers(dest="eval_command", metavar="{refine,network,audit}")
     add_refine(sub)
     add_network_parser(sub)
+    add_audit_parser(sub)
     p.set_defaults(func=lambda args: (p.print_help(), EXIT_USAGE)[1])
 
 

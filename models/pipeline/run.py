@@ -99,6 +99,7 @@ def _proposal(
         self_collision_depth=ver.self_collision,
         epsilon=ver.epsilon if prep.task.closure else None,
         failures=list(ver.failures),
+        geometry=ver.geometry,
     )
     return ProposalOutput(
         contact_points=ver.contacts,

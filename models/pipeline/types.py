@@ -134,6 +134,7 @@ class QualityOutput:
     self_collision_depth: float
     epsilon: float | None
     failures: list[str] = field(default_factory=list)
+    geometry: str = "points"  # the object surface verification measured on: "mesh" or "points"
 
 
 @dataclass

@@ -66,7 +66,9 @@ function traces(scene, proposal) {
       x: [palm[0], palm[0] + a * R[0][k]], y: [palm[1], palm[1] + a * R[1][k]], z: [palm[2], palm[2] + a * R[2][k]],
       line: { color: colour, width: 8 } });
   });
-  if (proposal.hand_spheres && proposal.hand_spheres.length) {
+  if (proposal.hand_mesh && proposal.hand_mesh.vertices.length) {
+    out.push(handMesh(proposal.hand_mesh));
+  } else if (proposal.hand_spheres && proposal.hand_spheres.length) {
     out.push(sphereMesh(proposal.hand_spheres));
   } else {
     const hx = [], hy = [], hz = [];
@@ -79,6 +81,13 @@ function traces(scene, proposal) {
   out.push({ type: "scatter3d", mode: "markers", name: "fingertips", x: col(c, 0), y: col(c, 1), z: col(c, 2),
     marker: { size: 12, color: "#ff7f0e", opacity: 0.35 } });
   return out;
+}
+
+// The hand's collision meshes at its solved pose (what the contacts were verified on), world metres.
+function handMesh(mesh) {
+  const v = mesh.vertices, f = mesh.faces;
+  return { type: "mesh3d", name: "hand (collision meshes)", showlegend: true, x: col(v, 0), y: col(v, 1), z: col(v, 2),
+    i: col(f, 0), j: col(f, 1), k: col(f, 2), color: "#c49c94", opacity: 0.55, flatshading: true, hoverinfo: "skip" };
 }
 
 // The hand at its solved pose as one mesh of its collision spheres ([x, y, z, r] rows, metres).
@@ -114,7 +123,8 @@ function draw(scene, index) {
     rows("quality", [["success", q.success], ["contacts from", proposal.contact_source || "-"], ["converged", q.converged], ["reason", q.reason],
       ["iterations", q.iterations], ["wrench residual", fmt(q.wrench_residual)],
       ["max tip distance (m)", fmt(q.max_tip_distance)], ["penetration (m)", fmt(q.penetration_depth)],
-      ["self-collision (m)", fmt(q.self_collision_depth)], ["Ferrari–Canny ε", fmt(q.epsilon)]]);
+      ["self-collision (m)", fmt(q.self_collision_depth)], ["Ferrari–Canny ε", fmt(q.epsilon)],
+      ["verified on", q.geometry || "-"], ["failed criteria", (q.failures || []).join(", ") || "-"]]);
     rows("hand", [["hand", result.hand], ["palm position", proposal.palm_position.map(fmt).join(", ")],
       ["palm quaternion", proposal.palm_quaternion.map(fmt).join(", ")],
       ...proposal.joint_names.map((n, i) => [n, fmt(proposal.joint_values[i])])]);
