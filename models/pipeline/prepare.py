@@ -78,7 +78,9 @@ def prepare(inp: SynthesisInput) -> Prepared:
     except ValueError as exc:
         raise InvalidInput(str(exc)) from exc
     density = float(inp.properties.get("density", DEFAULT_DENSITY))
-    mp = geom.mass_properties(density)
+    exact = mesh if mesh is not None and mesh.is_watertight else None  # else the points' surface, never a hull
+    cloud = PointCloudField(points, geom.normals, mask)
+    mp = geom.mass_properties(density) if exact is not None else _points_mass(cloud, geom, density)
     centre = np.asarray(mp.com, dtype=np.float64)
     inertia = np.asarray(mp.inertia, dtype=np.float64)
     if inp.joint is not None:
@@ -90,7 +92,6 @@ def prepare(inp: SynthesisInput) -> Prepared:
     mu = float(inp.properties.get("friction", DEFAULT_FRICTION))
     if not 0 < mu <= 5:
         raise InvalidInput(f"properties.friction: {mu} is outside (0, 5]")
-    cloud = PointCloudField(points, geom.normals, mask)
     tip_field = cloud.region_distance if mask is not None else None
     if inp.method == "contacts":
         if inp.contacts is None:
@@ -100,8 +101,18 @@ def prepare(inp: SynthesisInput) -> Prepared:
             raise InvalidInput(
                 f"contacts: {len(contacts)} contacts for a hand with {inp.hand.num_fingertips} fingertips"
             )
-    return Prepared(inp, cloud, geom.mesh if mesh is not None else mesh, centre, mp.mass, inertia, task, mu,
-                    tip_field, time.perf_counter() - t0)
+    return Prepared(inp, cloud, exact, centre, mp.mass, inertia, task, mu, tip_field, time.perf_counter() - t0)
+
+
+def _points_mass(cloud: PointCloudField, geom: Any, density: float) -> Any:
+    """Mass properties of the volume the points enclose (`models.refine.volume`); the convex hull's only for an
+    open or flat cloud that encloses nothing."""
+    from models.refine.volume import points_mass_properties
+
+    try:
+        return points_mass_properties(cloud, density)
+    except ValueError:
+        return geom.mass_properties(density)
 
 
 def network_inputs(batch: Sequence[Prepared]) -> list[Any]:
