@@ -289,15 +289,21 @@ async def large_bodies(args: argparse.Namespace) -> dict[str, Any]:
                 peak = max(peak, rss_mb(proc.pid).get("VmRSS", 0.0))
                 await asyncio.sleep(0.02)
             answers = posting.result()
-        await asyncio.sleep(2.0)
-        after = rss_mb(proc.pid)
+            after = rss_mb(proc.pid)
+            queued = (await http.get("/dashboard/data")).json()["stats"]["depth"]
+            end = time.monotonic() + args.budget
+            while (await http.get("/dashboard/data")).json()["stats"]["depth"] and time.monotonic() < end:
+                await asyncio.sleep(0.5)
+            await asyncio.sleep(1.0)
+            drained = rss_mb(proc.pid)
     finally:
         _stop(proc)
     return {
         "bodies": args.bodies, "body_mb": round(len(data) / 1e6, 1), "answers": dict(Counter(s for s, _ in answers)),
         "healthz_p50_ms": _pct(health, 0.5), "healthz_p99_ms": _pct(health, 0.99),
         "healthz_max_ms": _pct(health, 1.0), "api_rss_peak_mb": round(max(peak, after.get("VmHWM", 0.0)), 0),
-        "api_rss_after_mb": round(after.get("VmRSS", 0.0), 0),
+        "api_rss_after_mb": round(after.get("VmRSS", 0.0), 0), "queued_after": queued,
+        "api_rss_drained_mb": round(drained.get("VmRSS", 0.0), 0),
         "seconds": round(max((t for _, t in answers), default=0.0), 1),
     }  # fmt: skip
 

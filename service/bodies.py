@@ -3,18 +3,19 @@
 Decoding a 50 MB JSON body (millions of floats into Python lists, then into arrays) holds the GIL for seconds, so
 a thread would still stall every other request; a process does not. Bodies up to ``offload_bytes`` are decoded
 inline (the common case, ~2 ms); larger ones take one of ``slots`` slots before they are even read (so at most
-``slots`` large bodies are in memory at once) and are decoded in a small spawned process pool. A request that
-waits longer than ``wait_s`` for a slot gets 503 with Retry-After. The children import `clients` only (no
-torch, no server code).
+``slots`` large bodies are in memory at once) and are decoded in one of ``slots`` child processes
+(`service.body_child`). A request that waits longer than ``wait_s`` for a slot gets 503 with Retry-After. The
+children import `clients` only (no torch, no server code).
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
-import multiprocessing as mp
+import json
+import pickle
+import sys
 from collections.abc import AsyncIterator
-from concurrent.futures import ProcessPoolExecutor
 from typing import Any, TypeVar
 
 from pydantic import BaseModel, ValidationError
@@ -39,14 +40,21 @@ def decode(cls: type[ModelT], data: bytes, content_type: str | None) -> tuple[st
 
 
 class BodyPool:
-    """The slots and the process pool for large bodies (one per app; closed in the lifespan)."""
+    """The slots and the decoding processes for large bodies (one per app; closed in the lifespan).
+
+    The processes are plain ``python -m service.body_child`` children on pipes (no `multiprocessing`: no
+    re-import of the parent's main module, no feeder threads holding copies of the body); one body at a time
+    each, at most ``slots`` of them, started on first use. A child that fails or whose request is abandoned
+    half-way is killed and replaced.
+    """
 
     def __init__(self, offload_bytes: int, slots: int, wait_s: float) -> None:
         self.offload_bytes = offload_bytes
         self.wait_s = wait_s
+        self._size = slots
         self._slots = asyncio.Semaphore(slots)
-        self._workers = slots
-        self._pool: ProcessPoolExecutor | None = None
+        self._idle: list[asyncio.subprocess.Process] = []
+        self._loop: asyncio.AbstractEventLoop | None = None
 
     def large(self, declared: int | None) -> bool:
         """Whether a body of ``declared`` bytes (None: not declared) takes a slot."""
@@ -57,6 +65,10 @@ class BodyPool:
         """Hold one large-body slot. Raises `service.errors.Unavailable` after ``wait_s``."""
         from service.errors import Unavailable
 
+        if self._loop is not asyncio.get_running_loop():  # a new event loop (tests): start afresh
+            self.close()
+            self._slots = asyncio.Semaphore(self._size)
+            self._loop = asyncio.get_running_loop()
         try:
             await asyncio.wait_for(self._slots.acquire(), self.wait_s)
         except TimeoutError as exc:
@@ -67,12 +79,39 @@ class BodyPool:
             self._slots.release()
 
     async def decode(self, cls: type[ModelT], data: bytes, content_type: str | None) -> tuple[str, Any]:
-        """`decode` in the process pool (started on first use)."""
-        if self._pool is None:
-            self._pool = ProcessPoolExecutor(max_workers=self._workers, mp_context=mp.get_context("spawn"))
-        return await asyncio.get_running_loop().run_in_executor(self._pool, decode, cls, data, content_type)
+        """`decode` in a child process (call while holding a `slot`)."""
+        from service.errors import Unavailable
+
+        child = self._idle.pop() if self._idle else await self._spawn()
+        try:
+            header = json.dumps({"cls": f"{cls.__module__}:{cls.__qualname__}", "ct": content_type,
+                                 "size": len(data)}).encode()  # fmt: skip
+            assert child.stdin is not None and child.stdout is not None
+            child.stdin.write(len(header).to_bytes(4, "big") + header)
+            child.stdin.write(data)
+            await child.stdin.drain()
+            size = int.from_bytes(await child.stdout.readexactly(8), "big")
+            answer: tuple[str, Any] = pickle.loads(await child.stdout.readexactly(size))
+        except BaseException as exc:  # broken, or abandoned half-way (client gone): never reuse it
+            _kill(child)
+            if isinstance(exc, OSError | asyncio.IncompleteReadError):
+                raise Unavailable("the body decoder failed; retry", retry_after=1) from exc
+            raise
+        self._idle.append(child)
+        return answer
+
+    async def _spawn(self) -> asyncio.subprocess.Process:
+        return await asyncio.create_subprocess_exec(
+            sys.executable, "-m", "service.body_child", stdin=asyncio.subprocess.PIPE, stdout=asyncio.subprocess.PIPE
+        )
 
     def close(self) -> None:
-        if self._pool is not None:
-            self._pool.shutdown(wait=False, cancel_futures=True)
-            self._pool = None
+        """Stop the idle children (a busy one is killed by its request's end)."""
+        for child in self._idle:
+            _kill(child)
+        self._idle.clear()
+
+
+def _kill(child: asyncio.subprocess.Process) -> None:
+    with contextlib.suppress(ProcessLookupError):
+        child.kill()

@@ -6,6 +6,8 @@ from __future__ import annotations
 import contextlib
 import json
 import socket
+import subprocess
+import sys
 import threading
 import time
 from pathlib import Path
@@ -130,3 +132,24 @@ def test_a_batch_larger_than_the_queue_is_422_not_429_for_ever() -> None:
         assert answer.status_code == 422 and "at most 3 jobs" in answer.json()["error"], answer.text
         fits = httpx.post(f"{base}/v1/batches", json={"requests": [request_body("test_gripper")] * 3}, timeout=30)
         assert fits.status_code == 202, fits.text
+
+
+def test_large_bodies_work_from_a_script_without_a_main_guard(tmp_path: Path) -> None:
+    """The decoding children are plain `python -m service.body_child` processes: a script embedding the app
+    is never re-imported in them (multiprocessing's spawn would run such a script again)."""
+    script = tmp_path / "embed.py"
+    script.write_text(
+        "import json, sys\n"
+        f"sys.path[:0] = [{str(Path(__file__).resolve().parents[2])!r}]\n"
+        "from fastapi.testclient import TestClient\n"
+        "from service.app import create_app\n"
+        "from service.settings import Settings\n"
+        "from tests.service.fakes import FakeQueue\n"
+        "from tests.service.test_faults import big_body\n"
+        "with TestClient(create_app(Settings(parse_offload_bytes=1024), queue=FakeQueue())) as c:\n"
+        "    body = json.loads(big_body(2000)); body['robot']['name'] = 'fake_hand'\n"
+        "    r = c.post('/v1/jobs', content=json.dumps(body), headers={'Content-Type': 'application/json'})\n"
+        "    print('STATUS', r.status_code)\n"
+    )
+    out = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120)
+    assert out.stdout.count("STATUS 202") == 1, out.stdout + out.stderr
