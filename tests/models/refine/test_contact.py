@@ -107,3 +107,36 @@ def test_guards_see_a_fingertip_pushed_into_the_object():
     assert exact == pytest.approx(-0.003, abs=1e-9)
     assert lin.clear.min() == pytest.approx(exact, abs=1e-3)
     assert lin.penetration().max() > 0.002
+
+
+def test_object_points_inside_a_fingertip_are_guarded():
+    """An object point 2 mm inside a finger's face (between the surface samples) reads 2 mm deep on the
+    finger's convex parts, from the mesh's own faces (not the samples)."""
+    from models.refine.contact import GUARD_STANDOFF
+    from models.refine.state import linearise
+    from models.refine.wrench import closure_task
+    from models.robots import get_hand
+
+    hand = get_hand("panda_gripper")
+    pose = _rest(hand)
+    body = hand.fingertip_bodies[0]
+    mesh = hand.collision_meshes[body].split(only_watertight=False)[0].convex_hull
+    with torch.no_grad():
+        T = hand.link_poses(*pose.tensors())[body][0].numpy()
+    face = int(np.argmax(mesh.area_faces))
+    inside = mesh.triangles_center[face] - 0.002 * mesh.face_normals[face]
+    depth = float(-np.max(mesh.face_normals @ inside - np.einsum("ij,ij->i", mesh.face_normals,
+                                                                    mesh.triangles_center)))  # fmt: skip
+    point = T[:3, :3] @ inside + T[:3, 3]
+
+    class Poke(HalfSpace):  # a plane clear of the finger (5 cm from its centre), and one point inside it
+        points = point[None]
+
+        def normal_jacobian(self, x):
+            return np.zeros((len(x), 3, 3))
+
+    centre = T[:3, :3] @ hand.collision_meshes[body].bounds.mean(0) + T[:3, 3]
+    field = Poke(np.array([0.0, 0.0, -1.0]), -(float(centre[2]) + 0.05))  # beyond the fingertips, along +z
+    lin = linearise(hand, pose, field, closure_task(np.zeros(3), 0.05), 0.8, 10.0)
+    assert depth == pytest.approx(0.002, abs=2e-4)
+    assert lin.clear.min() == pytest.approx(-depth - GUARD_STANDOFF, abs=1e-6)
