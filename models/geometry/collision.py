@@ -6,8 +6,9 @@ gives no depth). We use it as the narrow-phase test per hand body, then measure 
 - hand → object: the largest depth of the hand body's surface samples (its vertices + ``BODY_SAMPLES`` area
   samples, seed 0) inside the object's watertight mesh (exact mesh signed distance, trimesh, evaluated only on
   the ``EXACT_CANDIDATES`` samples per body that the KD-tree Φ ranks deepest, if below ``PREFILTER``);
-- object → hand: the largest depth of object points (cloud + mesh vertices) inside the convex hulls of the body's
-  connected parts (half-space distance, exact for convex parts, an over-estimate for a non-convex one).
+- object → hand: the largest depth of object points (cloud + mesh vertices + points along its sharp edges) inside
+  the convex hulls of the body's connected parts (half-space distance, exact for convex parts, an over-estimate
+  for a non-convex one).
 
 Depth = the larger of the two. Its error is bounded by the sample spacing (a few mm² per sample on our hands):
 e.g. a sphere of radius r pushed d into a box face reads d within ~s²/(2r) (test: < 0.5 mm).
@@ -75,18 +76,19 @@ def _planes(mesh: trimesh.Trimesh) -> np.ndarray:
     return np.hstack([n, d[:, None]])
 
 
-def _parts_depth(parts: list[tuple[np.ndarray, np.ndarray]], x: np.ndarray) -> float:
-    """Largest depth (≥ 0) of points x (k, 3) inside any of the convex ``parts``."""
-    return max((_inside_depth(planes, x, bounds) for planes, bounds in parts), default=0.0)
+def _parts_depth(parts: list[tuple[np.ndarray, np.ndarray]], x: np.ndarray, grow: float = 0.0) -> float:
+    """Largest depth (≥ 0) of points x (k, 3) inside any of the convex ``parts`` grown by ``grow`` (m)."""
+    return max((_inside_depth(planes, x, bounds, grow) for planes, bounds in parts), default=0.0)
 
 
-def _inside_depth(planes: np.ndarray, x: np.ndarray, bounds: np.ndarray | None = None) -> float:
-    """Largest depth (≥ 0) of points x (k, 3) inside the convex region n·x <= d."""
+def _inside_depth(planes: np.ndarray, x: np.ndarray, bounds: np.ndarray | None = None, grow: float = 0.0) -> float:
+    """Largest depth (≥ 0) of points x (k, 3) inside the convex region n·x <= d + ``grow``."""
     lo, hi = bounds if bounds is not None else (x.min(0), x.max(0))
+    lo, hi = lo - grow, hi + grow
     x = x[np.all((x >= lo) & (x <= hi), axis=1)]  # cheap box cull first
     if len(x) == 0:
         return 0.0
-    slack = planes[:, 3][None] - x @ planes[:, :3].T  # (k, f) > 0 inside each half-space
+    slack = planes[:, 3][None] + grow - x @ planes[:, :3].T  # (k, f) > 0 inside each half-space
     depth = slack.min(axis=1)
     return float(max(depth.max(), 0.0))
 
@@ -133,7 +135,7 @@ def hand_object_penetration(
     poses = _poses(hand, palm_pos, palm_quat, q)
     mesh = geometry.mesh
     obj = _obj(_bvh(mesh), np.eye(4))
-    obj_pts = np.vstack([geometry.points, np.asarray(mesh.vertices)])
+    obj_pts = np.vstack([geometry.points, np.asarray(mesh.vertices), sharp_edge_points(mesh)])
     depth = 0.0
     for body in _bodies(hand):
         T = poses[body.name]
@@ -149,6 +151,24 @@ def hand_object_penetration(
         local = (obj_pts - T[:3, 3]) @ T[:3, :3]
         depth = max(depth, _parts_depth(body.parts, local))
     return depth
+
+
+SHARP_EDGE_ANGLE = np.radians(20.0)
+EDGE_SPACING = 5e-4
+
+
+def sharp_edge_points(mesh: trimesh.Trimesh, spacing: float = EDGE_SPACING) -> np.ndarray:
+    """Points (k, 3) every ``spacing`` along the mesh's sharp edges (faces meeting at more than 20°): an object's
+    edge can poke into a flat finger face between both sides' samples (a block's edge: 1.15 mm deep, unseen)."""
+    cache = mesh.__dict__.setdefault("_mani_edge_points", {})
+    if spacing not in cache:
+        edges = mesh.face_adjacency_edges[mesh.face_adjacency_angles > SHARP_EDGE_ANGLE]
+        a, b = mesh.vertices[edges[:, 0]], mesh.vertices[edges[:, 1]]
+        counts = np.maximum(np.ceil(np.linalg.norm(b - a, axis=1) / spacing).astype(int), 1)
+        t = np.concatenate([np.arange(1, c) / c for c in counts]) if counts.sum() > len(counts) else np.zeros(0)
+        owner = np.repeat(np.arange(len(edges)), counts - 1)
+        cache[spacing] = a[owner] + t[:, None] * (b - a)[owner] if len(owner) else np.zeros((0, 3))
+    return np.asarray(cache[spacing])
 
 
 def hand_mesh_penetration(
@@ -167,12 +187,13 @@ def hand_mesh_penetration(
 
 def hand_field_penetration(
     hand: Hand, field: SignedDistance, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray,
-    margin: float = 0.005,
+    margin: float = 0.005, inflate: float = 0.0,
 ) -> float:  # fmt: skip
     """Penetration depth (m, ≥ 0) of the hand's collision meshes into the surface of an object known only by its
     oriented points: the deepest body sample by the points' signed distance (``field``: negative inside, the side
     confirmed by the winding number; it keeps concavities, unlike a convex hull), and the deepest object point
-    inside a body's convex hull."""
+    inside a body's convex parts — both against the surface grown by ``inflate`` (m): the points' resolution, how
+    far the true surface may reach beyond them."""
     poses = _poses(hand, palm_pos, palm_quat, q)
     obj_pts = np.asarray(field.points, dtype=np.float64)
     depth = 0.0
@@ -184,11 +205,12 @@ def hand_field_penetration(
         if field.signed_distance(centre[None])[0][0] > reach + margin:
             continue
         phi = field.signed_distance(world)[0]
-        behind = np.flatnonzero(phi < 0)  # the discs' side errs beside sharp edges: confirm by winding number
+        behind = np.flatnonzero(phi < inflate)  # the discs' side errs beside sharp edges: confirm by winding number
         if len(behind):
-            depth = max(depth, float(max(-field.robust_signed_distance(world[behind]).min(), 0.0)))
+            depth = max(depth, float(max(inflate - field.robust_signed_distance(world[behind]).min(), 0.0)))
         local = (obj_pts - T[:3, 3]) @ T[:3, :3]
-        depth = max(depth, _parts_depth(body.parts, local))
+        inside = _parts_depth(body.parts, local, inflate)
+        depth = max(depth, inside)
     return depth
 
 

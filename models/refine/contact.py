@@ -27,7 +27,9 @@ the contact (on a flat pad against a flat face an arbitrary pick put a gripper's
 GUARD_MARGIN = 0.02
 GUARD_STANDOFF = 5e-4
 """m: the guards keep the sampled surface this far out, and the objective brings the pad this close: between the
-2.5 mm samples the real mesh reaches up to ~0.5 mm nearer (verification measured 1.05 mm where they read 0.5)."""
+2.5 mm samples the real mesh reaches up to ~0.5 mm nearer (verification measured 1.05 mm where they read 0.5).
+A field with a coarser ``resolution`` (the object's points: their disc radius) sets a larger standoff: the exact
+surface may reach that far beyond what its points show (a block's corner poked 1.4 mm into a finger)."""
 """m: samples (and spheres) farther than this from the object are not measured in detail."""
 
 TipField = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
@@ -149,6 +151,7 @@ def surface_contacts(
         margin: guards farther than this from the object are left out of the rows.
     """
     surf = hand.contact_surface  # type: ignore[attr-defined]
+    standoff = max(GUARD_STANDOFF, float(getattr(field, "resolution", 0.0)))
     with torch.no_grad():
         world_t, _, _ = hand.surface_samples(*pose, jacobian=False)  # type: ignore[attr-defined]
     world = world_t[0].numpy()
@@ -183,11 +186,11 @@ def surface_contacts(
     points = world[sample]
     gap = phi_all[at]
     if tip_field is None:
-        phi, grad = gap - GUARD_STANDOFF, grad_all[at].copy()
+        phi, grad = gap - standoff, grad_all[at].copy()
     else:
         phi, grad = tip_field(world[nearest])
     guard_rows = np.concatenate(rows) if rows else np.zeros(0, dtype=np.int64)
-    clear = np.concatenate([phi_all[guard_rows], *(e[0] for e in extra)]) - GUARD_STANDOFF
+    clear = np.concatenate([phi_all[guard_rows], *(e[0] for e in extra)]) - standoff
     clear_grad = np.concatenate([grad_all[guard_rows], *(e[1] for e in extra)]).reshape(-1, 3)
     guard_sample = measure[guard_rows]
     feet = np.concatenate([np.zeros((0, 3)), *(e[2] for e in extra)])

@@ -181,6 +181,12 @@ class PointCloudField:
         inside = self.winding_number(x) > 0.5
         return np.where(inside, -np.abs(phi), np.abs(phi))
 
+    @property
+    def resolution(self) -> float:
+        """How far (m) the object's true surface may lie beyond what its points show: the disc radius (0.75 × the
+        mean sample spacing). Refinement keeps this clear, verification without a mesh counts it as penetration."""
+        return self.disc_radius
+
     def given_normal(self, x: np.ndarray) -> np.ndarray:
         """The caller's outward normal (M, 3) of the sample nearest each x: what friction cones are built on
         (a re-estimated or smoothed normal differed from the caller's by a median 19° on third-party objects)."""

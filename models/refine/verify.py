@@ -14,7 +14,9 @@ Nothing here is judged on the optimiser's proxies (collision spheres, the sample
   residual ‖R Σ G_i f_i − τ‖² < 1e-6 for the unit target; for force closure Ferrari–Canny ε > 0 (parallel-jaw
   grippers: soft-finger pads);
 - hand–object penetration ≤ 1 mm on the hand's collision meshes against the mesh (fcl + exact signed distance) or
-  the points' surface; self-collision depth ≤ 1 mm on the meshes (`models.geometry`).
+  the points' surface grown by its resolution (the true surface may reach that far beyond the points: a block's
+  corner between samples poked 1.4 mm into a finger); self-collision depth ≤ 1 mm on the meshes
+  (`models.geometry`).
 
 ``geometry`` says which object surface was used: ``"mesh"`` or ``"points"``.
 """
@@ -131,7 +133,8 @@ def verify(
         if mesh is not None:
             pen = hand_mesh_penetration(hand, mesh, cloud.points, pose.palm_pos, pose.palm_quat, pose.q)
         else:
-            pen = hand_field_penetration(hand, cloud, pose.palm_pos, pose.palm_quat, pose.q)
+            pen = hand_field_penetration(hand, cloud, pose.palm_pos, pose.palm_quat, pose.q,
+                                         inflate=cloud.resolution)  # fmt: skip
         selfc = hand_self_collision(hand, pose.palm_pos, pose.palm_quat, pose.q)
     failures = []
     if not sol.residual_norm**2 < RESIDUAL_SQ_TOL:
