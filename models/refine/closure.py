@@ -19,7 +19,7 @@ from models.refine.grasp import grasp_maps, tangents
 def primitive_wrenches(
     points: np.ndarray,
     normals: np.ndarray,
-    mu: float,
+    mu: float | np.ndarray,
     centre: np.ndarray,
     length: float,
     edges: int = 8,
@@ -29,10 +29,11 @@ def primitive_wrenches(
     t1, t2 = tangents(normals)
     n = normals / np.linalg.norm(normals, axis=1, keepdims=True)
     angles = 2 * np.pi * np.arange(edges) / edges
+    mu_c = np.asarray(mu, dtype=np.float64).reshape(-1, 1, 1)  # one μ, or one per contact
     dirs = (
         -n[:, None, :]
-        + mu * np.cos(angles)[None, :, None] * t1[:, None, :]
-        + mu * np.sin(angles)[None, :, None] * t2[:, None, :]
+        + mu_c * np.cos(angles)[None, :, None] * t1[:, None, :]
+        + mu_c * np.sin(angles)[None, :, None] * t2[:, None, :]
     )  # (m, edges, 3)
     g = grasp_maps(points, centre, length)  # (m, 6, 3)
     prims = np.einsum("mij,mej->mei", g, dirs).reshape(-1, 6)
@@ -46,7 +47,7 @@ def primitive_wrenches(
 def ferrari_canny(
     points: np.ndarray,
     normals: np.ndarray,
-    mu: float,
+    mu: float | np.ndarray,
     centre: np.ndarray,
     length: float,
     edges: int = 8,

@@ -29,7 +29,7 @@ CLOSURE_MIN_SHARE = 0.25
 CLOSURE_CONE_SHRINK = 0.9
 
 
-def cone_mu(task: WrenchTask, mu: float) -> float:
+def cone_mu(task: WrenchTask, mu: float | np.ndarray) -> float | np.ndarray:
     """Friction coefficient of the optimisation's cones (narrowed for force closure)."""
     return mu * CLOSURE_CONE_SHRINK if task.closure else mu
 
@@ -66,7 +66,7 @@ def solve_forces(
     task: WrenchTask,
     points: np.ndarray,
     normals: np.ndarray,
-    mu: float,
+    mu: float | np.ndarray,
     max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE,
 ) -> ForceSolution:
     """Solve Eq. (6-8) with Clarabel's native API.
@@ -114,7 +114,7 @@ def solve_forces_cvxpy(
     task: WrenchTask,
     points: np.ndarray,
     normals: np.ndarray,
-    mu: float,
+    mu: float | np.ndarray,
     max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE,
 ) -> ForceSolution:
     """The same problem written plainly in CVXPY (reference for tests; ~10× slower)."""

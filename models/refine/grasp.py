@@ -33,12 +33,12 @@ def tangents(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return t1, np.cross(n, t1)
 
 
-def cone_rows(normals: np.ndarray, mu: float) -> np.ndarray:
+def cone_rows(normals: np.ndarray, mu: float | np.ndarray) -> np.ndarray:
     """C_i (m, 3, 3) with ``C_i f ∈ SOC`` ⇔ f in the friction cone at a contact with *outward* normal n_i.
 
     Rows: ``μ (−n_i)``, ``t1``, ``t2``: the force pushes into the object with tangential part ≤ μ times the
-    normal part.
+    normal part. ``mu``: one coefficient, or one per contact (m,).
     """
     t1, t2 = tangents(normals)
     n = normals / np.linalg.norm(normals, axis=-1, keepdims=True)
-    return np.stack([-mu * n, t1, t2], axis=1)
+    return np.stack([-np.asarray(mu, dtype=np.float64).reshape(-1, 1) * n, t1, t2], axis=1)
