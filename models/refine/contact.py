@@ -114,13 +114,17 @@ def _object_guards(
     local = (pts - t) @ R
     best = np.full(len(pts), np.inf)
     normal = np.zeros((len(pts), 3))
-    for planes, _ in parts:
-        excess = local @ planes[:, :3].T - planes[:, 3][None]  # (k, f) > 0 outside a face
+    for planes, bounds in parts:
+        near = np.flatnonzero(np.all((local > bounds[0] - OBJECT_GUARD_MARGIN)
+                                     & (local < bounds[1] + OBJECT_GUARD_MARGIN), axis=1))  # fmt: skip
+        if not len(near):
+            continue
+        excess = local[near] @ planes[:, :3].T - planes[:, 3][None]  # (k, f) > 0 outside a face
         face = np.argmax(excess, axis=1)
-        value = excess[np.arange(len(pts)), face]
-        better = value < best
-        best = np.where(better, value, best)
-        normal[better] = planes[face[better], :3]
+        value = excess[np.arange(len(near)), face]
+        better = value < best[near]
+        best[near[better]] = value[better]
+        normal[near[better]] = planes[face[better], :3]
     order = np.argsort(best)[:OBJECT_GUARDS_PER_FINGERTIP]
     order = order[best[order] < OBJECT_GUARD_MARGIN]
     n_world = normal[order] @ R.T

@@ -17,10 +17,10 @@ from scipy.spatial import cKDTree
 
 WINDING_FROM = 0.5
 """Points farther than this many disc radii from the nearest disc take their side from the winding number ..."""
-WINDING_TO = 0.05
+WINDING_TO = 0.015
 WINDING_BELOW = 0.9
 """... where the discs' vote is less clear than this (|Σ w cos|cos|| / Σ w)."""
-"""... up to this distance (m); farther points are far from any contact and keep the discs' side."""
+"""... up to this distance (m); farther points are beyond the refinement's guards and keep the discs' side."""
 
 
 WINDING_FAR = 2.0
