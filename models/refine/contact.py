@@ -64,6 +64,7 @@ class SurfaceContacts:
         phi: (m,) the distance the objective drives to zero: the nearest sample's Φ (or Φ^R with a region), a
             minimum of smooth functions. grad: (m, 3) its gradient.
         gap: (m,) each pad's signed distance Φ to the object: its nearest sample's (negative inside).
+        point_gap: (m,) Φ of each contact sample less the standoff (verification measures the contact there).
         clear, clear_grad, row_jac: (R,), (R, 3), (R, 3, n) the guards' clearances (negative: penetrating), the
             direction a finger point moves to increase each, and that point's Jacobian: the fingertip bodies'
             samples nearest the object (Φ, ∇Φ), and object points near a fingertip measured against the convex
@@ -79,6 +80,7 @@ class SurfaceContacts:
     phi: np.ndarray
     grad: np.ndarray
     gap: np.ndarray
+    point_gap: np.ndarray
     clear: np.ndarray
     clear_grad: np.ndarray
     row_jac: np.ndarray | None
@@ -189,6 +191,7 @@ def surface_contacts(
     at = np.searchsorted(measure, nearest)  # ``measure`` is sorted (np.flatnonzero)
     points = world[sample]
     gap = phi_all[at]
+    point_gap = phi_all[np.searchsorted(measure, sample)] - standoff
     if tip_field is None:
         phi, grad = gap - standoff, grad_all[at].copy()
     else:
@@ -218,6 +221,7 @@ def surface_contacts(
     return SurfaceContacts(
         sample=sample, points=points, jac=jac, nearest=nearest, gap_jac=gap_jac, phi=np.asarray(phi, dtype=np.float64),
         grad=np.asarray(grad, dtype=np.float64), gap=np.asarray(gap, dtype=np.float64),
+        point_gap=np.asarray(point_gap, dtype=np.float64),
         clear=np.asarray(clear, dtype=np.float64), clear_grad=np.asarray(clear_grad, dtype=np.float64),
         row_jac=row_jac,
     )  # fmt: skip

@@ -139,6 +139,7 @@ def _converged(lin: Linearisation, cfg: RefineConfig) -> bool:
         lin.residual_norm < cfg.residual_tol
         and np.max(np.abs(lin.tip_phi)) < cfg.tip_tol
         and (lin.region_point is None or np.max(lin.region_point) < cfg.region_point_tol)
+        and (lin.contact_gap is None or np.max(np.abs(lin.contact_gap)) < cfg.tip_tol)
         and lin.penetration().max(initial=0.0) <= cfg.penetration_tol
         and lin.self_overlap().max(initial=0.0) <= cfg.penetration_tol
     )

@@ -64,6 +64,8 @@ class Linearisation:
         q, lower, upper: joint values and limits (D,).
         region_point: with a region mask, each contact point's distance to the nearest allowed sample (m,) — the
             verification's region test, which the convergence test also applies (Φ^R is to the samples' discs).
+        contact_gap: (m,) Φ less the standoff at the contact samples (where the force acts and verification
+            measures, up to ``CONTACT_TIE`` farther than the pad's nearest sample); the convergence test asks it.
     """
 
     task: WrenchTask
@@ -90,6 +92,7 @@ class Linearisation:
     lower: np.ndarray
     upper: np.ndarray
     region_point: np.ndarray | None = None
+    contact_gap: np.ndarray | None = None
 
     @property
     def forces(self) -> np.ndarray:
@@ -179,4 +182,5 @@ def linearise(
         lower=np.asarray(hand.lower, dtype=np.float64),
         upper=np.asarray(hand.upper, dtype=np.float64),
         region_point=None if point_distance is None else np.asarray(point_distance(on_object), dtype=np.float64),
+        contact_gap=contacts.point_gap if tip_field is None else None,
     )
