@@ -13,6 +13,7 @@ from models.pipeline.tasks import build_task, network_motion
 from models.pipeline.types import MATERIALS, METHODS, InvalidInput, SynthesisInput
 from models.refine.evaluation import spread_contacts
 from models.refine.field import PointCloudField
+from models.refine.volume import points_mass_properties
 from models.refine.wrench import DEFAULT_DENSITY, WrenchTask
 
 DEFAULT_FRICTION = 0.5
@@ -80,7 +81,7 @@ def prepare(inp: SynthesisInput) -> Prepared:
     density = float(inp.properties.get("density", DEFAULT_DENSITY))
     exact = mesh if mesh is not None and mesh.is_watertight else None  # else the points' surface, never a hull
     cloud = PointCloudField(points, geom.normals, mask)
-    mp = geom.mass_properties(density) if exact is not None else _points_mass(cloud, geom, density)
+    mp = geom.mass_properties(density) if exact is not None else points_mass_properties(cloud, density)
     centre = np.asarray(mp.com, dtype=np.float64)
     inertia = np.asarray(mp.inertia, dtype=np.float64)
     if inp.joint is not None:
@@ -102,17 +103,6 @@ def prepare(inp: SynthesisInput) -> Prepared:
                 f"contacts: {len(contacts)} contacts for a hand with {inp.hand.num_fingertips} fingertips"
             )
     return Prepared(inp, cloud, exact, centre, mp.mass, inertia, task, mu, tip_field, time.perf_counter() - t0)
-
-
-def _points_mass(cloud: PointCloudField, geom: Any, density: float) -> Any:
-    """Mass properties of the volume the points enclose (`models.refine.volume`); the convex hull's only for an
-    open or flat cloud that encloses nothing."""
-    from models.refine.volume import points_mass_properties
-
-    try:
-        return points_mass_properties(cloud, density)
-    except ValueError:
-        return geom.mass_properties(density)
 
 
 def network_inputs(batch: Sequence[Prepared]) -> list[Any]:

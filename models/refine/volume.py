@@ -14,17 +14,17 @@ import numpy as np
 from models.geometry import MassProperties
 from models.refine.field import PointCloudField
 
+THIN_WALL = 2.0
 GRID_CELLS = 16
 """Cells along the bounding box's longest side (5 mm for an 8 cm object; centre of mass within 1 mm of the
 exact mesh's on third-party objects, where the hull's was 3-9 mm off)."""
 
 
 def points_mass_properties(field: PointCloudField, density: float, cells: int = GRID_CELLS) -> MassProperties:
-    """Mass, centre of mass (3,) and inertia (3, 3) about it, of the volume the points enclose at ``density``.
-
-    Raises:
-        ValueError: the points enclose no grid cell (an open or flat cloud): the caller falls back to the hull.
-    """
+    """Mass, centre of mass (3,) and inertia (3, 3) about it, of the volume the points enclose at ``density``; of
+    a shell of the points' surface when that volume is thinner than ``THIN_WALL`` disc radii on average (walls
+    thinner than the point spacing: the winding number inside them is unreliable — a drawer's volume came out
+    34 % short and its centre of mass 9 mm off; the area-weighted centroid of its points is 2 mm off)."""
     lo, hi = field.points.min(0), field.points.max(0)
     step = float((hi - lo).max()) / cells
     counts = np.maximum(np.ceil((hi - lo) / step).astype(int), 1)
@@ -34,8 +34,10 @@ def points_mass_properties(field: PointCloudField, density: float, cells: int = 
     # the winding number as each cell's filled fraction: cells the surface cuts count in part (a 0/1 threshold
     # moved an L-shaped part's centre of mass by 1.9 mm on 5 mm cells)
     fill = np.clip(field.winding_number(grid), 0.0, 1.0)
-    if fill.sum() < 8:
-        raise ValueError("the points enclose no volume")
+    area = field._sample_area()  # (N,) the surface each point stands for
+    thickness = float(fill.sum()) * step**3 / max(float(area.sum()), 1e-12)
+    if thickness < THIN_WALL * field.disc_radius:
+        return _shell(field.points, area, max(thickness, field.disc_radius), density)
     cell_mass = density * step**3 * fill
     mass = float(cell_mass.sum())
     com = (cell_mass[:, None] * grid).sum(axis=0) / mass
@@ -43,4 +45,14 @@ def points_mass_properties(field: PointCloudField, density: float, cells: int = 
     # each cell as a small cube: its own inertia step²/6 · m about every axis, plus the parallel-axis term
     inertia = ((r**2).sum(1) * cell_mass).sum() * np.eye(3) - (cell_mass[:, None] * r).T @ r
     inertia += np.eye(3) * mass * step**2 / 6.0
+    return MassProperties(mass, com, inertia)
+
+
+def _shell(points: np.ndarray, area: np.ndarray, thickness: float, density: float) -> MassProperties:
+    """A shell of the points' surface, ``thickness`` thick: each point a mass ρ a_j t at its place."""
+    mass_j = density * thickness * area
+    mass = float(mass_j.sum())
+    com = (mass_j[:, None] * points).sum(axis=0) / mass
+    r = points - com
+    inertia = ((r**2).sum(1) * mass_j).sum() * np.eye(3) - (mass_j[:, None] * r).T @ r
     return MassProperties(mass, com, inertia)

@@ -30,7 +30,9 @@ def test_the_hull_would_move_the_centre_of_an_l_shape():
     assert np.linalg.norm(mesh.convex_hull.center_mass - mesh.center_mass) > 4e-3
 
 
-def test_an_open_cloud_encloses_nothing():
-    plane = np.c_[np.random.default_rng(0).uniform(-0.05, 0.05, (500, 2)), np.zeros(500)]
-    with pytest.raises(ValueError):
-        points_mass_properties(PointCloudField(plane, np.tile([0.0, 0.0, 1.0], (500, 1))), 1000.0)
+def test_an_open_or_thin_cloud_is_a_shell():
+    """A flat patch encloses nothing: its mass sits on its points (centre at their area centroid)."""
+    rng = np.random.default_rng(0)
+    plane = np.c_[rng.uniform(-0.05, 0.05, (500, 2)), np.zeros(500)]
+    mp = points_mass_properties(PointCloudField(plane, np.tile([0.0, 0.0, 1.0], (500, 1))), 1000.0)
+    assert mp.mass > 0 and np.linalg.norm(mp.com - plane.mean(0)) < 5e-3 and abs(mp.com[2]) < 1e-12
