@@ -78,6 +78,7 @@ def audit_grasp(
     mu: float,
     target_wrench: ArrayLike | None = None,
     closure: bool = False,
+    soft_finger: float = 0.0,
     contact_tol: float = 5e-3,
     penetration_tol: float = 1e-3,
     cosine_tol: float = 0.99,
@@ -98,6 +99,9 @@ def audit_grasp(
         mu: friction coefficient.
         target_wrench: (6,) ``[F (N), τ (N·m)]`` the forces should achieve (optional).
         closure: also require force closure.
+        soft_finger: torsional friction radius (m) of soft-finger contacts for the closure test (rubber pads of a
+            parallel gripper resist a moment about the normal; two point contacts are never in closure); 0: point
+            contacts.
         contact_tol: contact distance tolerance (m).
         penetration_tol: penetration tolerance (m).
         cosine_tol: least cosine with the target wrench.
@@ -180,7 +184,7 @@ def audit_grasp(
         if report.target_cosine < cosine_tol:
             failures.append(f"wrench cosine with the target {report.target_cosine:.4f} < {cosine_tol}")
     if closure:
-        report.closure_epsilon = closure_epsilon(points, normals, mu, c, L)
+        report.closure_epsilon = closure_epsilon(points, normals, mu, c, L, torsion=soft_finger)
         if report.closure_epsilon <= 0.0:
             failures.append("contacts are not in force closure (linearised cones, 8-sided pyramids)")
 

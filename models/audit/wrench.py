@@ -108,7 +108,8 @@ def primitive_wrenches(
 
 
 def closure_epsilon(
-    points: np.ndarray, normals: np.ndarray, mu: float, centre: np.ndarray, length: float, sides: int = CLOSURE_SIDES
+    points: np.ndarray, normals: np.ndarray, mu: float, centre: np.ndarray, length: float, sides: int = CLOSURE_SIDES,
+    torsion: float = 0.0,
 ) -> float:
     """Distance from the origin to the boundary of the convex hull of the primitive wrenches.
 
@@ -123,11 +124,19 @@ def closure_epsilon(
         centre: (3,) torque reference point.
         length: torque scale.
         sides: pyramid edges per contact.
+        torsion: soft-finger contacts (m): each also resists a moment about its normal of up to ``torsion`` × its
+            normal force (two primitives ±, at unit normal force); 0: point contacts.
 
     Returns:
         ε ≥ 0.
     """
     w = primitive_wrenches(points, normals, mu, centre, length, sides)
+    if torsion > 0:
+        n = np.asarray(normals, dtype=np.float64)
+        n = n / np.linalg.norm(n, axis=1, keepdims=True)
+        push = contact_wrenches(np.asarray(points, dtype=np.float64), -n, centre, length)  # (m, 6)
+        spin = np.hstack([np.zeros_like(n), torsion * n / length])
+        w = np.vstack([w, push + spin, push - spin])
     if w.shape[0] < 7 or np.linalg.matrix_rank(w, tol=1e-9) < 6:
         return 0.0
     try:

@@ -17,6 +17,9 @@ from models.pipeline import SynthesisInput, TaskInput, run_pipeline
 from models.robots import get_hand
 
 LIFT = np.array([0.0, 0.0, 0.05])
+SOFT_FINGER = 0.005
+"""m: a parallel gripper's pads as soft fingers in the closure test (torsional friction radius; the Panda's pads are
+17.5 x 18.5 mm); hands with three or more fingertips are judged with point contacts."""
 
 
 @dataclass
@@ -62,8 +65,9 @@ def audit_service(
     for rank, p in enumerate(out.proposals):
         grasp = AuditedGrasp(p.contact_points, p.forces, p.fingertips, p.palm_position, p.palm_quaternion,
                              p.joint_names, p.joint_values)  # fmt: skip
+        soft = SOFT_FINGER if len(grasp.fingertips) == 2 else 0.0
         report = audit_grasp(hand_name, grasp, obj.mesh, points, normals, mu=mu, target_wrench=target,
-                             closure=task == "closure")  # fmt: skip
+                             closure=task == "closure", soft_finger=soft)  # fmt: skip
         rows.append(AuditRow(hand_name, obj.name, task, rank, p.quality.success, report.passed,
                              list(report.failures)))  # fmt: skip
     return rows

@@ -29,9 +29,13 @@ CLOSURE_MIN_SHARE = 0.25
 CLOSURE_CONE_SHRINK = 0.9
 
 
+CONE_MARGIN = 1e-4
+
+
 def cone_mu(task: WrenchTask, mu: float | np.ndarray) -> float | np.ndarray:
-    """Friction coefficient of the optimisation's cones (narrowed for force closure)."""
-    return mu * CLOSURE_CONE_SHRINK if task.closure else mu
+    """Friction coefficient of the optimisation's cones (narrowed for force closure; otherwise by ``CONE_MARGIN``,
+    so a force on the cone's edge is inside it for a check with its own rounding: 0.8000001 > μ failed one)."""
+    return mu * CLOSURE_CONE_SHRINK if task.closure else mu * (1.0 - CONE_MARGIN)
 
 
 def min_normal_force(task: WrenchTask, m: int) -> float:
