@@ -63,3 +63,22 @@ def test_revolute_door_only_one_face_can_open_it():
     front = solve_forces(task, np.array([[0.3, 0.01, 0]]), np.array([[0, 1.0, 0]]), 0.5)
     assert back.residual_norm < 1e-6 and back.forces[0, 1] > 0  # pushes the back face along +y
     assert front.residual_norm == pytest.approx(1.0, abs=1e-4)  # the front face can only close it
+
+
+def test_forces_are_projected_into_their_cones():
+    from models.refine.forces import project_to_cones
+
+    normals = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0]])
+    forces = np.array([[0.3, 0.0, -1.0], [1.0, 0.0, -1.0], [0.1, 0.0, 1.0]])  # inside, outside, pulling
+    out = project_to_cones(forces, normals, 0.5)
+    assert np.allclose(out[0], forces[0])
+    push = -out[1, 2]
+    assert np.hypot(out[1, 0], out[1, 1]) == pytest.approx(0.5 * push)
+    rng = np.random.default_rng(0)  # the projection is the cone's nearest point to the force
+    for _ in range(200):
+        fn = rng.uniform(0, 2)
+        t = rng.normal(size=2)
+        t *= 0.5 * fn / np.linalg.norm(t) * rng.uniform(0, 1)
+        other = np.array([t[0], t[1], -fn])
+        assert np.linalg.norm(out[1] - forces[1]) <= np.linalg.norm(other - forces[1]) + 1e-12
+    assert np.allclose(out[2], 0.0)
