@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import fcl
 import numpy as np
@@ -127,22 +127,29 @@ def _hits(a: fcl.CollisionObject, b: fcl.CollisionObject) -> bool:
 
 def hand_object_penetration(
     hand: Hand, geometry: ObjectGeometry, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray,
-    rank: Callable[[np.ndarray], np.ndarray] | None = None,
 ) -> float:  # fmt: skip
-    """Penetration depth (m, ≥ 0) between the hand's collision meshes and the object's watertight mesh.
+    """Penetration depth (m, ≥ 0) between the hand's collision meshes and the object's watertight mesh, hand
+    samples ranked for the exact test by the KD-tree Φ of the oriented points."""
+    rank = lambda x: geometry.signed_distance(x)[0]  # noqa: E731
+    return _mesh_depth(hand, geometry.mesh, geometry.points, rank, palm_pos, palm_quat, q)
 
-    ``rank`` orders hand samples by estimated depth (default: the KD-tree Φ of the oriented points)."""
+
+def _mesh_depth(
+    hand: Hand, mesh: trimesh.Trimesh, points: np.ndarray, rank: Callable[[np.ndarray], np.ndarray],
+    palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray,
+) -> float:  # fmt: skip
+    """The depth test of the module doc against a watertight ``mesh``; ``rank`` orders hand samples by estimated
+    depth (the exact signed distance is taken on the deepest), ``points`` (N, 3) are tested inside the hand."""
     poses = _poses(hand, palm_pos, palm_quat, q)
-    mesh = geometry.mesh
-    obj = _obj(_bvh(mesh), np.eye(4))
-    obj_pts = np.vstack([geometry.points, np.asarray(mesh.vertices), sharp_edge_points(mesh)])
+    obj = _obj(_per_mesh(mesh, "bvh", lambda: _bvh(mesh)), np.eye(4))
+    obj_pts = np.vstack([np.asarray(points, dtype=np.float64), np.asarray(mesh.vertices), sharp_edge_points(mesh)])
     depth = 0.0
     for body in _bodies(hand):
         T = poses[body.name]
         if not _hits(_obj(body.bvh, T), obj):
             continue
         world = body.samples @ T[:3, :3].T + T[:3, 3]
-        phi = geometry.signed_distance(world)[0] if rank is None else rank(world)  # cheap estimate ...
+        phi = rank(world)  # cheap estimate ...
         order = np.argsort(phi)[:EXACT_CANDIDATES]
         near = world[order[phi[order] < PREFILTER]]  # ... then exact distances for the deepest candidates
         if len(near):
@@ -160,15 +167,26 @@ EDGE_SPACING = 5e-4
 def sharp_edge_points(mesh: trimesh.Trimesh, spacing: float = EDGE_SPACING) -> np.ndarray:
     """Points (k, 3) every ``spacing`` along the mesh's sharp edges (faces meeting at more than 20°): an object's
     edge can poke into a flat finger face between both sides' samples (a block's edge: 1.15 mm deep, unseen)."""
-    cache = mesh.__dict__.setdefault("_mani_edge_points", {})
-    if spacing not in cache:
+
+    def build() -> np.ndarray:
         edges = mesh.face_adjacency_edges[mesh.face_adjacency_angles > SHARP_EDGE_ANGLE]
         a, b = mesh.vertices[edges[:, 0]], mesh.vertices[edges[:, 1]]
         counts = np.maximum(np.ceil(np.linalg.norm(b - a, axis=1) / spacing).astype(int), 1)
         t = np.concatenate([np.arange(1, c) / c for c in counts]) if counts.sum() > len(counts) else np.zeros(0)
         owner = np.repeat(np.arange(len(edges)), counts - 1)
-        cache[spacing] = a[owner] + t[:, None] * (b - a)[owner] if len(owner) else np.zeros((0, 3))
-    return np.asarray(cache[spacing])
+        return a[owner] + t[:, None] * (b - a)[owner] if len(owner) else np.zeros((0, 3))
+
+    return np.asarray(_per_mesh(mesh, f"edges-{spacing}", build))
+
+
+def _per_mesh(mesh: trimesh.Trimesh, key: str, build: Callable[[], Any]) -> Any:
+    """``build()`` once per object mesh (verification of K proposals meets the same mesh K times), kept on the
+    mesh and rebuilt when its data changes (trimesh's hash of it)."""
+    cache = mesh.__dict__.setdefault("_mani_cache", {})
+    stamp = hash(mesh)
+    if key not in cache or cache[key][0] != stamp:
+        cache[key] = (stamp, build())
+    return cache[key][1]
 
 
 def hand_mesh_penetration(
@@ -176,13 +194,8 @@ def hand_mesh_penetration(
     q: np.ndarray,
 ) -> float:  # fmt: skip
     """Penetration depth (m, ≥ 0) between the hand's collision meshes and a watertight object ``mesh`` (exact; the
-    object's points (N, 3) are tested inside the hand bodies too)."""
-    pts = np.asarray(points, dtype=np.float64)
-    normals = np.zeros_like(pts)  # unused by the depth test: only the KD-tree prefilter's ranking needs points
-    from scipy.spatial import cKDTree
-
-    geometry = ObjectGeometry(pts, normals, mesh, cKDTree(pts))
-    return hand_object_penetration(hand, geometry, palm_pos, palm_quat, q, rank=_mesh_rank(mesh))
+    object's points (N, 3) are tested inside the hand bodies too), hand samples ranked by `_mesh_rank`."""
+    return _mesh_depth(hand, mesh, points, _mesh_rank(mesh), palm_pos, palm_quat, q)
 
 
 def hand_field_penetration(
@@ -221,7 +234,7 @@ def _mesh_rank(mesh: trimesh.Trimesh) -> Callable[[np.ndarray], np.ndarray]:
 
     verts = np.asarray(mesh.vertices)
     vnorm = np.asarray(mesh.vertex_normals)
-    tree = cKDTree(verts)
+    tree = _per_mesh(mesh, "vertex_tree", lambda: cKDTree(verts))
 
     def rank(x: np.ndarray) -> np.ndarray:
         dist, idx = tree.query(x)
