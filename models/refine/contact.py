@@ -25,12 +25,12 @@ CONTACT_TIE = 1.5e-3
 """m: pad samples this close to the nearest one are equally in contact (a patch): the one nearest the tip point is
 the contact (on a flat pad against a flat face an arbitrary pick put a gripper's two contacts 2.4 cm apart)."""
 GUARD_MARGIN = 0.02
+"""m: samples (and spheres) farther than this from the object are not measured in detail."""
 GUARD_STANDOFF = 5e-4
 """m: the guards keep the sampled surface this far out, and the objective brings the pad this close: between the
 2.5 mm samples the real mesh reaches up to ~0.5 mm nearer (verification measured 1.05 mm where they read 0.5).
 A field with a coarser ``resolution`` (the object's points: their disc radius) sets a larger standoff: the exact
 surface may reach that far beyond what its points show (a block's corner poked 1.4 mm into a finger)."""
-"""m: samples (and spheres) farther than this from the object are not measured in detail."""
 
 TipField = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
@@ -158,9 +158,11 @@ def surface_contacts(
     """
     surf = hand.contact_surface  # type: ignore[attr-defined]
     standoff = max(GUARD_STANDOFF, float(getattr(field, "resolution", 0.0)))
-    with torch.no_grad():
-        world_t, _, _ = hand.surface_samples(*pose, jacobian=False)  # type: ignore[attr-defined]
+    with torch.no_grad():  # the body poses once: the samples, the parts' poses and the Jacobians all use them
+        T_all = hand.tree.body_poses(*pose)  # type: ignore[attr-defined]
+        world_t, _, _ = hand.surface_samples(*pose, jacobian=False, body_poses=T_all)  # type: ignore[attr-defined]
     world = world_t[0].numpy()
+    tip_body = hand.fingertip_body_index  # type: ignore[attr-defined]
     m = len(surf.bound_radius)
     # cull: the bodies whose bounding sphere is far from the object only need their pads measured
     centres = np.stack([world[surf.fingertip == i].mean(0) for i in range(m)])
@@ -175,9 +177,7 @@ def surface_contacts(
     pad = surf.pad[measure]
     rows: list[np.ndarray] = []
     extra: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    with torch.no_grad():
-        T_all = hand.tree.body_poses(*pose)  # type: ignore[attr-defined]
-    body_T = T_all[0, torch.as_tensor(hand._tip_body)].numpy()  # type: ignore[attr-defined]
+    body_T = T_all[0, torch.as_tensor(tip_body)].numpy()
     for i in range(m):
         mine = np.flatnonzero((owner == i) & pad)
         nearest[i] = measure[mine[np.argmin(score[mine])]]
@@ -202,13 +202,13 @@ def surface_contacts(
     guard_sample = measure[guard_rows]
     feet = np.concatenate([np.zeros((0, 3)), *(e[2] for e in extra)])
     foot_body = np.concatenate([np.zeros(0, dtype=np.int64)] + [
-        np.full(len(e[2]), hand._tip_body[i]) for i, e in zip(np.flatnonzero(near_body), extra, strict=True)  # type: ignore[attr-defined]
+        np.full(len(e[2]), tip_body[i]) for i, e in zip(np.flatnonzero(near_body), extra, strict=True)
     ])  # fmt: skip
     jac = gap_jac = row_jac = None
     if jacobian:
         wanted = np.concatenate([sample, nearest, guard_sample])
         with torch.no_grad():
-            _, _, j_t = hand.surface_samples(*pose, index=wanted)  # type: ignore[attr-defined]
+            _, _, j_t = hand.surface_samples(*pose, index=wanted, body_poses=T_all)  # type: ignore[attr-defined]
             assert j_t is not None
             full = j_t[0].numpy()
             if len(feet):

@@ -207,16 +207,22 @@ class Hand:
         """(m,) the body (link with fixed children merged) of each fingertip, keys of ``collision_meshes``."""
         return [self.tree.body_names[b] for b in self._tip_body]
 
+    @property
+    def fingertip_body_index(self) -> np.ndarray:
+        """(m,) index (into ``tree.body_names``) of each fingertip's body."""
+        return self._tip_body
+
     def surface_samples(
         self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor, index: np.ndarray | None = None,
-        jacobian: bool = True,
+        jacobian: bool = True, body_poses: torch.Tensor | None = None,
     ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor | None]:  # fmt: skip
         """World positions (B, k, 3), outward normals (B, k, 3) and Jacobians (B, k, 3, 6 + D) (None without
-        ``jacobian``) of the contact-surface samples ``index`` (default: all K)."""
+        ``jacobian``) of the contact-surface samples ``index`` (default: all K). ``body_poses``: the
+        ``tree.body_poses`` of this pose when the caller has them already."""
         self._check(palm_pos, palm_quat, q)
         surf = self.contact_surface
         idx = np.arange(len(surf)) if index is None else np.asarray(index, dtype=np.int64)
-        T = self.tree.body_poses(palm_pos, palm_quat, q)
+        T = self.tree.body_poses(palm_pos, palm_quat, q) if body_poses is None else body_poses
         bodies = surf.body[idx]
         Tb = T[:, torch.as_tensor(bodies, device=q.device)]
         local = torch.as_tensor(surf.local[idx], dtype=q.dtype, device=q.device)
