@@ -101,7 +101,8 @@ class RefineResult:
     Attributes:
         pose: final hand pose (the best iterate).
         forces: (m, 3) world-frame fingertip forces at ``pose``.
-        tips: (m, 3) fingertip points; contacts: (m, 3) their nearest surface points; normals: (m, 3).
+        tips, contacts: (m, 3) the contacts: each fingertip's contact sample projected onto the object (the
+            linearisation's ``tips``: projecting them again changed nothing but cost a query); normals: (m, 3).
         residual_norm: ‖r*‖; max_tip_distance: max |Φ(p_i)| (Φ^R with a mask); penetration, self_overlap:
             largest sphere violations (m).
         converged: the convergence test passed. reason: "converged", "max_iterations", "stalled",
@@ -247,13 +248,11 @@ def refine(
             progress(it, cfg.max_iterations)
     if reason != "converged" and not reason.startswith("solver_failed") and _converged(lin, cfg):
         reason = "converged"
-    phi, grad, _ = field_.signed_distance(lin.tips)
-    nearest = lin.tips - phi[:, None] * grad
     return RefineResult(
         pose=pose,
         forces=lin.forces.copy(),
         tips=lin.tips.copy(),
-        contacts=np.asarray(nearest, dtype=np.float64),
+        contacts=lin.tips.copy(),
         normals=lin.normals.copy(),
         residual_norm=lin.residual_norm,
         max_tip_distance=float(np.max(np.abs(lin.tip_phi))),
