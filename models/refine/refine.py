@@ -18,8 +18,9 @@ from typing import Any
 
 import numpy as np
 
+from models.refine.contact import ObjectField
 from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE
-from models.refine.state import DistanceField, HandPose, Linearisation, linearise
+from models.refine.state import HandPose, Linearisation, linearise
 from models.refine.step import StepParams, solve_step, solve_step_cvxpy
 from models.refine.wrench import WrenchTask
 
@@ -148,7 +149,7 @@ def _converged(lin: Linearisation, cfg: RefineConfig) -> bool:
 
 def refine(
     hand: Any,
-    field_: DistanceField,
+    field_: ObjectField,
     task: WrenchTask,
     start: HandPose,
     mu: float,

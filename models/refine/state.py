@@ -3,22 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any
 
 import numpy as np
 import torch
 
-from models.refine.contact import surface_contacts
+from models.refine.contact import ObjectField, surface_contacts
 from models.refine.forces import ForceSolution, solve_forces
 from models.refine.wrench import WrenchTask
-
-
-class DistanceField(Protocol):
-    """What refinement needs from the object (`models.geometry.ObjectGeometry` satisfies it)."""
-
-    def signed_distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(M, 3) → Φ (M,), ∇Φ (M, 3) (outward unit normal at the nearest point), nearest point (M, 3)."""
-        ...
 
 
 @dataclass(frozen=True)
@@ -123,7 +115,7 @@ def body_spheres(hand: Any) -> np.ndarray:
 def linearise(
     hand: Any,
     pose: HandPose,
-    field: DistanceField,
+    field: ObjectField,
     task: WrenchTask,
     mu: float,
     max_normal_force: float,
@@ -140,7 +132,7 @@ def linearise(
         tip_field: optional callable ``x -> (Φ^R, ∇Φ^R)`` used instead of Φ for the tip objective (masks).
     """
     tensors = pose.tensors()
-    contacts = surface_contacts(hand, tensors, field, tip_field)  # type: ignore[arg-type]
+    contacts = surface_contacts(hand, tensors, field, tip_field)
     assert contacts.jac is not None and contacts.gap_jac is not None and contacts.row_jac is not None
     with torch.no_grad():
         sph_t, sph_jac_t = hand.spheres(*tensors)
@@ -149,8 +141,8 @@ def linearise(
     guard = body_spheres(hand)
     sph_phi, sph_grad, _ = field.signed_distance(sph[guard])
     tips = contacts.points
-    on_object = contacts.object_points(field)  # type: ignore[arg-type]
-    normals = field.given_normal(on_object)  # type: ignore[attr-defined]
+    on_object = contacts.object_points(field)
+    normals = field.given_normal(on_object)
     normal_jac = field.normal_jacobian(tips) if hasattr(field, "normal_jacobian") else np.zeros((len(tips), 3, 3))
     point_distance = getattr(field, "region_point_distance", None) if tip_field is not None else None
     solution = solve_forces(task, on_object, normals, mu, max_normal_force)  # where verification applies them
