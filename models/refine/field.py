@@ -152,7 +152,7 @@ class PointCloudField:
     def winding_number_exact(self, x: np.ndarray, chunk: int = 512) -> np.ndarray:
         """The winding number of `winding_number` summed over every sample (M × N work)."""
         x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
-        area = self._sample_area()
+        area = self.sample_area()
         out = np.empty(len(x))
         for start in range(0, len(x), chunk):
             d = self.points[None] - x[start : start + chunk, None]  # (c, N, 3)
@@ -162,10 +162,10 @@ class PointCloudField:
 
     def _cells(self) -> _Cells:
         if not hasattr(self, "_cell_cache"):
-            self._cell_cache = _Cells.build(self.points, self.normals * self._sample_area()[:, None])
+            self._cell_cache = _Cells.build(self.points, self.normals * self.sample_area()[:, None])
         return self._cell_cache
 
-    def _sample_area(self) -> np.ndarray:
+    def sample_area(self) -> np.ndarray:
         """(N,) the surface area each sample stands for: π r_8² / 8, r_8 the distance to its 8th neighbour (a
         local density estimate; unbiased for uniform random sampling, unlike the nearest-neighbour spacing)."""
         if not hasattr(self, "_area"):

@@ -163,7 +163,7 @@ def refine(
 
     Args:
         hand: a `models.robots.Hand`.
-        field_: the object's signed distance (`models.geometry.ObjectGeometry`).
+        field_: the object: signed distance, given normals, points (`models.refine.field.PointCloudField`).
         task: target (rigid wrench, joint-space, or force closure).
         start: initial pose.
         mu: friction coefficient.

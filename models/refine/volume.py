@@ -34,7 +34,7 @@ def points_mass_properties(field: PointCloudField, density: float, cells: int = 
     # the winding number as each cell's filled fraction: cells the surface cuts count in part (a 0/1 threshold
     # moved an L-shaped part's centre of mass by 1.9 mm on 5 mm cells)
     fill = np.clip(field.winding_number(grid), 0.0, 1.0)
-    area = field._sample_area()  # (N,) the surface each point stands for
+    area = field.sample_area()  # (N,) the surface each point stands for
     thickness = float(fill.sum()) * step**3 / max(float(area.sum()), 1e-12)
     if thickness < THIN_WALL * field.disc_radius:
         return _shell(field.points, area, max(thickness, field.disc_radius), density)
