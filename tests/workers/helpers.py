@@ -52,6 +52,16 @@ async def until(queue: JobQueue, job_id: str, check: Callable[[JobPublic], bool]
         await asyncio.sleep(0.01)
 
 
+async def assert_only_the_poison_dead_lettered(queue: JobQueue, jobs: list[JobPublic], poison_id: str) -> None:
+    """The job that killed its worker failed as WorkerLost and is the only dead letter; each of its batch-mates
+    was given back once and succeeded on its second delivery."""
+    mates = {j.id: j for j in jobs}
+    poison = mates.pop(poison_id)
+    assert poison.state is JobState.FAILED and poison.error and poison.error.type == "WorkerLost"
+    assert [(j.state, j.deliveries) for j in mates.values()] == [(JobState.SUCCEEDED, 2)] * len(mates)
+    assert [d.job_id for d in await queue.dead_letters()] == [poison_id]
+
+
 def running(job: JobPublic) -> bool:
     return job.state is JobState.RUNNING and job.progress.stage.value != "queued"
 

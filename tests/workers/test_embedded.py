@@ -15,7 +15,7 @@ from clients.schemas import JobState, RobotRegister, Stage
 from workers.queue import JobNotFound, QueueFull, RobotInvalid, create_queue
 from workers.queue.embedded import EmbeddedQueue
 
-from .helpers import STAGED, logged, run, running, small_request, until
+from .helpers import STAGED, assert_only_the_poison_dead_lettered, logged, run, running, small_request, until
 
 URDF = """<robot name="g"><link name="base"/><link name="tip"/>
 <joint name="j" type="revolute"><parent link="base"/><child link="tip"/><limit lower="0" upper="1"/></joint></robot>"""
@@ -150,11 +150,8 @@ def test_poison_job_fails_no_batch_mate() -> None:
         await queue.start()
         try:
             ids = await queue.submit([small_request(s) for s in (1, 2, 666, 3)])
-            jobs = {j.id: j for j in await asyncio.gather(*(queue.wait(i, 60) for i in ids))}
-            poison = jobs.pop(ids[2])
-            assert poison.state is JobState.FAILED and poison.error and poison.error.type == "WorkerLost"
-            assert [(j.state, j.deliveries) for j in jobs.values()] == [(JobState.SUCCEEDED, 2)] * 3
-            assert [d.job_id for d in await queue.dead_letters()] == [ids[2]]
+            jobs = await asyncio.gather(*(queue.wait(i, 60) for i in ids))
+            await assert_only_the_poison_dead_lettered(queue, list(jobs), ids[2])
         finally:
             await queue.close()
 
