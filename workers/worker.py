@@ -31,10 +31,19 @@ from redis.exceptions import RedisError, ResponseError
 from redis.exceptions import TimeoutError as RedisTimeoutError
 
 from clients.codec import pack, unpack
-from clients.schemas import DeadLetter, ErrorBody, JobProgress, RobotRegister, Stage, SynthesisRequest, WorkerPublic
+from clients.schemas import (
+    DeadLetter,
+    ErrorBody,
+    ErrorType,
+    JobProgress,
+    RobotRegister,
+    Stage,
+    SynthesisRequest,
+    WorkerPublic,
+)
 from workers.logs import job_context, setup_logging
 from workers.pipeline import JobInput, Pipeline, error_from_exception, load_pipeline
-from workers.queue.records import new_id, scoped_robot, state_for_error
+from workers.queue.records import cancelled_error, deadline_error, new_id, scoped_robot, state_for_error
 from workers.queue.redis_lua import BEGIN, FINISH, GROUP, TOUCH, Keys
 from workers.runner import run_batch
 from workers.settings import QueueSettings
@@ -335,16 +344,15 @@ class RedisWorker:
         if verdict == "dead":
             h = self.r.hmget(self.keys.job(job_id), ["error", "error_type"])
             message = h[0].decode() if h[0] else "failed on every delivery"  # type: ignore[union-attr]
-            error = ErrorBody(error=message, type=h[1].decode() if h[1] else "WorkerLost")  # type: ignore[union-attr]
+            error = ErrorBody(error=message, type=h[1].decode() if h[1] else ErrorType.WORKER_LOST)  # type: ignore[union-attr]
             letter = DeadLetter(job_id=job_id, deliveries=int(deliveries), error=error, failed_at=time.time())
             self.r.xadd(self.keys.dead, {"d": pack(letter.model_dump(mode="python"))}, maxlen=10_000)
             self._end(entry, job_id, "failed", error=error)
             log.warning("job dead-lettered", extra={"deliveries": int(deliveries)})
         elif verdict == "expired":
-            self._end(entry, job_id, "expired", error=ErrorBody(error="job deadline passed before it started",
-                                                                 type="DeadlineExceeded"))  # fmt: skip
+            self._end(entry, job_id, "expired", error=deadline_error())
         elif verdict == "cancelled":
-            self._end(entry, job_id, "cancelled", error=ErrorBody(error="job cancelled", type="Cancelled"))
+            self._end(entry, job_id, "cancelled", error=cancelled_error())
         else:
             self._end(entry, job_id, "", owner=False)  # already terminal: just ack
         return None

@@ -6,20 +6,17 @@ arrays as nested lists in JSON and typed binary in msgpack (`clients.arrays`). S
 """
 
 from clients.schemas.common import MAX_POINTS, MIN_POINTS, SCHEMA_VERSION, WireModel
+from clients.schemas.errors import ErrorBody, ErrorType, FieldError
 from clients.schemas.jobs import (
     MAX_BATCH_SIZE,
     BatchCreate,
     BatchItem,
     BatchPublic,
     DeadLetter,
-    ErrorBody,
-    FieldError,
     JobCreated,
     JobProgress,
     JobPublic,
-    JobState,
     ReadyPublic,
-    Stage,
     WorkerPublic,
 )
 from clients.schemas.objects import (
@@ -34,6 +31,7 @@ from clients.schemas.objects import (
 from clients.schemas.requests import ContactsIn, Method, SynthesisOptions, SynthesisRequest
 from clients.schemas.results import HandMesh, IterationRecord, Proposal, Quality, SynthesisResult
 from clients.schemas.robots import MAX_URDF_BYTES, RobotIn, RobotPublic, RobotRegister
+from clients.schemas.states import JobState, Stage
 from clients.schemas.tasks import (
     DeltaPoseTask,
     ForceClosureTask,
@@ -60,6 +58,7 @@ __all__ = [
     "DeadLetter",
     "DeltaPoseTask",
     "ErrorBody",
+    "ErrorType",
     "FieldError",
     "ForceClosureTask",
     "HandMesh",

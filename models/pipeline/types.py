@@ -10,23 +10,11 @@ from typing import Any
 
 import numpy as np
 
-from models.refine.refine import Cancelled
+from models.errors import Cancelled, InvalidInput, ModelUnavailable
 
 METHODS = ("network", "contacts", "direct_grasp", "random_contacts")
 TASK_KINDS = ("delta_pose", "point_motion", "target_points", "wrench", "force_closure", "joint_motion")
 MATERIALS = ("rigid", "articulated", "cloth", "rope", "plasticine")
-
-
-class PipelineError(Exception):
-    """Base of the pipeline's errors."""
-
-
-class InvalidInput(PipelineError, ValueError):
-    """An input that cannot be processed (the message names the field)."""
-
-
-class ModelUnavailable(PipelineError, RuntimeError):
-    """Method "network" without a predictor (no trained model loaded)."""
 
 
 __all__ = [
@@ -38,7 +26,6 @@ __all__ = [
     "IterationOutput",
     "JointInput",
     "ModelUnavailable",
-    "PipelineError",
     "ProposalOutput",
     "QualityOutput",
     "SynthesisInput",

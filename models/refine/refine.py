@@ -18,15 +18,12 @@ from typing import Any
 
 import numpy as np
 
+from models.errors import Cancelled
 from models.refine.contact import ObjectField
 from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE
 from models.refine.state import HandPose, Linearisation, linearise
 from models.refine.step import StepParams, solve_step, solve_step_cvxpy
 from models.refine.wrench import WrenchTask
-
-
-class Cancelled(Exception):
-    """The caller's ``should_cancel()`` returned true."""
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ import time
 from fastapi import APIRouter, Request
 from starlette.responses import Response
 
-from clients.schemas import ErrorBody, JobCreated, JobPublic, SynthesisRequest, SynthesisResult
+from clients.schemas import ErrorBody, ErrorType, JobCreated, JobPublic, JobState, SynthesisRequest, SynthesisResult
 from service.deps import Authorized, CallerDep, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
 from service.errors import Unavailable
 from service.negotiation import body_openapi, read_model, respond
@@ -20,22 +20,14 @@ router = APIRouter(prefix="/v1", tags=["synthesis"], dependencies=[Authorized])
 log = logging.getLogger("service.synthesis")
 
 # A failed job's error type → the status of a synchronous answer (anything else: 500, the worker's fault).
-JOB_ERROR_STATUS = {
-    "ValidationError": 422,
-    "InvalidInput": 422,
-    "InvalidPointCloud": 422,
-    "InfeasibleTask": 422,
-    "RobotInvalid": 422,
-    "HandLoadError": 422,
-    "UnknownHand": 404,
-    "UnknownRobot": 404,
-    "NotFound": 404,
-    "Cancelled": 409,
-    "DeadlineExceeded": 504,
-    "ResultExpired": 410,
-    "QueueShutdown": 503,
-    "ModelUnavailable": 503,
+
+
+_WITHOUT_ERROR = {
+    JobState.CANCELLED: ErrorType.CANCELLED,
+    JobState.EXPIRED: ErrorType.DEADLINE_EXCEEDED,
+    JobState.FAILED: ErrorType.INTERNAL_ERROR,
 }
+"""The error a terminal job without an error body answers with (no backend writes one; kept for safety)."""
 
 
 async def admit(queue: QueueDep, count: int = 1) -> None:
@@ -102,8 +94,8 @@ async def synthesize(
     headers = {"X-Job-ID": job_id}
     if job.result is not None:
         return respond(request, job.result, headers=headers)
-    error = job.error or ErrorBody(error=f"job ended {job.state.value}", type=job.state.value.capitalize())
-    status = JOB_ERROR_STATUS.get(error.type, 500)
+    error = job.error or ErrorBody.of(_WITHOUT_ERROR[job.state], f"job ended {job.state.value}")
+    status = error.status
     if status >= 500:
         log.warning("job failed", extra={"job_id": job_id, "type": error.type, "error": error.error})
     return respond(request, error, status=status, headers=headers)

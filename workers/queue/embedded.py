@@ -41,7 +41,16 @@ from clients.schemas import (
 )
 from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
 from workers.queue.embedded_parts import ChildProcess, JobRecord, WorkerHandle, settle
-from workers.queue.records import new_id, result_expired_error, scoped_robot, state_for_error, worker_lost_error
+from workers.queue.records import (
+    cancelled_error,
+    deadline_error,
+    new_id,
+    result_expired_error,
+    scoped_robot,
+    shutdown_error,
+    state_for_error,
+    worker_lost_error,
+)
 from workers.settings import QueueSettings
 
 log = logging.getLogger("workers.queue.embedded")
@@ -94,7 +103,7 @@ class EmbeddedQueue(JobQueue):
         with self._lock:
             workers = list(self._workers.values())
             for job_id in list(self._pending):
-                self._finish(self._jobs[job_id], error=ErrorBody(error="queue shut down", type="QueueShutdown"))
+                self._finish(self._jobs[job_id], error=shutdown_error())
         for worker in workers:
             with contextlib.suppress(OSError):
                 worker.send({"op": "stop"})
@@ -200,7 +209,7 @@ class EmbeddedQueue(JobQueue):
         with self._lock:
             job = self._jobs.get(job_id)
             if job is not None and job.state is JobState.QUEUED:
-                self._finish(job, error=ErrorBody(error="job cancelled", type="Cancelled"))
+                self._finish(job, error=cancelled_error())
             elif job is not None and job.state is JobState.RUNNING and not job.cancel:
                 job.cancel = True
                 target = self._workers.get(job.worker or "")
@@ -382,9 +391,9 @@ class EmbeddedQueue(JobQueue):
                     continue
                 error = worker_lost_error(detail, job.deliveries, max_deliveries)
                 if job.cancel:
-                    self._finish(job, error=ErrorBody(error="job cancelled", type="Cancelled"))
+                    self._finish(job, error=cancelled_error())
                 elif not self._running:
-                    self._finish(job, error=ErrorBody(error="queue shut down while the job ran", type="QueueShutdown"))
+                    self._finish(job, error=shutdown_error("queue shut down while the job ran"))
                 elif job.deliveries >= max_deliveries:
                     self._finish(job, error=error)
                     self._dead.append(DeadLetter(job_id=job.id, deliveries=job.deliveries, error=error,
@@ -443,8 +452,7 @@ class EmbeddedQueue(JobQueue):
             for job_id in list(self._pending):
                 job = self._jobs.get(job_id)
                 if job is not None and job.deadline is not None and job.deadline <= now and not job.state.terminal:
-                    self._finish(job, error=ErrorBody(error="job deadline passed before it started",
-                                                      type="DeadlineExceeded"))  # fmt: skip
+                    self._finish(job, error=deadline_error())
             ttl = self.settings.result_ttl
             while self._finished:
                 oldest = next(iter(self._finished))

@@ -30,6 +30,7 @@ from clients.codec import pack, unpack
 from clients.schemas import (
     DeadLetter,
     ErrorBody,
+    ErrorType,
     JobProgress,
     JobPublic,
     JobState,
@@ -42,7 +43,7 @@ from clients.schemas import (
 )
 from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
 from workers.queue.persistence import check_persistence_async
-from workers.queue.records import CANCELLED, DEADLINE_EXCEEDED, new_id, result_expired_error, scoped_robot
+from workers.queue.records import new_id, result_expired_error, scoped_robot
 from workers.queue.redis_lua import CANCEL, GROUP, SUBMIT, Keys
 from workers.settings import QueueSettings
 
@@ -217,11 +218,12 @@ class RedisQueue(JobQueue):
             raise JobNotFound(f"no job {job_id}")
         job = job_from_hash(job_id, h, result if with_result else None, bool(result))
         if job.state is JobState.QUEUED and job.deadline is not None and job.deadline <= time.time():
-            await self._end_queued(job_id, JobState.EXPIRED, "job deadline passed before it started", DEADLINE_EXCEEDED)
+            expired = ErrorType.DEADLINE_EXCEEDED
+            await self._end_queued(job_id, JobState.EXPIRED, "job deadline passed before it started", expired)
             return await self.get(job_id, with_result=with_result)
         return job
 
-    async def _end_queued(self, job_id: str, state: JobState, message: str, kind: str) -> str:
+    async def _end_queued(self, job_id: str, state: JobState, message: str, kind: ErrorType) -> str:
         keys = [self.keys.stream, self.keys.job(job_id), self.keys.counts, self.keys.done]
         args = [GROUP, time.time(), state.value, message, kind, job_id, int(self.settings.record_ttl * 1000)]
         async with self._guard():
@@ -250,7 +252,7 @@ class RedisQueue(JobQueue):
     async def cancel(self, job_id: str, *, owner: str | None = None) -> JobPublic:
         if owner is not None:
             await self.get(job_id, with_result=False, owner=owner)  # JobNotFound for another owner's job
-        if await self._end_queued(job_id, JobState.CANCELLED, "job cancelled", CANCELLED) == "missing":
+        if await self._end_queued(job_id, JobState.CANCELLED, "job cancelled", ErrorType.CANCELLED) == "missing":
             raise JobNotFound(f"no job {job_id}")
         return await self.get(job_id, with_result=False)
 

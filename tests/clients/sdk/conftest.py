@@ -141,7 +141,7 @@ class FakeService:
             fake.job = fake.job.model_copy(update={"state": JobState.RUNNING})
             return fake.job
         if self.fail:
-            error = ErrorBody(error="refinement diverged", type="InfeasibleTask")
+            error = ErrorBody(error="refinement diverged", type="InternalError")
             fake.job = fake.job.model_copy(update={"state": JobState.FAILED, "error": error})
         else:
             result = sample_result(fake.request.robot.name or "custom", seed=int(fake.job.id.split("-")[1]))

@@ -149,9 +149,9 @@ def test_failed_job_carries_its_error(
     fake.fail, fake.sync_finishes = True, sync  # sync: an error answer with X-Job-ID; else 202, then polling
     with pytest.raises(JobFailed) as info:
         make_client().synthesize(object_points)
-    assert info.value.error is not None and info.value.error.type == "InfeasibleTask"
+    assert info.value.error is not None and info.value.error.type == "InternalError"
     assert info.value.state is JobState.FAILED and info.value.job_id == "job-0"
-    assert "InfeasibleTask" in str(info.value)
+    assert "InternalError" in str(info.value)
 
 
 def test_job_wait_timeout(make_client: MakeClient, fake: Any, object_points: np.ndarray) -> None:

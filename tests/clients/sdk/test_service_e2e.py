@@ -180,10 +180,10 @@ def test_job_events_cancel_and_failure(served: tuple[str, Any], client: Client) 
         failing = client.submit(_points(), robot=HAND)
         from clients.schemas import ErrorBody
 
-        queue.finish(failing.id, ErrorBody(error="no feasible grasp", type="InfeasibleTask"))
+        queue.finish(failing.id, ErrorBody(error="no feasible grasp", type="InternalError"))
         with pytest.raises(JobFailed) as failed:
             failing.wait(5)
-        assert failed.value.error is not None and failed.value.error.type == "InfeasibleTask"
+        assert failed.value.error is not None and failed.value.error.type == "InternalError"
     finally:
         queue.hold = False
 
