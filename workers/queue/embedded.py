@@ -74,7 +74,7 @@ class EmbeddedQueue(JobQueue):
         self._waiters: dict[str, list[tuple[asyncio.AbstractEventLoop, asyncio.Future[None]]]] = {}
         self._workers: dict[str, WorkerHandle] = {}
         self._robots: dict[str, RobotPublic] = {}  # by `scoped_robot(owner, name)`; built-ins by name
-        self._registered: dict[str, RobotRegister] = {}
+        self._registered: dict[str, bytes] = {}  # owner-scoped name -> msgpack of its RobotRegister
         self._robot_replies: dict[str, tuple[asyncio.AbstractEventLoop, asyncio.Future[dict[str, Any]]]] = {}
         self._dead: deque[DeadLetter] = deque(maxlen=1000)
         self._totals = {"completed": 0, "failed": 0}
@@ -172,8 +172,15 @@ class EmbeddedQueue(JobQueue):
         with self._lock:
             job = self._jobs.get(job_id)
             if job is not None and (owner is None or job.owner == owner):
-                return job.public(with_result)
-            gone = None if job is not None else self._tombstones.get(job_id)
+                public, raw = job.public(), job.result if with_result else None
+                gone = None
+            else:
+                public, raw = None, None
+                gone = None if job is not None else self._tombstones.get(job_id)
+        if public is not None:
+            if raw is not None:  # the one validation of a result on the service side, outside the lock
+                public.result = SynthesisResult.model_validate(unpack(raw))
+            return public
         if gone is None or (owner is not None and gone[2] != owner):
             raise JobNotFound(f"no job {job_id}")
         created, batch, _ = gone
@@ -225,7 +232,7 @@ class EmbeddedQueue(JobQueue):
             out: list[JobPublic] = []
             for job in reversed(self._jobs.values()):
                 if owner is None or job.owner == owner:
-                    out.append(job.public(False))
+                    out.append(job.public())
                     if len(out) == limit:
                         break
             return out
@@ -294,11 +301,12 @@ class EmbeddedQueue(JobQueue):
             raise QueueUnavailable("no worker is running to validate the robot")
         worker = min(ready, key=lambda w: len(w.inflight))
         rid, loop = new_id(), asyncio.get_running_loop()
+        payload = pack(robot.model_dump(mode="python", exclude_none=True))
         future: asyncio.Future[dict[str, Any]] = loop.create_future()
         with self._lock:
             self._robot_replies[rid] = (loop, future)
         try:
-            worker.send({"op": "robot", "rid": rid, "robot": robot.model_dump(mode="python", exclude_none=True)})
+            worker.send({"op": "robot", "rid": rid}, payload)
             reply = await asyncio.wait_for(future, timeout)
         except TimeoutError as exc:
             raise QueueUnavailable(f"no worker validated the robot within {timeout} s") from exc
@@ -310,7 +318,7 @@ class EmbeddedQueue(JobQueue):
         public = RobotPublic.model_validate(reply["robot"])
         key = scoped_robot(owner, robot.name)
         with self._lock:
-            self._registered[key] = robot
+            self._registered[key] = payload
             self._robots[key] = public
         return public
 
@@ -357,6 +365,14 @@ class EmbeddedQueue(JobQueue):
             self._lost(worker, f"worker process exited (code {worker.process.exitcode}) while running the job")
             return
         op = msg["op"]
+        result = None
+        if op == "done" and msg.get("state") == JobState.SUCCEEDED.value:
+            try:
+                result = conn.recv_bytes()  # the result's frame follows its header (bytes, stored as they are)
+            except (EOFError, OSError):
+                worker.process.join(1)
+                self._lost(worker, "worker process exited while sending a result")
+                return
         with self._lock:
             if op == "hello":
                 worker.info = WorkerPublic.model_validate(msg["worker"])
@@ -373,8 +389,8 @@ class EmbeddedQueue(JobQueue):
                 job = self._jobs.get(msg["id"])
                 if job is not None and job.state is JobState.RUNNING:
                     job.timings.update(msg.get("timings", {}))
-                    if "result" in msg:
-                        self._finish(job, result=SynthesisResult.model_validate(msg["result"]))
+                    if result is not None:
+                        self._finish(job, result=result)
                     else:
                         self._finish(job, error=ErrorBody.model_validate(msg["error"]))
             elif op == "robot" and (reply := self._robot_replies.get(msg["rid"])):
@@ -414,12 +430,13 @@ class EmbeddedQueue(JobQueue):
         worker.conn.close()
 
     def _dispatch(self) -> None:
-        sends: list[tuple[WorkerHandle, list[dict[str, Any]]]] = []
+        sends: list[tuple[WorkerHandle, list[dict[str, Any]], list[bytes]]] = []
         with self._lock:
             idle = [w for w in self._workers.values() if w.info is not None and not w.inflight]
             now = time.time()
             for worker in idle:
                 batch: list[dict[str, Any]] = []
+                frames: list[bytes] = []
                 while self._pending and len(batch) < self.settings.batch_size:
                     job = self._jobs.get(self._pending[0])
                     if job is None or job.state is not JobState.QUEUED:
@@ -430,21 +447,21 @@ class EmbeddedQueue(JobQueue):
                     self._pending.popleft()
                     job.state, job.worker, job.deliveries = JobState.RUNNING, worker.id, job.deliveries + 1
                     job.started_at = now
-                    job.timings["queue"] = now - job.created_at
                     robot = self._registered.get(scoped_robot(job.owner, job.robot or ""))
                     batch.append({
-                        "id": job.id, "request": job.payload, "deadline": job.deadline, "request_id": job.request_id,
-                        "robot": robot.model_dump(mode="python", exclude_none=True) if robot else None,
+                        "id": job.id, "deadline": job.deadline, "request_id": job.request_id,
+                        "queued_for": now - job.created_at, "robot": robot is not None,
                     })  # fmt: skip
+                    frames += [job.payload, robot] if robot is not None else [job.payload]
                     worker.inflight.add(job.id)
                     if job.deliveries > 1:
                         break
                 if not batch:
                     break
-                sends.append((worker, batch))
-        for worker, batch in sends:
+                sends.append((worker, batch, frames))
+        for worker, batch, frames in sends:
             with contextlib.suppress(OSError):  # on failure, the EOF on its pipe re-queues the jobs
-                worker.send({"op": "run", "jobs": batch})
+                worker.send({"op": "run", "jobs": batch}, *frames)
 
     def _sweep(self) -> None:
         now = time.time()
@@ -465,7 +482,7 @@ class EmbeddedQueue(JobQueue):
                 if len(self._tombstones) > _TOMBSTONES_PER_RESULT * self.settings.max_results:
                     self._tombstones.popitem(last=False)
 
-    def _finish(self, job: JobRecord, *, result: SynthesisResult | None = None, error: ErrorBody | None = None) -> None:
+    def _finish(self, job: JobRecord, *, result: bytes | None = None, error: ErrorBody | None = None) -> None:
         """Make ``job`` terminal (caller holds the lock) and wake its waiters."""
         if job.state is JobState.QUEUED:
             with contextlib.suppress(ValueError):
@@ -478,8 +495,6 @@ class EmbeddedQueue(JobQueue):
             self._totals["completed"] += 1
         elif job.state is JobState.FAILED:
             self._totals["failed"] += 1
-        if job.started_at is not None:
-            job.timings["total"] = job.finished_at - job.created_at
         self._finished[job.id] = None
         for loop, future in self._waiters.pop(job.id, []):
             loop.call_soon_threadsafe(settle, future, None)
