@@ -220,7 +220,7 @@ def _serve(max_queue: int, stage_seconds: float) -> tuple[subprocess.Popen[bytes
 
     port = _free_port()
     env = dict(os.environ, MANI_PIPELINE=STAGED, MANI_PIPELINE_OPTIONS=json.dumps({"stage_seconds": stage_seconds}),
-               MANI_MAX_QUEUE=str(max_queue), MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING", MANI_WORKERS="1",
+               MANI_MAX_QUEUE=str(max_queue), MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING", MANI_CONCURRENCY="1",
                MANI_BODY_TIMEOUT="120")  # fmt: skip
     env.pop("MANI_REDIS_URL", None)
     proc = subprocess.Popen([sys.executable, "-m", "clients.cli.main", "serve", "--port", str(port)], env=env,

@@ -49,6 +49,7 @@ from typing import Any
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from models.geometry.object import DEFAULT_FRICTION
 from models.refine.baseline import direct_grasp
 from models.refine.field import PointCloudField
 from models.refine.grasp import grasp_maps, tangents
@@ -59,7 +60,7 @@ from models.refine.strategy import refine_from_start
 from models.refine.verify import Verification, verify
 from models.refine.wrench import WrenchTask, characteristic_length, closure_task, rigid_task
 
-DEFAULT_MU = 0.5
+DEFAULT_MU = DEFAULT_FRICTION
 GROUND_TRUTHS = ("sampled", "refined")
 SAMPLER_PALMS = 16  # palms per sampling round
 SAMPLER_MAX_GRASPS = 16  # feasible grasps kept per round

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from importlib.metadata import version as package_version
+
 from fastapi import APIRouter, Request
 from prometheus_client import CONTENT_TYPE_LATEST
 from starlette.responses import Response
@@ -12,7 +14,8 @@ from service.negotiation import respond
 from service.responses import HealthPublic, errors
 
 router = APIRouter(tags=["health"], dependencies=[Authorized])
-VERSION = "0.1.0"
+VERSION = package_version("manifoundation")
+"""The installed distribution's version (pyproject.toml is its one source)."""
 
 
 @router.get("/healthz", summary="Liveness", responses={200: {"model": HealthPublic}})
