@@ -31,6 +31,7 @@ from clients.schemas.objects import (
 from clients.schemas.requests import ContactsIn, Method, SynthesisOptions, SynthesisRequest
 from clients.schemas.results import HandMesh, IterationRecord, Proposal, Quality, SynthesisResult
 from clients.schemas.robots import MAX_URDF_BYTES, RobotIn, RobotPublic, RobotRegister
+from clients.schemas.service import DashboardPublic, HealthPublic, JobList, QueueStats, Sample, ScenePublic
 from clients.schemas.states import JobState, Stage
 from clients.schemas.tasks import (
     DeltaPoseTask,
@@ -55,6 +56,7 @@ __all__ = [
     "BatchItem",
     "BatchPublic",
     "ContactsIn",
+    "DashboardPublic",
     "DeadLetter",
     "DeltaPoseTask",
     "ErrorBody",
@@ -62,8 +64,10 @@ __all__ = [
     "FieldError",
     "ForceClosureTask",
     "HandMesh",
+    "HealthPublic",
     "IterationRecord",
     "JobCreated",
+    "JobList",
     "JobProgress",
     "JobPublic",
     "JobState",
@@ -76,10 +80,13 @@ __all__ = [
     "PointMotionTask",
     "Proposal",
     "Quality",
+    "QueueStats",
     "ReadyPublic",
     "RobotIn",
     "RobotPublic",
     "RobotRegister",
+    "Sample",
+    "ScenePublic",
     "Stage",
     "SynthesisOptions",
     "SynthesisRequest",

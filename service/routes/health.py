@@ -8,10 +8,10 @@ from fastapi import APIRouter, Request
 from prometheus_client import CONTENT_TYPE_LATEST
 from starlette.responses import Response
 
-from clients.schemas import ReadyPublic
+from clients.schemas import HealthPublic, ReadyPublic
 from service.deps import Authorized, MetricsDep, QueueDep
 from service.negotiation import respond
-from service.responses import HealthPublic, errors
+from service.responses import errors
 
 router = APIRouter(tags=["health"], dependencies=[Authorized])
 VERSION = package_version("manifoundation")

@@ -25,13 +25,14 @@ from clients.schemas import (
     DeadLetter,
     JobPublic,
     JobState,
+    QueueStats,
     RobotPublic,
     RobotRegister,
     SynthesisRequest,
     SynthesisResult,
     WorkerPublic,
 )
-from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
+from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
 from workers.queue.embedded_parts import JobRecord, WorkerHandle
 from workers.queue.embedded_pump import EmbeddedPump
 from workers.queue.records import (

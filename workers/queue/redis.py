@@ -34,6 +34,7 @@ from clients.schemas import (
     JobProgress,
     JobPublic,
     JobState,
+    QueueStats,
     RobotPublic,
     RobotRegister,
     Stage,
@@ -41,7 +42,7 @@ from clients.schemas import (
     SynthesisResult,
     WorkerPublic,
 )
-from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
+from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
 from workers.queue.persistence import check_persistence_async
 from workers.queue.records import new_id, result_expired_error, scoped_robot
 from workers.queue.redis_lua import CANCEL, GROUP, SUBMIT, Keys
