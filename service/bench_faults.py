@@ -9,6 +9,8 @@ directory, `mani worker` / `mani serve` children), all killed at the end:
 - poison: a crashing job in every micro-batch of 4: how many jobs were dead-lettered, and whether all were poison.
 - large bodies: C concurrent valid bodies of S MB against `mani serve`: /healthz latency meanwhile, API RSS.
 - full queue: C concurrent posts (small and large bodies) against a full queue: 429 latency.
+
+Why one module: four scenarios of one benchmark share their process and Redis helpers and one report table.
 """
 
 from __future__ import annotations

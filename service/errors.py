@@ -33,7 +33,7 @@ from starlette.responses import Response
 
 from clients.schemas import ErrorBody, ErrorType, FieldError
 from clients.validation import field_errors, summary
-from service.negotiation import respond
+from service.encoding import respond
 from workers.queue import JobNotFound, QueueFull, QueueUnavailable, RobotInvalid
 
 log = logging.getLogger("service.errors")

@@ -12,6 +12,9 @@ could not be written while Redis was down is retried until it is (`_end_durably`
 
 Run as ``python -m workers.worker`` (settings as JSON in ``MANI_WORKER_SETTINGS``, else ``MANI_*``); `mani worker`
 supervises several of these.
+
+Why one module: one consumer's loop: claiming, delivery, heartbeats and durable outcomes share its in-flight
+bookkeeping and lock.
 """
 
 from __future__ import annotations

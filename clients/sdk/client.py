@@ -1,4 +1,8 @@
-"""`Client`: the synchronous SDK. Every decision lives in `BaseClient`; this module only sends and sleeps."""
+"""`Client`: the synchronous SDK. Every decision lives in `BaseClient`; this module only sends and sleeps.
+
+Why one module: it mirrors `AsyncClient` method for method (the httpx pattern); keeping each client in one file
+keeps the two surfaces side by side and reviewable.
+"""
 
 from __future__ import annotations
 

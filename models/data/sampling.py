@@ -13,6 +13,9 @@
 5. Reject with the verification's own tests: a pad sphere off the surface (|Φ(c) − r| > ``TIP_TOL``, exact
    mesh distance), two contacts closer than ``MIN_CONTACT_GAP``, hand–object penetration or self-collision
    deeper than 1 mm on the collision meshes (`models.geometry`, fcl), after fast pre-filters (`checks.py`).
+
+Why one module: the three sampling levels share one set of per-object arrays and constants; split, each part would
+re-derive them.
 """
 
 from __future__ import annotations

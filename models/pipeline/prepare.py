@@ -10,9 +10,9 @@ from typing import Any
 import numpy as np
 
 from models.geometry.object import DEFAULT_DENSITY, DEFAULT_FRICTION
+from models.geometry.spread import spread_contacts
 from models.pipeline.tasks import build_task, network_motion
 from models.pipeline.types import MATERIALS, METHODS, InvalidInput, SynthesisInput
-from models.refine.evaluation import spread_contacts
 from models.refine.field import PointCloudField
 from models.refine.volume import points_mass_properties
 from models.refine.wrench import WrenchTask

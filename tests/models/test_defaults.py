@@ -4,8 +4,8 @@ the contract, so this test keeps them equal)."""
 from __future__ import annotations
 
 from clients.schemas import PhysicalProperties
+from models.evaluation.refinement import DEFAULT_MU
 from models.geometry.object import DEFAULT_DENSITY, DEFAULT_FRICTION
-from models.refine.evaluation import DEFAULT_MU
 
 
 def test_default_friction_is_the_contracts() -> None:

@@ -6,7 +6,6 @@ The embedded run is in the default suite; the Redis run of the same request is `
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
 import time
 from collections.abc import Iterator
@@ -29,8 +28,6 @@ HAND = "allegro"
 
 @pytest.fixture(scope="module", params=["embedded", pytest.param("redis", marks=pytest.mark.slow)])
 def base(request: pytest.FixtureRequest) -> Iterator[str]:
-    if importlib.util.find_spec("workers.models_pipeline") is None:
-        pytest.skip("workers.models_pipeline (the science pipeline) is not part of this checkout yet")
     with (
         start_queue_and_workers(request, pipeline=PIPELINE, hands=[HAND]) as queue,
         serving(create_app(Settings(sync_wait_max=120), queue=queue)) as url,

@@ -8,6 +8,9 @@ Waiting uses a pub/sub channel with polling as a fallback, so a lost message onl
 Every call is bounded in time: connect and command timeouts of ``redis_timeout`` seconds, one retry after a
 reconnect, and a deadline of ``OP_ROUNDS × redis_timeout`` on each guarded step, so a hung Redis (SIGSTOP, a
 black-holed network) answers `QueueUnavailable` (503) in seconds instead of hanging requests.
+
+Why one module: one `JobQueue` implementation; its methods share the key layout and the Lua scripts' calling
+conventions.
 """
 
 from __future__ import annotations

@@ -37,6 +37,9 @@ Protocol, per object and grasp:
 
 Times are CPU seconds of this process (`time.process_time`, torch on one thread): on a shared machine the wall
 time also counts other processes' work. Ground-truth sampling is not timed.
+
+Why one module: the protocol's steps (ground truth, perturbation, the two modes, the report) are one experiment and
+share its seeds.
 """
 
 from __future__ import annotations
@@ -111,20 +114,6 @@ class Report:
             "baseline_median_s": float(np.median(bsec)),
             "baseline_p90_s": float(np.percentile(bsec, 90)),
         }
-
-
-def spread_contacts(points: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
-    """Indices of ``count`` farthest-point-spread points in a random half-space-ish subset of the cloud."""
-    direction = rng.normal(size=3)
-    side = points @ direction
-    pool = np.flatnonzero(side >= np.quantile(side, rng.uniform(0.2, 0.5)))
-    chosen = [int(rng.choice(pool))]
-    dist = np.linalg.norm(points[pool] - points[chosen[0]], axis=1)
-    for _ in range(count - 1):
-        nxt = int(pool[np.argmax(dist)])
-        chosen.append(nxt)
-        dist = np.minimum(dist, np.linalg.norm(points[pool] - points[nxt], axis=1))
-    return np.asarray(chosen)
 
 
 def feasible_grasp(
