@@ -1,4 +1,4 @@
-"""DESIGN.md §4: imports run one way. Checked statically (every import statement) and at run time."""
+"""docs/layering.md: imports run one way. Checked statically (every import statement) and at run time."""
 
 from __future__ import annotations
 

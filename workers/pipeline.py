@@ -1,4 +1,4 @@
-"""The small interface between a worker and the science it runs (an engine behind a protocol, STYLE.md §4).
+"""The small interface between a worker and the science it runs (an engine behind a protocol, docs/layering.md).
 
 A worker hands a `Pipeline` a micro-batch of `JobInput` and gets one outcome per job: a `SynthesisResult`, or an
 `ErrorBody` (``type`` "Cancelled" / "DeadlineExceeded" / the error's class). The default is

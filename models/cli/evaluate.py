@@ -1,6 +1,6 @@
 """`mani eval`: evaluations of the science (paper Tables I and II).
 
-``mani eval refine`` reproduces the refinement protocol of DESIGN.md §5 (see `models.evaluation.refinement` for the
+``mani eval refine`` reproduces the refinement protocol of docs/evaluation.md (see `models.evaluation.refinement` for the
 exact procedure: ground-truth poses from the data generator's verified grasp sampling (``--ground-truth
 sampled``, default; force-closure grasps for ``closure``) or from our own verified force-closure refinements
 (``--ground-truth refined``, the original protocol), targets those grasps can produce, starts retreated +

@@ -1,4 +1,4 @@
-"""Table I protocol: for each test case and method, run the pipeline and count DESIGN.md §5 successes.
+"""Table I protocol: for each test case and method, run the pipeline and count docs/evaluation.md successes.
 
 Methods (all through `models.pipeline.run_pipeline`, same hand, same case, same seed):
 

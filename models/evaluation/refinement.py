@@ -1,4 +1,4 @@
-"""The refinement evaluation (paper Table II, DESIGN.md §5) as a library; `mani eval refine` drives it.
+"""The refinement evaluation (paper Table II, docs/evaluation.md) as a library; `mani eval refine` drives it.
 
 Protocol, per object and grasp:
 

@@ -1,4 +1,4 @@
-"""Verification of a hand pose on exact geometry (DESIGN.md §5), shared by refinement and the baseline.
+"""Verification of a hand pose on exact geometry (docs/evaluation.md), shared by refinement and the baseline.
 
 Nothing here is judged on the optimiser's proxies (collision spheres, the sampled contact surface's distances):
 

@@ -1,6 +1,6 @@
 """The queue interface that the service talks to and both backends implement.
 
-Two backends (DESIGN.md §3): embedded (in-process queue feeding spawned worker processes; the default, not
+Two backends (docs/architecture.md): embedded (in-process queue feeding spawned worker processes; the default, not
 durable) and Redis Streams (a consumer group; durable as far as Redis's own persistence goes, scale-out). The
 service only ever sees `JobQueue`. Everything here is torch-free.
 

@@ -30,3 +30,15 @@ def test_bodies_built_from_a_type_carry_its_name() -> None:
     body = ErrorBody.of(ErrorType.QUEUE_FULL, "full")
     assert body.model_dump(exclude_none=True) == {"error": "full", "type": "QueueFull"}
     assert body.kind is ErrorType.QUEUE_FULL and body.status == 429
+
+
+def test_the_documented_table_is_the_enum() -> None:
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[3] / "docs" / "errors.md").read_text()
+    rows = {}
+    for line in text.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 4 and cells[0].startswith("`"):
+            rows[cells[0].strip("`")] = (int(cells[1]), cells[2])
+    assert rows == {k.value: (k.status, k.job_state.value) for k in ErrorType}
