@@ -130,7 +130,7 @@ class RedisWorker:
             robots = {r.name: pack(r.model_dump(mode="python", exclude_none=True)) for r in self._core.robots()}
             self.builtin_robots = set(robots)
             if robots:
-                self.r.hset(self.keys.robots, mapping=robots)  # type: ignore[arg-type]
+                self.r.hset(self.keys.robots, mapping=robots)
             if with_group:
                 log.info("created consumer group")
             self._beat()

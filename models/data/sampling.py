@@ -61,7 +61,7 @@ class Grasp:
     self_overlap: float
 
 
-def pad_directions(hand) -> np.ndarray:  # type: ignore[no-untyped-def]
+def pad_directions(hand) -> np.ndarray:
     """(m, 3) unit "pad" direction of each fingertip in its link frame: the outward normal of the fingertip
     body's collision mesh at the contact point (the side of the finger that should face the object)."""
     if hand.name in _PADS:
@@ -88,7 +88,7 @@ def pad_alignment(
     hand,
     palm_pos: torch.Tensor,
     palm_quat: torch.Tensor,
-    q: torch.Tensor,  # type: ignore[no-untyped-def]
+    q: torch.Tensor,
     normals: np.ndarray,
 ) -> np.ndarray:
     """(B, m) cosine between each fingertip's world pad direction and the surface normal there (−1: facing)."""
@@ -109,7 +109,7 @@ def sample_palms(
     obj: ObjectField,
     size: float,
     count: int,
-    rng: np.random.Generator,  # type: ignore[no-untyped-def]
+    rng: np.random.Generator,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``count`` palm poses facing the object: positions (B, 3), quaternions (B, 4) wxyz."""
     pos0 = torch.zeros(1, 3, dtype=torch.float64)
@@ -158,7 +158,7 @@ def _targets(obj: ObjectField, all_tips: np.ndarray, i: int, k: int, rng: np.ran
 
 
 def sample_grasps(
-    hand,  # type: ignore[no-untyped-def]
+    hand,
     obj: ObjectField,
     size: float,
     rng: np.random.Generator,
@@ -269,7 +269,7 @@ def sample_grasps(
     return out
 
 
-def _closure_rows(  # type: ignore[no-untyped-def]
+def _closure_rows(
     hand, obj: ObjectField, pads: np.ndarray, radii: np.ndarray, rows: np.ndarray, mu: float
 ) -> np.ndarray:
     """(R,) bool: rows (of ``rows``) whose pad contacts (R, m, 3) pass the verification's closure tests at ``mu``
@@ -308,7 +308,7 @@ def exact_checks(
     obj: ObjectField,
     palm_pos: np.ndarray,
     palm_quat: np.ndarray,
-    q: np.ndarray,  # type: ignore[no-untyped-def]
+    q: np.ndarray,
     pads: np.ndarray,
     radii: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, float, float] | None:

@@ -45,7 +45,7 @@ class MethodResult:
         return self.successes / self.cases if self.cases else 0.0
 
 
-def synthesis_input(case: TestCase, hand: Any, method: str, num_proposals: int, seed: int, max_iterations: int):  # type: ignore[no-untyped-def]
+def synthesis_input(case: TestCase, hand: Any, method: str, num_proposals: int, seed: int, max_iterations: int):
     """The `SynthesisInput` of one case for one method."""
     from models.pipeline import JointInput, SynthesisInput, TaskInput
 

@@ -104,7 +104,7 @@ def parse_mjcf(path: str, name: str = "robot") -> RobotDescription:
     return RobotDescription(name, nm(mujoco.mjtObj.mjOBJ_BODY, 0), links, joints)
 
 
-def _geom_mesh(m, g: int) -> trimesh.Trimesh | None:  # type: ignore[no-untyped-def]
+def _geom_mesh(m, g: int) -> trimesh.Trimesh | None:
     import mujoco
 
     t, s = int(m.geom_type[g]), np.asarray(m.geom_size[g], dtype=np.float64)
@@ -125,7 +125,7 @@ def _geom_mesh(m, g: int) -> trimesh.Trimesh | None:  # type: ignore[no-untyped-
     return None
 
 
-def _couplings(m, joints: list[JointSpec]) -> None:  # type: ignore[no-untyped-def]
+def _couplings(m, joints: list[JointSpec]) -> None:
     import mujoco
 
     by_name = {j.name: j for j in joints}

@@ -39,7 +39,7 @@ async def admit(queue: QueueDep, count: int = 1) -> None:
 def job_created(request: Request, job_id: str, job: JobPublic | None = None) -> Response:
     """202 with the job's URL (in the body and in Location)."""
     url = str(request.url_for("get_job", job_id=job_id))
-    body = JobCreated(id=job_id, state=job.state if job else "queued", url=url)  # type: ignore[arg-type]
+    body = JobCreated(id=job_id, state=job.state if job else "queued", url=url)
     return respond(request, body, status=202, headers={"Location": url, "X-Job-ID": job_id})
 
 

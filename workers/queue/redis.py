@@ -73,7 +73,7 @@ def _s(value: bytes | None) -> str | None:
 
 
 def _f(value: bytes | None) -> float | None:
-    return None if value in (None, b"") else float(value)  # type: ignore[arg-type]
+    return None if value in (None, b"") else float(value)
 
 
 def job_from_hash(job_id: str, h: dict[bytes, bytes], result: bytes | None, has_result: bool) -> JobPublic:
@@ -231,7 +231,7 @@ class RedisQueue(JobQueue):
         keys = [self.keys.stream, self.keys.job(job_id), self.keys.counts, self.keys.done]
         args = [GROUP, time.time(), state.value, message, kind, job_id, int(self.settings.record_ttl * 1000)]
         async with self._guard():
-            return (await self._cancel(keys=keys, args=args)).decode()  # type: ignore[no-any-return]
+            return (await self._cancel(keys=keys, args=args)).decode()
 
     async def wait(self, job_id: str, timeout: float) -> JobPublic:
         end = time.monotonic() + timeout
@@ -359,7 +359,7 @@ class RedisQueue(JobQueue):
         loop, end = asyncio.get_running_loop(), time.monotonic() + timeout
         async with self._guard():
             fields = {"k": "robot", "id": rid, "p": payload} | ({"o": owner} if owner else {})
-            await self._client.xadd(self.keys.stream, fields)  # type: ignore[arg-type]
+            await self._client.xadd(self.keys.stream, fields)
         while True:
             future: asyncio.Future[None] = loop.create_future()
             self._waiters.setdefault(f"robot:{rid}", []).append(future)
