@@ -1,4 +1,5 @@
 """`ModelsPipeline`: the worker's default `Pipeline`, the science of `models` (network → selection →
+
 initialisation → refinement → verification).
 
 Loaded once per worker process: the network from ``weights_dir`` (default ``models/weights``) when a checkpoint
@@ -15,11 +16,14 @@ import logging
 import time
 from collections import OrderedDict
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from clients.schemas import ErrorBody, ErrorType, RobotPublic, RobotRegister, Stage
 from workers.pipeline import CancelFn, JobInput, Outcome, ProgressFn, error_from_exception
 from workers.queue.records import cancelled_error
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 log = logging.getLogger("workers.models_pipeline")
 _HAND_CACHE = 32
@@ -209,7 +213,7 @@ def _reporter(job: JobInput, progress: ProgressFn) -> Any:
     return report
 
 
-def _public(hand: Any, name: str, *, builtin: bool, source: str) -> RobotPublic:
+def _public(hand: Hand, name: str, *, builtin: bool, source: str) -> RobotPublic:
     return RobotPublic(
         name=name, builtin=builtin, dof=int(hand.dof), joint_names=list(hand.joint_names),
         lower=[float(x) for x in hand.lower], upper=[float(x) for x in hand.upper],

@@ -1,5 +1,6 @@
 """The refinement evaluation (paper Table II, docs/evaluation.md) as a library; `mani eval refine` drives it.
 
+
 Protocol, per object and grasp:
 
 1. Known-feasible ("ground-truth") palm pose, from one of two sources (``ground_truth``):
@@ -47,7 +48,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -62,6 +63,9 @@ from models.refine.state import HandPose
 from models.refine.strategy import refine_from_start
 from models.refine.verify import Verification, verify
 from models.refine.wrench import WrenchTask, characteristic_length, closure_task, rigid_task
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 DEFAULT_MU = DEFAULT_FRICTION
 GROUND_TRUTHS = ("sampled", "refined")
@@ -117,7 +121,7 @@ class Report:
 
 
 def feasible_grasp(
-    hand: Any, cloud: PointCloudField, mesh: Any, task: WrenchTask, mu: float, rng: np.random.Generator,
+    hand: Hand, cloud: PointCloudField, mesh: Any, task: WrenchTask, mu: float, rng: np.random.Generator,
     attempts: int = 10, config: RefineConfig | None = None,
 ) -> HandPose | None:
     """A verified force-closure pose from random contacts (protocol step 1), or None."""
@@ -156,7 +160,7 @@ class SampledGroundTruth:
     """
 
     def __init__(
-        self, hand: Any, obj: Any, cloud: PointCloudField, closure: WrenchTask, mu: float, seed: int, index: int,
+        self, hand: Hand, obj: Any, cloud: PointCloudField, closure: WrenchTask, mu: float, seed: int, index: int,
         rounds: int = SAMPLER_ROUNDS, palms: int = SAMPLER_PALMS, max_grasps: int = SAMPLER_MAX_GRASPS,
     ) -> None:
         self.hand, self.obj, self.cloud, self.closure, self.mu = hand, obj, cloud, closure, mu
@@ -219,7 +223,7 @@ def sampled_ground_truth(
 
 
 def approach_start(
-    hand: Any, cloud: PointCloudField, centre: np.ndarray, rng: np.random.Generator, rest: Any = None
+    hand: Hand, cloud: PointCloudField, centre: np.ndarray, rng: np.random.Generator, rest: Any = None
 ) -> HandPose:
     """Palm facing ``centre`` from a random direction and roll, backed off until its body spheres clear."""
     rest = rest or rest_geometry(hand)
@@ -258,7 +262,7 @@ def feasible_wrench(
 
 
 def perturb(
-    hand: Any, pose: HandPose, rng: np.random.Generator, retreat: float = 0.30,
+    hand: Hand, pose: HandPose, rng: np.random.Generator, retreat: float = 0.30,
     max_angle_deg: float = 60.0, max_shift: float = 0.05,
 ) -> HandPose:
     """Protocol step 3: retreat along the approach axis, random rotation ≤ max angle, shift ≤ max_shift."""
@@ -274,7 +278,7 @@ def perturb(
 
 
 def evaluate(
-    hand: Any,
+    hand: Hand,
     objects: Iterable[Any],
     mode: str,
     grasps: int,

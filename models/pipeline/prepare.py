@@ -121,7 +121,7 @@ def network_inputs(batch: Sequence[Prepared]) -> list[Any]:
                 properties=dict(inp.properties),
                 hand_points=np.asarray(hand.surface_points),
                 hand_normals=np.asarray(hand.surface_normals),
-                hand_key=str(inp.hand_key or getattr(hand, "name", "hand")),
+                hand_key=str(inp.hand_key or hand.name),
             )
         )
     return rows

@@ -1,16 +1,20 @@
 """Core inputs and outputs of the synthesis pipeline (pure dataclasses; the worker maps the wire schemas here).
 
+
 Mirrors ``clients/schemas`` (requests, tasks, results) field for field without importing it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from models.errors import Cancelled, InvalidInput, ModelUnavailable
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 METHODS = ("network", "contacts", "direct_grasp", "random_contacts")
 TASK_KINDS = ("delta_pose", "point_motion", "target_points", "wrench", "force_closure", "joint_motion")
@@ -87,7 +91,7 @@ class SynthesisInput:
     """
 
     points: np.ndarray
-    hand: Any
+    hand: Hand
     task: TaskInput
     normals: np.ndarray | None = None
     material: str = "rigid"

@@ -1,5 +1,6 @@
 """The iterative SOCP refinement loop (paper §III-B) with an adaptive trust region.
 
+
 Each iteration: linearise at q (kinematics, Φ, optimal forces f* → r*), solve the step of `models.refine.step`,
 evaluate the true merit ``‖r*‖² + λ Σ Φ(p_i)² + ρ (Σ penetration + Σ self-overlap)`` at q + δq, accept the step
 if it lowers the merit, grow the trust region after good agreement with the model (ratio > 0.75) and shrink it
@@ -14,7 +15,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,6 +25,9 @@ from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE
 from models.refine.state import HandPose, Linearisation, linearise
 from models.refine.step import StepParams, solve_step, solve_step_cvxpy
 from models.refine.wrench import WrenchTask
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 
 @dataclass(frozen=True)
@@ -145,7 +149,7 @@ def _converged(lin: Linearisation, cfg: RefineConfig) -> bool:
 
 
 def refine(
-    hand: Any,
+    hand: Hand,
     field_: ObjectField,
     task: WrenchTask,
     start: HandPose,
