@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -267,9 +267,3 @@ def refine(
         history=history,
     )
 
-
-def with_solver(config: RefineConfig, solver: str) -> RefineConfig:
-    """A copy of ``config`` using ``solver`` ("clarabel" or "cvxpy")."""
-    if solver not in ("clarabel", "cvxpy"):
-        raise ValueError(f"solver must be 'clarabel' or 'cvxpy', got {solver!r}")
-    return replace(config, solver=solver)
