@@ -49,7 +49,7 @@ class Client(BaseClient):
 
     Args:
         base_url, api_key, timeout, retries, encoding, headers, poll_interval: see `BaseClient`.
-        transport: an ``httpx.BaseTransport`` to send through (tests: ``httpx.MockTransport``).
+        transport: an ``httpx.BaseTransport`` to send through (tests: the app in process).
         sleep: how to wait between retries and polls (tests may pass a no-op).
     """
 
