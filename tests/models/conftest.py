@@ -1,3 +1,5 @@
+"""Fixtures shared by the science tests (refinement and its evaluation): a box, the Panda gripper."""
+
 import numpy as np
 import pytest
 import trimesh
