@@ -58,13 +58,13 @@ class StagedPipeline:
 
     def validate_robot(self, robot: RobotRegister) -> RobotPublic:
         try:
-            root = ET.fromstring(robot.urdf)
+            root = ET.fromstring(robot.urdf or robot.mjcf or "")
         except ET.ParseError as exc:
             raise ValueError(f"urdf: malformed XML: {exc}") from exc
         if root.tag != "robot":
             raise ValueError("urdf: root element must be <robot>")
         links = {link.get("name") for link in root.iter("link")}
-        missing = [tip for tip in robot.fingertips if tip not in links]
+        missing = [tip for tip in robot.fingertips or [] if tip not in links]
         if missing:
             raise ValueError(f"fingertips: unknown links {missing}")
         joints = [j.get("name") or "" for j in root.iter("joint") if j.get("type") in ("revolute", "prismatic")]
@@ -75,7 +75,7 @@ class StagedPipeline:
             joint_names=joints,
             lower=[0.0] * len(joints),
             upper=[1.0] * len(joints),
-            fingertips=list(robot.fingertips),
+            fingertips=list(robot.fingertips or []),
             source="user",
         )
 
@@ -109,6 +109,6 @@ class StagedPipeline:
             timings[stage.value] = timings.get(stage.value, 0.0) + time.perf_counter() - t0
         hand = job.request.robot.name or "inline"
         if job.robot is not None:
-            root = ET.fromstring(job.robot.urdf)
+            root = ET.fromstring(job.robot.urdf or job.robot.mjcf or "<robot/>")
             timings["robot_dof"] = float(sum(j.get("type") in ("revolute", "prismatic") for j in root.iter("joint")))
         return SynthesisResult(hand=hand, model_version=self.model_version or "", proposals=[], timings=timings)

@@ -33,7 +33,7 @@ from clients.schemas.objects import (
 )
 from clients.schemas.requests import ContactsIn, Method, SynthesisOptions, SynthesisRequest
 from clients.schemas.results import HandMesh, IterationRecord, Proposal, Quality, SynthesisResult
-from clients.schemas.robots import MAX_URDF_BYTES, RobotIn, RobotPublic, RobotRegister
+from clients.schemas.robots import MAX_ARCHIVE_BYTES, MAX_URDF_BYTES, RobotIn, RobotPreview, RobotPublic, RobotRegister
 from clients.schemas.tasks import (
     DeltaPoseTask,
     ForceClosureTask,
@@ -46,6 +46,7 @@ from clients.schemas.tasks import (
 
 __all__ = [
     "MATERIAL_PROPERTIES",
+    "MAX_ARCHIVE_BYTES",
     "MAX_BATCH_SIZE",
     "MAX_POINTS",
     "MAX_URDF_BYTES",
@@ -79,6 +80,7 @@ __all__ = [
     "Quality",
     "ReadyPublic",
     "RobotIn",
+    "RobotPreview",
     "RobotPublic",
     "RobotRegister",
     "Stage",

@@ -44,6 +44,8 @@ class RobotDescription:
     root: str
     links: dict[str, list[trimesh.Trimesh]] = field(default_factory=dict)
     joints: list[JointSpec] = field(default_factory=list)
+    couplings: list[str] = field(default_factory=list)
+    """What the reader did with each coupling the file declares (mimic, tendon, equality), one line each."""
 
     def subtree(self, root: str) -> RobotDescription:
         """The description restricted to ``root`` and its descendants (e.g. the hand of an arm)."""
@@ -60,7 +62,9 @@ class RobotDescription:
                 keep_links.append(j.child)
                 keep_joints.append(j)
                 stack.append(j.child)
-        return RobotDescription(self.name, root, {k: self.links[k] for k in keep_links}, keep_joints)
+        kept = {j.name for j in keep_joints}
+        couplings = [c for c in self.couplings if any(f"{n} " in c or f" {n}" in c for n in kept)]
+        return RobotDescription(self.name, root, {k: self.links[k] for k in keep_links}, keep_joints, couplings)
 
 
 def transform(xyz: np.ndarray | None = None, rpy: np.ndarray | None = None) -> np.ndarray:
