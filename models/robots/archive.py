@@ -129,12 +129,12 @@ class _Budget:
         self.names.add(name)
         if len(self.names) > MAX_MEMBERS:
             raise HandLoadError(f"more than {MAX_MEMBERS} members: refused")
-        if size > MAX_MEMBER_BYTES:
-            raise HandLoadError(f"member {name!r}: {size} bytes unpacked, over the {MAX_MEMBER_BYTES}-byte limit")
         if packed is not None and size > MAX_RATIO * max(packed, 1) and size > 1024 * 1024:
             raise HandLoadError(
                 f"member {name!r}: compressed {size // max(packed, 1)} : 1, a zip bomb (limit {MAX_RATIO})"
             )
+        if size > MAX_MEMBER_BYTES:
+            raise HandLoadError(f"member {name!r}: {size} bytes unpacked, over the {MAX_MEMBER_BYTES}-byte limit")
 
     def add(self, name: str, n: int) -> None:
         self.total += n
@@ -173,6 +173,9 @@ def _read_zip(data: bytes) -> HandArchive:
                     continue
                 if info.flag_bits & 0x1:
                     raise HandLoadError(f"member {name!r}: encrypted")
+                if name.lower().endswith(".stl"):  # the face count first: it names the problem of a huge mesh
+                    with zf.open(info) as f:
+                        _check_stl_header(name, f.read(84), info.file_size)
                 budget.declare(name, info.file_size, info.compress_size)
                 with zf.open(info) as f:
                     files[name] = _read_limited(f, name, info.file_size, budget)
@@ -197,10 +200,13 @@ def _read_tar(data: bytes) -> HandArchive:
                     continue
                 if not info.isfile():
                     raise HandLoadError(f"member {name!r}: a device, FIFO or other special file; refused")
-                budget.declare(name, info.size, None)
                 f = tf.extractfile(info)
                 if f is None:
                     raise HandLoadError(f"member {name!r}: unreadable")
+                if name.lower().endswith(".stl"):
+                    _check_stl_header(name, f.read(84), info.size)
+                    f.seek(0)
+                budget.declare(name, info.size, None)
                 files[name] = _read_limited(f, name, info.size, budget)
     except (tarfile.TarError, EOFError, OSError, ValueError) as e:  # gzip/bz2/xz errors are OSError/EOFError
         raise HandLoadError(f"malformed tar archive: {e}") from e

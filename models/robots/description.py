@@ -6,6 +6,7 @@ into a tree of moving bodies (fixed joints collapsed) for batched forward kinema
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -62,8 +63,8 @@ class RobotDescription:
                 keep_links.append(j.child)
                 keep_joints.append(j)
                 stack.append(j.child)
-        kept = {j.name for j in keep_joints}
-        couplings = [c for c in self.couplings if any(f"{n} " in c or f" {n}" in c for n in kept)]
+        kept = {j.name for j in keep_joints} | set(keep_links)
+        couplings = [c for c in self.couplings if kept & set(re.findall(r"[^\s'\"(),=*]+", c))]
         return RobotDescription(self.name, root, {k: self.links[k] for k in keep_links}, keep_joints, couplings)
 
 

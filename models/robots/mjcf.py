@@ -198,5 +198,10 @@ def _couplings(m, joints: list[JointSpec]) -> list[str]:  # type: ignore[no-unty
             notes.append(f"equality {ename!r}: {a.name} = {poly[1]:.6g} * {b.name} + {a.mimic[2]:.6g} (honoured)")
         elif kind in (mujoco.mjtEq.mjEQ_CONNECT, mujoco.mjtEq.mjEQ_WELD, mujoco.mjtEq.mjEQ_TENDON):
             what = {mujoco.mjtEq.mjEQ_CONNECT: "connect", mujoco.mjtEq.mjEQ_WELD: "weld"}.get(kind, "tendon")
-            notes.append(f"equality {ename!r} ({what}): a closed loop or tendon coupling, not modelled: joints free")
+            obj = mujoco.mjtObj.mjOBJ_TENDON if kind == mujoco.mjtEq.mjEQ_TENDON else mujoco.mjtObj.mjOBJ_BODY
+            ends = [mujoco.mj_id2name(m, obj, int(i)) or "" for i in (m.eq_obj1id[e], m.eq_obj2id[e]) if i >= 0]
+            notes.append(
+                f"equality {ename!r} ({what} {' '.join(ends)}): a closed loop or tendon coupling, not modelled: "
+                "its joints are free"
+            )
     return notes

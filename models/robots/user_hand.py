@@ -191,14 +191,16 @@ def _cut(desc: RobotDescription, palm: str, notes: list[str]) -> RobotDescriptio
 
 
 def _default_fingertips(tree: KinematicTree, desc: RobotDescription) -> list[str]:
+    """One link per leaf body (a moving body with no moving child): its leaf link with geometry, else any."""
     parents = {j.parent for j in desc.joints}
-    by_body: dict[int, str] = {}
-    for link, (b, _) in tree.link_body.items():
-        if link in parents or b == 0:
-            continue
-        if any(desc.links.get(n) for n, (bb, _) in tree.link_body.items() if bb == b):
-            by_body.setdefault(b, link)
-    tips = [by_body[b] for b in sorted(by_body)]
+    leaf_bodies = [b for b in range(1, len(tree.body_names)) if b not in set(tree.parent.tolist())]
+    tips = []
+    for b in leaf_bodies:
+        links = [n for n, (bb, _) in tree.link_body.items() if bb == b]
+        shaped = [n for n in links if desc.links.get(n)]
+        leaves = [n for n in shaped if n not in parents]
+        if shaped:
+            tips.append((leaves or shaped)[-1])
     if not tips:
         raise HandLoadError("fingertips: the palm's sub-tree has no moving leaf link with geometry; name them")
     if len(tips) > MAX_FINGERTIPS:
