@@ -1,0 +1,171 @@
+"""Bring your own hand, end to end: third-party hands (nobody on the team wrote them) zipped from their PyPI
+packages, registered through the API with the real science in the worker, then used for force-closure grasps of
+a box and a cylinder; every proposal the service calls a success is checked by the outside audit (`models.audit`:
+its own kinematics from the package's original files, the links' meshes, the object's exact mesh).
+
+The parallel gripper (robosuite's Rethink gripper) runs in the default suite; the G1 Dex3 hand, the ORCA hand
+and the TriFinger are `slow`. Hostile archives through the API: each a 4xx naming the problem.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import time
+import zipfile
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import httpx
+import numpy as np
+import pytest
+import trimesh
+
+from clients.schemas import SynthesisResult
+from models.audit import AuditedGrasp, audit_grasp
+from models.audit.hands import AuditHand, HandSpec
+from models.audit.objects import sample_surface
+from models.robots.thirdparty import ThirdPartyHand, third_party_hands
+from service.app import create_app
+from service.settings import Settings
+
+from .server import serving
+from .workers import start_queue_and_workers
+
+PIPELINE = "workers.models_pipeline:ModelsPipeline"
+HANDS = third_party_hands()
+MU = 0.8
+OBJECTS = {
+    "box": lambda size: trimesh.creation.box(extents=[size] * 3),
+    "cylinder": lambda size: trimesh.creation.cylinder(radius=size / 2, height=0.08, sections=48),
+}
+
+
+@pytest.fixture(scope="module")
+def base(request: pytest.FixtureRequest) -> Iterator[str]:
+    settings = Settings(
+        sync_wait_max=300,
+        robot_register_timeout=120,
+        rate_limit_per_s=0,
+        robots_cache_s=0,
+        max_robot_store_bytes=2_600_000,
+    )
+    with (
+        start_queue_and_workers(request, pipeline=PIPELINE, hands=["barrett"]) as queue,
+        serving(create_app(settings, queue=queue)) as url,
+    ):
+        deadline = time.monotonic() + 240
+        while not httpx.get(f"{url}/v1/robots", timeout=10).json()["robots"]:
+            assert time.monotonic() < deadline, "no worker published its hands"
+            time.sleep(0.5)
+        yield url
+
+
+@dataclass(frozen=True)
+class PackageSpec(HandSpec):
+    """The audit's view of a packaged hand: ``package://pkg/...`` resolved in the package's own folder."""
+
+    packages: Path = Path()
+
+    def resolve_mesh(self, filename: str) -> Path:
+        if filename.startswith("package://"):
+            return self.packages / filename[len("package://") :]
+        return super().resolve_mesh(filename)
+
+
+def register(base: str, hand: ThirdPartyHand, name: str) -> dict:
+    body = {"name": name, "archive": base64.b64encode(hand.archive()).decode(), "palm": hand.palm}
+    response = httpx.post(f"{base}/v1/robots", json=body, timeout=180)
+    assert response.status_code == 201, response.text[:2000]
+    return response.json()
+
+
+def grasp_and_audit(base: str, hand: ThirdPartyHand, size: float) -> dict[str, int]:
+    """Register ``hand``, ask for 4 force-closure grasps of each object, audit every claimed success."""
+    name = hand.name.replace("_", "-")
+    robot = register(base, hand, name)
+    assert robot["palm"] == hand.palm and robot["num_spheres"] > 0 and robot["format"] in ("urdf", "mjcf")
+    assert httpx.get(robot["view_url"], timeout=30).status_code == 200
+    spec = PackageSpec(name, hand.description, hand.palm, tuple(robot["fingertips"]), packages=hand.root.parent)
+    audit_hand = AuditHand(spec)
+    passed: dict[str, int] = {}
+    for shape, make in OBJECTS.items():
+        mesh = make(size)
+        points, normals = sample_surface(mesh, 2048, 0)
+        request = {
+            "object": {"points": points.tolist(), "normals": normals.tolist(), "properties": {"friction": MU},
+                       "mesh": {"vertices": mesh.vertices.tolist(), "faces": mesh.faces.tolist()}},
+            "task": {"kind": "force_closure"},
+            "robot": {"name": name},
+            "options": {"method": "random_contacts", "num_proposals": 4, "seed": 0, "timeout": 280},
+        }  # fmt: skip
+        response = httpx.post(f"{base}/v1/synthesize", json=request, timeout=300)
+        assert response.status_code == 200, response.text[:2000]
+        result = SynthesisResult.model_validate(response.json())
+        claimed = [p for p in result.proposals if p.quality.success]
+        for p in claimed:
+            grasp = AuditedGrasp(p.contact_points, p.forces, p.fingertips, p.palm_position, p.palm_quaternion,
+                                 p.joint_names, p.joint_values)  # fmt: skip
+            soft = 0.005 if len(p.fingertips) == 2 else 0.0
+            report = audit_grasp(audit_hand, grasp, mesh, points, normals, mu=MU, closure=True, soft_finger=soft)
+            assert report.passed, f"{hand.name} {shape}: the service's success fails the audit: {report.failures}"
+        passed[shape] = len(claimed)
+    assert httpx.delete(f"{base}/v1/robots/{name}", timeout=30).status_code == 204
+    return passed
+
+
+def test_a_parallel_gripper_from_robosuite(base: str) -> None:
+    passed = grasp_and_audit(base, HANDS["rethink"], 0.03)
+    assert passed["box"] >= 1 and passed["cylinder"] >= 1, passed
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("hand", "size"), [("g1_dex3", 0.05), ("orca", 0.05), ("trifinger", 0.05)])
+def test_third_party_hands_grasp_a_box_and_a_cylinder(base: str, hand: str, size: float) -> None:
+    passed = grasp_and_audit(base, HANDS[hand], size)
+    assert passed["box"] >= 1 and passed["cylinder"] >= 1, passed
+
+
+def _zip(files: dict[str, bytes]) -> str:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
+        for name, data in files.items():
+            z.writestr(name, data)
+    return base64.b64encode(buf.getvalue()).decode()
+
+
+def test_hostile_archives_get_a_4xx_naming_the_problem(base: str) -> None:
+    urdf = (HANDS["rethink"].description.parent / "x").as_posix()  # any path: it must never be opened
+    doc = (f'<robot name="r"><link name="p"><collision><geometry><mesh filename="{urdf}"/></geometry>'
+           "</collision></link></robot>").encode()  # fmt: skip
+    cases = {
+        "zip bomb": {"hand.urdf": doc, "pad.obj": b"\0" * (40 * 1024 * 1024)},
+        "traversal": {"hand.urdf": doc, "../../x.stl": b"x"},
+        "absolute paths": {"hand.urdf": doc},
+        "not in the archive": {"hand.urdf": doc.replace(urdf.encode(), b"meshes/missing.stl")},
+    }
+    for words, files in cases.items():
+        response = httpx.post(f"{base}/v1/robots", json={"name": "bad", "archive": _zip(files)}, timeout=60)
+        assert 400 <= response.status_code < 500 and words in response.json()["error"], (words, response.text)
+    not_b64 = httpx.post(f"{base}/v1/robots", json={"name": "bad", "archive": "%%%"}, timeout=30)
+    assert not_b64.status_code == 422 and "archive" in not_b64.text
+
+
+def test_registered_bytes_per_key_are_bounded(base: str) -> None:
+    archive = base64.b64encode(HANDS["rethink"].archive()).decode()  # 1.4 MB: one fits the 2.6 MB quota, two do not
+    first = httpx.post(
+        f"{base}/v1/robots", json={"name": "q1", "archive": archive, "palm": "gripper_base"}, timeout=120
+    )
+    assert first.status_code == 201, first.text[:500]
+    assert first.json()["stored_bytes"] == len(base64.b64decode(archive))
+    second = httpx.post(
+        f"{base}/v1/robots", json={"name": "q2", "archive": archive, "palm": "gripper_base"}, timeout=120
+    )
+    assert second.status_code == 409 and "MANI_MAX_ROBOT_STORE_BYTES" in second.json()["error"]
+    assert httpx.delete(f"{base}/v1/robots/q1", timeout=30).status_code == 204
+    again = httpx.post(
+        f"{base}/v1/robots", json={"name": "q2", "archive": archive, "palm": "gripper_base"}, timeout=120
+    )
+    assert again.status_code == 201
+    assert httpx.delete(f"{base}/v1/robots/q2", timeout=30).status_code == 204
