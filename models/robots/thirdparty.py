@@ -56,7 +56,7 @@ class ThirdPartyHand:
             path = todo.pop()
             text = path.read_text()
             for ref in re.findall(r'(?:file|filename)="([^"]+)"', text):
-                target = self._locate(path, ref)
+                target = self.locate(path, ref)
                 if target is None or target in out or (self.name == "g1_dex3" and "right_hand" not in target.name):
                     continue
                 out.append(target)
@@ -64,7 +64,8 @@ class ThirdPartyHand:
                     todo.append(target)
         return out
 
-    def _locate(self, referrer: Path, ref: str) -> Path | None:
+    def locate(self, referrer: Path, ref: str) -> Path | None:
+        """The package file a reference in ``referrer`` names (package:// tails, relative paths), or None."""
         if ref.startswith("package://"):
             tail = ref[len("package://") :].split("/", 1)[1]
             hits = [p for p in (self.root / tail, self.root.parent / tail) if p.is_file()]

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import base64
 import io
+import json
 import time
 import zipfile
 from collections.abc import Iterator
@@ -65,12 +66,12 @@ def base(request: pytest.FixtureRequest) -> Iterator[str]:
 class PackageSpec(HandSpec):
     """The audit's view of a packaged hand: ``package://pkg/...`` resolved in the package's own folder."""
 
-    packages: Path = Path()
+    package: ThirdPartyHand | None = None
 
     def resolve_mesh(self, filename: str) -> Path:
-        if filename.startswith("package://"):
-            return self.packages / filename[len("package://") :]
-        return super().resolve_mesh(filename)
+        assert self.package is not None
+        found = self.package.locate(self.path, filename)
+        return found if found is not None else Path(filename)
 
 
 def register(base: str, hand: ThirdPartyHand, name: str) -> dict:
@@ -86,7 +87,7 @@ def grasp_and_audit(base: str, hand: ThirdPartyHand, size: float) -> dict[str, i
     robot = register(base, hand, name)
     assert robot["palm"] == hand.palm and robot["num_spheres"] > 0 and robot["format"] in ("urdf", "mjcf")
     assert httpx.get(robot["view_url"], timeout=30).status_code == 200
-    spec = PackageSpec(name, hand.description, hand.palm, tuple(robot["fingertips"]), packages=hand.root.parent)
+    spec = PackageSpec(name, hand.description, hand.palm, tuple(robot["fingertips"]), package=hand)
     audit_hand = AuditHand(spec)
     passed: dict[str, int] = {}
     for shape, make in OBJECTS.items():
@@ -168,3 +169,25 @@ def test_registered_bytes_per_key_are_bounded(base: str) -> None:
     )
     assert again.status_code == 201
     assert httpx.delete(f"{base}/v1/robots/q2", timeout=30).status_code == 204
+
+
+def test_the_cli_adds_shows_lists_and_deletes_a_hand_folder(
+    base: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from clients.cli.main import main
+
+    with zipfile.ZipFile(io.BytesIO(HANDS["rethink"].archive())) as z:
+        z.extractall(tmp_path / "rethink")  # a folder as a user has it: the CLI zips it
+    assert main(["robots", "add", str(tmp_path / "rethink"), "--palm", "gripper_base", "--name", "cli-rethink",
+                 "--url", base, "--json"]) == 0  # fmt: skip
+    added = json.loads(capsys.readouterr().out)
+    assert added["dof"] == 2 and added["palm"] == "gripper_base" and added["view_url"].endswith("/view")
+    assert main(["robots", "show", "cli-rethink", "--url", base]) == 0
+    shown = capsys.readouterr().out
+    assert "collision spheres" in shown and "pad areas" in shown
+    assert main(["robots", "list", "--url", base, "--json"]) == 0
+    assert "cli-rethink" in {r["name"] for r in json.loads(capsys.readouterr().out)}
+    assert main(["robots", "delete", "cli-rethink", "--url", base]) == 0
+    assert main(["robots", "show", "cli-rethink", "--url", base]) == 2  # 404: a usage error
+    capsys.readouterr()
+    assert main(["robots", "add", str(tmp_path / "nothere.zip"), "--url", base]) == 2
