@@ -54,7 +54,7 @@ class ModelsPipeline:
         card = getattr(self.predictor, "card", None)
         self.model_version: str | None = f"{card.config_name}-{card.version}" if card else None
         self._hands: OrderedDict[str, Any] = OrderedDict()
-        self._builtin = {name: get_hand(name) for name in (hands if hands is not None else list_hands())}
+        self._builtin = {name: get_hand(name) for name in (hands if hands is not None else list_hands(aliases=True))}
 
     @staticmethod
     def _load(path: Path) -> Any | None:

@@ -24,8 +24,11 @@ import re
 import time
 from dataclasses import dataclass, field
 
+from typing import cast
+
 import numpy as np
 import torch
+import trimesh
 
 from models.robots.archive import HandArchive, read_archive
 from models.robots.archive_meshes import ArchiveMeshes
@@ -209,23 +212,27 @@ def _default_fingertips(tree: KinematicTree, desc: RobotDescription) -> list[str
 
 
 def _tip_offsets(tree: KinematicTree, desc: RobotDescription, tips: list[str]) -> np.ndarray:
+    """(m, 3) tip points in the fingertip link frames: each body's distal end pulled back by ``TIP_PULLBACK``
+    towards the centroid, then moved onto the body's surface (a pad point, as the built-ins' offsets are)."""
     out = []
     for link in tips:
         b, T_bl = tree.link_body[link]
-        verts = [
-            np.asarray(m.vertices) @ T[:3, :3].T + T[:3, 3]
+        meshes = [
+            m.copy().apply_transform(T)
             for n, (bb, T) in tree.link_body.items()
             if bb == b
             for m in desc.links.get(n, [])
         ]
-        if not verts:
+        if not meshes:
             out.append(np.zeros(3))
             continue
-        v = np.vstack(verts)
+        body = cast(trimesh.Trimesh, trimesh.util.concatenate(meshes))
+        v = np.asarray(body.vertices)
         far = v[np.argmax(np.linalg.norm(v, axis=1))]
-        tip_body = far + TIP_PULLBACK * (v.mean(0) - far)
+        inner = far + TIP_PULLBACK * (v.mean(0) - far)
+        on_surface, _, _ = trimesh.proximity.closest_point(body, inner[None])
         T_lb = np.linalg.inv(T_bl)
-        out.append(T_lb[:3, :3] @ tip_body + T_lb[:3, 3])
+        out.append(T_lb[:3, :3] @ on_surface[0] + T_lb[:3, 3])
     return np.asarray(out)
 
 
