@@ -87,7 +87,8 @@ def hand_specs() -> dict[str, HandSpec]:
             ("tip_soft_2", "tip_soft", "tip_soft_1", "tip_soft__thumb"),
         ),
         "leap_hand": HandSpec(
-            "leap_hand", OUR_DESCRIPTIONS / "leap_hand" / "right_hand.xml", "palm", ("if_ds", "mf_ds", "rf_ds", "th_ds"),
+            "leap_hand", OUR_DESCRIPTIONS / "leap_hand" / "right_hand.xml", "palm",
+            ("if_ds", "mf_ds", "rf_ds", "th_ds"),
         ),
         "shadow": HandSpec(
             "shadow", sp / "gymnasium_robotics" / "envs" / "assets" / "hand" / "reach.xml", "robot0:palm",

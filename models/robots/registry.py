@@ -34,8 +34,8 @@ from __future__ import annotations
 import functools
 import io
 import os
-import zipfile
 import sysconfig
+import zipfile
 from collections.abc import Callable
 from pathlib import Path
 

@@ -23,7 +23,6 @@ from __future__ import annotations
 import re
 import time
 from dataclasses import dataclass, field
-
 from typing import cast
 
 import numpy as np
