@@ -15,7 +15,6 @@ import json
 import time
 import zipfile
 from collections.abc import Iterator
-from dataclasses import dataclass
 from pathlib import Path
 
 import httpx
@@ -24,8 +23,8 @@ import trimesh
 
 from clients.schemas import SynthesisResult
 from models.audit import AuditedGrasp, audit_grasp
-from models.audit.hands import AuditHand, HandSpec
 from models.audit.objects import sample_surface
+from models.evaluation.custom_hands import audit_hand
 from models.robots.thirdparty import ThirdPartyHand, third_party_hands
 from service.app import create_app
 from service.settings import Settings
@@ -62,18 +61,6 @@ def base(request: pytest.FixtureRequest) -> Iterator[str]:
         yield url
 
 
-@dataclass(frozen=True)
-class PackageSpec(HandSpec):
-    """The audit's view of a packaged hand: ``package://pkg/...`` resolved in the package's own folder."""
-
-    package: ThirdPartyHand | None = None
-
-    def resolve_mesh(self, filename: str) -> Path:
-        assert self.package is not None
-        found = self.package.locate(self.path, filename)
-        return found if found is not None else Path(filename)
-
-
 def register(base: str, hand: ThirdPartyHand, name: str) -> dict:
     body = {"name": name, "archive": base64.b64encode(hand.archive()).decode(), "palm": hand.palm}
     response = httpx.post(f"{base}/v1/robots", json=body, timeout=180)
@@ -87,8 +74,7 @@ def grasp_and_audit(base: str, hand: ThirdPartyHand, size: float) -> dict[str, i
     robot = register(base, hand, name)
     assert robot["palm"] == hand.palm and robot["num_spheres"] > 0 and robot["format"] in ("urdf", "mjcf")
     assert httpx.get(robot["view_url"], timeout=30).status_code == 200
-    spec = PackageSpec(name, hand.description, hand.palm, tuple(robot["fingertips"]), package=hand)
-    audit_hand = AuditHand(spec)
+    checker = audit_hand(hand, robot["fingertips"])  # the audit's own model, from the package's files
     passed: dict[str, int] = {}
     for shape, make in OBJECTS.items():
         mesh = make(size)
@@ -108,7 +94,7 @@ def grasp_and_audit(base: str, hand: ThirdPartyHand, size: float) -> dict[str, i
             grasp = AuditedGrasp(p.contact_points, p.forces, p.fingertips, p.palm_position, p.palm_quaternion,
                                  p.joint_names, p.joint_values)  # fmt: skip
             soft = 0.005 if len(p.fingertips) == 2 else 0.0
-            report = audit_grasp(audit_hand, grasp, mesh, points, normals, mu=MU, closure=True, soft_finger=soft)
+            report = audit_grasp(checker, grasp, mesh, points, normals, mu=MU, closure=True, soft_finger=soft)
             assert report.passed, f"{hand.name} {shape}: the service's success fails the audit: {report.failures}"
         passed[shape] = len(claimed)
     assert httpx.delete(f"{base}/v1/robots/{name}", timeout=30).status_code == 204
