@@ -235,6 +235,15 @@ def _tip_offsets(tree: KinematicTree, desc: RobotDescription, tips: list[str]) -
     return np.asarray(out)
 
 
+def _weld(desc: RobotDescription) -> None:
+    """Merge each mesh's duplicate vertices (STL files and MuJoCo's compiled meshes are triangle soups): a closed
+    mesh is then one watertight part, which the pads' convex parts and the penetration checks rely on."""
+    for meshes in desc.links.values():
+        for mesh in meshes:
+            mesh.merge_vertices()
+            mesh.remove_unreferenced_vertices()
+
+
 def pad_areas(hand: Hand) -> list[float]:
     """(m,) m²: each fingertip pad's area, its body mesh's faces within ``PAD_RADIUS`` of the tip point."""
     areas = []
@@ -253,6 +262,7 @@ def build_user_hand(src: HandSource) -> HandBuild:
     """
     start = time.perf_counter()
     desc, fmt, member, meshes, ignored, palm, drawn = _parse(src)
+    _weld(desc)
     tree = KinematicTree(desc)
     rest = src.rest if src.rest is not None else {k: v for k, v in drawn.items() if k in tree.joint_names}
     tips = list(src.fingertips) if src.fingertips else _default_fingertips(tree, desc)
@@ -271,6 +281,12 @@ def build_user_hand(src: HandSource) -> HandBuild:
     empty = [n for n in desc.links if not desc.links[n] and "__j" not in n]
     if empty:
         ignored.append(f"{len(empty)} links below the palm carry no geometry ({', '.join(empty[:4])})")
+    open_bodies = [b for b, m in hand.collision_meshes.items() if not m.is_watertight]
+    if open_bodies:
+        ignored.append(
+            f"{len(open_bodies)} of {len(hand.collision_meshes)} bodies have meshes that are not closed "
+            f"({', '.join(open_bodies[:4])}): inside/outside, hence penetration, is approximate on them"
+        )
     couplings = [f"joint {j.name!r} = {j.mimic[1]:.6g} * {j.mimic[0]!r} + {j.mimic[2]:.6g} (mimic, honoured)"
                  for j in desc.joints if j.mimic is not None and fmt == "urdf"]  # fmt: skip
     couplings += desc.couplings
