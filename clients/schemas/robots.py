@@ -74,7 +74,10 @@ class RobotRegister(WireModel):
     urdf: str | None = Field(None, min_length=1, max_length=MAX_URDF_BYTES)
     mjcf: str | None = Field(None, min_length=1, max_length=MAX_URDF_BYTES)
     archive: ArchiveBytes | None = Field(
-        None, max_length=MAX_ARCHIVE_BYTES, description="zip or tar (gz/bz2/xz): the description and its meshes."
+        None,
+        max_length=MAX_ARCHIVE_BYTES,
+        description="zip or tar (gz/bz2/xz): the description and its meshes (base64 in JSON, bytes in msgpack).",
+        json_schema_extra={"maxLength": 4 * MAX_ARCHIVE_BYTES // 3 + 4},
     )
     description: str | None = Field(
         None, max_length=300, description="The archive member to load (default: its only URDF, else its top MJCF)."

@@ -177,3 +177,22 @@ def test_the_cli_adds_shows_lists_and_deletes_a_hand_folder(
     assert main(["robots", "show", "cli-rethink", "--url", base]) == 2  # 404: a usage error
     capsys.readouterr()
     assert main(["robots", "add", str(tmp_path / "nothere.zip"), "--url", base]) == 2
+
+
+def test_the_async_sdk_adds_previews_and_deletes(base: str) -> None:
+    import asyncio
+
+    from clients.sdk import AsyncClient
+
+    async def go() -> None:
+        async with AsyncClient(base, timeout=120) as client:
+            archive = HANDS["rethink"].archive()
+            robot = await client.add_robot(archive, palm="gripper_base", name="async-rethink")
+            assert robot.dof == 2 and robot.couplings == [] and robot.registration_s is not None
+            preview = await client.robot_preview("async-rethink")
+            assert preview.spheres.shape == (robot.num_spheres, 4) and len(preview.tips) == 2
+            assert len(preview.pads) > 10 and len(preview.faces) > 10
+            await client.delete_robot("async-rethink")
+            assert "async-rethink" not in {r.name for r in await client.robots()}
+
+    asyncio.run(go())
