@@ -77,7 +77,17 @@ class ModelsPipeline:
 
     # ---- robots ----------------------------------------------------------------------------------------------
     def robots(self) -> list[RobotPublic]:
-        return [_public(hand, name, builtin=True, source="built-in") for name, hand in self._builtin.items()]
+        from models.robots.registry import ALIASES
+
+        return [
+            _public(
+                hand,
+                name,
+                builtin=True,
+                source=f"built-in, alias of {ALIASES[name]}" if name in ALIASES else "built-in",
+            )
+            for name, hand in self._builtin.items()
+        ]
 
     def validate_robot(self, robot: RobotRegister) -> RobotPublic:
         from workers.user_robots import robot_public

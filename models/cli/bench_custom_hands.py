@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
     from models.evaluation.custom_hands import audit_hand, grasp_and_audit
     from models.robots import get_hand
     from models.robots.thirdparty import third_party_hands
-    from models.robots.user_hand import HandSource, build_user_hand
+    from models.robots.user_hand import HandSource, build_user_hand, pad_areas
 
     torch.set_num_threads(1)
     packaged = third_party_hands()
@@ -69,8 +69,9 @@ def run(args: argparse.Namespace) -> int:
         if name == "leap_hand":
             t0 = time.perf_counter()
             get_hand.cache_clear()
-            hand, fmt, size, pads = get_hand(name), "mjcf", 0.0, float("nan")
+            hand, fmt, size = get_hand(name), "mjcf", 0.0  # shipped: no archive
             build_s = time.perf_counter() - t0
+            pads = float(np.mean(pad_areas(hand))) * 1e4
             checker = load_hand(name)
         else:
             package = packaged[name]
