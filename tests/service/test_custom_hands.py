@@ -43,6 +43,15 @@ OBJECTS = {
 
 @pytest.fixture(scope="module")
 def base(request: pytest.FixtureRequest) -> Iterator[str]:
+    yield from _serving(request)
+
+
+@pytest.fixture(scope="module", params=[pytest.param("redis", marks=pytest.mark.slow)])
+def redis_base(request: pytest.FixtureRequest) -> Iterator[str]:
+    yield from _serving(request)
+
+
+def _serving(request: pytest.FixtureRequest) -> Iterator[str]:
     settings = Settings(
         sync_wait_max=300,
         robot_register_timeout=120,
@@ -196,3 +205,9 @@ def test_the_async_sdk_adds_previews_and_deletes(base: str) -> None:
             assert "async-rethink" not in {r.name for r in await client.robots()}
 
     asyncio.run(go())
+
+
+def test_an_archive_travels_through_the_redis_queue(redis_base: str) -> None:
+    """The archive's bytes go through the stream, the worker stores them, jobs on another delivery rebuild it."""
+    passed = grasp_and_audit(redis_base, HANDS["rethink"], 0.03)
+    assert passed["cylinder"] >= 1, passed
