@@ -16,7 +16,9 @@ import signal
 import time
 import xml.etree.ElementTree as ET
 
-from clients.schemas import RobotPublic, RobotRegister, Stage, SynthesisResult
+import numpy as np
+
+from clients.schemas import RobotPreview, RobotPublic, RobotRegister, Stage, SynthesisResult
 from workers.pipeline import CancelFn, JobInput, Outcome, ProgressFn
 from workers.queue.records import cancelled_error, deadline_error
 
@@ -30,6 +32,16 @@ TEST_HAND = RobotPublic(
     fingertips=["left_tip", "right_tip"],
     source="workers.testing",
 )
+
+
+_TETRAHEDRON = RobotPreview(
+    vertices=np.array([[0.0, 0, 0], [0.02, 0, 0], [0, 0.02, 0], [0, 0, 0.02]]),
+    faces=np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]),
+    spheres=np.array([[0.005, 0.005, 0.005, 0.01]]),
+    pads=np.array([[0.0, 0.0, 0.02]]),
+    tips=np.array([[0.0, 0.0, 0.02]]),
+)
+"""What a registered hand's view draws in the staged pipeline (it builds no hand)."""
 
 
 class StagedPipeline:
@@ -77,6 +89,7 @@ class StagedPipeline:
             upper=[1.0] * len(joints),
             fingertips=list(robot.fingertips or []),
             source="user",
+            preview=_TETRAHEDRON,
         )
 
     def run(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:

@@ -122,11 +122,21 @@ def test_third_party_hands_grasp_a_box_and_a_cylinder(base: str, hand: str, size
     assert passed["box"] >= 1 and passed["cylinder"] >= 1, passed
 
 
-def _zip(files: dict[str, bytes]) -> str:
+def _zip(files: dict[str, bytes], link: tuple[str, str] | None = None, stl_faces: tuple[str, int] | None = None) -> str:
+    """A base64 zip of ``files``, with a symbolic link member and a real binary STL of that many faces."""
     buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as z:
         for name, data in files.items():
             z.writestr(name, data)
+        if link is not None:
+            info = zipfile.ZipInfo(link[0])
+            info.external_attr = 0o120777 << 16
+            z.writestr(info, link[1])
+        if stl_faces is not None:
+            with z.open(stl_faces[0], "w", force_zip64=True) as f:
+                f.write(b"\0" * 80 + stl_faces[1].to_bytes(4, "little"))
+                for _ in range(stl_faces[1] // 100_000):
+                    f.write(b"\0" * 5_000_000)
     return base64.b64encode(buf.getvalue()).decode()
 
 
@@ -140,9 +150,16 @@ def test_hostile_archives_get_a_4xx_naming_the_problem(base: str) -> None:
         "absolute paths": {"hand.urdf": doc},
         "not in the archive": {"hand.urdf": doc.replace(urdf.encode(), b"meshes/missing.stl")},
     }
-    for words, files in cases.items():
-        response = httpx.post(f"{base}/v1/robots", json={"name": "bad", "archive": _zip(files)}, timeout=60)
-        assert 400 <= response.status_code < 500 and words in response.json()["error"], (words, response.text)
+    archives = {words: _zip(files) for words, files in cases.items()}
+    archives["10000 members"] = _zip({"hand.urdf": doc} | {f"junk/{i}": b"" for i in range(10_000)})
+    archives["symbolic link"] = _zip({"hand.urdf": doc}, link=("meshes/tip.stl", "/etc/passwd"))
+    archives["10000000 faces"] = _zip({"hand.urdf": doc}, stl_faces=("meshes/tip.stl", 10_000_000))
+    for words, archive in archives.items():
+        response = httpx.post(f"{base}/v1/robots", json={"name": "bad", "archive": archive}, timeout=60)
+        assert 400 <= response.status_code < 500 and words.split()[-1] in response.json()["error"], (
+            words,
+            response.text,
+        )
     not_b64 = httpx.post(f"{base}/v1/robots", json={"name": "bad", "archive": "%%%"}, timeout=30)
     assert not_b64.status_code == 422 and "archive" in not_b64.text
 
