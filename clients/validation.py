@@ -11,7 +11,7 @@ import re
 
 from pydantic import ValidationError
 
-from clients.schemas.jobs import FieldError
+from clients.schemas.errors import FieldError
 
 _FIELD_PREFIX = re.compile(r"^(?P<field>[A-Za-z_][\w.]*): (?P<problem>.+)$", re.DOTALL)
 _PYDANTIC_PREFIXES = ("Value error, ", "Assertion failed, ")

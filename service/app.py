@@ -53,6 +53,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
         app.state.queue = the_queue
         app.state.robots = RobotCatalog(the_queue, settings.robots_cache_s)
         app.state.history = history
+        app.state.shutting_down = False  # an app started again after a shutdown serves again
         sampler = asyncio.create_task(history.run(), name="dashboard-sampler")
         log.info("service started", extra={"backend": the_queue.backend})
         try:

@@ -49,9 +49,6 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--key", help="API key of a service with auth on")
     parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
     parser.set_defaults(func=run)
-    from service.bench_faults import register as register_faults
-
-    register_faults(subparsers)  # `mani bench faults` (no entry point of its own: same plugin, same module family)
 
 
 def _free_port() -> int:

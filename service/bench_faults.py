@@ -9,6 +9,8 @@ directory, `mani worker` / `mani serve` children), all killed at the end:
 - poison: a crashing job in every micro-batch of 4: how many jobs were dead-lettered, and whether all were poison.
 - large bodies: C concurrent valid bodies of S MB against `mani serve`: /healthz latency meanwhile, API RSS.
 - full queue: C concurrent posts (small and large bodies) against a full queue: 429 latency.
+
+Why one module: four scenarios of one benchmark share their process and Redis helpers and one report table.
 """
 
 from __future__ import annotations
@@ -220,7 +222,7 @@ def _serve(max_queue: int, stage_seconds: float) -> tuple[subprocess.Popen[bytes
 
     port = _free_port()
     env = dict(os.environ, MANI_PIPELINE=STAGED, MANI_PIPELINE_OPTIONS=json.dumps({"stage_seconds": stage_seconds}),
-               MANI_MAX_QUEUE=str(max_queue), MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING", MANI_WORKERS="1",
+               MANI_MAX_QUEUE=str(max_queue), MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING", MANI_CONCURRENCY="1",
                MANI_BODY_TIMEOUT="120")  # fmt: skip
     env.pop("MANI_REDIS_URL", None)
     proc = subprocess.Popen([sys.executable, "-m", "clients.cli.main", "serve", "--port", str(port)], env=env,

@@ -12,7 +12,7 @@ EXAMPLE = """examples:
   mani serve                                  # API + 2 embedded worker processes on 127.0.0.1:8000
   mani serve --port 9000 --workers 4
   mani serve --redis redis://localhost:6379/0 # API only; run `mani worker --redis ...` elsewhere
-environment: MANI_HOST, MANI_PORT, MANI_WORKERS, MANI_REDIS_URL, MANI_API_KEYS, MANI_RATE_LIMIT_PER_S, ..."""
+environment: MANI_HOST, MANI_PORT, MANI_CONCURRENCY, MANI_REDIS_URL, MANI_API_KEYS, MANI_RATE_LIMIT_PER_S, ..."""
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -26,7 +26,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     )
     parser.add_argument("--host", help="address to listen on (MANI_HOST, default 127.0.0.1)")
     parser.add_argument("--port", type=int, help="port (MANI_PORT, default 8000)")
-    parser.add_argument("--workers", type=int, help="embedded worker processes (MANI_WORKERS, default 2)")
+    parser.add_argument("--workers", type=int, help="embedded worker processes (MANI_CONCURRENCY, default 2)")
     parser.add_argument("--redis", metavar="URL", help="Redis URL: API only, workers run as `mani worker`")
     parser.add_argument("--log-level", help="DEBUG, INFO, WARNING, ... (MANI_LOG_LEVEL)")
     parser.set_defaults(func=serve)
@@ -36,14 +36,11 @@ def settings_from(args: argparse.Namespace) -> Any:
     """`Settings` from the environment with the command line on top."""
     from service.settings import Settings
 
-    given = {
-        "host": args.host,
-        "port": args.port,
-        "workers": args.workers,
-        "redis_url": args.redis,
-        "log_level": getattr(args, "log_level", None),
-    }
-    return Settings(**{k: v for k, v in given.items() if v is not None})
+    given = {"host": args.host, "port": args.port, "log_level": getattr(args, "log_level", None)}
+    queue = {"concurrency": args.workers, "redis_url": args.redis}
+    return Settings(
+        **{k: v for k, v in given.items() if v is not None}, queue={k: v for k, v in queue.items() if v is not None}
+    )
 
 
 def uvicorn_config(app: Any, settings: Any) -> Any:

@@ -12,39 +12,10 @@ import logging
 import time
 from collections import deque
 
-from pydantic import BaseModel, Field
-
-from clients.schemas import DeadLetter, JobPublic, JobState, WorkerPublic
-from workers.queue import JobQueue, QueueStats
+from clients.schemas import DashboardPublic, Sample
+from workers.queue import JobQueue
 
 log = logging.getLogger("service.dashboard")
-
-
-class Sample(BaseModel):
-    """The queue at one moment."""
-
-    t: float
-    depth: int
-    running: int
-    by_state: dict[JobState, int]
-    completed_total: int
-    failed_total: int
-
-
-class DashboardPublic(BaseModel):
-    """Answer of ``GET /dashboard/data``."""
-
-    now: float
-    backend: str
-    queue_up: bool
-    stats: QueueStats | None = None
-    throughput_per_s: float = Field(0.0, description="Jobs finished per second over the last minute.")
-    latency_p50: float | None = Field(None, description="Submission → finish of recent jobs, s.")
-    latency_p99: float | None = None
-    series: list[Sample] = Field(default_factory=list)
-    workers: list[WorkerPublic] = Field(default_factory=list)
-    recent: list[JobPublic] = Field(default_factory=list)
-    dead_letters: list[DeadLetter] = Field(default_factory=list)
 
 
 def percentile(values: list[float], q: float) -> float | None:

@@ -16,26 +16,26 @@ from workers.queue import JobQueue
 
 
 async def get_settings(request: Request) -> Settings:
-    return request.app.state.settings  # type: ignore[no-any-return]
+    return request.app.state.settings
 
 
 async def get_queue(request: Request) -> JobQueue:
     queue = getattr(request.app.state, "queue", None)
     if queue is None:
         raise Unavailable("the queue is not running")
-    return queue  # type: ignore[no-any-return]
+    return queue
 
 
 async def get_metrics(request: Request) -> Metrics:
-    return request.app.state.metrics  # type: ignore[no-any-return]
+    return request.app.state.metrics
 
 
 async def get_robots(request: Request) -> RobotCatalog:
-    return request.app.state.robots  # type: ignore[no-any-return]
+    return request.app.state.robots
 
 
 async def get_history(request: Request) -> History:
-    return request.app.state.history  # type: ignore[no-any-return]
+    return request.app.state.history
 
 
 async def get_request_id(request: Request) -> str:

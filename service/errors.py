@@ -1,5 +1,7 @@
 """The service's errors and their one translation into ``{error, type, detail}`` (and a status code).
 
+Each class is one member of the contract's `ErrorType`, which also gives its HTTP status:
+
     ApiError                      status + type + message (+ field errors, + headers)
     ├── BadRequest          400   malformed body (not JSON/msgpack), bad query parameter
     ├── Unauthorized        401   missing or unknown API key
@@ -9,6 +11,7 @@
     ├── PayloadTooLarge     413   body over the limit (the message gives the limit)
     ├── UnsupportedMediaType 415  a body that is neither JSON nor msgpack
     ├── InvalidInput        422   schema validation failed (detail names each field and problem)
+    │   └── RobotRejected   422   a robot description the hardened loader refused
     ├── RateLimited         429   per-key token bucket empty (Retry-After)
     └── Unavailable         503   shutting down / queue unreachable (Retry-After)
 
@@ -28,9 +31,9 @@ from pydantic import ValidationError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.responses import Response
 
-from clients.schemas import ErrorBody, FieldError
+from clients.schemas import ErrorBody, ErrorType, FieldError
 from clients.validation import field_errors, summary
-from service.negotiation import respond
+from service.encoding import respond
 from workers.queue import JobNotFound, QueueFull, QueueUnavailable, RobotInvalid
 
 log = logging.getLogger("service.errors")
@@ -39,8 +42,7 @@ log = logging.getLogger("service.errors")
 class ApiError(Exception):
     """An answer other than 2xx."""
 
-    status = 500
-    type = "InternalError"
+    kind: ErrorType = ErrorType.INTERNAL_ERROR
 
     def __init__(
         self, message: str, *, detail: list[FieldError] | None = None, headers: dict[str, str] | None = None
@@ -49,45 +51,51 @@ class ApiError(Exception):
         self.message = message
         self.detail = detail
         self.headers = headers or {}
+        self.status = self.kind.status
+
+    @property
+    def type(self) -> str:
+        """The error's name on the wire."""
+        return self.kind.value
 
     def body(self) -> ErrorBody:
         """The wire form."""
-        return ErrorBody(error=self.message, type=self.type, detail=self.detail)
+        return ErrorBody.of(self.kind, self.message, self.detail)
 
 
 class BadRequest(ApiError):
-    status, type = 400, "BadRequest"
+    kind = ErrorType.BAD_REQUEST
 
 
 class Unauthorized(ApiError):
-    status, type = 401, "Unauthorized"
+    kind = ErrorType.UNAUTHORIZED
 
     def __init__(self, message: str) -> None:
         super().__init__(message, headers={"WWW-Authenticate": "Bearer"})
 
 
 class NotFound(ApiError):
-    status, type = 404, "NotFound"
+    kind = ErrorType.NOT_FOUND
 
 
 class RequestTimeout(ApiError):
-    status, type = 408, "RequestTimeout"
+    kind = ErrorType.REQUEST_TIMEOUT
 
 
 class Conflict(ApiError):
-    status, type = 409, "Conflict"
+    kind = ErrorType.CONFLICT
 
 
 class PayloadTooLarge(ApiError):
-    status, type = 413, "PayloadTooLarge"
+    kind = ErrorType.PAYLOAD_TOO_LARGE
 
 
 class UnsupportedMediaType(ApiError):
-    status, type = 415, "UnsupportedMediaType"
+    kind = ErrorType.UNSUPPORTED_MEDIA_TYPE
 
 
 class InvalidInput(ApiError):
-    status, type = 422, "ValidationError"
+    kind = ErrorType.VALIDATION_ERROR
 
     @classmethod
     def from_pydantic(cls, exc: ValidationError, root: str = "") -> InvalidInput:
@@ -96,22 +104,26 @@ class InvalidInput(ApiError):
         return cls(summary(errors), detail=errors)
 
 
+class RobotRejected(InvalidInput):
+    kind = ErrorType.ROBOT_INVALID
+
+
 class RateLimited(ApiError):
-    status, type = 429, "RateLimited"
+    kind = ErrorType.RATE_LIMITED
 
     def __init__(self, message: str, retry_after: float) -> None:
         super().__init__(message, headers={"Retry-After": retry_after_header(retry_after)})
 
 
 class QueueFullError(ApiError):
-    status, type = 429, "QueueFull"
+    kind = ErrorType.QUEUE_FULL
 
     def __init__(self, message: str, retry_after: float) -> None:
         super().__init__(message, headers={"Retry-After": retry_after_header(retry_after)})
 
 
 class Unavailable(ApiError):
-    status, type = 503, "Unavailable"
+    kind = ErrorType.UNAVAILABLE
 
     def __init__(self, message: str, retry_after: float = 5.0) -> None:
         super().__init__(message, headers={"Retry-After": retry_after_header(retry_after)})
@@ -142,24 +154,27 @@ def from_exception(exc: Exception) -> ApiError:
         message = str(exc) or "robot description rejected"
         field, sep, problem = message.partition(": ")
         if sep and field.replace("_", "").replace(".", "").isalnum():  # the worker named the field already
-            return InvalidInput(message, detail=[FieldError(field=field, problem=problem)])
-        return InvalidInput(f"urdf: {message}", detail=[FieldError(field="urdf", problem=message)])
+            return RobotRejected(message, detail=[FieldError(field=field, problem=problem)])
+        return RobotRejected(f"urdf: {message}", detail=[FieldError(field="urdf", problem=message)])
     if isinstance(exc, QueueUnavailable):
         return Unavailable(str(exc) or "queue unavailable")
     if isinstance(exc, StarletteHTTPException):
-        names: dict[int, str] = {
-            400: "BadRequest",
-            401: "Unauthorized",
-            404: "NotFound",
-            405: "MethodNotAllowed",
-            413: "PayloadTooLarge",
-            415: "UnsupportedMediaType",
-        }
+        kind = _BY_HTTP_STATUS.get(exc.status_code, ErrorType.BAD_REQUEST)
         err = ApiError(str(exc.detail), headers=dict(exc.headers or {}))
-        err.status = exc.status_code
-        err.type = names.get(exc.status_code, "HTTPError")
+        err.kind, err.status = kind, exc.status_code
         return err
     return ApiError("internal error")
+
+
+_BY_HTTP_STATUS: dict[int, ErrorType] = {
+    400: ErrorType.BAD_REQUEST,
+    401: ErrorType.UNAUTHORIZED,
+    404: ErrorType.NOT_FOUND,
+    405: ErrorType.METHOD_NOT_ALLOWED,
+    413: ErrorType.PAYLOAD_TOO_LARGE,
+    415: ErrorType.UNSUPPORTED_MEDIA_TYPE,
+}
+"""Starlette's own errors (routing, body limits) by status; any other 4xx it raises reads as BadRequest."""
 
 
 def route_table(app: Any) -> list[tuple[str, Any, set[str]]]:

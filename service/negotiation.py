@@ -2,7 +2,8 @@
 
 Bodies are read here (not by FastAPI) so that msgpack works and the size limit holds while streaming: a body
 over the limit is refused as soon as its Content-Length (or its running size) says so; a sender too slow is cut
-off (408); a large body is decoded off the event loop (`service.bodies`).
+off (408); a large body is decoded off the event loop (`service.bodies`). Answers are encoded by
+`service.encoding` (re-exported here for the routes).
 """
 
 from __future__ import annotations
@@ -12,55 +13,23 @@ from typing import Any, TypeVar
 
 from pydantic import BaseModel
 from starlette.requests import Request
-from starlette.responses import Response
 
-from clients.codec import JSON, MSGPACK, dump_model, media_type
+from clients.codec import JSON, MSGPACK, media_type
 from clients.schemas import FieldError
 from clients.validation import summary
 from service.bodies import BodyPool, decode
+from service.encoding import accepted, respond
+from service.errors import BadRequest, InvalidInput, PayloadTooLarge, RequestTimeout, UnsupportedMediaType
+
+__all__ = ["accepted", "body_openapi", "declared_length", "read_bytes", "read_model", "respond"]
 
 ModelT = TypeVar("ModelT", bound=BaseModel)
 BODY_MEDIA_TYPES = (JSON, MSGPACK)
 
 
-def accepted(request: Request) -> str:
-    """`MSGPACK` when the Accept header prefers it (by q-value, then order), else `JSON`."""
-    best, best_q = JSON, -1.0
-    for part in request.headers.get("accept", "").split(","):
-        kind, _, params = part.partition(";")
-        kind = kind.strip().lower()
-        if not kind:
-            continue
-        q = 1.0
-        for param in params.split(";"):
-            name, _, value = param.partition("=")
-            if name.strip() == "q":
-                try:
-                    q = float(value)
-                except ValueError:
-                    q = 0.0
-        choice = MSGPACK if media_type(kind) == MSGPACK else JSON if kind in _JSON_LIKE else None
-        if choice is not None and q > best_q:
-            best, best_q = choice, q
-    return best
-
-
-_JSON_LIKE = frozenset({JSON, "application/*", "*/*"})
-
-
-def respond(
-    request: Request, model: BaseModel, *, status: int = 200, headers: dict[str, str] | None = None
-) -> Response:
-    """Serialise ``model`` in the negotiated encoding."""
-    kind = accepted(request)
-    return Response(dump_model(model, kind), status_code=status, media_type=kind, headers=headers)
-
-
 def declared_length(request: Request, limit: int) -> int | None:
     """The body's Content-Length (None when not declared). Raises 400 when malformed, 413 when over ``limit``:
     both before a byte of the body is read."""
-    from service.errors import BadRequest, PayloadTooLarge
-
     declared = request.headers.get("content-length")
     if declared is None:
         return None
@@ -78,8 +47,6 @@ def declared_length(request: Request, limit: int) -> int | None:
 async def read_bytes(request: Request, limit: int, timeout: float = 60.0, idle: float = 10.0) -> bytes:
     """The raw body, refusing more than ``limit`` bytes (413) and a sender slower than ``timeout`` seconds in
     all or ``idle`` seconds between two chunks (408: a slow client never holds a connection for ever)."""
-    from service.errors import PayloadTooLarge, RequestTimeout
-
     declared_length(request, limit)
     chunks: list[bytes] = []
     total = 0
@@ -105,8 +72,6 @@ async def read_bytes(request: Request, limit: int, timeout: float = 60.0, idle: 
 async def read_model(request: Request, cls: type[ModelT], limit: int) -> ModelT:
     """Read, decode and validate a body of ``cls`` (400 malformed, 408 too slow, 413 too big, 415 other type,
     422 invalid). A large body waits for a slot and is decoded in a worker process (`service.bodies`)."""
-    from service.errors import UnsupportedMediaType
-
     content_type = request.headers.get("content-type")
     base = (content_type or JSON).split(";", 1)[0].strip().lower()
     if base not in (JSON, "text/json") and media_type(base) != MSGPACK and not base.endswith("+json"):
@@ -125,8 +90,6 @@ async def read_model(request: Request, cls: type[ModelT], limit: int) -> ModelT:
 
 
 def _answer(outcome: tuple[str, Any]) -> Any:
-    from service.errors import BadRequest, InvalidInput
-
     kind, value = outcome
     if kind == "ok":
         return value

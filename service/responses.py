@@ -4,8 +4,6 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import BaseModel
-
 from clients.schemas import ErrorBody
 
 _ERROR_TEXT = {
@@ -30,9 +28,3 @@ ERRORS = errors()
 READ_ERRORS = errors(400, 401, 404, 429, 503)
 
 
-class HealthPublic(BaseModel):
-    """Answer of ``GET /healthz`` (service-local: liveness only)."""
-
-    status: str = "ok"
-    backend: str
-    version: str

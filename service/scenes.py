@@ -11,9 +11,8 @@ from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
-from pydantic import BaseModel, Field
 
-from clients.schemas import JobPublic, SynthesisRequest
+from clients.schemas import JobPublic, ScenePublic, SynthesisRequest
 
 MAX_VIEW_POINTS = 4096
 MAX_SCENES = 128
@@ -64,11 +63,3 @@ class SceneStore:
         )
 
 
-class ScenePublic(BaseModel):
-    """Answer of ``GET /v1/jobs/{id}/scene``: the job (with result) and the object to draw it on."""
-
-    job: JobPublic
-    points: list[list[float]] | None = Field(None, description="Subsampled object points (≤ 4096), m.")
-    normals: list[list[float]] | None = None
-    region_mask: list[int] | None = None
-    heatmap: list[float] | None = Field(None, description="Contact heatmap at those points (return_heatmap).")

@@ -27,11 +27,12 @@ class Settings(BaseSettings):
     host: str = "127.0.0.1"
     port: int = Field(8000, ge=0, le=65535)
 
-    # --- queue: embedded workers (default) or Redis Streams (scale-out; workers run as `mani worker`)
-    redis_url: str | None = Field(None, description="Redis URL; unset: in-process queue + embedded workers.")
-    workers: int = Field(2, ge=1, le=64, description="Embedded worker processes (ignored with Redis).")
-    # Other queue/worker knobs (MANI_MAX_QUEUE, MANI_BATCH_SIZE, MANI_RESULT_TTL, ...) are read by
-    # `workers.settings.QueueSettings`; `queue_settings()` hands it the two above.
+    # --- queue: embedded workers (default) or Redis Streams (scale-out; workers run as `mani worker`). Its knobs
+    # (MANI_REDIS_URL, MANI_CONCURRENCY, MANI_MAX_QUEUE, MANI_BATCH_SIZE, ...) are `workers.settings.QueueSettings`'
+    # alone; `queue` holds what the command line set on top of the environment.
+    queue: dict[str, object] = Field(
+        default_factory=dict, description="Overrides of QueueSettings fields (from the command line)."
+    )
 
     # --- auth and rate limits
     api_keys: Annotated[list[str], NoDecode] = Field(
@@ -113,7 +114,7 @@ class Settings(BaseSettings):
         return [*self.api_keys, *(k for k in self.admin_keys if k not in self.api_keys)]
 
     def queue_settings(self) -> QueueSettings:
-        """The queue's settings: env ``MANI_*`` for its own knobs, our Redis URL and worker count on top."""
+        """The queue's settings: env ``MANI_*`` for its knobs, the command line's ``queue`` overrides on top."""
         from workers.settings import QueueSettings
 
-        return QueueSettings(redis_url=self.redis_url, concurrency=self.workers)
+        return QueueSettings(**self.queue)  # type: ignore[arg-type]

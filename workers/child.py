@@ -1,9 +1,12 @@
-"""The embedded backend's worker process: loads the pipeline (and model) once, then runs the micro-batches its
-parent sends over a duplex pipe, streaming progress and outcomes back.
+"""The embedded backend's worker process: a thin shell around `workers.core.WorkerCore` that speaks to its
+parent (`mani serve`) over a duplex pipe.
 
-Messages are msgpack maps (`clients.codec`). Parent → child: ``run`` (jobs), ``cancel`` (id), ``robot`` (validate
-a registration), ``stop`` (finish the current batch, then exit). Child → parent: ``hello`` (worker info and
-built-in robots), ``heartbeat``, ``progress``, ``done`` (outcome and timings), ``robot`` (validation answer).
+Messages are msgpack maps (`clients.codec`); payloads travel as their own frames after the map that announces them,
+so a request or a result is never encoded inside another message. Parent → child: ``run`` (job metadata, then per
+job its request frame and, when it names a registered robot, the robot's frame), ``cancel`` (id), ``robot`` (then
+the registration's frame: validate it), ``stop`` (finish the current batch, then exit). Child → parent: ``hello``
+(worker info and built-in robots), ``heartbeat``, ``progress``, ``done`` (state, error, timings; then the result's
+frame when it succeeded), ``robot`` (validation answer).
 """
 
 from __future__ import annotations
@@ -11,17 +14,16 @@ from __future__ import annotations
 import logging
 import os
 import signal
-import socket
 import threading
 import time
 from multiprocessing.connection import Connection
 from typing import Any
 
 from clients.codec import pack, unpack
-from clients.schemas import ErrorBody, JobProgress, RobotRegister, Stage, SynthesisRequest, WorkerPublic
-from workers.logs import job_context, setup_logging
-from workers.pipeline import JobInput, Pipeline, error_from_exception, load_pipeline
-from workers.runner import run_batch
+from clients.schemas import JobProgress
+from workers.core import RawJob, WorkerCore
+from workers.logs import setup_logging
+from workers.pipeline import load_pipeline
 from workers.settings import QueueSettings
 
 log = logging.getLogger("workers.child")
@@ -37,17 +39,26 @@ class _Link:
         self.deferred: list[dict[str, Any]] = []
         self.stopping = False
 
-    def send(self, message: dict[str, Any]) -> None:
+    def send(self, message: dict[str, Any], *frames: bytes) -> None:
         data = pack(message)
         with self.lock:
             self.conn.send_bytes(data)
+            for frame in frames:
+                self.conn.send_bytes(frame)
+
+    def receive(self) -> dict[str, Any]:
+        """One message, with the frames it announces read into ``frames``."""
+        msg: dict[str, Any] = unpack(self.conn.recv_bytes())
+        count = sum(1 + bool(j.get("robot")) for j in msg["jobs"]) if msg["op"] == "run" else int(msg["op"] == "robot")
+        msg["frames"] = [self.conn.recv_bytes() for _ in range(count)]
+        return msg
 
     def drain(self) -> None:
         """Take in what the parent sent while a batch runs (cancels, stop; anything else waits)."""
         while self.conn.poll(0):
-            self._take(unpack(self.conn.recv_bytes()))
+            self.take(self.receive())
 
-    def _take(self, msg: dict[str, Any]) -> None:
+    def take(self, msg: dict[str, Any]) -> None:
         if msg["op"] == "cancel":
             self.cancelled.add(msg["id"])
         elif msg["op"] == "stop":
@@ -60,7 +71,7 @@ class _Link:
             return self.deferred.pop(0)
         if not self.conn.poll(timeout):
             return None
-        return unpack(self.conn.recv_bytes())
+        return self.receive()
 
 
 def child_main(worker_id: str, settings_json: str, conn: Connection) -> None:
@@ -71,33 +82,23 @@ def child_main(worker_id: str, settings_json: str, conn: Connection) -> None:
     setup_logging(settings.log_level, worker_id)
     link = _Link(conn)
     signal.signal(signal.SIGTERM, lambda *_: setattr(link, "stopping", True))
-    started = time.time()
-    pipeline = load_pipeline(settings.pipeline, settings.pipeline_options, settings.weights_dir)
-    info = WorkerPublic(
-        id=worker_id,
-        host=socket.gethostname(),
-        pid=os.getpid(),
-        started_at=started,
-        last_heartbeat=time.time(),
-        model_loaded=pipeline.model_loaded,
-        model_version=pipeline.model_version,
-    )
-    robots = [r.model_dump(mode="python", exclude_none=True) for r in pipeline.robots()]
+    core = WorkerCore(load_pipeline(settings.pipeline, settings.pipeline_options, settings.weights_dir))
+    info = core.info(worker_id)
+    robots = [r.model_dump(mode="python", exclude_none=True) for r in core.robots()]
     link.send({"op": "hello", "worker": info.model_dump(mode="python", exclude_none=True), "robots": robots})
-    log.info("worker ready", extra={"model_loaded": pipeline.model_loaded})
-    beat = threading.Thread(target=_heartbeat, args=(link, settings.heartbeat_interval), daemon=True)
-    beat.start()
+    log.info("worker ready", extra={"model_loaded": info.model_loaded})
+    threading.Thread(target=_heartbeat, args=(link, settings.heartbeat_interval), daemon=True).start()
     try:
         while not link.stopping:
             msg = link.next(0.5)
             if msg is None:
                 continue
             if msg["op"] == "run":
-                _run(pipeline, link, msg["jobs"])
+                _run(core, link, msg)
             elif msg["op"] == "robot":
-                _robot(pipeline, link, msg)
+                _robot(core, link, msg)
             else:
-                link._take(msg)
+                link.take(msg)
     except (EOFError, OSError):
         pass  # the parent went away
     log.info("worker stopped")
@@ -112,58 +113,34 @@ def _heartbeat(link: _Link, interval: float) -> None:
             return
 
 
-def _run(pipeline: Pipeline, link: _Link, raw_jobs: list[dict[str, Any]]) -> None:
-    jobs: list[JobInput] = []
-    for raw in raw_jobs:
-        try:
-            jobs.append(
-                JobInput(
-                    id=raw["id"],
-                    request=SynthesisRequest.model_validate(unpack(raw["request"])),
-                    deadline=raw.get("deadline"),
-                    robot=RobotRegister.model_validate(raw["robot"]) if raw.get("robot") else None,
-                    request_id=raw.get("request_id"),
-                )
-            )
-        except Exception as exc:  # a queue payload is input too: fail that job, not the worker
-            error = error_from_exception(exc).model_dump(mode="python", exclude_none=True)
-            link.send({"op": "done", "id": raw["id"], "error": error, "timings": {}})
-            with job_context(raw["id"], raw.get("request_id")):
-                log.warning("job rejected", extra={"error": error["error"]})
-            continue
-        with job_context(jobs[-1].id, jobs[-1].request_id):
-            log.info("job started")
-    last: dict[str, float] = {}
+def _run(core: WorkerCore, link: _Link, msg: dict[str, Any]) -> None:
+    frames = iter(msg["frames"])
+    raw_jobs = [
+        RawJob(
+            id=j["id"], request=next(frames), deadline=j.get("deadline"),
+            robot=next(frames) if j.get("robot") else None, request_id=j.get("request_id"),
+            queued_for=float(j.get("queued_for", 0.0)),
+        )
+        for j in msg["jobs"]
+    ]  # fmt: skip
 
-    def progress(job_id: str, stage: Stage, fraction: float, iteration: int | None, maximum: int | None) -> None:
-        now = time.monotonic()
-        if stage is Stage.REFINEMENT and now - last.get(job_id, 0.0) < 0.05 and iteration != maximum:
-            return  # throttle per-iteration updates
-        last[job_id] = now
-        p = JobProgress(stage=stage, fraction=min(max(fraction, 0.0), 1.0), iteration=iteration, max_iterations=maximum)
+    def progress(job_id: str, p: JobProgress) -> None:
         link.send({"op": "progress", "id": job_id, "p": p.model_dump(mode="python", exclude_none=True)})
 
     def should_cancel(job_id: str) -> bool:
         link.drain()
         return job_id in link.cancelled
 
-    t0 = time.perf_counter()
-    outcomes = run_batch(pipeline, jobs, progress, should_cancel)
-    elapsed = time.perf_counter() - t0
-    for job in jobs:
-        outcome = outcomes[job.id]
-        body = outcome.model_dump(mode="python", exclude_none=True)
-        key = "error" if isinstance(outcome, ErrorBody) else "result"
-        timings = {**getattr(outcome, "timings", {}), "run": elapsed}
-        link.send({"op": "done", "id": job.id, key: body, "timings": timings})
-        with job_context(job.id, job.request_id):
-            log.info("job finished", extra={"outcome": outcome.type if isinstance(outcome, ErrorBody) else "ok"})
-        link.cancelled.discard(job.id)
+    for done in core.run(raw_jobs, progress, should_cancel):
+        error = done.error.model_dump(mode="python", exclude_none=True) if done.error else None
+        header = {"op": "done", "id": done.id, "state": done.state.value, "error": error, "timings": done.timings}
+        link.send(header, *([done.result] if done.result is not None else []))
+        link.cancelled.discard(done.id)
 
 
-def _robot(pipeline: Pipeline, link: _Link, msg: dict[str, Any]) -> None:
+def _robot(core: WorkerCore, link: _Link, msg: dict[str, Any]) -> None:
     try:
-        robot = pipeline.validate_robot(RobotRegister.model_validate(msg["robot"]))
+        robot = core.validate_robot(msg["frames"][0])
         link.send({"op": "robot", "rid": msg["rid"], "robot": robot.model_dump(mode="python", exclude_none=True)})
     except Exception as exc:
         link.send({"op": "robot", "rid": msg["rid"], "error": str(exc) or exc.__class__.__name__})

@@ -14,10 +14,11 @@ import argparse
 import logging
 import os
 import signal
-import subprocess
 import sys
 import time
 from typing import Any
+
+from workers.supervisor import CrashLoop, spawn, stop_all
 
 log = logging.getLogger("workers.cli")
 GRACE_S = 120.0
@@ -94,14 +95,8 @@ def supervise(settings_json: str, concurrency: int) -> int:
 
     signal.signal(signal.SIGTERM, stop)
     signal.signal(signal.SIGINT, stop)
-    env = os.environ | {"MANI_WORKER_SETTINGS": settings_json}
-    children: list[tuple[subprocess.Popen[bytes], float]] = []
-
-    def spawn() -> tuple[subprocess.Popen[bytes], float]:
-        return subprocess.Popen([sys.executable, "-m", "workers.worker"], env=env), time.monotonic()
-
-    children = [spawn() for _ in range(concurrency)]
-    quick_deaths = [0] * concurrency
+    children = [(spawn("workers.worker", [], settings_json), time.monotonic()) for _ in range(concurrency)]
+    crash_loop = CrashLoop()
     log.info("started %d workers", concurrency)
     while not stopping:
         time.sleep(0.1)
@@ -109,19 +104,8 @@ def supervise(settings_json: str, concurrency: int) -> int:
             code = proc.poll()
             if code is not None and not stopping:
                 log.warning("worker pid %d exited with code %s; restarting", proc.pid, code)
-                quick_deaths[i] = quick_deaths[i] + 1 if time.monotonic() - born < 5.0 else 0
-                if quick_deaths[i] > 2:
-                    time.sleep(min(10.0, 0.5 * quick_deaths[i]))  # crash loop: slow down
-                children[i] = spawn()
-    for proc, _ in children:
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGTERM)
-    end = time.monotonic() + GRACE_S
-    for proc, _ in children:
-        try:
-            proc.wait(max(0.1, end - time.monotonic()))
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait()
+                time.sleep(crash_loop.delay(i, time.monotonic() - born))
+                children[i] = (spawn("workers.worker", [], settings_json), time.monotonic())
+    stop_all([proc for proc, _ in children], GRACE_S)
     log.info("workers stopped")
     return 0

@@ -1,12 +1,13 @@
 """Wire ↔ science: `SynthesisRequest` → `models.pipeline.SynthesisInput`, `SynthesisOutput` → `SynthesisResult`.
 
+
 Imported in the worker process only (it imports `models`, hence torch).
 """
 
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -21,6 +22,9 @@ from clients.schemas import (
 )
 from models.pipeline import JointInput, SynthesisInput, SynthesisOutput, TaskInput
 
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
+
 _BIG = float(np.finfo(np.float64).max)
 
 
@@ -31,7 +35,7 @@ def method_of(request: SynthesisRequest) -> str:
     return request.options.method.value
 
 
-def to_input(request: SynthesisRequest, hand: Any, deadline: float | None = None) -> SynthesisInput:
+def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = None) -> SynthesisInput:
     """The core input of ``request`` for ``hand`` (a `models.robots.Hand`).
 
     Args:
@@ -69,7 +73,7 @@ def to_input(request: SynthesisRequest, hand: Any, deadline: float | None = None
         seed=options.seed,
         deadline=None if deadline is None else time.monotonic() + (deadline - time.time()),
         return_history=options.return_history,
-        hand_key=getattr(hand, "name", None),
+        hand_key=hand.name,
     )
 
 
@@ -77,7 +81,7 @@ def _finite(value: float) -> float:
     return float(value) if np.isfinite(value) else _BIG
 
 
-def hand_spheres(hand: Any, palm_position: np.ndarray, palm_quaternion: np.ndarray, q: np.ndarray) -> np.ndarray:
+def hand_spheres(hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, q: np.ndarray) -> np.ndarray:
     """The hand's collision spheres at a pose, (S, 4): world centre and radius (what viewers draw)."""
     import torch
 
@@ -94,7 +98,7 @@ VIEW_VERTICES_PER_PART = 48
 """... each hull of at most this many of the part's vertices (spread by farthest-point sampling)."""
 
 
-def hand_mesh(hand: Any, palm_position: np.ndarray, palm_quaternion: np.ndarray, q: np.ndarray) -> HandMesh:
+def hand_mesh(hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, q: np.ndarray) -> HandMesh:
     """The hand's collision meshes posed at a proposal, merged into one mesh (world frame) for viewers."""
     import torch
 
@@ -112,7 +116,7 @@ def hand_mesh(hand: Any, palm_position: np.ndarray, palm_quaternion: np.ndarray,
     return HandMesh(vertices=np.vstack(verts).astype(np.float64), faces=np.vstack(faces).astype(np.int64))
 
 
-def _view_meshes(hand: Any) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+def _view_meshes(hand: Hand) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     cache = hand.__dict__.setdefault("_view_meshes", {})
     if not cache:
         for body, mesh in hand.collision_meshes.items():
@@ -141,7 +145,7 @@ def _coarse_hull(vertices: np.ndarray) -> Any:
 
 
 def to_result(
-    output: SynthesisOutput, request: SynthesisRequest, model_version: str, hand: Any = None
+    output: SynthesisOutput, request: SynthesisRequest, model_version: str, hand: Hand | None = None
 ) -> SynthesisResult:
     """The wire result of ``output`` (maps and history only when the request asked for them).
 

@@ -1,4 +1,5 @@
 """`ModelsPipeline`: the worker's default `Pipeline`, the science of `models` (network → selection →
+
 initialisation → refinement → verification).
 
 Loaded once per worker process: the network from ``weights_dir`` (default ``models/weights``) when a checkpoint
@@ -15,11 +16,14 @@ import logging
 import time
 from collections import OrderedDict
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from clients.schemas import ErrorBody, RobotPublic, RobotRegister, Stage
-from workers.pipeline import CancelFn, JobInput, Outcome, ProgressFn
-from workers.queue.records import MODEL_UNAVAILABLE, cancelled_error
+from clients.schemas import ErrorBody, ErrorType, RobotPublic, RobotRegister, Stage
+from workers.pipeline import CancelFn, JobInput, Outcome, ProgressFn, error_from_exception
+from workers.queue.records import cancelled_error
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 log = logging.getLogger("workers.models_pipeline")
 _HAND_CACHE = 32
@@ -106,8 +110,9 @@ class ModelsPipeline:
             return self._hands[key]
         try:
             build = build_robot(robot)
-        except HandLoadError as exc:
-            raise ValueError(str(exc)) from exc
+        except HandLoadError as exc:  # named by the field that carried the description
+            source = "archive" if robot.archive is not None else "urdf" if robot.urdf is not None else "mjcf"
+            raise HandLoadError(f"{source}: {exc}") from exc
         self._hands[key] = build
         while len(self._hands) > _HAND_CACHE:
             self._hands.popitem(last=False)
@@ -123,7 +128,7 @@ class ModelsPipeline:
         try:
             hand = load_hand(urdf.encode(), fingertips=fingertips, tip_offsets=offsets, name=name)
         except HandLoadError as exc:
-            raise ValueError(f"urdf: {exc}") from exc
+            raise HandLoadError(f"urdf: {exc}") from exc
         self._hands[key] = hand
         while len(self._hands) > _HAND_CACHE:
             self._hands.popitem(last=False)
@@ -137,17 +142,20 @@ class ModelsPipeline:
             return self._builtin[robot.name]
         if job.robot is not None:
             return self._registered(job.robot).hand
-        raise LookupError(f"robot.name: unknown hand {robot.name!r}; built-in: {', '.join(self._builtin)}")
+        from models.errors import UnknownHand
+
+        raise UnknownHand(f"robot.name: unknown hand {robot.name!r}; built-in: {', '.join(self._builtin)}")
 
     # ---- jobs ------------------------------------------------------------------------------------------------
     def _prepare(self, job: JobInput) -> tuple[Any, Any]:
-        """The job's hand and core input; raises `ValueError` for what the loaded model cannot serve."""
+        """The job's hand and core input; raises `InvalidInput` for what the loaded model cannot serve."""
+        from models.errors import InvalidInput
         from workers.convert import method_of, to_input
 
         material = job.request.object.material.value
         card = getattr(self.predictor, "card", None)
         if method_of(job.request) == "network" and card is not None and material not in (card.materials or [material]):
-            raise ValueError(
+            raise InvalidInput(
                 f"object.material: '{material}' is not supported by the loaded model "
                 f"{self.model_version} (trained on: {', '.join(card.materials)}); "
                 "use options.method 'contacts', 'random_contacts' or 'direct_grasp'"
@@ -161,22 +169,20 @@ class ModelsPipeline:
         return [self._run_one(job, progress, should_cancel) for job in jobs]
 
     def _run_one(self, job: JobInput, progress: ProgressFn, should_cancel: CancelFn) -> Outcome:
-        from models.pipeline import Cancelled, InvalidInput, ModelUnavailable, run_pipeline
+        from models.errors import ScienceError
+        from models.pipeline import run_pipeline
         from workers.convert import to_result
 
         try:
             hand, inp = self._prepare(job)
             out = run_pipeline(inp, self.predictor, _reporter(job, progress), lambda: should_cancel(job.id))
-        except Cancelled:
-            return cancelled_error()
-        except ModelUnavailable as exc:
-            return ErrorBody(error=str(exc), type=MODEL_UNAVAILABLE)
-        except (InvalidInput, LookupError, ValueError) as exc:
-            return ErrorBody(error=str(exc), type="InvalidInput")
+        except ScienceError as exc:
+            return error_from_exception(exc)
         return to_result(out, job.request, self.model_version or "none", hand)
 
     def _run_batched(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
-        from models.pipeline import Cancelled, ModelUnavailable, run_pipeline_batch
+        from models.errors import Cancelled, ScienceError
+        from models.pipeline import run_pipeline_batch
         from workers.convert import to_result
 
         outcomes: list[Outcome | None] = [None] * len(jobs)
@@ -187,8 +193,8 @@ class ModelsPipeline:
                 inputs.append(inp)
                 index.append(i)
                 hands.append(hand)
-            except (LookupError, ValueError) as exc:
-                outcomes[i] = ErrorBody(error=str(exc), type="InvalidInput")
+            except ScienceError as exc:
+                outcomes[i] = error_from_exception(exc)
         reporters = [_reporter(jobs[i], progress) for i in index]
 
         def report(stage: str, fraction: float) -> None:
@@ -203,13 +209,12 @@ class ModelsPipeline:
             job = jobs[i]
             if should_cancel(job.id) or isinstance(out, Cancelled):
                 outcomes[i] = cancelled_error()
-            elif isinstance(out, ModelUnavailable):
-                outcomes[i] = ErrorBody(error=str(out), type=MODEL_UNAVAILABLE)
             elif isinstance(out, Exception):
-                outcomes[i] = ErrorBody(error=str(out), type="InvalidInput")
+                outcomes[i] = error_from_exception(out)
             else:
                 outcomes[i] = to_result(out, job.request, self.model_version or "none", hand)
-        return [o if o is not None else ErrorBody(error="no outcome", type="InternalError") for o in outcomes]
+        missing = ErrorBody.of(ErrorType.INTERNAL_ERROR, "the pipeline gave this job no outcome")
+        return [o if o is not None else missing for o in outcomes]
 
 
 def _reporter(job: JobInput, progress: ProgressFn) -> Any:
@@ -238,7 +243,7 @@ def _reporter(job: JobInput, progress: ProgressFn) -> Any:
     return report
 
 
-def _public(hand: Any, name: str, *, builtin: bool, source: str) -> RobotPublic:
+def _public(hand: Hand, name: str, *, builtin: bool, source: str) -> RobotPublic:
     return RobotPublic(
         name=name, builtin=builtin, dof=int(hand.dof), joint_names=list(hand.joint_names),
         lower=[float(x) for x in hand.lower], upper=[float(x) for x in hand.upper],

@@ -1,4 +1,4 @@
-"""The small interface between a worker and the science it runs (an engine behind a protocol, STYLE.md §4).
+"""The small interface between a worker and the science it runs (an engine behind a protocol, docs/layering.md).
 
 A worker hands a `Pipeline` a micro-batch of `JobInput` and gets one outcome per job: a `SynthesisResult`, or an
 `ErrorBody` (``type`` "Cancelled" / "DeadlineExceeded" / the error's class). The default is
@@ -16,7 +16,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
-from clients.schemas import ErrorBody, RobotPublic, RobotRegister, Stage, SynthesisRequest, SynthesisResult
+from clients.schemas import ErrorBody, ErrorType, RobotPublic, RobotRegister, Stage, SynthesisRequest, SynthesisResult
+from clients.validation import field_errors, summary
 
 Outcome = SynthesisResult | ErrorBody
 ProgressFn = Callable[[str, Stage, float, int | None, int | None], None]
@@ -71,6 +72,21 @@ def load_pipeline(spec: str, options: dict[str, Any] | None = None, weights_dir:
 
 
 def error_from_exception(exc: BaseException) -> ErrorBody:
-    """An error body naming the exception's class and message."""
+    """The one translation of an exception into a job's error.
+
+    A `models.errors.ScienceError` carries its contract type (``code``); pydantic's `ValidationError` (a queue
+    payload is input too) is a ``ValidationError`` naming each field; anything else is a fault of the service,
+    an ``InternalError`` that names the exception's class, never a 4xx that blames the caller.
+    """
+    import pydantic
+
+    from models.errors import ScienceError
+
+    if isinstance(exc, pydantic.ValidationError):
+        detail = field_errors(exc)
+        return ErrorBody.of(ErrorType.VALIDATION_ERROR, summary(detail)[:2000], detail)
     message = str(exc) or exc.__class__.__name__
-    return ErrorBody(error=message[:2000], type=exc.__class__.__name__)
+    if isinstance(exc, ScienceError):
+        kind = ErrorType.parse(exc.code) or ErrorType.INTERNAL_ERROR
+        return ErrorBody.of(kind, message[:2000])
+    return ErrorBody.of(ErrorType.INTERNAL_ERROR, f"{exc.__class__.__name__}: {message}"[:2000])

@@ -31,7 +31,9 @@ class QueueSettings(BaseSettings):
         2.0, gt=0, le=60, description="Seconds a Redis connect or command may take before the call fails (503)."
     )
     # workers
-    concurrency: int = Field(1, ge=0, le=64, description="Worker processes (embedded: spawned by the queue).")
+    concurrency: int = Field(
+        2, ge=0, le=64, description="Worker processes: spawned by `mani serve` (embedded) or by `mani worker`."
+    )
     batch_size: int = Field(4, ge=1, le=64, description="Jobs a worker takes at once (network micro-batch).")
     max_wait_ms: float = Field(0.0, ge=0, le=10_000, description="How long a worker waits to fill a batch.")
     visibility_timeout: float = Field(

@@ -4,7 +4,7 @@ Loop: XAUTOCLAIM entries idle longer than ``visibility_timeout`` (their worker d
 re-delivered job runs alone, so a job that kills its worker takes no batch-mate down), else XREADGROUP COUNT =
 ``batch_size`` (waiting up to ``max_wait_ms`` to fill a batch); for each job the BEGIN script counts the delivery
 (beyond ``max_deliveries`` → dead-letter stream, the job failed with its last error), drops expired or cancelled
-jobs, marks it running; the batch runs through `workers.runner.run_batch`; the FINISH script writes the result
+jobs, marks it running; the batch runs through the worker core (`workers.core`); the FINISH script writes the result
 (msgpack, TTL) and acks in one atomic step, only while this worker still owns the entry. A heartbeat thread
 publishes the worker's state and XCLAIMs its own in-flight entries so a long job is not stolen. SIGTERM: finish the
 current batch, then exit. Redis going away: retry with back-off, recreate the group, go on; an outcome that
@@ -12,6 +12,9 @@ could not be written while Redis was down is retried until it is (`_end_durably`
 
 Run as ``python -m workers.worker`` (settings as JSON in ``MANI_WORKER_SETTINGS``, else ``MANI_*``); `mani worker`
 supervises several of these.
+
+Why one module: one consumer's loop: claiming, delivery, heartbeats and durable outcomes share its in-flight
+bookkeeping and lock.
 """
 
 from __future__ import annotations
@@ -30,18 +33,25 @@ from redis.exceptions import ConnectionError as RedisConnectionError
 from redis.exceptions import RedisError, ResponseError
 from redis.exceptions import TimeoutError as RedisTimeoutError
 
-from clients.codec import pack, unpack
-from clients.schemas import DeadLetter, ErrorBody, JobProgress, RobotRegister, Stage, SynthesisRequest, WorkerPublic
+from clients.codec import pack
+from clients.schemas import (
+    DeadLetter,
+    ErrorBody,
+    ErrorType,
+    JobProgress,
+    Stage,
+    WorkerPublic,
+)
+from workers.core import PROGRESS_INTERVAL_S, RawJob, WorkerCore
 from workers.logs import job_context, setup_logging
-from workers.pipeline import JobInput, Pipeline, error_from_exception, load_pipeline
-from workers.queue.records import new_id, scoped_robot, state_for_error
+from workers.pipeline import load_pipeline
+from workers.queue.records import cancelled_error, deadline_error, new_id, scoped_robot
 from workers.queue.redis_lua import BEGIN, FINISH, GROUP, TOUCH, Keys
-from workers.runner import run_batch
 from workers.settings import QueueSettings
 
 log = logging.getLogger("workers.worker")
-PROGRESS_S = 0.05
-"""Seconds between a job's progress writes and cancel-flag reads (keeps short jobs at ~4 Redis round trips)."""
+PROGRESS_S = PROGRESS_INTERVAL_S
+"""Seconds between a job's cancel-flag reads (as between its progress writes: short jobs stay at ~4 round trips)."""
 END_RETRY_S = 30.0
 """How long a stopping worker keeps retrying to write an outcome while Redis is unreachable."""
 
@@ -64,10 +74,9 @@ class RedisWorker:
         self.inflight: dict[str, str] = {}  # entry id -> job id
         self.lock = threading.Lock()
         self.jobs_done = 0
-        self.queued_for: dict[str, float] = {}
         self.cancel_checked: dict[str, float] = {}
         self.builtin_robots: set[str] = set()
-        self.pipeline: Pipeline | None = None
+        self.core: WorkerCore | None = None
         self.info: WorkerPublic | None = None
         self._begin, self._finish = self.r.register_script(BEGIN), self.r.register_script(FINISH)
         self._last_claim = 0.0
@@ -78,16 +87,13 @@ class RedisWorker:
     # ---- lifecycle -------------------------------------------------------------------------------------------
     def run(self) -> None:
         """Serve until `stop()` (SIGTERM)."""
-        self.pipeline = load_pipeline(self.settings.pipeline, self.settings.pipeline_options, self.settings.weights_dir)
-        now = time.time()
-        self.info = WorkerPublic(
-            id=self.id, host=socket.gethostname(), pid=os.getpid(), started_at=now, last_heartbeat=now,
-            model_loaded=self.pipeline.model_loaded, model_version=self.pipeline.model_version,
-        )  # fmt: skip
+        s = self.settings
+        self.core = WorkerCore(load_pipeline(s.pipeline, s.pipeline_options, s.weights_dir))
+        self.info = self.core.info(self.id)
         self._connect()
         beat = threading.Thread(target=self._heartbeat_loop, name="mani-heartbeat", daemon=True)
         beat.start()
-        log.info("worker ready", extra={"model_loaded": self.pipeline.model_loaded})
+        log.info("worker ready", extra={"model_loaded": self.info.model_loaded})
         backoff = 0.1
         while not self.stopping:
             try:
@@ -107,6 +113,12 @@ class RedisWorker:
     def stop(self, *_: object) -> None:
         self.stopping = True
 
+    @property
+    def _core(self) -> WorkerCore:
+        if self.core is None:
+            raise RuntimeError("the worker has not loaded its pipeline yet (call run())")
+        return self.core
+
     def _connect(self, quiet: bool = False) -> None:
         """Create the group (if Redis lost it) and publish the built-in robots."""
         try:
@@ -115,11 +127,10 @@ class RedisWorker:
                 self.r.xgroup_create(self.keys.stream, GROUP, id="0", mkstream=True)
             except ResponseError:
                 with_group = False
-            assert self.pipeline is not None
-            robots = {r.name: pack(r.model_dump(mode="python", exclude_none=True)) for r in self.pipeline.robots()}
+            robots = {r.name: pack(r.model_dump(mode="python", exclude_none=True)) for r in self._core.robots()}
             self.builtin_robots = set(robots)
             if robots:
-                self.r.hset(self.keys.robots, mapping=robots)  # type: ignore[arg-type]
+                self.r.hset(self.keys.robots, mapping=robots)
             if with_group:
                 log.info("created consumer group")
             self._beat()
@@ -236,9 +247,8 @@ class RedisWorker:
         return entries
 
     def _handle(self, entries: list[tuple[bytes, dict[bytes, bytes]]]) -> None:
-        jobs: list[JobInput] = []
+        raw_jobs: list[RawJob] = []
         entry_of: dict[str, str] = {}
-        started: dict[str, float] = {}
         for entry_raw, fields in entries:
             entry = entry_raw.decode()
             if fields.get(b"k") == b"robot":
@@ -246,41 +256,29 @@ class RedisWorker:
                 continue
             job_id = fields[b"id"].decode()
             request_id = fields[b"r"].decode() if fields.get(b"r") else None  # entries of older services lack it
-            owner = fields[b"o"].decode() if fields.get(b"o") else None
             with job_context(job_id, request_id):
-                job = self._start_job(entry, job_id, fields[b"p"], request_id, owner)
-            if job is not None:
-                jobs.append(job)
+                raw = self._start_job(entry, job_id, fields, request_id)
+            if raw is not None:
+                raw_jobs.append(raw)
                 entry_of[job_id] = entry
-                started[job_id] = time.time()
-        if not jobs:
+        if not raw_jobs:
             return
+        request_of = {j.id: j.request_id for j in raw_jobs}
         with self.lock:
-            self.inflight.update({entry_of[j.id]: j.id for j in jobs})
-        assert self.pipeline is not None
+            self.inflight.update({entry_of[j.id]: j.id for j in raw_jobs})
         try:
-            outcomes = run_batch(self.pipeline, jobs, self._progress(), self._should_cancel)
-            for job in jobs:
-                outcome = outcomes[job.id]
-                timings = dict(getattr(outcome, "timings", {}) or {})
-                timings["run"] = time.time() - started[job.id]
-                timings["queue"] = self.queued_for.pop(job.id, 0.0)
-                timings["total"] = timings["queue"] + timings["run"]
-                with job_context(job.id, job.request_id):
-                    if isinstance(outcome, ErrorBody):
-                        state = state_for_error(outcome).value
-                        self._end_durably(entry_of[job.id], job.id, state, error=outcome, timings=timings)
-                    else:
-                        result = pack(outcome.model_dump(mode="python", exclude_none=True))
-                        self._end_durably(entry_of[job.id], job.id, "succeeded", result=result, timings=timings)
+            for done in self._core.run(raw_jobs, self._progress, self._should_cancel):
+                with job_context(done.id, request_of[done.id]):
+                    self._end_durably(entry_of[done.id], done.id, done.state.value, result=done.result or b"",
+                                      error=done.error, timings=done.timings)  # fmt: skip
                     self.jobs_done += 1
                 with self.lock:
-                    self.inflight.pop(entry_of[job.id], None)
-                self.cancel_checked.pop(job.id, None)
+                    self.inflight.pop(entry_of[done.id], None)
+                self.cancel_checked.pop(done.id, None)
         finally:  # whatever was not finished is given back: no heartbeat keeps it from re-delivery any more
             with self.lock:
-                for job in jobs:
-                    self.inflight.pop(entry_of[job.id], None)
+                for raw in raw_jobs:
+                    self.inflight.pop(entry_of[raw.id], None)
 
     def _end_durably(self, entry: str, job_id: str, state: str, **outcome: Any) -> None:
         """`_end`, retried with back-off while Redis is unreachable (a restart, a failover): the outcome is
@@ -306,48 +304,46 @@ class RedisWorker:
                 return
 
     def _start_job(
-        self, entry: str, job_id: str, payload: bytes, request_id: str | None = None, owner: str | None = None
-    ) -> JobInput | None:
+        self, entry: str, job_id: str, fields: dict[bytes, bytes], request_id: str | None
+    ) -> RawJob | None:
+        """BEGIN the delivery; the job as the core takes it when it is to run, else end it here (dead, expired,
+        cancelled or already terminal)."""
         s = self.settings
         now = time.time()
         verdict, deliveries, *rest = self._begin(keys=[self.keys.job(job_id)], args=[self.id, now, s.max_deliveries])
         verdict = verdict.decode()
+        queued_for = now - float(rest[0]) if rest else 0.0
         if rest:
-            self.queued_for[job_id] = now - float(rest[0])
             self.cancel_checked[job_id] = time.monotonic()  # BEGIN just checked the cancel flag
         if verdict == "run":
-            try:
-                request = SynthesisRequest.model_validate(unpack(payload))
-                robot = None
-                builtin = request.robot.name in self.builtin_robots
-                if (
-                    request.robot.name
-                    and not builtin
-                    and (raw := self.r.hget(self.keys.robot_urdf, scoped_robot(owner, request.robot.name)))
-                ):
-                    robot = RobotRegister.model_validate(unpack(raw))  # type: ignore[arg-type]
-            except Exception as exc:  # a queue payload is input too
-                self._end(entry, job_id, "failed", error=error_from_exception(exc))
-                return None
             deadline = float(rest[1]) if len(rest) > 1 and rest[1] else None
-            log.info("job started", extra={"delivery": int(deliveries)})
-            return JobInput(id=job_id, request=request, deadline=deadline, robot=robot, request_id=request_id)
+            log.info("job delivered", extra={"delivery": int(deliveries)})
+            robot = self._registered_robot(job_id, fields)
+            return RawJob(job_id, fields[b"p"], deadline, robot, request_id, queued_for)
         if verdict == "dead":
             h = self.r.hmget(self.keys.job(job_id), ["error", "error_type"])
-            message = h[0].decode() if h[0] else "failed on every delivery"  # type: ignore[union-attr]
-            error = ErrorBody(error=message, type=h[1].decode() if h[1] else "WorkerLost")  # type: ignore[union-attr]
+            message = h[0].decode() if h[0] else "failed on every delivery"
+            error = ErrorBody(error=message, type=h[1].decode() if h[1] else ErrorType.WORKER_LOST.value)
             letter = DeadLetter(job_id=job_id, deliveries=int(deliveries), error=error, failed_at=time.time())
             self.r.xadd(self.keys.dead, {"d": pack(letter.model_dump(mode="python"))}, maxlen=10_000)
             self._end(entry, job_id, "failed", error=error)
             log.warning("job dead-lettered", extra={"deliveries": int(deliveries)})
         elif verdict == "expired":
-            self._end(entry, job_id, "expired", error=ErrorBody(error="job deadline passed before it started",
-                                                                 type="DeadlineExceeded"))  # fmt: skip
+            self._end(entry, job_id, "expired", error=deadline_error())
         elif verdict == "cancelled":
-            self._end(entry, job_id, "cancelled", error=ErrorBody(error="job cancelled", type="Cancelled"))
+            self._end(entry, job_id, "cancelled", error=cancelled_error())
         else:
             self._end(entry, job_id, "", owner=False)  # already terminal: just ack
         return None
+
+    def _registered_robot(self, job_id: str, fields: dict[bytes, bytes]) -> bytes | None:
+        """The registration (msgpack bytes, as stored) of the user robot the job names; None for a built-in."""
+        name = fields.get(b"h") or self.r.hget(self.keys.job(job_id), "robot")  # entries of older services lack h
+        if not name or name.decode() in self.builtin_robots:
+            return None
+        owner = fields[b"o"].decode() if fields.get(b"o") else None
+        raw: bytes | None = self.r.hget(self.keys.robot_urdf, scoped_robot(owner, name.decode()))
+        return raw
 
     def _end(
         self, entry: str, job_id: str, state: str, *, result: bytes = b"", error: ErrorBody | None = None,
@@ -365,25 +361,14 @@ class RedisWorker:
         if not self._finish(keys=keys, args=args):
             log.warning("result discarded: the job was re-delivered to another worker")
         elif state:
-            log.info("job finished", extra={"state": state})
+            log.debug("outcome written", extra={"state": state})
 
-    def _progress(self) -> Any:
-        """Progress writes, at most one per job every `PROGRESS_S` (a job shorter than that writes none)."""
-        start = time.monotonic()
-        last: dict[str, float] = {}
-
-        def progress(job_id: str, stage: Stage, fraction: float, iteration: int | None, top: int | None) -> None:
-            now = time.monotonic()
-            if now - last.get(job_id, start) < PROGRESS_S:
-                return
-            last[job_id] = now
-            p = JobProgress(stage=stage, fraction=min(max(fraction, 0.0), 1.0), iteration=iteration, max_iterations=top)
-            try:
-                self.r.hset(self.keys.job(job_id), "progress", pack(p.model_dump(mode="python", exclude_none=True)))
-            except RedisError as exc:  # progress is best effort; the outcome is what must not be lost
-                log.warning("progress not written: %s", exc)
-
-        return progress
+    def _progress(self, job_id: str, progress: JobProgress) -> None:
+        """A job's (throttled) progress, written to its record; best effort."""
+        try:
+            self.r.hset(self.keys.job(job_id), "progress", pack(progress.model_dump(mode="python", exclude_none=True)))
+        except RedisError as exc:  # progress is best effort; the outcome is what must not be lost
+            log.warning("progress not written: %s", exc)
 
     def _should_cancel(self, job_id: str) -> bool:
         """The job's cancel flag, read at most every `PROGRESS_S` (BEGIN read it when the job started)."""
@@ -398,12 +383,10 @@ class RedisWorker:
 
     def _robot(self, entry: str, fields: dict[bytes, bytes]) -> None:
         rid = fields[b"id"].decode()
-        assert self.pipeline is not None
         try:
-            robot = RobotRegister.model_validate(unpack(fields[b"p"]))
-            public = self.pipeline.validate_robot(robot)
+            public = self._core.validate_robot(fields[b"p"])
             answer: dict[str, Any] = {"robot": public.model_dump(mode="python", exclude_none=True)}
-            key = scoped_robot(fields[b"o"].decode() if fields.get(b"o") else None, robot.name)
+            key = scoped_robot(fields[b"o"].decode() if fields.get(b"o") else None, public.name)
             pipe = self.r.pipeline()
             pipe.hset(self.keys.robots, key, pack(answer["robot"]))
             pipe.hset(self.keys.robot_urdf, key, fields[b"p"])

@@ -6,20 +6,17 @@ arrays as nested lists in JSON and typed binary in msgpack (`clients.arrays`). S
 """
 
 from clients.schemas.common import MAX_POINTS, MIN_POINTS, SCHEMA_VERSION, WireModel
+from clients.schemas.errors import ErrorBody, ErrorType, FieldError
 from clients.schemas.jobs import (
     MAX_BATCH_SIZE,
     BatchCreate,
     BatchItem,
     BatchPublic,
     DeadLetter,
-    ErrorBody,
-    FieldError,
     JobCreated,
     JobProgress,
     JobPublic,
-    JobState,
     ReadyPublic,
-    Stage,
     WorkerPublic,
 )
 from clients.schemas.objects import (
@@ -34,6 +31,8 @@ from clients.schemas.objects import (
 from clients.schemas.requests import ContactsIn, Method, SynthesisOptions, SynthesisRequest
 from clients.schemas.results import HandMesh, IterationRecord, Proposal, Quality, SynthesisResult
 from clients.schemas.robots import MAX_ARCHIVE_BYTES, MAX_URDF_BYTES, RobotIn, RobotPreview, RobotPublic, RobotRegister
+from clients.schemas.service import DashboardPublic, HealthPublic, JobList, QueueStats, Sample, ScenePublic
+from clients.schemas.states import JobState, Stage
 from clients.schemas.tasks import (
     DeltaPoseTask,
     ForceClosureTask,
@@ -58,14 +57,18 @@ __all__ = [
     "BatchItem",
     "BatchPublic",
     "ContactsIn",
+    "DashboardPublic",
     "DeadLetter",
     "DeltaPoseTask",
     "ErrorBody",
+    "ErrorType",
     "FieldError",
     "ForceClosureTask",
     "HandMesh",
+    "HealthPublic",
     "IterationRecord",
     "JobCreated",
+    "JobList",
     "JobProgress",
     "JobPublic",
     "JobState",
@@ -78,11 +81,14 @@ __all__ = [
     "PointMotionTask",
     "Proposal",
     "Quality",
+    "QueueStats",
     "ReadyPublic",
     "RobotIn",
     "RobotPreview",
     "RobotPublic",
     "RobotRegister",
+    "Sample",
+    "ScenePublic",
     "Stage",
     "SynthesisOptions",
     "SynthesisRequest",

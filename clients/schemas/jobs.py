@@ -1,58 +1,16 @@
-"""Jobs, batches, workers and errors: the asynchronous side of the API."""
+"""Jobs, batches and workers: the asynchronous side of the API."""
 
 from __future__ import annotations
-
-from enum import StrEnum
 
 from pydantic import Field
 
 from clients.schemas.common import WireModel
+from clients.schemas.errors import ErrorBody
 from clients.schemas.requests import SynthesisRequest
 from clients.schemas.results import SynthesisResult
+from clients.schemas.states import JobState, Stage
 
 MAX_BATCH_SIZE = 1000
-
-
-class JobState(StrEnum):
-    """Where a job is in its life. Terminal: succeeded, failed, cancelled, expired."""
-
-    QUEUED = "queued"
-    RUNNING = "running"
-    SUCCEEDED = "succeeded"
-    FAILED = "failed"
-    CANCELLED = "cancelled"
-    EXPIRED = "expired"
-
-    @property
-    def terminal(self) -> bool:
-        """Whether the job will not change any more."""
-        return self not in (JobState.QUEUED, JobState.RUNNING)
-
-
-class Stage(StrEnum):
-    """Pipeline stage of a running job."""
-
-    QUEUED = "queued"
-    NETWORK = "network"
-    INITIALISATION = "initialisation"
-    REFINEMENT = "refinement"
-    VERIFICATION = "verification"
-    DONE = "done"
-
-
-class FieldError(WireModel):
-    """One problem with one field of the input."""
-
-    field: str = Field(..., examples=["object.points"])
-    problem: str
-
-
-class ErrorBody(WireModel):
-    """The one error shape of every non-2xx answer (and of a failed job)."""
-
-    error: str = Field(..., description="Human-readable message naming the problem.")
-    type: str = Field(..., description="Machine-readable class, e.g. ValidationError, NotFound, RateLimited.")
-    detail: list[FieldError] | None = None
 
 
 class JobProgress(WireModel):

@@ -44,17 +44,15 @@ class SynthesisOptions(WireModel):
 
 
 class ContactsIn(WireModel):
-    """Contacts chosen by the caller (method "contacts"): H points on the object, optional forces."""
+    """Contacts chosen by the caller (method "contacts"): H points on the object. The forces are the refinement's
+    to find (the ones that produce the task's wrench), so the caller gives none."""
 
     points: Rows3
-    forces: Rows3 | None = None
 
     @model_validator(mode="after")
     def _sizes(self) -> ContactsIn:
         if not 1 <= len(self.points) <= 8:
             raise ValueError(f"contacts.points: {len(self.points)} contacts, need 1..8")
-        if self.forces is not None and self.forces.shape != self.points.shape:
-            raise ValueError("contacts.forces: one row per contact point")
         return self
 
 

@@ -12,7 +12,7 @@ from clients.schemas.common import PerPoint, Points, Quaternion, Rows3, Vec3, Ve
 
 
 class Quality(WireModel):
-    """Verification figures of one proposal (DESIGN.md §5)."""
+    """Verification figures of one proposal (docs/evaluation.md)."""
 
     success: bool = Field(..., description="All criteria below met.")
     converged: bool

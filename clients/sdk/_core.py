@@ -2,6 +2,9 @@
 
 `Client` and `AsyncClient` share everything here and differ only in how they send (the httpx pattern). Nothing
 in this module opens a connection or sleeps, so all of it is testable with plain values.
+
+Why one module: every request the SDK can make is built and read here, once for both clients; each part is a few
+lines.
 """
 
 from __future__ import annotations

@@ -45,7 +45,7 @@ class AsyncClient(BaseClient):
 
     Args:
         base_url, api_key, timeout, retries, encoding, headers, poll_interval: see `BaseClient`.
-        transport: an ``httpx.AsyncBaseTransport`` to send through (tests: ``httpx.MockTransport``).
+        transport: an ``httpx.AsyncBaseTransport`` to send through (tests: the app in process).
         sleep: how to wait between retries and polls.
     """
 

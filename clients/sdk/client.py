@@ -1,4 +1,8 @@
-"""`Client`: the synchronous SDK. Every decision lives in `BaseClient`; this module only sends and sleeps."""
+"""`Client`: the synchronous SDK. Every decision lives in `BaseClient`; this module only sends and sleeps.
+
+Why one module: it mirrors `AsyncClient` method for method (the httpx pattern); keeping each client in one file
+keeps the two surfaces side by side and reviewable.
+"""
 
 from __future__ import annotations
 
@@ -47,7 +51,7 @@ class Client(BaseClient):
 
     Args:
         base_url, api_key, timeout, retries, encoding, headers, poll_interval: see `BaseClient`.
-        transport: an ``httpx.BaseTransport`` to send through (tests: ``httpx.MockTransport``).
+        transport: an ``httpx.BaseTransport`` to send through (tests: the app in process).
         sleep: how to wait between retries and polls (tests may pass a no-op).
     """
 

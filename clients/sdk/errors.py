@@ -21,7 +21,7 @@ from typing import Any, TypeVar
 
 import pydantic
 
-from clients.schemas import ErrorBody, FieldError, JobPublic, JobState
+from clients.schemas import ErrorBody, ErrorType, FieldError, JobPublic, JobState
 from clients.validation import field_errors, summary
 
 ModelT = TypeVar("ModelT", bound=pydantic.BaseModel)
@@ -133,6 +133,20 @@ class JobFailed(ManiError):
         return cls(job.id, job.state, job.error, job)
 
 
+_BY_TYPE: dict[ErrorType, type[RequestError]] = {
+    ErrorType.BAD_REQUEST: ValidationError,
+    ErrorType.UNAUTHORIZED: Unauthorized,
+    ErrorType.NOT_FOUND: NotFound,
+    ErrorType.UNKNOWN_HAND: NotFound,
+    ErrorType.PAYLOAD_TOO_LARGE: ValidationError,
+    ErrorType.UNSUPPORTED_MEDIA_TYPE: ValidationError,
+    ErrorType.VALIDATION_ERROR: ValidationError,
+    ErrorType.ROBOT_INVALID: ValidationError,
+    ErrorType.RATE_LIMITED: RateLimited,
+    ErrorType.QUEUE_FULL: RateLimited,
+}
+"""The contract's error types mapped back to this SDK's classes (the one place); other types: by status."""
+
 _BY_STATUS: dict[int, type[RequestError]] = {
     400: ValidationError,
     401: Unauthorized,
@@ -147,7 +161,8 @@ _BY_STATUS: dict[int, type[RequestError]] = {
 def error_for(
     status_code: int, body: ErrorBody | None, text: str = "", retry_after: float | None = None
 ) -> RequestError:
-    """The exception for an error answer: class by status, message/type/detail from the body.
+    """The exception for an error answer: class by the body's `ErrorType` (by the status for a type this
+    version does not know, or no contract body), message/type/detail from the body.
 
     Args:
         status_code: the HTTP status (≥ 400).
@@ -155,7 +170,9 @@ def error_for(
         text: the raw body text, used as the message when there is no contract body.
         retry_after: seconds from the Retry-After header.
     """
-    cls = _BY_STATUS.get(status_code, ServerError if status_code >= 500 else RequestError)
+    kind = body.kind if body is not None else None
+    by_status = _BY_STATUS.get(status_code, ServerError if status_code >= 500 else RequestError)
+    cls = _BY_TYPE.get(kind, ServerError if status_code >= 500 else by_status) if kind is not None else by_status
     message = body.error if body else (text.strip()[:500] or f"HTTP {status_code}")
     kwargs: dict[str, object] = {
         "type": body.type if body else None,
@@ -176,7 +193,8 @@ def local_validation_error(exc: pydantic.ValidationError, root: str = "") -> Val
             the service would write them (``object.points``).
     """
     detail = field_errors(exc, root=root)
-    return ValidationError(f"invalid {root or 'request'}: {summary(detail)}", type="ValidationError", detail=detail)
+    message = f"invalid {root or 'request'}: {summary(detail)}"
+    return ValidationError(message, type=ErrorType.VALIDATION_ERROR.value, detail=detail)
 
 
 def checked(cls: type[ModelT], root: str, **fields: Any) -> ModelT:

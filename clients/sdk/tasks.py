@@ -77,7 +77,7 @@ def as_task(value: TaskLike) -> TaskIn:
         value = {"kind": value}
     if isinstance(value, dict):
         try:
-            return _TASK_ADAPTER.validate_python(value)  # type: ignore[no-any-return]
+            return _TASK_ADAPTER.validate_python(value)
         except pydantic.ValidationError as exc:
             raise local_validation_error(exc, "task") from exc
     return value

@@ -33,7 +33,7 @@ from numpy.typing import ArrayLike
 from scipy.spatial import cKDTree
 
 from models.audit.hands import AuditHand, load_hand
-from models.audit.penetration import measure_penetration
+from models.audit.penetration import PenetrationAudit, measure_penetration
 from models.audit.report import AuditedGrasp, AuditReport, ContactAudit
 from models.audit.wrench import closure_epsilon, contact_wrenches, cosine, friction_components, scaled_wrench
 
@@ -143,34 +143,14 @@ def audit_grasp(
 
     # (a) contact distances
     finger = _finger_distances(hand, grasp, poses)
-    if object_mesh is not None:
-        _, obj_dist, tri = trimesh.proximity.closest_point(object_mesh, points)
-        normals = np.asarray(object_mesh.face_normals)[tri]
-    else:
-        notes.append("no object mesh: object distances are to the nearest given object point")
-        obj_dist, _ = cKDTree(np.asarray(object_points)).query(points)
-    if object_points is not None and object_normals is not None:
-        _, nearest = cKDTree(np.asarray(object_points, dtype=np.float64)).query(points)
-        normals = np.asarray(object_normals, dtype=np.float64)[nearest]
-    normals = normals / np.linalg.norm(normals, axis=1, keepdims=True)
+    obj_dist, normals = _object_distances_and_normals(points, object_mesh, object_points, object_normals, notes)
     for k in np.flatnonzero(finger > contact_tol):
         failures.append(f"contact {k} is {finger[k] * 1e3:.2f} mm from {grasp.fingertips[k]}'s surface")
     for k in np.flatnonzero(np.asarray(obj_dist) > contact_tol):
         failures.append(f"contact {k} is {obj_dist[k] * 1e3:.2f} mm from the object surface")
 
     # (c) friction cones
-    contacts = []
-    for i in range(len(points)):
-        fn, ft = friction_components(forces[i], normals[i])
-        scale = float(np.linalg.norm(forces[i]))
-        ratio = 0.0 if scale == 0.0 else (ft / fn if fn > 0.0 else np.inf)
-        contacts.append(
-            ContactAudit(grasp.fingertips[i], float(finger[i]), float(obj_dist[i]), normals[i], fn, ft, ratio)
-        )
-        if fn < -FRICTION_SLACK * scale:
-            failures.append(f"contact {i} pulls the object (normal force {fn:.3g} N)")
-        elif ft > mu * fn + FRICTION_SLACK * scale:
-            failures.append(f"contact {i} leaves its friction cone (tangential/normal {ratio:.3g} > μ = {mu})")
+    contacts = _cone_audits(grasp.fingertips, forces, normals, finger, obj_dist, mu, failures)
 
     # (d) wrench
     c, L = _centre_and_length(object_mesh, object_points, centre, length)
@@ -192,17 +172,62 @@ def audit_grasp(
     if object_mesh is None:
         notes.append("no object mesh: penetration not measured")
     else:
-        if not object_mesh.is_watertight:
-            notes.append("object mesh is not watertight: inside tests on it are approximate")
-        report.penetration = measure_penetration(hand.links, poses, object_mesh, spacing=sample_spacing, seed=seed)
-        pen = report.penetration
-        if pen.hulled_links:
-            notes.append(f"non-watertight link meshes tested by their convex hulls: {pen.hulled_links}")
-        if pen.depth > penetration_tol:
-            where = np.round(pen.point, 4).tolist() if pen.point is not None else None
-            failures.append(f"{pen.link} and the object overlap by {pen.depth * 1e3:.2f} mm ({pen.kind} at {where})")
+        report.penetration = _penetration(hand, poses, object_mesh, sample_spacing, seed, penetration_tol, report)
     report.passed = not failures
     return report
+
+
+def _object_distances_and_normals(
+    points: np.ndarray, mesh: trimesh.Trimesh | None, object_points: ArrayLike | None,
+    object_normals: ArrayLike | None, notes: list[str],
+) -> tuple[np.ndarray, np.ndarray]:
+    """(H,) distance of each contact to the object's surface and (H, 3) the outward unit normal there (the
+    caller's normals when given, else the mesh's face normals)."""
+    normals = np.zeros_like(points)
+    if mesh is not None:
+        _, obj_dist, tri = trimesh.proximity.closest_point(mesh, points)
+        normals = np.asarray(mesh.face_normals)[tri]
+    else:
+        notes.append("no object mesh: object distances are to the nearest given object point")
+        obj_dist, _ = cKDTree(np.asarray(object_points)).query(points)
+    if object_points is not None and object_normals is not None:
+        _, nearest = cKDTree(np.asarray(object_points, dtype=np.float64)).query(points)
+        normals = np.asarray(object_normals, dtype=np.float64)[nearest]
+    return np.asarray(obj_dist), normals / np.linalg.norm(normals, axis=1, keepdims=True)
+
+
+def _cone_audits(
+    fingertips: Sequence[str], forces: np.ndarray, normals: np.ndarray, finger: np.ndarray, obj_dist: np.ndarray,
+    mu: float, failures: list[str],
+) -> list[ContactAudit]:
+    """Each contact's force split against its friction cone; a pull or a slip is added to ``failures``."""
+    contacts = []
+    for i in range(len(forces)):
+        fn, ft = friction_components(forces[i], normals[i])
+        scale = float(np.linalg.norm(forces[i]))
+        ratio = 0.0 if scale == 0.0 else (ft / fn if fn > 0.0 else np.inf)
+        contacts.append(ContactAudit(fingertips[i], float(finger[i]), float(obj_dist[i]), normals[i], fn, ft, ratio))
+        if fn < -FRICTION_SLACK * scale:
+            failures.append(f"contact {i} pulls the object (normal force {fn:.3g} N)")
+        elif ft > mu * fn + FRICTION_SLACK * scale:
+            failures.append(f"contact {i} leaves its friction cone (tangential/normal {ratio:.3g} > μ = {mu})")
+    return contacts
+
+
+def _penetration(
+    hand: AuditHand, poses: dict[str, np.ndarray], mesh: trimesh.Trimesh, spacing: float, seed: int, tol: float,
+    report: AuditReport,
+) -> PenetrationAudit:
+    """The deepest hand-object overlap; an overlap beyond ``tol`` is added to the report's failures."""
+    if not mesh.is_watertight:
+        report.notes.append("object mesh is not watertight: inside tests on it are approximate")
+    pen = measure_penetration(hand.links, poses, mesh, spacing=spacing, seed=seed)
+    if pen.hulled_links:
+        report.notes.append(f"non-watertight link meshes tested by their convex hulls: {pen.hulled_links}")
+    if pen.depth > tol:
+        where = np.round(pen.point, 4).tolist() if pen.point is not None else None
+        report.failures.append(f"{pen.link} and the object overlap by {pen.depth * 1e3:.2f} mm ({pen.kind} at {where})")
+    return pen
 
 
 def audit_many(

@@ -38,8 +38,8 @@ def run(args: argparse.Namespace) -> int:
     from rich.table import Table
     from tqdm import tqdm
 
+    from models.evaluation.refinement import approach_start
     from models.objects import object_set
-    from models.refine.evaluation import approach_start
     from models.refine.field import PointCloudField
     from models.refine.refine import RefineConfig, refine
     from models.refine.state import HandPose, linearise

@@ -1,11 +1,11 @@
 """`mani eval`: evaluations of the science (paper Tables I and II).
 
-``mani eval refine`` reproduces the refinement protocol of DESIGN.md §5 (see `models.refine.evaluation` for the
-exact procedure: ground-truth poses from the data generator's verified grasp sampling (``--ground-truth
+``mani eval refine`` reproduces the refinement protocol of docs/evaluation.md (see `models.evaluation.refinement`
+for the exact procedure: ground-truth poses from the data generator's verified grasp sampling (``--ground-truth
 sampled``, default; force-closure grasps for ``closure``) or from our own verified force-closure refinements
-(``--ground-truth refined``, the original protocol), targets those grasps can produce, starts retreated +
-rotated ≤ 60° + shifted ≤ 5 cm, fingers at rest) on the procedural test objects of `models.objects` (sizes
-5-25 cm, kinds cycled, seeded), against the direct-grasp baseline.
+(``--ground-truth refined``, the original protocol), targets those grasps can produce, starts retreated + rotated ≤
+60° + shifted ≤ 5 cm, fingers at rest) on the procedural test objects of `models.objects` (sizes 5-25 cm, kinds
+cycled, seeded), against the direct-grasp baseline.
 
 Examples:
     mani eval refine --hand leap --mode task --objects 20 --grasps 2 --seed 0
@@ -69,8 +69,8 @@ def run_refine(args: argparse.Namespace) -> int:
     from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
     from rich.table import Table
 
+    from models.evaluation.refinement import evaluate
     from models.objects import object_set
-    from models.refine.evaluation import evaluate
     from models.refine.refine import RefineConfig
     from models.robots import UnknownHand, get_hand
 

@@ -63,7 +63,7 @@ class ObjectField:
 _HAND_SAMPLES: dict[str, list[tuple[str, np.ndarray]]] = {}
 
 
-def hand_samples(hand) -> list[tuple[str, np.ndarray]]:  # type: ignore[no-untyped-def]
+def hand_samples(hand) -> list[tuple[str, np.ndarray]]:
     """(body link, (S, 3) points in the link frame) for every collision mesh (cached per hand name)."""
     if hand.name not in _HAND_SAMPLES:
         out = []
@@ -79,7 +79,7 @@ def penetration_depth(
     hand,
     obj: ObjectField,
     palm_pos: torch.Tensor,
-    palm_quat: torch.Tensor,  # type: ignore[no-untyped-def]
+    palm_quat: torch.Tensor,
     q: torch.Tensor,
     skip: frozenset[str] = frozenset(),
 ) -> np.ndarray:
@@ -108,12 +108,12 @@ def penetration_depth(
     return depth
 
 
-def fingertip_bodies(hand) -> frozenset[str]:  # type: ignore[no-untyped-def]
+def fingertip_bodies(hand) -> frozenset[str]:
     """Names of the bodies that carry fingertips."""
     return frozenset(hand.tree.body_names[hand.tree.link_body[link][0]] for link in hand.fingertip_links)
 
 
-def self_overlap(hand, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor) -> np.ndarray:  # type: ignore[no-untyped-def]
+def self_overlap(hand, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor) -> np.ndarray:
     """Largest overlap (B,) ≥ 0 of the hand's self-collision sphere pairs (m)."""
     pairs = np.asarray(hand.self_collision_pairs, dtype=np.int64).reshape(-1, 2)
     if not len(pairs):

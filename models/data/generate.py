@@ -63,7 +63,7 @@ def object_split(object_id: str, test_fraction: float) -> str:
     return "test" if h < 1000 * test_fraction else "train"
 
 
-def make_dataset_object(cfg: DataConfig, i: int):  # type: ignore[no-untyped-def]
+def make_dataset_object(cfg: DataConfig, i: int):
     """Object ``i`` of the data set."""
     from models.objects import OBJECT_KINDS, make_object
 

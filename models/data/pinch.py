@@ -27,7 +27,7 @@ APERTURE_SLACK = 0.03  # m: the fingers may open a little beyond the rest pose
 RAYS_PER_PALM = 8  # candidate surface points per wanted palm (most rays fail the width or cone test)
 
 
-def hand_opposition(hand) -> tuple[np.ndarray, np.ndarray, float]:  # type: ignore[no-untyped-def]
+def hand_opposition(hand) -> tuple[np.ndarray, np.ndarray, float]:
     """Thumb tip (3,), mean of the other tips (3,) at rest in the palm frame, and their distance (the aperture);
     `models.refine.initialise.opposition`."""
     thumb, others = opposition(rest_geometry(hand))
@@ -52,7 +52,7 @@ def antipodal_pairs(
 
 
 def sample_pinch_palms(
-    hand, obj: ObjectField, count: int, mu: float, rng: np.random.Generator  # type: ignore[no-untyped-def]
+    hand, obj: ObjectField, count: int, mu: float, rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray]:
     """Up to ``count`` pinching palm poses: positions (B, 3), quaternions (B, 4) wxyz (B = 0 when the object
     has no antipodal pair the hand spans)."""

@@ -13,6 +13,9 @@
 5. Reject with the verification's own tests: a pad sphere off the surface (|Φ(c) − r| > ``TIP_TOL``, exact
    mesh distance), two contacts closer than ``MIN_CONTACT_GAP``, hand–object penetration or self-collision
    deeper than 1 mm on the collision meshes (`models.geometry`, fcl), after fast pre-filters (`checks.py`).
+
+Why one module: the three sampling levels share one set of per-object arrays and constants; split, each part would
+re-derive them.
 """
 
 from __future__ import annotations
@@ -58,7 +61,7 @@ class Grasp:
     self_overlap: float
 
 
-def pad_directions(hand) -> np.ndarray:  # type: ignore[no-untyped-def]
+def pad_directions(hand) -> np.ndarray:
     """(m, 3) unit "pad" direction of each fingertip in its link frame: the outward normal of the fingertip
     body's collision mesh at the contact point (the side of the finger that should face the object)."""
     if hand.name in _PADS:
@@ -85,7 +88,7 @@ def pad_alignment(
     hand,
     palm_pos: torch.Tensor,
     palm_quat: torch.Tensor,
-    q: torch.Tensor,  # type: ignore[no-untyped-def]
+    q: torch.Tensor,
     normals: np.ndarray,
 ) -> np.ndarray:
     """(B, m) cosine between each fingertip's world pad direction and the surface normal there (−1: facing)."""
@@ -106,7 +109,7 @@ def sample_palms(
     obj: ObjectField,
     size: float,
     count: int,
-    rng: np.random.Generator,  # type: ignore[no-untyped-def]
+    rng: np.random.Generator,
 ) -> tuple[np.ndarray, np.ndarray]:
     """``count`` palm poses facing the object: positions (B, 3), quaternions (B, 4) wxyz."""
     pos0 = torch.zeros(1, 3, dtype=torch.float64)
@@ -155,7 +158,7 @@ def _targets(obj: ObjectField, all_tips: np.ndarray, i: int, k: int, rng: np.ran
 
 
 def sample_grasps(
-    hand,  # type: ignore[no-untyped-def]
+    hand,
     obj: ObjectField,
     size: float,
     rng: np.random.Generator,
@@ -266,7 +269,7 @@ def sample_grasps(
     return out
 
 
-def _closure_rows(  # type: ignore[no-untyped-def]
+def _closure_rows(
     hand, obj: ObjectField, pads: np.ndarray, radii: np.ndarray, rows: np.ndarray, mu: float
 ) -> np.ndarray:
     """(R,) bool: rows (of ``rows``) whose pad contacts (R, m, 3) pass the verification's closure tests at ``mu``
@@ -305,7 +308,7 @@ def exact_checks(
     obj: ObjectField,
     palm_pos: np.ndarray,
     palm_quat: np.ndarray,
-    q: np.ndarray,  # type: ignore[no-untyped-def]
+    q: np.ndarray,
     pads: np.ndarray,
     radii: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, float, float] | None:

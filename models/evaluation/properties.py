@@ -11,16 +11,20 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from models.evaluation.testset import TestCase
 
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
+
+
 MODE_RADIUS = 0.1
 
 
-def _inputs(case: TestCase, hand: Any, friction: float | None = None) -> Any:
+def _inputs(case: TestCase, hand: Hand, friction: float | None = None) -> Any:
     from models.network import NetworkInput
 
     return NetworkInput(
@@ -35,7 +39,7 @@ def _inputs(case: TestCase, hand: Any, friction: float | None = None) -> Any:
     )
 
 
-def _select(case: TestCase, heat: np.ndarray, force: np.ndarray, hand: Any, mask: bool = True) -> np.ndarray:
+def _select(case: TestCase, heat: np.ndarray, force: np.ndarray, hand: Hand, mask: bool = True) -> np.ndarray:
     from models.network import select_contacts
 
     return select_contacts(case.points, heat, force, case.mask if mask else None, hand.num_fingertips).indices
@@ -62,7 +66,7 @@ class PropertyReport:
     friction_changes_contacts: float  # fraction of cases whose contact set changes
 
 
-def evaluate_properties(cases: list[TestCase], hand: Any, predictor: Any, k: int = 8, seed: int = 0) -> PropertyReport:
+def evaluate_properties(cases: list[TestCase], hand: Hand, predictor: Any, k: int = 8, seed: int = 0) -> PropertyReport:
     """The three checks of the module docstring on ``cases`` with ``hand``."""
     modes, inside, total, empty, mask_cases = [], 0, 0, 0, 0
     deltas, changed = [], 0

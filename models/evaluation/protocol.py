@@ -1,4 +1,5 @@
-"""Table I protocol: for each test case and method, run the pipeline and count DESIGN.md §5 successes.
+"""Table I protocol: for each test case and method, run the pipeline and count docs/evaluation.md successes.
+
 
 Methods (all through `models.pipeline.run_pipeline`, same hand, same case, same seed):
 
@@ -20,11 +21,14 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from models.evaluation.testset import TestCase
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 METHODS = ("network", "network_no_refine", "random_contacts", "direct_grasp")
 
@@ -45,7 +49,7 @@ class MethodResult:
         return self.successes / self.cases if self.cases else 0.0
 
 
-def synthesis_input(case: TestCase, hand: Any, method: str, num_proposals: int, seed: int, max_iterations: int):  # type: ignore[no-untyped-def]
+def synthesis_input(case: TestCase, hand: Hand, method: str, num_proposals: int, seed: int, max_iterations: int):
     """The `SynthesisInput` of one case for one method."""
     from models.pipeline import JointInput, SynthesisInput, TaskInput
 
@@ -78,7 +82,7 @@ def synthesis_input(case: TestCase, hand: Any, method: str, num_proposals: int, 
 
 def evaluate(
     cases: list[TestCase],
-    hand: Any,
+    hand: Hand,
     methods: tuple[str, ...],
     predictor: Any | None,
     num_proposals: int = 4,

@@ -69,13 +69,6 @@ def _bvh(mesh: trimesh.Trimesh) -> fcl.BVHModel:
     return m
 
 
-def _planes(mesh: trimesh.Trimesh) -> np.ndarray:
-    hull = mesh.convex_hull
-    n = np.asarray(hull.face_normals)
-    d = np.einsum("ij,ij->i", n, np.asarray(hull.triangles_center))
-    return np.hstack([n, d[:, None]])
-
-
 def _parts_depth(parts: list[tuple[np.ndarray, np.ndarray]], x: np.ndarray, grow: float = 0.0) -> float:
     """Largest depth (≥ 0) of points x (k, 3) inside any of the convex ``parts`` grown by ``grow`` (m)."""
     return max((_inside_depth(planes, x, bounds, grow) for planes, bounds in parts), default=0.0)

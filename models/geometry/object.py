@@ -19,13 +19,13 @@ import numpy as np
 import trimesh
 from scipy.spatial import cKDTree
 
+from models.errors import InvalidPointCloud
+
 DEFAULT_DENSITY = 500.0
 """kg/m³: a mid value for household objects (wood ~500-700, hollow plastic parts less, water 1000)."""
+DEFAULT_FRICTION = 0.5
+"""Coulomb μ when a caller gives none (the wire contract's default is the same value; a test keeps them equal)."""
 NORMAL_NEIGHBOURS = 16
-
-
-class InvalidPointCloud(ValueError):
-    """Points/normals/mask of the wrong shape, non-finite, or too few to define a surface."""
 
 
 @dataclass

@@ -17,6 +17,7 @@ from typing import Any
 
 from safetensors.torch import load_file, save_file
 
+from models.errors import CheckpointError
 from models.network.config import NetworkConfig, get_config
 from models.network.model import ManiFoundationNet, count_parameters
 from models.network.properties import PROPERTY_NAMES
@@ -24,10 +25,6 @@ from models.network.properties import PROPERTY_NAMES
 WEIGHTS_FILE = "model.safetensors"
 CARD_FILE = "model_card.json"
 FORMAT_VERSION = 1
-
-
-class CheckpointError(ValueError):
-    """A checkpoint is missing, malformed, or does not match the configuration."""
 
 
 @dataclass

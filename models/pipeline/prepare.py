@@ -9,14 +9,13 @@ from typing import Any
 
 import numpy as np
 
+from models.geometry.object import DEFAULT_DENSITY, DEFAULT_FRICTION
+from models.geometry.spread import spread_contacts
 from models.pipeline.tasks import build_task, network_motion
 from models.pipeline.types import MATERIALS, METHODS, InvalidInput, SynthesisInput
-from models.refine.evaluation import spread_contacts
 from models.refine.field import PointCloudField
 from models.refine.volume import points_mass_properties
-from models.refine.wrench import DEFAULT_DENSITY, WrenchTask
-
-DEFAULT_FRICTION = 0.5
+from models.refine.wrench import WrenchTask
 
 
 @dataclass
@@ -122,7 +121,7 @@ def network_inputs(batch: Sequence[Prepared]) -> list[Any]:
                 properties=dict(inp.properties),
                 hand_points=np.asarray(hand.surface_points),
                 hand_normals=np.asarray(hand.surface_normals),
-                hand_key=str(inp.hand_key or getattr(hand, "name", "hand")),
+                hand_key=str(inp.hand_key or hand.name),
             )
         )
     return rows

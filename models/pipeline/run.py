@@ -188,7 +188,7 @@ def _finish(
     heat = force = None
     if net_out is not None:
         heat, force = net_out.heatmaps[0].astype(np.float64), net_out.force_maps[0].astype(np.float64)
-    return SynthesisOutput(hand=getattr(hand, "name", "hand"), proposals=proposals, heatmap=heat, force_map=force,
+    return SynthesisOutput(hand=hand.name, proposals=proposals, heatmap=heat, force_map=force,
                            timings=timings)
 
 

@@ -7,7 +7,6 @@ from scipy.spatial.transform import Rotation
 
 from models.pipeline.types import InvalidInput, JointInput, TaskInput
 from models.refine.wrench import (
-    DEFAULT_DENSITY,
     WrenchTask,
     articulated_task,
     characteristic_length,
@@ -113,4 +112,4 @@ def network_motion(
     return np.zeros((n, 3))
 
 
-__all__ = ["DEFAULT_DENSITY", "build_task", "network_motion"]
+__all__ = ["build_task", "network_motion"]

@@ -1,32 +1,24 @@
 """Core inputs and outputs of the synthesis pipeline (pure dataclasses; the worker maps the wire schemas here).
 
+
 Mirrors ``clients/schemas`` (requests, tasks, results) field for field without importing it.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from models.refine.refine import Cancelled
+from models.errors import Cancelled, InvalidInput, ModelUnavailable
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 METHODS = ("network", "contacts", "direct_grasp", "random_contacts")
 TASK_KINDS = ("delta_pose", "point_motion", "target_points", "wrench", "force_closure", "joint_motion")
 MATERIALS = ("rigid", "articulated", "cloth", "rope", "plasticine")
-
-
-class PipelineError(Exception):
-    """Base of the pipeline's errors."""
-
-
-class InvalidInput(PipelineError, ValueError):
-    """An input that cannot be processed (the message names the field)."""
-
-
-class ModelUnavailable(PipelineError, RuntimeError):
-    """Method "network" without a predictor (no trained model loaded)."""
 
 
 __all__ = [
@@ -38,7 +30,6 @@ __all__ = [
     "IterationOutput",
     "JointInput",
     "ModelUnavailable",
-    "PipelineError",
     "ProposalOutput",
     "QualityOutput",
     "SynthesisInput",
@@ -100,7 +91,7 @@ class SynthesisInput:
     """
 
     points: np.ndarray
-    hand: Any
+    hand: Hand
     task: TaskInput
     normals: np.ndarray | None = None
     material: str = "rigid"

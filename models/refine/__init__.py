@@ -4,7 +4,7 @@ force closure, articulated objects, masked regions, the direct-grasp baseline, v
 Modules: `wrench` (Eq. 4-5, P^J), `grasp` (G_i, cones), `forces` (Eq. 6-8, native Clarabel + CVXPY reference),
 `closure` (Ferrari–Canny ε), `field` (point-cloud Φ, Φ^R), `state` (iterate, local model), `step` (Eq. 9-16, native
 + CVXPY reference), `refine` (the loop), `strategy` (approach alignment + restarts), `initialise` (§III-B-1),
-`baseline` (direct grasp), `verify` (DESIGN.md §5), `evaluation` (Table II protocol).
+`baseline` (direct grasp), `verify` (docs/evaluation.md), `evaluation` (Table II protocol).
 """
 
 from models.refine.closure import ferrari_canny

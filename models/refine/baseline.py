@@ -1,5 +1,6 @@
 """The paper's direct-grasp baseline: open hand, move towards the object centre, close fingers until contact.
 
+
 From the start pose (fingers at rest = open) the palm translates towards the object centre in 5 mm steps until
 any non-fingertip sphere or fingertip touches the object (Φ ≤ radius, resp. Φ(tip) ≤ 2 mm), or the palm would
 pass the centre. Then every finger "closes": its own joints (the Jacobian columns that move its tip) follow the
@@ -11,7 +12,7 @@ any of its spheres touches; joints stay in their limits. Forces come from Eq. (6
 from __future__ import annotations
 
 import time
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
@@ -20,24 +21,27 @@ from models.refine.contact import surface_contacts
 from models.refine.field import PointCloudField
 from models.refine.state import HandPose, body_spheres
 
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
+
 CONTACT = 2e-3
 
 
-def _spheres_touch(hand: Any, pose: HandPose, cloud: PointCloudField, which: np.ndarray) -> np.ndarray:
+def _spheres_touch(hand: Hand, pose: HandPose, cloud: PointCloudField, which: np.ndarray) -> np.ndarray:
     with torch.no_grad():
         sph = hand.spheres(*pose.tensors(), jacobian=False)[0][0].numpy()
     phi = cloud.signed_distance(sph[which])[0]
     return np.asarray(phi <= np.asarray(hand.sphere_radii)[which])
 
 
-def _fingertips_touch(hand: Any, pose: HandPose, cloud: PointCloudField) -> np.ndarray:
+def _fingertips_touch(hand: Hand, pose: HandPose, cloud: PointCloudField) -> np.ndarray:
     """(m,) each fingertip's real surface is within ``CONTACT`` of the object."""
     found = surface_contacts(hand, pose.tensors(), cloud, jacobian=False)
     return np.asarray(found.gap <= CONTACT)
 
 
 def direct_grasp(
-    hand: Any, cloud: PointCloudField, start: HandPose, centre: np.ndarray, max_steps: int = 200
+    hand: Hand, cloud: PointCloudField, start: HandPose, centre: np.ndarray, max_steps: int = 200
 ) -> tuple[HandPose, float]:
     """Run the baseline from ``start``; returns (final pose, seconds)."""
     t0 = time.perf_counter()

@@ -1,5 +1,6 @@
 """Pose initialisation (paper §III-B-1): finger↔contact assignments, rigid fit, heatmap IoU.
 
+
 For H contacts and m fingertips every injective assignment (m!/(m−H)!) is tried. The hand is kept rigid in its
 rest pose and the palm pose that brings the assigned fingertips onto the contacts is fitted by a weighted Wahba /
 Kabsch problem that also aligns the palm's approach axis with a desired approach direction d. The extra vector
@@ -15,7 +16,7 @@ from __future__ import annotations
 
 import itertools
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
@@ -23,6 +24,9 @@ from scipy.spatial.transform import Rotation
 
 from models.refine.field import PointCloudField
 from models.refine.state import HandPose
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 HEAT_RADIUS = 0.015  # m: object points this close to a fingertip count as touched
 
@@ -46,7 +50,7 @@ class RestGeometry:
     tip_sphere: np.ndarray
 
 
-def rest_geometry(hand: Any) -> RestGeometry:
+def rest_geometry(hand: Hand) -> RestGeometry:
     """Palm-frame rest geometry (palm at the origin, identity orientation, joints at rest)."""
     pos = torch.zeros(1, 3, dtype=torch.float64)
     quat = torch.tensor([[1.0, 0.0, 0.0, 0.0]], dtype=torch.float64)
@@ -54,7 +58,7 @@ def rest_geometry(hand: Any) -> RestGeometry:
     with torch.no_grad():
         tips = hand.fingertips(pos, quat, q)[0].numpy()
         sph = hand.spheres(pos, quat, q, jacobian=False)[0][0].numpy()
-    on_tip = np.asarray(getattr(hand, "sphere_fingertip", np.full(len(sph), -1))) >= 0
+    on_tip = np.asarray(hand.sphere_fingertip) >= 0
     return RestGeometry(tips, sph, on_tip)
 
 
@@ -157,7 +161,7 @@ def back_off(
 
 
 def initialise(
-    hand: Any,
+    hand: Hand,
     field: PointCloudField,
     contacts: np.ndarray,
     contact_normals: np.ndarray,

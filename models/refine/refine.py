@@ -1,5 +1,6 @@
 """The iterative SOCP refinement loop (paper §III-B) with an adaptive trust region.
 
+
 Each iteration: linearise at q (kinematics, Φ, optimal forces f* → r*), solve the step of `models.refine.step`,
 evaluate the true merit ``‖r*‖² + λ Σ Φ(p_i)² + ρ (Σ penetration + Σ self-overlap)`` at q + δq, accept the step
 if it lowers the merit, grow the trust region after good agreement with the model (ratio > 0.75) and shrink it
@@ -13,20 +14,20 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
-from typing import Any
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+from models.errors import Cancelled
 from models.refine.contact import ObjectField
 from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE
 from models.refine.state import HandPose, Linearisation, linearise
 from models.refine.step import StepParams, solve_step, solve_step_cvxpy
 from models.refine.wrench import WrenchTask
 
-
-class Cancelled(Exception):
-    """The caller's ``should_cancel()`` returned true."""
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 
 @dataclass(frozen=True)
@@ -148,7 +149,7 @@ def _converged(lin: Linearisation, cfg: RefineConfig) -> bool:
 
 
 def refine(
-    hand: Any,
+    hand: Hand,
     field_: ObjectField,
     task: WrenchTask,
     start: HandPose,
@@ -266,9 +267,3 @@ def refine(
         history=history,
     )
 
-
-def with_solver(config: RefineConfig, solver: str) -> RefineConfig:
-    """A copy of ``config`` using ``solver`` ("clarabel" or "cvxpy")."""
-    if solver not in ("clarabel", "cvxpy"):
-        raise ValueError(f"solver must be 'clarabel' or 'cvxpy', got {solver!r}")
-    return replace(config, solver=solver)

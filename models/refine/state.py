@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
@@ -11,6 +11,10 @@ import torch
 from models.refine.contact import ObjectField, surface_contacts
 from models.refine.forces import ForceSolution, solve_forces
 from models.refine.wrench import WrenchTask
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
+
 
 
 @dataclass(frozen=True)
@@ -29,7 +33,7 @@ class HandPose:
             torch.as_tensor(self.q, dtype=torch.float64)[None],
         )
 
-    def step(self, hand: Any, delta: np.ndarray) -> HandPose:
+    def step(self, hand: Hand, delta: np.ndarray) -> HandPose:
         """Apply δ (6 + D) with the hand's exponential map (palm rotation in the world frame)."""
         pos, quat, q = hand.apply_delta(*self.tensors(), torch.as_tensor(delta, dtype=torch.float64)[None])
         return HandPose(pos[0].numpy().copy(), quat[0].numpy().copy(), q[0].numpy().copy())
@@ -106,14 +110,14 @@ class Linearisation:
         return np.maximum(0.0, r - self.pair_dist)
 
 
-def body_spheres(hand: Any) -> np.ndarray:
+def body_spheres(hand: Hand) -> np.ndarray:
     """Indices of the collision spheres that guard hand–object contact: those not on a fingertip body (the
     fingertip bodies are guarded by samples of their real surface, which the spheres would hold off it)."""
     return np.flatnonzero(np.asarray(hand.sphere_fingertip) < 0)
 
 
 def linearise(
-    hand: Any,
+    hand: Hand,
     pose: HandPose,
     field: ObjectField,
     task: WrenchTask,

@@ -1,5 +1,6 @@
 """Refinement from a far start: approach alignment and restarts within one iteration budget.
 
+
 The SCP is local. From a start far from the object (the evaluation's: 10-30 cm back, rotated up to 60°) the
 tip-distance term pulls every fingertip onto the nearest face and the wrench residual is then stuck in a local
 minimum. `refine_from_start` therefore
@@ -23,7 +24,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -34,10 +35,13 @@ from models.refine.refine import RefineConfig, RefineResult, refine
 from models.refine.state import HandPose
 from models.refine.wrench import WrenchTask
 
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
+
 MIN_ATTEMPT_ITERATIONS = 10
 
 
-def align(hand: Any, cloud: PointCloudField, start: HandPose, centre: np.ndarray, roll: float = 0.0,
+def align(hand: Hand, cloud: PointCloudField, start: HandPose, centre: np.ndarray, roll: float = 0.0,
           tilt: np.ndarray | None = None) -> HandPose:
     """Step 1 of the module doc, with an extra ``roll`` (rad) about the approach axis and optional tilt rotvec."""
     rest = rest_geometry(hand)
@@ -49,7 +53,7 @@ def align(hand: Any, cloud: PointCloudField, start: HandPose, centre: np.ndarray
 
 
 def _aligned_rotation(
-    hand: Any, start: HandPose, centre: np.ndarray, roll: float = 0.0, tilt: np.ndarray | None = None
+    hand: Hand, start: HandPose, centre: np.ndarray, roll: float = 0.0, tilt: np.ndarray | None = None
 ) -> tuple[Rotation, np.ndarray]:
     """The palm orientation of `align` and its approach direction (3,) (no back-off: the position is not needed)."""
     rest = rest_geometry(hand)
@@ -64,7 +68,7 @@ def _aligned_rotation(
     return Rotation.from_rotvec(d * roll) * turn * rot, d
 
 
-def pinch_roll(hand: Any, cloud: PointCloudField, start: HandPose, centre: np.ndarray) -> float:
+def pinch_roll(hand: Hand, cloud: PointCloudField, start: HandPose, centre: np.ndarray) -> float:
     """Roll (rad) about the aligned approach axis that lays the rest opposition axis along the minor principal axis
     of the object's cloud projected on the plane normal to the approach; 0 for hands without a clear thumb."""
     rest = rest_geometry(hand)
@@ -96,7 +100,7 @@ def _attempts(rng: np.random.Generator, roll0: float = 0.0) -> list[tuple[float,
 
 
 def refine_from_start(
-    hand: Any,
+    hand: Hand,
     cloud: PointCloudField,
     task: WrenchTask,
     start: HandPose,

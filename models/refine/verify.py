@@ -1,4 +1,5 @@
-"""Verification of a hand pose on exact geometry (DESIGN.md §5), shared by refinement and the baseline.
+"""Verification of a hand pose on exact geometry (docs/evaluation.md), shared by refinement and the baseline.
+
 
 Nothing here is judged on the optimiser's proxies (collision spheres, the sampled contact surface's distances):
 
@@ -24,7 +25,7 @@ Nothing here is judged on the optimiser's proxies (collision spheres, the sample
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
@@ -35,6 +36,9 @@ from models.refine.field import PointCloudField
 from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE, ForceSolution, solve_forces
 from models.refine.state import HandPose
 from models.refine.wrench import WrenchTask
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 RESIDUAL_SQ_TOL = 1e-6
 TIP_TOL = 4e-3
@@ -69,13 +73,13 @@ class Verification:
         return not self.failures
 
 
-def torsion_for(hand: Any) -> float:
+def torsion_for(hand: Hand) -> float:
     """Soft-finger coefficient for the closure metric: pads for two-fingertip grippers, point contacts else."""
     return PAD_TORSION if hand.num_fingertips == 2 else 0.0
 
 
 def contact_quality(
-    hand: Any, contacts: np.ndarray, normals: np.ndarray, task: WrenchTask, mu: float | np.ndarray,
+    hand: Hand, contacts: np.ndarray, normals: np.ndarray, task: WrenchTask, mu: float | np.ndarray,
     max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE, epsilon_below: float | None = None,
 ) -> tuple[ForceSolution, float]:
     """The contact-level tests of `verify`: the optimal forces of Eq. (6-8) (their residual is the wrench test)
@@ -90,7 +94,7 @@ def contact_quality(
 
 
 def verify(
-    hand: Any,
+    hand: Hand,
     pose: HandPose,
     cloud: PointCloudField,
     task: WrenchTask,
@@ -165,7 +169,7 @@ def verify(
     )
 
 
-def finger_surface_distances(hand: Any, pose: HandPose, points: np.ndarray) -> np.ndarray:
+def finger_surface_distances(hand: Hand, pose: HandPose, points: np.ndarray) -> np.ndarray:
     """Exact distance (m,) from each contact point (m, 3) to its posed fingertip body's collision mesh."""
     with torch.no_grad():
         poses = hand.link_poses(*pose.tensors())
@@ -178,7 +182,7 @@ def finger_surface_distances(hand: Any, pose: HandPose, points: np.ndarray) -> n
     return out
 
 
-def _proximity(hand: Any, body: str) -> Any:
+def _proximity(hand: Hand, body: str) -> Any:
     import trimesh
 
     cache = hand.__dict__.setdefault("_proximity_cache", {})

@@ -17,8 +17,6 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-DEFAULT_DENSITY = 500.0  # kg/m³ when a request gives none (cancels after normalisation for uniform density)
-
 
 @dataclass(frozen=True)
 class WrenchTask:

@@ -12,11 +12,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import trimesh
 
+from models.errors import HandLoadError
+
 JOINT_TYPES = ("fixed", "revolute", "continuous", "prismatic")
-
-
-class HandLoadError(ValueError):
-    """A robot description is malformed, unsafe or inconsistent (the message says which and where)."""
 
 
 @dataclass

@@ -8,6 +8,9 @@ Conventions (shared with refinement and verification):
   (a point p moves by ω × (p − palm_pos)), 6: the finger joints; :meth:`Hand.apply_delta` applies exactly that
   step (palm_pos += δt, palm_quat = quat(exp(δω)) ⊗ palm_quat, q += δq, no clamping).
 - All methods take torch tensors, batch first; dtype and device follow the inputs (float64 supported).
+
+Why one module: `Hand` is one class, its kinematics, geometry and Jacobians; splitting it would scatter one object's
+invariants.
 """
 
 from __future__ import annotations

@@ -44,7 +44,7 @@ def parse_mjcf(path: str, name: str = "robot") -> RobotDescription:
     return description_from_model(mujoco.MjModel.from_xml_path(path), name)
 
 
-def description_from_model(m, name: str = "robot", *, body_frames: bool = False) -> RobotDescription:  # type: ignore[no-untyped-def]
+def description_from_model(m, name: str = "robot", *, body_frames: bool = False) -> RobotDescription:
     """The body tree of a compiled ``mujoco.MjModel`` as a description (root = world).
 
     Joint ``ref`` values are honoured (a joint at its ``ref`` leaves the body where the file puts it, so joint
@@ -133,7 +133,7 @@ def _at_ref(axis: np.ndarray, ref: float, hinge: bool) -> np.ndarray:
     return T
 
 
-def _geom_mesh(m, g: int) -> trimesh.Trimesh | None:  # type: ignore[no-untyped-def]
+def _geom_mesh(m, g: int) -> trimesh.Trimesh | None:
     import mujoco
 
     t, s = int(m.geom_type[g]), np.asarray(m.geom_size[g], dtype=np.float64)
@@ -154,7 +154,7 @@ def _geom_mesh(m, g: int) -> trimesh.Trimesh | None:  # type: ignore[no-untyped-
     return None
 
 
-def _couplings(m, joints: list[JointSpec]) -> list[str]:  # type: ignore[no-untyped-def]
+def _couplings(m, joints: list[JointSpec]) -> list[str]:
     """Tie coupled joints as mimic joints; returns one line per coupling, honoured or left free.
 
     Honoured: a fixed tendon over two joints with a range of at most ``COUPLING_RANGE`` (c0·a + c1·b ≈ 0 gives

@@ -125,7 +125,7 @@ def sanitised_mjcf(archive: HandArchive, member: str, meshes: ArchiveMeshes) -> 
     return ET.tostring(root, encoding="unicode"), assets, notes
 
 
-def compile_mjcf(archive: HandArchive, member: str, meshes: ArchiveMeshes):  # type: ignore[no-untyped-def]
+def compile_mjcf(archive: HandArchive, member: str, meshes: ArchiveMeshes):
     """``mujoco.MjModel`` of the archive's MJCF ``member`` and the drop notes (see :func:`sanitised_mjcf`).
 
     Raises:

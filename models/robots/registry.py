@@ -42,17 +42,13 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
+from models.errors import UnknownHand
 from models.robots.description import HandLoadError
 from models.robots.hand import Hand
 from models.robots.meshcache import hull_loader
 from models.robots.mjcf import parse_mjcf
 from models.robots.urdf import MAX_URDF_BYTES, MeshLoader, parse_urdf
 from models.robots.user_hand import HandSource, build_user_hand
-
-
-class UnknownHand(KeyError):
-    """No built-in hand of that name (the message lists the names)."""
-
 
 DESCRIPTIONS = Path(__file__).parent / "descriptions"
 

@@ -163,7 +163,7 @@ def _parse(
     return _cut(desc, palm, notes), "urdf", member, meshes, notes, palm, {}
 
 
-def _references(model) -> dict[str, float]:  # type: ignore[no-untyped-def]
+def _references(model) -> dict[str, float]:
     """Joint → its MJCF ``ref`` value (the pose the file draws; the default rest pose of an MJCF hand)."""
     import mujoco
 

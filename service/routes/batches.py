@@ -9,12 +9,11 @@ import time
 from fastapi import APIRouter, Query, Request
 from starlette.responses import Response
 
-from clients.schemas import BatchCreate, BatchItem, BatchPublic, FieldError, JobPublic, JobState
-from service.deps import Authorized, CallerDep, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
-from service.errors import InvalidInput
-from service.negotiation import body_openapi, read_model, respond
+from clients.schemas import BatchItem, BatchPublic, JobPublic, JobState
+from service.deps import Authorized, CallerDep, QueueDep, SettingsDep
+from service.negotiation import body_openapi, respond
 from service.responses import ERRORS, READ_ERRORS
-from service.routes.synthesis import admit
+from service.submission import SubmitterDep
 
 router = APIRouter(prefix="/v1/batches", tags=["batches"], dependencies=[Authorized])
 log = logging.getLogger("service.batches")
@@ -27,32 +26,10 @@ log = logging.getLogger("service.batches")
     openapi_extra=body_openapi("BatchCreate", "`{requests: [SynthesisRequest, ...]}` (1 to 1000 of them)."),
     responses={202: {"model": BatchPublic}, **ERRORS},
 )
-async def create_batch(
-    request: Request,
-    queue: QueueDep,
-    robots: RobotsDep,
-    metrics: MetricsDep,
-    settings: SettingsDep,
-    request_id: RequestIdDep,
-    caller: CallerDep,
-) -> Response:
+async def create_batch(request: Request, submitter: SubmitterDep) -> Response:
     """All or none are enqueued (owned by the caller); 202 with the batch and its first page of job ids."""
-    await admit(queue)
-    body = await read_model(request, BatchCreate, settings.max_body_bytes)
-    if len(body.requests) > settings.max_batch_size:
-        raise InvalidInput(f"requests: {len(body.requests)} requests, at most {settings.max_batch_size} per batch")
-    if queue.capacity is not None and len(body.requests) > queue.capacity:
-        raise InvalidInput(
-            f"requests: {len(body.requests)} requests can never fit: the queue holds at most {queue.capacity} jobs"
-            " (MANI_MAX_QUEUE); split the batch",
-            detail=[FieldError(field="requests", problem=f"more than the queue's capacity of {queue.capacity}")],
-        )
-    for index, item in enumerate(body.requests):
-        await robots.check(item, caller.tenant, field=f"requests.{index}.robot.name")
-    batch_id = await queue.create_batch(body.requests, request_id=request_id, owner=caller.tenant)
-    log.info("batch submitted", extra={"batch_id": batch_id, "jobs": len(body.requests), "request_id": request_id})
-    metrics.batch_size.observe(len(body.requests))
-    metrics.jobs_submitted.labels(kind="batch").inc(len(body.requests))
+    _, batch_id = await submitter.batch()
+    queue, caller = submitter.queue, submitter.caller
     job_ids = await queue.batch_job_ids(batch_id, owner=caller.tenant)
     limit = min(100, len(job_ids))
     items = [BatchItem(index=i, job_id=j, state=JobState.QUEUED) for i, j in enumerate(job_ids[:limit])]

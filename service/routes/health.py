@@ -2,17 +2,20 @@
 
 from __future__ import annotations
 
+from importlib.metadata import version as package_version
+
 from fastapi import APIRouter, Request
 from prometheus_client import CONTENT_TYPE_LATEST
 from starlette.responses import Response
 
-from clients.schemas import ReadyPublic
+from clients.schemas import HealthPublic, ReadyPublic
 from service.deps import Authorized, MetricsDep, QueueDep
 from service.negotiation import respond
-from service.responses import HealthPublic, errors
+from service.responses import errors
 
 router = APIRouter(tags=["health"], dependencies=[Authorized])
-VERSION = "0.1.0"
+VERSION = package_version("manifoundation")
+"""The installed distribution's version (pyproject.toml is its one source)."""
 
 
 @router.get("/healthz", summary="Liveness", responses={200: {"model": HealthPublic}})

@@ -9,7 +9,7 @@ from collections.abc import AsyncIterator
 from fastapi import APIRouter, Query, Request
 from starlette.responses import Response, StreamingResponse
 
-from clients.schemas import JobPublic, WireModel
+from clients.schemas import JobList, JobPublic
 from service.deps import Authorized, CallerDep, MetricsDep, QueueDep, SettingsDep
 from service.negotiation import respond
 from service.responses import READ_ERRORS
@@ -18,12 +18,6 @@ router = APIRouter(prefix="/v1/jobs", tags=["jobs"], dependencies=[Authorized])
 
 SSE_KEEPALIVE_S = 15.0
 JOB_ID = r"^[A-Za-z0-9_\-:.]{1,128}$"
-
-
-class JobList(WireModel):
-    """Answer of ``GET /v1/jobs``: the most recent jobs, newest first, without results (service-local)."""
-
-    jobs: list[JobPublic]
 
 
 @router.get("", summary="Recent jobs, newest first", responses={200: {"model": JobList}, **READ_ERRORS})

@@ -16,12 +16,11 @@ from fastapi import APIRouter, Request
 from fastapi.openapi.docs import get_swagger_ui_html
 from starlette.responses import FileResponse, HTMLResponse, Response
 
-from service.dashboard import DashboardPublic
+from clients.schemas import DashboardPublic, ScenePublic
 from service.deps import Authorized, CallerDep, HistoryDep, QueueDep, SettingsDep
 from service.errors import NotFound
 from service.negotiation import respond
 from service.responses import READ_ERRORS
-from service.scenes import ScenePublic
 
 STATIC = Path(__file__).resolve().parent.parent / "static"
 SWAGGER_FILES = frozenset({"swagger-ui-bundle.js", "swagger-ui.css", "favicon-32x32.png"})

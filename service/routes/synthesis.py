@@ -9,71 +9,32 @@ import time
 from fastapi import APIRouter, Request
 from starlette.responses import Response
 
-from clients.schemas import ErrorBody, JobCreated, JobPublic, SynthesisRequest, SynthesisResult
-from service.deps import Authorized, CallerDep, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
+from clients.schemas import ErrorBody, ErrorType, JobCreated, JobPublic, JobState, SynthesisResult
+from service.deps import Authorized, QueueDep
 from service.errors import Unavailable
-from service.negotiation import body_openapi, read_model, respond
+from service.negotiation import body_openapi, respond
 from service.responses import ERRORS
-from workers.queue import QueueFull
+from service.submission import SubmitterDep
 
 router = APIRouter(prefix="/v1", tags=["synthesis"], dependencies=[Authorized])
 log = logging.getLogger("service.synthesis")
 
 # A failed job's error type → the status of a synchronous answer (anything else: 500, the worker's fault).
-JOB_ERROR_STATUS = {
-    "ValidationError": 422,
-    "InvalidInput": 422,
-    "InvalidPointCloud": 422,
-    "InfeasibleTask": 422,
-    "RobotInvalid": 422,
-    "HandLoadError": 422,
-    "UnknownHand": 404,
-    "UnknownRobot": 404,
-    "NotFound": 404,
-    "Cancelled": 409,
-    "DeadlineExceeded": 504,
-    "ResultExpired": 410,
-    "QueueShutdown": 503,
-    "ModelUnavailable": 503,
+
+
+_WITHOUT_ERROR = {
+    JobState.CANCELLED: ErrorType.CANCELLED,
+    JobState.EXPIRED: ErrorType.DEADLINE_EXCEEDED,
+    JobState.FAILED: ErrorType.INTERNAL_ERROR,
 }
-
-
-async def admit(queue: QueueDep, count: int = 1) -> None:
-    """429 `QueueFull` before reading a body the queue has no room for (`submit` still decides, atomically)."""
-    if not await queue.room(count):
-        raise QueueFull("the queue is full; retry later", retry_after=1.0)
+"""The error a terminal job without an error body answers with (no backend writes one; kept for safety)."""
 
 
 def job_created(request: Request, job_id: str, job: JobPublic | None = None) -> Response:
     """202 with the job's URL (in the body and in Location)."""
     url = str(request.url_for("get_job", job_id=job_id))
-    body = JobCreated(id=job_id, state=job.state if job else "queued", url=url)  # type: ignore[arg-type]
+    body = JobCreated(id=job_id, state=job.state if job else "queued", url=url)
     return respond(request, body, status=202, headers={"Location": url, "X-Job-ID": job_id})
-
-
-async def enqueue(
-    request: Request,
-    queue: QueueDep,
-    robots: RobotsDep,
-    metrics: MetricsDep,
-    request_id: str,
-    kind: str,
-    settings: SettingsDep,
-    deadline_from_timeout: bool,
-    caller: CallerDep,
-) -> tuple[SynthesisRequest, str]:
-    """Refuse at once when the queue is full (before the body is read), read + validate the body, check the
-    hand, submit (owned by the caller); returns the request and its id."""
-    await admit(queue)
-    body = await read_model(request, SynthesisRequest, settings.max_body_bytes)
-    await robots.check(body, caller.tenant)
-    deadline = time.time() + body.options.timeout if deadline_from_timeout else None
-    (job_id,) = await queue.submit([body], deadline=deadline, request_id=request_id, owner=caller.tenant)
-    request.state.job_id = job_id
-    request.app.state.scenes.put(job_id, body)
-    metrics.jobs_submitted.labels(kind=kind).inc()
-    log.info("job submitted", extra={"job_id": job_id, "kind": kind, "request_id": request_id})
-    return body, job_id
 
 
 @router.post(
@@ -82,19 +43,12 @@ async def enqueue(
     openapi_extra=body_openapi("SynthesisRequest"),
     responses={200: {"model": SynthesisResult}, 202: {"model": JobCreated}, **ERRORS},
 )
-async def synthesize(
-    request: Request,
-    queue: QueueDep,
-    robots: RobotsDep,
-    metrics: MetricsDep,
-    settings: SettingsDep,
-    request_id: RequestIdDep,
-    caller: CallerDep,
-) -> Response:
+async def synthesize(request: Request, submitter: SubmitterDep) -> Response:
     """Enqueue, wait up to ``options.timeout`` (capped by the server's ``sync_wait_max``): 200 with the result
     when it finishes in time, else 202 with the job's URL. The job's deadline is ``options.timeout`` from now."""
-    body, job_id = await enqueue(request, queue, robots, metrics, request_id, "sync", settings, True, caller)
-    wait = min(body.options.timeout, settings.sync_wait_max)
+    body, job_id = await submitter.one("sync", deadline_from_timeout=True)
+    queue, metrics = submitter.queue, submitter.metrics
+    wait = min(body.options.timeout, submitter.settings.sync_wait_max)
     job = await wait_for(request, queue, job_id, wait)
     if not job.state.terminal:
         return job_created(request, job_id, job)
@@ -102,8 +56,8 @@ async def synthesize(
     headers = {"X-Job-ID": job_id}
     if job.result is not None:
         return respond(request, job.result, headers=headers)
-    error = job.error or ErrorBody(error=f"job ended {job.state.value}", type=job.state.value.capitalize())
-    status = JOB_ERROR_STATUS.get(error.type, 500)
+    error = job.error or ErrorBody.of(_WITHOUT_ERROR[job.state], f"job ended {job.state.value}")
+    status = error.status
     if status >= 500:
         log.warning("job failed", extra={"job_id": job_id, "type": error.type, "error": error.error})
     return respond(request, error, status=status, headers=headers)
@@ -129,15 +83,7 @@ async def wait_for(request: Request, queue: QueueDep, job_id: str, timeout: floa
     openapi_extra=body_openapi("SynthesisRequest"),
     responses={202: {"model": JobCreated}, **ERRORS},
 )
-async def create_job(
-    request: Request,
-    queue: QueueDep,
-    robots: RobotsDep,
-    metrics: MetricsDep,
-    settings: SettingsDep,
-    request_id: RequestIdDep,
-    caller: CallerDep,
-) -> Response:
+async def create_job(request: Request, submitter: SubmitterDep) -> Response:
     """202 with the job's URL at once (no deadline: an asynchronous caller comes back for it)."""
-    _, job_id = await enqueue(request, queue, robots, metrics, request_id, "async", settings, False, caller)
+    _, job_id = await submitter.one("async", deadline_from_timeout=False)
     return job_created(request, job_id)

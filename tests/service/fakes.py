@@ -20,6 +20,7 @@ from clients.schemas import (
     JobState,
     Proposal,
     Quality,
+    QueueStats,
     RobotPublic,
     RobotRegister,
     Stage,
@@ -27,7 +28,7 @@ from clients.schemas import (
     SynthesisResult,
     WorkerPublic,
 )
-from workers.queue import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
+from workers.queue import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
 
 HAND = RobotPublic(
     name="fake_hand",

@@ -95,9 +95,9 @@ def test_failed_job_keeps_the_error_shape() -> None:
     queue = FakeQueue(hold=True)
     with make_client(queue, sync_wait_max=0.3) as client:
         job_id = client.post("/v1/jobs", json=request_body()).json()["id"]
-        queue.finish(job_id, ErrorBody(error="object.points: too flat", type="InvalidPointCloud"))
+        queue.finish(job_id, ErrorBody(error="object.points: too flat", type="ValidationError"))
         job = JobPublic.model_validate(client.get(f"/v1/jobs/{job_id}").json())
-        assert job.state == "failed" and job.error is not None and job.error.type == "InvalidPointCloud"
+        assert job.state == "failed" and job.error is not None and job.error.type == "ValidationError"
 
 
 def test_every_submit_route_hands_the_request_id_to_the_queue(client: TestClient, queue: FakeQueue) -> None:
@@ -134,7 +134,7 @@ def test_robots(client: TestClient) -> None:
     assert created.status_code == 201 and created.json()["name"] == "my_hand"
     assert client.get("/v1/robots/my_hand").status_code == 200
     bad = client.post("/v1/robots", json={"name": "bad_hand", "urdf": "<nope/>", "fingertips": ["tip"]})
-    assert assert_error(bad, 422, "ValidationError").detail[0].field == "urdf"  # type: ignore[index]
+    assert assert_error(bad, 422, "RobotInvalid").detail[0].field == "urdf"  # type: ignore[index]
     taken = client.post("/v1/robots", json={"name": "fake_hand", "urdf": urdf, "fingertips": ["tip"]})
     assert_error(taken, 409, "Conflict")
 

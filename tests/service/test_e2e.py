@@ -151,7 +151,7 @@ def test_robots(service: Service) -> None:
     assert created.status_code == 201, created.text
     assert service.http.get("/v1/robots/e2e_hand").status_code == 200
     bad = service.http.post("/v1/robots", json={"name": "e2e_bad", "urdf": "<robot", "fingertips": ["tip"]})
-    error_of(bad, 422, "ValidationError")
+    error_of(bad, 422, "RobotInvalid")
 
 
 def test_errors(service: Service) -> None:

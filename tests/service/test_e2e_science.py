@@ -6,7 +6,6 @@ The embedded run is in the default suite; the Redis run of the same request is `
 
 from __future__ import annotations
 
-import importlib.util
 import shutil
 import time
 from collections.abc import Iterator
@@ -29,8 +28,6 @@ HAND = "allegro"
 
 @pytest.fixture(scope="module", params=["embedded", pytest.param("redis", marks=pytest.mark.slow)])
 def base(request: pytest.FixtureRequest) -> Iterator[str]:
-    if importlib.util.find_spec("workers.models_pipeline") is None:
-        pytest.skip("workers.models_pipeline (the science pipeline) is not part of this checkout yet")
     with (
         start_queue_and_workers(request, pipeline=PIPELINE, hands=[HAND]) as queue,
         serving(create_app(Settings(sync_wait_max=120), queue=queue)) as url,
@@ -101,3 +98,37 @@ def test_the_quickstart_grasp_touches_the_box_with_the_real_fingertips(base: str
         assert "hand (collision meshes)" in dump_dom(f"{base}/view/{job_id}", budget_ms=4000)
         png = screenshot(f"{base}/view/{job_id}", f"viewer_{HAND}_box.png", budget_ms=4000)
         assert png.stat().st_size > 10_000
+
+
+def test_the_shipped_network_and_refinement_through_the_api(base: str) -> None:
+    """The product's main path, `method=network`: the shipped weights propose the contacts, the refinement poses
+    the hand, verification judges it. Whatever the network proposes, the answer names its source and the model
+    that made it, and a proposal called successful touches the object with the real fingertips."""
+    from pathlib import Path
+
+    import numpy as np
+    import trimesh
+
+    ready = httpx.get(f"{base}/readyz", timeout=10).json()
+    assert ready["model_loaded"], ready  # the shipped weights are in the repository: the worker must load them
+    data = np.load(Path(__file__).resolve().parents[2] / "examples" / "data" / "box.npz")
+    body = {
+        "object": {"points": data["points"].tolist(), "normals": data["normals"].tolist(),
+                   "properties": {"friction": 0.8}},
+        "task": {"kind": "delta_pose", "translation": [0.0, 0.0, 0.05], "rotation": [1.0, 0.0, 0.0, 0.0]},
+        "robot": {"name": HAND},
+        "options": {"method": "network", "num_proposals": 2, "timeout": 120, "return_hand_mesh": True,
+                    "return_heatmap": True},
+    }  # fmt: skip
+    response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=180)
+    assert response.status_code == 200, response.text[:2000]
+    result = SynthesisResult.model_validate(response.json())
+    assert result.model_version != "none" and result.heatmap is not None and len(result.heatmap) == len(data["points"])
+    assert {p.contact_source for p in result.proposals} <= {"network", "random_fallback"}
+    assert {"network", "refinement", "verification"} <= result.timings.keys()
+    for proposal in result.proposals:
+        if proposal.quality.success:
+            assert proposal.hand_mesh is not None
+            hand = trimesh.Trimesh(proposal.hand_mesh.vertices, proposal.hand_mesh.faces, process=False)
+            _, gap, _ = trimesh.proximity.closest_point(hand, proposal.contact_points)
+            assert np.all(gap < 5e-3), gap

@@ -1,4 +1,4 @@
-"""The API process never imports torch or the science (DESIGN.md §4)."""
+"""The API process never imports torch or the science (docs/layering.md)."""
 
 from __future__ import annotations
 

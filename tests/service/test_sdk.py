@@ -41,7 +41,7 @@ def test_sdk_round_trips(served: tuple[str, FakeQueue]) -> None:
         queue.hold = True
         try:
             job = client.submit(obj, "force_closure", "fake_hand", method="direct_grasp")
-            queue.finish(job.id, ErrorBody(error="boom", type="InvalidInput"))
+            queue.finish(job.id, ErrorBody(error="boom", type="ValidationError"))
             assert job.status().state == "failed"
         finally:
             queue.hold = False
@@ -55,7 +55,7 @@ def test_sdk_sees_job_failures(served: tuple[str, FakeQueue]) -> None:
     original = queue.finish
 
     def failing(job_id: str, error: ErrorBody | None = None) -> None:
-        original(job_id, error or ErrorBody(error="object.points: degenerate", type="InvalidInput"))
+        original(job_id, error or ErrorBody(error="object.points: degenerate", type="ValidationError"))
 
     queue.finish = failing  # type: ignore[method-assign]
     try:

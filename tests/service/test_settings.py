@@ -20,12 +20,12 @@ def test_env(monkeypatch: pytest.MonkeyPatch) -> None:
     assert settings.api_keys == ["key-one-123", "key-two-456"] and settings.auth_enabled
     assert settings.port == 9001 and settings.log_level == "DEBUG"
     queue = settings.queue_settings()
-    assert queue.redis_url == "redis://localhost:6379/3" and queue.concurrency == settings.workers
+    assert queue.redis_url == "redis://localhost:6379/3" and queue.concurrency == 2  # one knob, one default
 
 
 @pytest.mark.parametrize(
     "field, value",
-    [("port", 70000), ("workers", 0), ("api_keys", "short"), ("sync_wait_max", 0), ("log_level", "LOUD")],
+    [("port", 70000), ("api_keys", "short"), ("sync_wait_max", 0), ("log_level", "LOUD")],
 )
 def test_bad_values_fail_fast(field: str, value: object) -> None:
     with pytest.raises(ValidationError):
@@ -38,5 +38,6 @@ def test_cli_overrides_env(monkeypatch: pytest.MonkeyPatch) -> None:
     register(parser.add_subparsers())
     args = parser.parse_args(["serve", "--port", "9100", "--workers", "3", "--redis", "redis://h:1/0"])
     settings = settings_from(args)
-    assert (settings.port, settings.workers, settings.redis_url) == (9100, 3, "redis://h:1/0")
+    queue = settings.queue_settings()
+    assert (settings.port, queue.concurrency, queue.redis_url) == (9100, 3, "redis://h:1/0")
     assert args.func.__name__ == "serve"

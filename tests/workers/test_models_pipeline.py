@@ -89,7 +89,7 @@ def test_shipped_model_refuses_materials_it_was_not_trained_on() -> None:
     })  # fmt: skip
     [outcome] = pipeline.run([JobInput(id="cloth", request=cloth)], lambda *a: None, lambda job_id: False)
     assert "cloth" not in trained_on
-    assert getattr(outcome, "type", None) == "InvalidInput"
+    assert getattr(outcome, "type", None) == "ValidationError"
     assert "object.material: 'cloth' is not supported" in outcome.error  # type: ignore[union-attr]
     # The baseline needs no network, so the same object is served with it.
     [baseline] = pipeline.run(
@@ -98,3 +98,15 @@ def test_shipped_model_refuses_materials_it_was_not_trained_on() -> None:
         lambda *a: None, lambda job_id: False,
     )  # fmt: skip
     assert getattr(baseline, "proposals", None)
+
+
+def test_an_unknown_hand_is_a_404_naming_the_field() -> None:
+    from clients.schemas import ErrorBody, ErrorType
+    from workers.models_pipeline import ModelsPipeline
+    from workers.pipeline import JobInput
+
+    pipeline = ModelsPipeline(hands=["panda_gripper"], weights_dir=NO_WEIGHTS)
+    request = make_request("contacts", robot={"name": "no_such_hand"}, contacts=CONTACTS)
+    [outcome] = pipeline.run([JobInput(id="u", request=request)], lambda *a: None, lambda job_id: False)
+    assert isinstance(outcome, ErrorBody) and outcome.kind is ErrorType.UNKNOWN_HAND and outcome.status == 404
+    assert outcome.error.startswith("robot.name:")

@@ -23,7 +23,6 @@ from workers.queue.base import (
     JobQueue,
     QueueError,
     QueueFull,
-    QueueStats,
     QueueUnavailable,
     RobotInvalid,
 )
@@ -64,7 +63,6 @@ __all__ = [
     "QueueError",
     "QueueFull",
     "QueueSettings",
-    "QueueStats",
     "QueueUnavailable",
     "RobotInvalid",
     "create_queue",

@@ -1,6 +1,6 @@
 """The queue interface that the service talks to and both backends implement.
 
-Two backends (DESIGN.md §3): embedded (in-process queue feeding spawned worker processes; the default, not
+Two backends (docs/architecture.md): embedded (in-process queue feeding spawned worker processes; the default, not
 durable) and Redis Streams (a consumer group; durable as far as Redis's own persistence goes, scale-out). The
 service only ever sees `JobQueue`. Everything here is torch-free.
 
@@ -15,16 +15,13 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import AsyncIterator
 
-from pydantic import Field
-
 from clients.schemas import (
     DeadLetter,
     JobPublic,
-    JobState,
+    QueueStats,
     RobotPublic,
     RobotRegister,
     SynthesisRequest,
-    WireModel,
     WorkerPublic,
 )
 
@@ -51,18 +48,6 @@ class RobotInvalid(QueueError):
 
 class QueueUnavailable(QueueError):
     """The backend cannot be reached (e.g. Redis down) or is shutting down."""
-
-
-class QueueStats(WireModel):
-    """Counters for the dashboard and `/metrics`."""
-
-    depth: int = Field(..., description="Jobs waiting to be picked up.")
-    running: int
-    by_state: dict[JobState, int]
-    completed_total: int
-    failed_total: int
-    dead_letters: int
-    workers: int
 
 
 class JobQueue(ABC):

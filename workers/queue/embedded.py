@@ -7,6 +7,8 @@ over one duplex pipe each (`workers.child`): it dispatches up to ``batch_size`` 
 takes progress and outcomes back, and notices a dead worker (EOF): its jobs go back to the queue until they have
 been delivered ``max_deliveries`` times, then to the dead letters with the error; a replacement is spawned. A job
 given back that way runs alone (a micro-batch of one), so a job that kills its worker fails no batch-mate.
+
+This module is the queue's asyncio API; the state and the pump thread are `workers.queue.embedded_pump`.
 """
 
 from __future__ import annotations
@@ -14,64 +16,40 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import multiprocessing as mp
-import os
-import socket
-import subprocess
-import sys
 import threading
 import time
-from collections import OrderedDict, deque
-from multiprocessing.connection import Connection, wait
 from typing import Any
 
 from clients.codec import pack, unpack
 from clients.schemas import (
     DeadLetter,
-    ErrorBody,
-    JobProgress,
     JobPublic,
     JobState,
+    QueueStats,
     RobotPublic,
     RobotRegister,
-    Stage,
     SynthesisRequest,
     SynthesisResult,
     WorkerPublic,
 )
-from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
-from workers.queue.embedded_parts import ChildProcess, JobRecord, WorkerHandle, settle
-from workers.queue.records import new_id, result_expired_error, scoped_robot, state_for_error, worker_lost_error
-from workers.settings import QueueSettings
+from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
+from workers.queue.embedded_parts import JobRecord, WorkerHandle
+from workers.queue.embedded_pump import EmbeddedPump
+from workers.queue.records import (
+    cancelled_error,
+    new_id,
+    result_expired_error,
+    scoped_robot,
+    shutdown_error,
+)
 
 log = logging.getLogger("workers.queue.embedded")
-_TOMBSTONES_PER_RESULT = 10
 
 
-class EmbeddedQueue(JobQueue):
+class EmbeddedQueue(EmbeddedPump, JobQueue):
     """In-process queue + ``concurrency`` spawned worker processes (see module doc)."""
 
     backend = "embedded"
-
-    def __init__(self, settings: QueueSettings | None = None, **overrides: Any) -> None:
-        base = settings or QueueSettings()
-        self.settings = base.model_copy(update=overrides) if overrides else base
-        self._lock = threading.Lock()
-        self._jobs: dict[str, JobRecord] = {}
-        self._pending: deque[str] = deque()
-        self._finished: OrderedDict[str, None] = OrderedDict()
-        self._tombstones: OrderedDict[str, tuple[float, str | None, str | None]] = OrderedDict()
-        self._batches: OrderedDict[str, tuple[str | None, list[str]]] = OrderedDict()
-        self._waiters: dict[str, list[tuple[asyncio.AbstractEventLoop, asyncio.Future[None]]]] = {}
-        self._workers: dict[str, WorkerHandle] = {}
-        self._robots: dict[str, RobotPublic] = {}  # by `scoped_robot(owner, name)`; built-ins by name
-        self._registered: dict[str, RobotRegister] = {}
-        self._robot_replies: dict[str, tuple[asyncio.AbstractEventLoop, asyncio.Future[dict[str, Any]]]] = {}
-        self._dead: deque[DeadLetter] = deque(maxlen=1000)
-        self._totals = {"completed": 0, "failed": 0}
-        self._wake_r, self._wake_w = mp.Pipe(duplex=False)
-        self._pump: threading.Thread | None = None
-        self._running = False
 
     # ---- lifecycle -------------------------------------------------------------------------------------------
     async def start(self) -> None:
@@ -94,7 +72,7 @@ class EmbeddedQueue(JobQueue):
         with self._lock:
             workers = list(self._workers.values())
             for job_id in list(self._pending):
-                self._finish(self._jobs[job_id], error=ErrorBody(error="queue shut down", type="QueueShutdown"))
+                self._finish(self._jobs[job_id], error=shutdown_error())
         for worker in workers:
             with contextlib.suppress(OSError):
                 worker.send({"op": "stop"})
@@ -102,31 +80,6 @@ class EmbeddedQueue(JobQueue):
         await asyncio.get_running_loop().run_in_executor(None, self._join, workers)
         if self._pump is not None:
             await asyncio.get_running_loop().run_in_executor(None, self._pump.join, 10)
-
-    def _join(self, workers: list[WorkerHandle]) -> None:
-        deadline = time.monotonic() + 10
-        for worker in workers:
-            worker.process.join(max(0.0, deadline - time.monotonic()))
-            if worker.process.is_alive():
-                worker.process.terminate()
-                worker.process.join(2)
-                worker.process.kill()
-
-    def _spawn(self) -> WorkerHandle:
-        worker_id = new_id()[:12]
-        parent, child = socket.socketpair()
-        process = subprocess.Popen(
-            [sys.executable, "-m", "workers.child", worker_id, str(child.fileno())],
-            pass_fds=(child.fileno(),),
-            stdin=subprocess.PIPE,
-            env=os.environ | {"MANI_WORKER_SETTINGS": self.settings.model_dump_json()},
-        )
-        child.close()
-        assert process.stdin is not None
-        process.stdin.close()
-        worker = WorkerHandle(worker_id, ChildProcess(process), Connection(parent.detach()))
-        self._workers[worker_id] = worker
-        return worker
 
     async def ping(self) -> bool:
         return self._running
@@ -163,8 +116,15 @@ class EmbeddedQueue(JobQueue):
         with self._lock:
             job = self._jobs.get(job_id)
             if job is not None and (owner is None or job.owner == owner):
-                return job.public(with_result)
-            gone = None if job is not None else self._tombstones.get(job_id)
+                public, raw = job.public(), job.result if with_result else None
+                gone = None
+            else:
+                public, raw = None, None
+                gone = None if job is not None else self._tombstones.get(job_id)
+        if public is not None:
+            if raw is not None:  # the one validation of a result on the service side, outside the lock
+                public.result = SynthesisResult.model_validate(unpack(raw))
+            return public
         if gone is None or (owner is not None and gone[2] != owner):
             raise JobNotFound(f"no job {job_id}")
         created, batch, _ = gone
@@ -200,7 +160,7 @@ class EmbeddedQueue(JobQueue):
         with self._lock:
             job = self._jobs.get(job_id)
             if job is not None and job.state is JobState.QUEUED:
-                self._finish(job, error=ErrorBody(error="job cancelled", type="Cancelled"))
+                self._finish(job, error=cancelled_error())
             elif job is not None and job.state is JobState.RUNNING and not job.cancel:
                 job.cancel = True
                 target = self._workers.get(job.worker or "")
@@ -216,7 +176,7 @@ class EmbeddedQueue(JobQueue):
             out: list[JobPublic] = []
             for job in reversed(self._jobs.values()):
                 if owner is None or job.owner == owner:
-                    out.append(job.public(False))
+                    out.append(job.public())
                     if len(out) == limit:
                         break
             return out
@@ -285,11 +245,12 @@ class EmbeddedQueue(JobQueue):
             raise QueueUnavailable("no worker is running to validate the robot")
         worker = min(ready, key=lambda w: len(w.inflight))
         rid, loop = new_id(), asyncio.get_running_loop()
+        payload = pack(robot.model_dump(mode="python", exclude_none=True))
         future: asyncio.Future[dict[str, Any]] = loop.create_future()
         with self._lock:
             self._robot_replies[rid] = (loop, future)
         try:
-            worker.send({"op": "robot", "rid": rid, "robot": robot.model_dump(mode="python", exclude_none=True)})
+            worker.send({"op": "robot", "rid": rid}, payload)
             reply = await asyncio.wait_for(future, timeout)
         except TimeoutError as exc:
             raise QueueUnavailable(f"no worker validated the robot within {timeout} s") from exc
@@ -301,7 +262,7 @@ class EmbeddedQueue(JobQueue):
         public = RobotPublic.model_validate(reply["robot"])
         key = scoped_robot(owner, robot.name)
         with self._lock:
-            self._registered[key] = robot
+            self._registered[key] = payload
             self._robots[key] = public
         return public
 
@@ -314,164 +275,9 @@ class EmbeddedQueue(JobQueue):
             del self._robots[key]
             self._registered.pop(key, None)
 
-    # ---- pump thread -----------------------------------------------------------------------------------------
-    def _wake(self) -> None:
-        with contextlib.suppress(OSError):
-            self._wake_w.send_bytes(b"")
 
-    def _pump_loop(self) -> None:
-        last_sweep = 0.0
-        while self._running or any(w.inflight or w.process.is_alive() for w in list(self._workers.values())):
-            conns: list[Any] = [w.conn for w in list(self._workers.values())]
-            for conn in wait([*conns, self._wake_r], timeout=0.1):
-                if conn is self._wake_r:
-                    while self._wake_r.poll():
-                        self._wake_r.recv_bytes()
-                    continue
-                self._receive(conn)
-            if time.monotonic() - last_sweep > 0.05:
-                last_sweep = time.monotonic()
-                self._sweep()
-            if self._running:
-                self._dispatch()
-            elif not any(w.process.is_alive() for w in list(self._workers.values())):
-                break
 
-    def _receive(self, conn: Any) -> None:
-        worker = next((w for w in list(self._workers.values()) if w.conn is conn), None)
-        if worker is None:
-            return
-        try:
-            msg = unpack(conn.recv_bytes())
-        except (EOFError, OSError):
-            worker.process.join(1)
-            self._lost(worker, f"worker process exited (code {worker.process.exitcode}) while running the job")
-            return
-        op = msg["op"]
-        with self._lock:
-            if op == "hello":
-                worker.info = WorkerPublic.model_validate(msg["worker"])
-                for raw in msg["robots"]:
-                    robot = RobotPublic.model_validate(raw)
-                    self._robots.setdefault(robot.name, robot)
-            elif op == "heartbeat" and worker.info is not None:
-                worker.info.last_heartbeat = float(msg["t"])
-            elif op == "progress" and (job := self._jobs.get(msg["id"])) and job.state is JobState.RUNNING:
-                job.progress = JobProgress.model_validate(msg["p"])
-            elif op == "done":
-                worker.inflight.discard(msg["id"])
-                worker.jobs_done += 1
-                job = self._jobs.get(msg["id"])
-                if job is not None and job.state is JobState.RUNNING:
-                    job.timings.update(msg.get("timings", {}))
-                    if "result" in msg:
-                        self._finish(job, result=SynthesisResult.model_validate(msg["result"]))
-                    else:
-                        self._finish(job, error=ErrorBody.model_validate(msg["error"]))
-            elif op == "robot" and (reply := self._robot_replies.get(msg["rid"])):
-                loop, future = reply
-                loop.call_soon_threadsafe(settle, future, msg)
 
-    def _lost(self, worker: WorkerHandle, detail: str) -> None:
-        with self._lock:
-            self._workers.pop(worker.id, None)
-            max_deliveries = self.settings.max_deliveries
-            for job_id in sorted(worker.inflight, key=lambda i: self._jobs[i].created_at, reverse=True):
-                job = self._jobs.get(job_id)
-                if job is None or job.state.terminal:
-                    continue
-                error = worker_lost_error(detail, job.deliveries, max_deliveries)
-                if job.cancel:
-                    self._finish(job, error=ErrorBody(error="job cancelled", type="Cancelled"))
-                elif not self._running:
-                    self._finish(job, error=ErrorBody(error="queue shut down while the job ran", type="QueueShutdown"))
-                elif job.deliveries >= max_deliveries:
-                    self._finish(job, error=error)
-                    self._dead.append(DeadLetter(job_id=job.id, deliveries=job.deliveries, error=error,
-                                                 failed_at=time.time()))  # fmt: skip
-                    log.warning("job dead-lettered", extra={"job_id": job.id, "request_id": job.request_id,
-                                                           "deliveries": job.deliveries})  # fmt: skip
-                else:
-                    job.state, job.progress, job.error = JobState.QUEUED, JobProgress(), error
-                    self._pending.appendleft(job.id)
-                    log.warning("job re-queued after worker loss",
-                                extra={"job_id": job.id, "request_id": job.request_id})  # fmt: skip
-            worker.inflight.clear()
-            if self._running and worker.info is not None:
-                self._spawn()
-            elif self._running:
-                log.error("worker %s exited before it was ready (code %s); not respawned",
-                          worker.id, worker.process.exitcode)  # fmt: skip
-        worker.conn.close()
 
-    def _dispatch(self) -> None:
-        sends: list[tuple[WorkerHandle, list[dict[str, Any]]]] = []
-        with self._lock:
-            idle = [w for w in self._workers.values() if w.info is not None and not w.inflight]
-            now = time.time()
-            for worker in idle:
-                batch: list[dict[str, Any]] = []
-                while self._pending and len(batch) < self.settings.batch_size:
-                    job = self._jobs.get(self._pending[0])
-                    if job is None or job.state is not JobState.QUEUED:
-                        self._pending.popleft()
-                        continue
-                    if job.deliveries and batch:
-                        break  # a job whose worker died runs alone: a poison job takes no batch-mate down
-                    self._pending.popleft()
-                    job.state, job.worker, job.deliveries = JobState.RUNNING, worker.id, job.deliveries + 1
-                    job.started_at = now
-                    job.timings["queue"] = now - job.created_at
-                    robot = self._registered.get(scoped_robot(job.owner, job.robot or ""))
-                    batch.append({
-                        "id": job.id, "request": job.payload, "deadline": job.deadline, "request_id": job.request_id,
-                        "robot": robot.model_dump(mode="python", exclude_none=True) if robot else None,
-                    })  # fmt: skip
-                    worker.inflight.add(job.id)
-                    if job.deliveries > 1:
-                        break
-                if not batch:
-                    break
-                sends.append((worker, batch))
-        for worker, batch in sends:
-            with contextlib.suppress(OSError):  # on failure, the EOF on its pipe re-queues the jobs
-                worker.send({"op": "run", "jobs": batch})
 
-    def _sweep(self) -> None:
-        now = time.time()
-        with self._lock:
-            for job_id in list(self._pending):
-                job = self._jobs.get(job_id)
-                if job is not None and job.deadline is not None and job.deadline <= now and not job.state.terminal:
-                    self._finish(job, error=ErrorBody(error="job deadline passed before it started",
-                                                      type="DeadlineExceeded"))  # fmt: skip
-            ttl = self.settings.result_ttl
-            while self._finished:
-                oldest = next(iter(self._finished))
-                job = self._jobs[oldest]
-                if len(self._finished) <= self.settings.max_results and (job.finished_at or now) + ttl > now:
-                    break
-                self._finished.popitem(last=False)
-                del self._jobs[oldest]
-                self._tombstones[oldest] = (job.created_at, job.batch_id, job.owner)
-                if len(self._tombstones) > _TOMBSTONES_PER_RESULT * self.settings.max_results:
-                    self._tombstones.popitem(last=False)
 
-    def _finish(self, job: JobRecord, *, result: SynthesisResult | None = None, error: ErrorBody | None = None) -> None:
-        """Make ``job`` terminal (caller holds the lock) and wake its waiters."""
-        if job.state is JobState.QUEUED:
-            with contextlib.suppress(ValueError):
-                self._pending.remove(job.id)
-        job.finished_at = time.time()
-        job.result, job.error, job.payload = result, error, b""
-        job.state = JobState.SUCCEEDED if error is None else state_for_error(error)
-        if job.state is JobState.SUCCEEDED:
-            job.progress = JobProgress(stage=Stage.DONE, fraction=1.0)
-            self._totals["completed"] += 1
-        elif job.state is JobState.FAILED:
-            self._totals["failed"] += 1
-        if job.started_at is not None:
-            job.timings["total"] = job.finished_at - job.created_at
-        self._finished[job.id] = None
-        for loop, future in self._waiters.pop(job.id, []):
-            loop.call_soon_threadsafe(settle, future, None)

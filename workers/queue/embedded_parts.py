@@ -11,7 +11,7 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from clients.codec import pack
-from clients.schemas import ErrorBody, JobProgress, JobPublic, JobState, SynthesisResult, WorkerPublic
+from clients.schemas import ErrorBody, JobProgress, JobPublic, JobState, WorkerPublic
 
 
 class JobRecord:
@@ -37,11 +37,12 @@ class JobRecord:
         self.deliveries = 0
         self.worker: str | None = None
         self.timings: dict[str, float] = {}
-        self.result: SynthesisResult | None = None
+        self.result: bytes | None = None  # msgpack of the SynthesisResult, as the worker encoded it
         self.error: ErrorBody | None = None
         self.cancel = False
 
-    def public(self, with_result: bool) -> JobPublic:
+    def public(self) -> JobPublic:
+        """The job without its result (the caller decodes ``result`` outside the queue's lock)."""
         return JobPublic(
             id=self.id,
             state=self.state,
@@ -54,7 +55,6 @@ class JobRecord:
             worker=self.worker,
             batch_id=self.batch_id,
             timings=dict(self.timings),
-            result=self.result if with_result else None,
             error=self.error,
         )
 
@@ -96,10 +96,13 @@ class WorkerHandle:
         self.inflight: set[str] = set()
         self.jobs_done = 0
 
-    def send(self, message: dict[str, Any]) -> None:
+    def send(self, message: dict[str, Any], *frames: bytes) -> None:
+        """``message``, then the payload frames it announces (see `workers.child`)."""
         data = pack(message)
         with self.lock:
             self.conn.send_bytes(data)
+            for frame in frames:
+                self.conn.send_bytes(frame)
 
 
 def settle(future: asyncio.Future[Any], value: Any) -> None:

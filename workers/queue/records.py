@@ -1,49 +1,42 @@
-"""Error types and state rules shared by both backends and the worker side (torch-free).
+"""Error bodies and state rules shared by both backends and the worker side (torch-free).
 
-A job's outcome is a `SynthesisResult` or an `ErrorBody`; the error's ``type`` decides the terminal state:
-``Cancelled`` → cancelled, ``DeadlineExceeded`` / ``ResultExpired`` → expired, anything else → failed.
+A job's outcome is a `SynthesisResult` or an `ErrorBody`; the error's `ErrorType` decides the terminal state
+(`ErrorType.job_state`): ``Cancelled`` → cancelled, ``DeadlineExceeded`` / ``ResultExpired`` → expired, anything
+else → failed.
 """
 
 from __future__ import annotations
 
 import uuid
 
-from clients.schemas import ErrorBody, JobState
-
-CANCELLED = "Cancelled"
-DEADLINE_EXCEEDED = "DeadlineExceeded"
-RESULT_EXPIRED = "ResultExpired"
-WORKER_LOST = "WorkerLost"
-SHUTDOWN = "QueueShutdown"
-MODEL_UNAVAILABLE = "ModelUnavailable"
+from clients.schemas import ErrorBody, ErrorType, JobState
 
 
 def state_for_error(error: ErrorBody) -> JobState:
-    """The terminal state a job ends in when its outcome is ``error``."""
-    if error.type == CANCELLED:
-        return JobState.CANCELLED
-    if error.type in (DEADLINE_EXCEEDED, RESULT_EXPIRED):
-        return JobState.EXPIRED
-    return JobState.FAILED
+    """The terminal state a job ends in when its outcome is ``error`` (failed for a type this version does not
+    know)."""
+    kind = error.kind
+    return kind.job_state if kind is not None else JobState.FAILED
 
 
 def cancelled_error() -> ErrorBody:
-    return ErrorBody(error="job cancelled", type=CANCELLED)
+    return ErrorBody.of(ErrorType.CANCELLED, "job cancelled")
 
 
 def deadline_error(stage: str = "before it started") -> ErrorBody:
-    return ErrorBody(error=f"job deadline passed {stage}", type=DEADLINE_EXCEEDED)
+    return ErrorBody.of(ErrorType.DEADLINE_EXCEEDED, f"job deadline passed {stage}")
 
 
 def result_expired_error() -> ErrorBody:
-    return ErrorBody(error="the job finished but its result expired and was removed", type=RESULT_EXPIRED)
+    return ErrorBody.of(ErrorType.RESULT_EXPIRED, "the job finished but its result expired and was removed")
+
+
+def shutdown_error(detail: str = "queue shut down") -> ErrorBody:
+    return ErrorBody.of(ErrorType.QUEUE_SHUTDOWN, detail)
 
 
 def worker_lost_error(detail: str, delivery: int, max_deliveries: int) -> ErrorBody:
-    return ErrorBody(
-        error=f"{detail} (delivery {delivery} of {max_deliveries})",
-        type=WORKER_LOST,
-    )
+    return ErrorBody.of(ErrorType.WORKER_LOST, f"{detail} (delivery {delivery} of {max_deliveries})")
 
 
 def new_id() -> str:

@@ -8,6 +8,9 @@ Waiting uses a pub/sub channel with polling as a fallback, so a lost message onl
 Every call is bounded in time: connect and command timeouts of ``redis_timeout`` seconds, one retry after a
 reconnect, and a deadline of ``OP_ROUNDS × redis_timeout`` on each guarded step, so a hung Redis (SIGSTOP, a
 black-holed network) answers `QueueUnavailable` (503) in seconds instead of hanging requests.
+
+Why one module: one `JobQueue` implementation; its methods share the key layout and the Lua scripts' calling
+conventions.
 """
 
 from __future__ import annotations
@@ -30,9 +33,11 @@ from clients.codec import pack, unpack
 from clients.schemas import (
     DeadLetter,
     ErrorBody,
+    ErrorType,
     JobProgress,
     JobPublic,
     JobState,
+    QueueStats,
     RobotPublic,
     RobotRegister,
     Stage,
@@ -40,9 +45,9 @@ from clients.schemas import (
     SynthesisResult,
     WorkerPublic,
 )
-from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueStats, QueueUnavailable, RobotInvalid
+from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
 from workers.queue.persistence import check_persistence_async
-from workers.queue.records import CANCELLED, DEADLINE_EXCEEDED, new_id, result_expired_error, scoped_robot
+from workers.queue.records import new_id, result_expired_error, scoped_robot
 from workers.queue.redis_lua import CANCEL, GROUP, SUBMIT, Keys
 from workers.settings import QueueSettings
 
@@ -68,7 +73,7 @@ def _s(value: bytes | None) -> str | None:
 
 
 def _f(value: bytes | None) -> float | None:
-    return None if value in (None, b"") else float(value)  # type: ignore[arg-type]
+    return None if value in (None, b"") else float(value)
 
 
 def job_from_hash(job_id: str, h: dict[bytes, bytes], result: bytes | None, has_result: bool) -> JobPublic:
@@ -217,15 +222,16 @@ class RedisQueue(JobQueue):
             raise JobNotFound(f"no job {job_id}")
         job = job_from_hash(job_id, h, result if with_result else None, bool(result))
         if job.state is JobState.QUEUED and job.deadline is not None and job.deadline <= time.time():
-            await self._end_queued(job_id, JobState.EXPIRED, "job deadline passed before it started", DEADLINE_EXCEEDED)
+            expired = ErrorType.DEADLINE_EXCEEDED
+            await self._end_queued(job_id, JobState.EXPIRED, "job deadline passed before it started", expired)
             return await self.get(job_id, with_result=with_result)
         return job
 
-    async def _end_queued(self, job_id: str, state: JobState, message: str, kind: str) -> str:
+    async def _end_queued(self, job_id: str, state: JobState, message: str, kind: ErrorType) -> str:
         keys = [self.keys.stream, self.keys.job(job_id), self.keys.counts, self.keys.done]
         args = [GROUP, time.time(), state.value, message, kind, job_id, int(self.settings.record_ttl * 1000)]
         async with self._guard():
-            return (await self._cancel(keys=keys, args=args)).decode()  # type: ignore[no-any-return]
+            return (await self._cancel(keys=keys, args=args)).decode()
 
     async def wait(self, job_id: str, timeout: float) -> JobPublic:
         end = time.monotonic() + timeout
@@ -250,7 +256,7 @@ class RedisQueue(JobQueue):
     async def cancel(self, job_id: str, *, owner: str | None = None) -> JobPublic:
         if owner is not None:
             await self.get(job_id, with_result=False, owner=owner)  # JobNotFound for another owner's job
-        if await self._end_queued(job_id, JobState.CANCELLED, "job cancelled", CANCELLED) == "missing":
+        if await self._end_queued(job_id, JobState.CANCELLED, "job cancelled", ErrorType.CANCELLED) == "missing":
             raise JobNotFound(f"no job {job_id}")
         return await self.get(job_id, with_result=False)
 
@@ -353,7 +359,7 @@ class RedisQueue(JobQueue):
         loop, end = asyncio.get_running_loop(), time.monotonic() + timeout
         async with self._guard():
             fields = {"k": "robot", "id": rid, "p": payload} | ({"o": owner} if owner else {})
-            await self._client.xadd(self.keys.stream, fields)  # type: ignore[arg-type]
+            await self._client.xadd(self.keys.stream, fields)
         while True:
             future: asyncio.Future[None] = loop.create_future()
             self._waiters.setdefault(f"robot:{rid}", []).append(future)

@@ -83,6 +83,10 @@ for i = 0, n - 1 do
     table.insert(fields, 'o')
     table.insert(fields, owner)
   end
+  if ARGV[b + 4] ~= '' then
+    table.insert(fields, 'h')
+    table.insert(fields, ARGV[b + 4])
+  end
   local entry = redis.call('XADD', KEYS[1], '*', unpack(fields))
   redis.call('HSET', key, 'entry', entry)
   redis.call('EXPIRE', key, ARGV[3])

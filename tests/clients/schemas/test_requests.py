@@ -101,3 +101,9 @@ def test_batch_errors_carry_the_item_index() -> None:
     errors = field_errors(info.value)
     assert errors[0].field == "requests.1.object.points"
     assert summary(errors).startswith("requests.1.object.points: 10 points given")
+
+
+def test_given_contacts_carry_points_only() -> None:
+    contacts = {"points": POINTS[:2], "forces": np.ones((2, 3))}
+    assert [f for f, _ in _errors(_body(contacts=contacts))] == ["contacts.forces"]
+    assert SynthesisRequest.model_validate(_body(contacts={"points": POINTS[:2]})).contacts is not None

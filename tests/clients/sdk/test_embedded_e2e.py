@@ -18,14 +18,10 @@ from typing import Any
 
 import numpy as np
 import pytest
+import uvicorn
 
 from clients.schemas import JobState, Stage
 from clients.sdk import Client, JobFailed, make_request
-
-pytest.importorskip("service.app", reason="the service is not part of this tree yet")
-uvicorn = pytest.importorskip("uvicorn")
-if importlib.util.find_spec("workers.queue.embedded") is None or importlib.util.find_spec("workers.testing") is None:
-    pytest.skip("the embedded queue is not part of this tree yet", allow_module_level=True)
 
 HAND = "test_gripper"
 
@@ -59,7 +55,7 @@ def stack(pipeline: str, options: dict[str, Any], concurrency: int = 1, ready_ti
         with Client(url, retries=0) as client:  # workers up (a model is not needed for every method)
             while (ready := client.ready()).workers < concurrency:
                 if time.monotonic() > deadline:
-                    pytest.skip(f"workers not up in {ready_timeout:g} s: {ready.detail}")
+                    raise AssertionError(f"workers not up in {ready_timeout:g} s: {ready.detail}")
                 time.sleep(0.1)
         yield url
     finally:

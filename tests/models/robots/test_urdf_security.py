@@ -124,7 +124,7 @@ def test_unknown_builtin_lists_names() -> None:
     with pytest.raises(UnknownHand) as err:
         get_hand("robotiq")
     assert all(n in str(err.value) for n in list_hands())
-    assert isinstance(err.value, KeyError)
+    assert isinstance(err.value, LookupError)
     builtins = {"allegro", "leap_hand", "leap_kaizen", "shadow", "panda_gripper", "barrett", "kinova3f"}
     assert set(list_hands()) == builtins and set(list_hands(aliases=True)) == builtins | {"leap"}
 

@@ -1,4 +1,5 @@
-"""The refinement evaluation (paper Table II, DESIGN.md §5) as a library; `mani eval refine` drives it.
+"""The refinement evaluation (paper Table II, docs/evaluation.md) as a library; `mani eval refine` drives it.
+
 
 Protocol, per object and grasp:
 
@@ -37,6 +38,9 @@ Protocol, per object and grasp:
 
 Times are CPU seconds of this process (`time.process_time`, torch on one thread): on a shared machine the wall
 time also counts other processes' work. Ground-truth sampling is not timed.
+
+Why one module: the protocol's steps (ground truth, perturbation, the two modes, the report) are one experiment and
+share its seeds.
 """
 
 from __future__ import annotations
@@ -44,11 +48,12 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from models.geometry.object import DEFAULT_FRICTION
 from models.refine.baseline import direct_grasp
 from models.refine.field import PointCloudField
 from models.refine.grasp import grasp_maps, tangents
@@ -59,7 +64,10 @@ from models.refine.strategy import refine_from_start
 from models.refine.verify import Verification, verify
 from models.refine.wrench import WrenchTask, characteristic_length, closure_task, rigid_task
 
-DEFAULT_MU = 0.5
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
+
+DEFAULT_MU = DEFAULT_FRICTION
 GROUND_TRUTHS = ("sampled", "refined")
 SAMPLER_PALMS = 16  # palms per sampling round
 SAMPLER_MAX_GRASPS = 16  # feasible grasps kept per round
@@ -112,22 +120,8 @@ class Report:
         }
 
 
-def spread_contacts(points: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
-    """Indices of ``count`` farthest-point-spread points in a random half-space-ish subset of the cloud."""
-    direction = rng.normal(size=3)
-    side = points @ direction
-    pool = np.flatnonzero(side >= np.quantile(side, rng.uniform(0.2, 0.5)))
-    chosen = [int(rng.choice(pool))]
-    dist = np.linalg.norm(points[pool] - points[chosen[0]], axis=1)
-    for _ in range(count - 1):
-        nxt = int(pool[np.argmax(dist)])
-        chosen.append(nxt)
-        dist = np.minimum(dist, np.linalg.norm(points[pool] - points[nxt], axis=1))
-    return np.asarray(chosen)
-
-
 def feasible_grasp(
-    hand: Any, cloud: PointCloudField, mesh: Any, task: WrenchTask, mu: float, rng: np.random.Generator,
+    hand: Hand, cloud: PointCloudField, mesh: Any, task: WrenchTask, mu: float, rng: np.random.Generator,
     attempts: int = 10, config: RefineConfig | None = None,
 ) -> HandPose | None:
     """A verified force-closure pose from random contacts (protocol step 1), or None."""
@@ -166,7 +160,7 @@ class SampledGroundTruth:
     """
 
     def __init__(
-        self, hand: Any, obj: Any, cloud: PointCloudField, closure: WrenchTask, mu: float, seed: int, index: int,
+        self, hand: Hand, obj: Any, cloud: PointCloudField, closure: WrenchTask, mu: float, seed: int, index: int,
         rounds: int = SAMPLER_ROUNDS, palms: int = SAMPLER_PALMS, max_grasps: int = SAMPLER_MAX_GRASPS,
     ) -> None:
         self.hand, self.obj, self.cloud, self.closure, self.mu = hand, obj, cloud, closure, mu
@@ -229,7 +223,7 @@ def sampled_ground_truth(
 
 
 def approach_start(
-    hand: Any, cloud: PointCloudField, centre: np.ndarray, rng: np.random.Generator, rest: Any = None
+    hand: Hand, cloud: PointCloudField, centre: np.ndarray, rng: np.random.Generator, rest: Any = None
 ) -> HandPose:
     """Palm facing ``centre`` from a random direction and roll, backed off until its body spheres clear."""
     rest = rest or rest_geometry(hand)
@@ -268,7 +262,7 @@ def feasible_wrench(
 
 
 def perturb(
-    hand: Any, pose: HandPose, rng: np.random.Generator, retreat: float = 0.30,
+    hand: Hand, pose: HandPose, rng: np.random.Generator, retreat: float = 0.30,
     max_angle_deg: float = 60.0, max_shift: float = 0.05,
 ) -> HandPose:
     """Protocol step 3: retreat along the approach axis, random rotation ≤ max angle, shift ≤ max_shift."""
@@ -284,7 +278,7 @@ def perturb(
 
 
 def evaluate(
-    hand: Any,
+    hand: Hand,
     objects: Iterable[Any],
     mode: str,
     grasps: int,

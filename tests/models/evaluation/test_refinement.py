@@ -1,11 +1,11 @@
-"""The Table II protocol's ground truth from the data generator's grasp sampling (`models.refine.evaluation`)."""
+"""The Table II protocol's ground truth from the data generator's grasp sampling (`models.evaluation.refinement`)."""
 
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
 
-from models.refine.evaluation import SampledGroundTruth, evaluate, sampled_ground_truth
+from models.evaluation.refinement import SampledGroundTruth, evaluate, sampled_ground_truth
 from models.refine.field import PointCloudField
 from models.refine.verify import verify
 from models.refine.wrench import characteristic_length, closure_task

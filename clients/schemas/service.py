@@ -1,0 +1,75 @@
+"""What the service answers besides jobs and results: health, lists, the dashboard's data, a result's scene.
+
+Defined here, in the contract, so that the SDK reads the shapes the service sends instead of guessing them.
+"""
+
+from __future__ import annotations
+
+from pydantic import Field
+
+from clients.schemas.common import WireModel
+from clients.schemas.jobs import DeadLetter, JobPublic, WorkerPublic
+from clients.schemas.states import JobState
+
+
+class HealthPublic(WireModel):
+    """Answer of ``GET /healthz`` (service-local: liveness only)."""
+
+    status: str = "ok"
+    backend: str
+    version: str
+
+
+class JobList(WireModel):
+    """Answer of ``GET /v1/jobs``: the most recent jobs, newest first, without results (service-local)."""
+
+    jobs: list[JobPublic]
+
+
+class QueueStats(WireModel):
+    """Counters for the dashboard and `/metrics`."""
+
+    depth: int = Field(..., description="Jobs waiting to be picked up.")
+    running: int
+    by_state: dict[JobState, int]
+    completed_total: int
+    failed_total: int
+    dead_letters: int
+    workers: int
+
+
+class Sample(WireModel):
+    """The queue at one moment."""
+
+    t: float
+    depth: int
+    running: int
+    by_state: dict[JobState, int]
+    completed_total: int
+    failed_total: int
+
+
+class DashboardPublic(WireModel):
+    """Answer of ``GET /dashboard/data``."""
+
+    now: float
+    backend: str
+    queue_up: bool
+    stats: QueueStats | None = None
+    throughput_per_s: float = Field(0.0, description="Jobs finished per second over the last minute.")
+    latency_p50: float | None = Field(None, description="Submission → finish of recent jobs, s.")
+    latency_p99: float | None = None
+    series: list[Sample] = Field(default_factory=list)
+    workers: list[WorkerPublic] = Field(default_factory=list)
+    recent: list[JobPublic] = Field(default_factory=list)
+    dead_letters: list[DeadLetter] = Field(default_factory=list)
+
+
+class ScenePublic(WireModel):
+    """Answer of ``GET /v1/jobs/{id}/scene``: the job (with result) and the object to draw it on."""
+
+    job: JobPublic
+    points: list[list[float]] | None = Field(None, description="Subsampled object points (≤ 4096), m.")
+    normals: list[list[float]] | None = None
+    region_mask: list[int] | None = None
+    heatmap: list[float] | None = Field(None, description="Contact heatmap at those points (return_heatmap).")

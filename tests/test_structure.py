@@ -1,0 +1,134 @@
+"""The tree's shape (docs/layering.md): no import circle, the science's subpackages in one stated order, small
+modules. Read statically from every import statement, lazy ones (inside functions) included: an import moved into
+a function to dodge a circle is still a circle."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("clients", "service", "workers", "models")
+
+MODELS_ORDER = (
+    "errors", "objects", "robots", "geometry", "network", "audit", "refine", "pipeline", "data", "training",
+    "evaluation", "cli",
+)  # fmt: skip
+"""Bottom to top: a subpackage of `models` imports only from those before it (and itself). ``audit`` imports none:
+it is the outside check and shares no code with what it checks."""
+MAX_LINES = 300
+REASON = "Why one module:"
+
+
+def _modules() -> dict[str, Path]:
+    found = {}
+    for package in PACKAGES:
+        for path in (ROOT / package).rglob("*.py"):
+            name = ".".join(path.relative_to(ROOT).with_suffix("").parts)
+            found[name.removesuffix(".__init__")] = path
+    return found
+
+
+def _imports(path: Path, modules: dict[str, Path]) -> set[str]:
+    """The product modules ``path`` imports (``from a.b import c`` counts as a.b.c when that is a module)."""
+    out: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        targets: list[str] = []
+        if isinstance(node, ast.Import):
+            targets = [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            targets = [node.module, *(f"{node.module}.{alias.name}" for alias in node.names)]
+        for target in targets:
+            while target and target not in modules:
+                target = target.rpartition(".")[0]
+            if target:
+                out.add(target)
+    return out
+
+
+def _graph() -> dict[str, set[str]]:
+    modules = _modules()
+    return {name: _imports(path, modules) - {name} for name, path in modules.items()}
+
+
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Strongly connected components of more than one module (Tarjan, iterative)."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    found: list[list[str]] = []
+    for root in graph:
+        if root in index:
+            continue
+        work = [(root, iter(sorted(graph[root])))]
+        index[root] = low[root] = len(index)
+        stack.append(root)
+        on_stack.add(root)
+        while work:
+            node, children = work[-1]
+            child = next(children, None)
+            if child is not None:
+                if child not in index:
+                    index[child] = low[child] = len(index)
+                    stack.append(child)
+                    on_stack.add(child)
+                    work.append((child, iter(sorted(graph[child]))))
+                elif child in on_stack:
+                    low[node] = min(low[node], index[child])
+                continue
+            work.pop()
+            if work:
+                low[work[-1][0]] = min(low[work[-1][0]], low[node])
+            if low[node] == index[node]:
+                component = []
+                while True:
+                    member = stack.pop()
+                    on_stack.discard(member)
+                    component.append(member)
+                    if member == node:
+                        break
+                if len(component) > 1:
+                    found.append(sorted(component))
+    return found
+
+
+def test_the_cycle_finder_finds_a_cycle() -> None:
+    assert _cycles({"a": {"b"}, "b": {"c"}, "c": {"a"}, "d": {"a"}}) == [["a", "b", "c"]]
+
+
+def test_no_import_circle() -> None:
+    assert _cycles(_graph()) == []
+
+
+def test_models_subpackages_import_only_downwards() -> None:
+    rank = {name: i for i, name in enumerate(MODELS_ORDER)}
+    offenders = []
+    for module, imported in _graph().items():
+        parts = module.split(".")
+        if parts[0] != "models" or len(parts) < 2:
+            continue
+        assert parts[1] in rank, f"models.{parts[1]} has no place in MODELS_ORDER (tests/test_structure.py)"
+        for target in imported:
+            tparts = target.split(".")
+            if tparts[0] == "models" and len(tparts) > 1 and rank.get(tparts[1], -1) > rank[parts[1]]:
+                offenders.append(f"{module} imports {target}")
+    assert not offenders, "\n".join(sorted(offenders))
+
+
+def test_audit_shares_no_code_with_the_science() -> None:
+    graph = _graph()
+    borrowed = sorted(
+        f"{m} imports {t}" for m, ts in graph.items() if m.startswith("models.audit") for t in ts
+        if t.startswith("models.") and not t.startswith("models.audit")
+    )  # fmt: skip
+    assert not borrowed, "\n".join(borrowed)
+
+
+def test_long_modules_say_why() -> None:
+    long = []
+    for name, path in _modules().items():
+        text = path.read_text()
+        if text.count("\n") > MAX_LINES and REASON not in (ast.get_docstring(ast.parse(text)) or ""):
+            long.append(f"{name}: {text.count(chr(10))} lines, no '{REASON}' in its docstring")
+    assert not long, "\n".join(long)
