@@ -1,4 +1,8 @@
-"""`AsyncClient`: the asyncio SDK. Same calls as `Client`, awaited; every decision lives in `BaseClient`."""
+"""`AsyncClient`: the asyncio SDK. Same calls as `Client`, awaited; every decision lives in `BaseClient`.
+
+Why one module: it mirrors `Client` method for method (the httpx pattern); keeping each client in one file keeps
+the pair side by side, and every method is a thin await of a `BaseClient` call.
+"""
 
 from __future__ import annotations
 
