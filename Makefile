@@ -15,6 +15,9 @@ $(STAMP): pyproject.toml
 	# torch first, pinned: the CPU wheel on disk (an unpinned torch pulls a CUDA build).
 	$(BIN)/python -m pip install -q torch==2.13.0
 	$(BIN)/python -m pip install -q -e '.[dev]'
+	# test data: third-party hands (pyproject's `third-party-hands`); only their description files are read,
+	# so their own dependencies (numba, pinocchio, ...) are not installed.
+	$(BIN)/python -m pip install -q --no-deps 'robosuite>=1.5,<1.6' 'orca-sim>=0.1,<0.2' 'robot-properties-fingers>=2,<3'
 	touch $(STAMP)
 
 install: $(STAMP)

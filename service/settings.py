@@ -58,7 +58,12 @@ class Settings(BaseSettings):
     # --- request handling
     sync_wait_max: float = Field(30.0, gt=0, le=600, description="Cap on how long /v1/synthesize waits.")
     max_body_bytes: int = Field(MAX_BODY_BYTES, ge=1024, le=MAX_BODY_BYTES, description="Request body limit.")
-    max_robot_bytes: int = Field(4 * 1024 * 1024, ge=1024, description="Body limit of POST /v1/robots.")
+    max_robot_bytes: int = Field(
+        24 * 1024 * 1024, ge=1024, description="Body limit of POST /v1/robots (a 16 MiB archive, base64 in JSON)."
+    )
+    max_robot_store_bytes: int = Field(
+        64 * 1024 * 1024, ge=0, description="Descriptions and archives stored per key, bytes (409 beyond; DELETE one)."
+    )
     max_robots: int = Field(20, ge=0, le=10_000, description="Registered hands per key (409 beyond; DELETE one).")
     max_batch_size: int = Field(MAX_BATCH_SIZE, ge=1, le=MAX_BATCH_SIZE)
     batch_page_max: int = Field(1000, ge=1, le=MAX_BATCH_SIZE, description="Largest page of GET /v1/batches.")

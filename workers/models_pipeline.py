@@ -58,7 +58,7 @@ class ModelsPipeline:
         card = getattr(self.predictor, "card", None)
         self.model_version: str | None = f"{card.config_name}-{card.version}" if card else None
         self._hands: OrderedDict[str, Any] = OrderedDict()
-        self._builtin = {name: get_hand(name) for name in (hands if hands is not None else list_hands())}
+        self._builtin = {name: get_hand(name) for name in (hands if hands is not None else list_hands(aliases=True))}
 
     @staticmethod
     def _load(path: Path) -> Any | None:
@@ -81,11 +81,42 @@ class ModelsPipeline:
 
     # ---- robots ----------------------------------------------------------------------------------------------
     def robots(self) -> list[RobotPublic]:
-        return [_public(hand, name, builtin=True, source="built-in") for name, hand in self._builtin.items()]
+        from models.robots.registry import ALIASES
+
+        return [
+            _public(
+                hand,
+                name,
+                builtin=True,
+                source=f"built-in, alias of {ALIASES[name]}" if name in ALIASES else "built-in",
+            )
+            for name, hand in self._builtin.items()
+        ]
 
     def validate_robot(self, robot: RobotRegister) -> RobotPublic:
-        hand = self._user_hand(robot.name, robot.urdf, robot.fingertips, robot.tip_offsets)
-        return _public(hand, robot.name, builtin=False, source="user")
+        from workers.user_robots import robot_public
+
+        return robot_public(self._registered(robot), robot)
+
+    def _registered(self, robot: RobotRegister) -> Any:
+        """The `HandBuild` of a registered hand (URDF/MJCF, archive with meshes, palm cut), cached by content."""
+        from clients.codec import pack
+        from models.robots import HandLoadError
+        from workers.user_robots import build_robot
+
+        key = hashlib.blake2b(pack(robot.model_dump(mode="python", exclude_none=True)), digest_size=16).hexdigest()
+        if key in self._hands:
+            self._hands.move_to_end(key)
+            return self._hands[key]
+        try:
+            build = build_robot(robot)
+        except HandLoadError as exc:  # named by the field that carried the description
+            source = "archive" if robot.archive is not None else "urdf" if robot.urdf is not None else "mjcf"
+            raise HandLoadError(f"{source}: {exc}") from exc
+        self._hands[key] = build
+        while len(self._hands) > _HAND_CACHE:
+            self._hands.popitem(last=False)
+        return build
 
     def _user_hand(self, name: str, urdf: str, fingertips: list[str], offsets: Any) -> Any:
         from models.robots import HandLoadError, load_hand
@@ -110,8 +141,7 @@ class ModelsPipeline:
         if robot.name in self._builtin:
             return self._builtin[robot.name]
         if job.robot is not None:
-            r = job.robot
-            return self._user_hand(r.name, r.urdf, r.fingertips, r.tip_offsets)
+            return self._registered(job.robot).hand
         from models.errors import UnknownHand
 
         raise UnknownHand(f"robot.name: unknown hand {robot.name!r}; built-in: {', '.join(self._builtin)}")

@@ -16,7 +16,9 @@ import signal
 import time
 import xml.etree.ElementTree as ET
 
-from clients.schemas import RobotPublic, RobotRegister, Stage, SynthesisResult
+import numpy as np
+
+from clients.schemas import RobotPreview, RobotPublic, RobotRegister, Stage, SynthesisResult
 from workers.pipeline import CancelFn, JobInput, Outcome, ProgressFn
 from workers.queue.records import cancelled_error, deadline_error
 
@@ -30,6 +32,16 @@ TEST_HAND = RobotPublic(
     fingertips=["left_tip", "right_tip"],
     source="workers.testing",
 )
+
+
+_TETRAHEDRON = RobotPreview(
+    vertices=np.array([[0.0, 0, 0], [0.02, 0, 0], [0, 0.02, 0], [0, 0, 0.02]]),
+    faces=np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]),
+    spheres=np.array([[0.005, 0.005, 0.005, 0.01]]),
+    pads=np.array([[0.0, 0.0, 0.02]]),
+    tips=np.array([[0.0, 0.0, 0.02]]),
+)
+"""What a registered hand's view draws in the staged pipeline (it builds no hand)."""
 
 
 class StagedPipeline:
@@ -58,13 +70,13 @@ class StagedPipeline:
 
     def validate_robot(self, robot: RobotRegister) -> RobotPublic:
         try:
-            root = ET.fromstring(robot.urdf)
+            root = ET.fromstring(robot.urdf or robot.mjcf or "")
         except ET.ParseError as exc:
             raise ValueError(f"urdf: malformed XML: {exc}") from exc
         if root.tag != "robot":
             raise ValueError("urdf: root element must be <robot>")
         links = {link.get("name") for link in root.iter("link")}
-        missing = [tip for tip in robot.fingertips if tip not in links]
+        missing = [tip for tip in robot.fingertips or [] if tip not in links]
         if missing:
             raise ValueError(f"fingertips: unknown links {missing}")
         joints = [j.get("name") or "" for j in root.iter("joint") if j.get("type") in ("revolute", "prismatic")]
@@ -75,8 +87,9 @@ class StagedPipeline:
             joint_names=joints,
             lower=[0.0] * len(joints),
             upper=[1.0] * len(joints),
-            fingertips=list(robot.fingertips),
+            fingertips=list(robot.fingertips or []),
             source="user",
+            preview=_TETRAHEDRON,
         )
 
     def run(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
@@ -109,6 +122,6 @@ class StagedPipeline:
             timings[stage.value] = timings.get(stage.value, 0.0) + time.perf_counter() - t0
         hand = job.request.robot.name or "inline"
         if job.robot is not None:
-            root = ET.fromstring(job.robot.urdf)
+            root = ET.fromstring(job.robot.urdf or job.robot.mjcf or "<robot/>")
             timings["robot_dof"] = float(sum(j.get("type") in ("revolute", "prismatic") for j in root.iter("joint")))
         return SynthesisResult(hand=hand, model_version=self.model_version or "", proposals=[], timings=timings)

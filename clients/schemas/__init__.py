@@ -30,7 +30,7 @@ from clients.schemas.objects import (
 )
 from clients.schemas.requests import ContactsIn, Method, SynthesisOptions, SynthesisRequest
 from clients.schemas.results import HandMesh, IterationRecord, Proposal, Quality, SynthesisResult
-from clients.schemas.robots import MAX_URDF_BYTES, RobotIn, RobotPublic, RobotRegister
+from clients.schemas.robots import MAX_ARCHIVE_BYTES, MAX_URDF_BYTES, RobotIn, RobotPreview, RobotPublic, RobotRegister
 from clients.schemas.service import DashboardPublic, HealthPublic, JobList, QueueStats, Sample, ScenePublic
 from clients.schemas.states import JobState, Stage
 from clients.schemas.tasks import (
@@ -45,6 +45,7 @@ from clients.schemas.tasks import (
 
 __all__ = [
     "MATERIAL_PROPERTIES",
+    "MAX_ARCHIVE_BYTES",
     "MAX_BATCH_SIZE",
     "MAX_POINTS",
     "MAX_URDF_BYTES",
@@ -83,6 +84,7 @@ __all__ = [
     "QueueStats",
     "ReadyPublic",
     "RobotIn",
+    "RobotPreview",
     "RobotPublic",
     "RobotRegister",
     "Sample",

@@ -14,7 +14,8 @@ Public names:
 - clients: `Client`, `AsyncClient` (same calls, awaited), `RetryPolicy`; handles `Job`, `AsyncJob`, `Batch`,
   `AsyncBatch`.
 - inputs: `object_from_points`, `object_from_mesh`, `object_from_file`, `save_object`, `delta_pose`,
-  `target_points`, `force_closure`, `wrench`, `make_request`, `robot_registration`.
+  `target_points`, `force_closure`, `wrench`, `make_request`, `robot_registration`; hands: `hand_registration`
+  (an archive, folder or URDF/MJCF file, cut at a ``palm``), `zip_folder`.
 - outputs: `result_to_dict`, `result_to_json`, `load_result`, `result_figure`.
 - errors: `ManiError` › `RequestError` › (`ValidationError`, `Unauthorized`, `NotFound`, `RateLimited`,
   `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed`.
@@ -37,6 +38,7 @@ from clients.sdk.errors import (
     Unreachable,
     ValidationError,
 )
+from clients.sdk.hands import hand_registration, zip_folder
 from clients.sdk.objects import object_from_file, object_from_mesh, object_from_points, save_object
 from clients.sdk.outputs import load_result, result_figure, result_to_dict, result_to_json
 from clients.sdk.requests import make_request, robot_registration
@@ -63,6 +65,7 @@ __all__ = [
     "ValidationError",
     "delta_pose",
     "force_closure",
+    "hand_registration",
     "load_result",
     "make_request",
     "object_from_file",
@@ -75,4 +78,5 @@ __all__ = [
     "save_object",
     "target_points",
     "wrench",
+    "zip_folder",
 ]

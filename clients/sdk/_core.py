@@ -27,6 +27,7 @@ from clients.schemas import (
     JobPublic,
     JobState,
     ReadyPublic,
+    RobotPreview,
     RobotPublic,
     RobotRegister,
     SynthesisRequest,
@@ -300,6 +301,15 @@ class BaseClient:
 
     def _call_register_robot(self, body: RobotRegister) -> Call[RobotPublic]:
         return self._model_call("POST", "/v1/robots", RobotPublic, body=body)
+
+    def _call_robot_preview(self, name: str) -> Call[RobotPreview]:
+        return self._model_call("GET", f"/v1/robots/{name}/preview", RobotPreview)
+
+    def _call_delete_robot(self, name: str) -> Call[None]:
+        def parse(response: httpx.Response) -> None:
+            self.raise_for_status(response)
+
+        return Call(self.build_request("DELETE", f"/v1/robots/{name}"), parse)
 
     def _call_health(self) -> Call[dict[str, Any]]:
         http = self.build_request("GET", "/healthz", accept=JSON)

@@ -1,4 +1,8 @@
-"""`AsyncClient`: the asyncio SDK. Same calls as `Client`, awaited; every decision lives in `BaseClient`."""
+"""`AsyncClient`: the asyncio SDK. Same calls as `Client`, awaited; every decision lives in `BaseClient`.
+
+Why one module: it mirrors `Client` method for method (the httpx pattern); keeping each client in one file keeps
+the pair side by side, and every method is a thin await of a `BaseClient` call.
+"""
 
 from __future__ import annotations
 
@@ -17,12 +21,14 @@ from clients.schemas import (
     JobCreated,
     JobPublic,
     ReadyPublic,
+    RobotPreview,
     RobotPublic,
     SynthesisRequest,
     SynthesisResult,
 )
 from clients.sdk._core import BaseClient, Call
 from clients.sdk.errors import TimeoutError
+from clients.sdk.hands import hand_registration
 from clients.sdk.objects import ObjectLike
 from clients.sdk.requests import RobotLike, make_request, robot_registration
 from clients.sdk.retry import poll_delays
@@ -167,6 +173,35 @@ class AsyncClient(BaseClient):
         """Register a custom hand from a URDF (text or file)."""
         body = robot_registration(urdf, fingertips, name=name, tip_offsets=tip_offsets)
         return await self._run(self._call_register_robot(body))
+
+    async def add_robot(
+        self,
+        source: str | bytes | os.PathLike[str],
+        *,
+        palm: str | None = None,
+        fingertips: list[str] | None = None,
+        name: str | None = None,
+        tip_offsets: Any = None,
+        description: str | None = None,
+        rest: dict[str, float] | None = None,
+        approach_axis: Any = None,
+    ) -> RobotPublic:
+        """Register a hand from an archive (zip/tar of a URDF or MJCF and its meshes), a folder, or a description
+        file (see `clients.sdk.hands`); ``palm`` cuts it from a whole robot. The answer reports DoF, fingertips,
+        spheres, pad areas, couplings, what was ignored, and ``view_url``."""
+        body = hand_registration(
+            source, palm=palm, fingertips=fingertips, name=name, tip_offsets=tip_offsets, description=description,
+            rest=rest, approach_axis=approach_axis,
+        )  # fmt: skip
+        return await self._run(self._call_register_robot(body))
+
+    async def robot_preview(self, name: str) -> RobotPreview:
+        """A registered hand at rest (palm frame): coarse meshes, collision spheres, pad samples, fingertips."""
+        return await self._run(self._call_robot_preview(name))
+
+    async def delete_robot(self, name: str) -> None:
+        """Remove a hand this key registered (jobs naming it afterwards get 404)."""
+        await self._run(self._call_delete_robot(name))
 
     async def health(self) -> dict[str, Any]:
         """``GET /healthz``."""

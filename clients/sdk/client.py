@@ -20,12 +20,14 @@ from clients.schemas import (
     JobCreated,
     JobPublic,
     ReadyPublic,
+    RobotPreview,
     RobotPublic,
     SynthesisRequest,
     SynthesisResult,
 )
 from clients.sdk._core import BaseClient, Call
 from clients.sdk.errors import TimeoutError
+from clients.sdk.hands import hand_registration
 from clients.sdk.objects import ObjectLike
 from clients.sdk.requests import RobotLike, make_request, robot_registration
 from clients.sdk.retry import poll_delays
@@ -187,6 +189,35 @@ class Client(BaseClient):
         """Register a custom hand from a URDF (text or file); every worker can use it by ``name`` afterwards."""
         body = robot_registration(urdf, fingertips, name=name, tip_offsets=tip_offsets)
         return self._run(self._call_register_robot(body))
+
+    def add_robot(
+        self,
+        source: str | bytes | os.PathLike[str],
+        *,
+        palm: str | None = None,
+        fingertips: list[str] | None = None,
+        name: str | None = None,
+        tip_offsets: Any = None,
+        description: str | None = None,
+        rest: dict[str, float] | None = None,
+        approach_axis: Any = None,
+    ) -> RobotPublic:
+        """Register a hand from an archive (zip/tar of a URDF or MJCF and its meshes), a folder, or a description
+        file (see `clients.sdk.hands`); ``palm`` cuts it from a whole robot. The answer reports DoF, fingertips,
+        spheres, pad areas, couplings, what was ignored, and ``view_url``."""
+        body = hand_registration(
+            source, palm=palm, fingertips=fingertips, name=name, tip_offsets=tip_offsets, description=description,
+            rest=rest, approach_axis=approach_axis,
+        )  # fmt: skip
+        return self._run(self._call_register_robot(body))
+
+    def robot_preview(self, name: str) -> RobotPreview:
+        """A registered hand at rest (palm frame): coarse meshes, collision spheres, pad samples, fingertips."""
+        return self._run(self._call_robot_preview(name))
+
+    def delete_robot(self, name: str) -> None:
+        """Remove a hand this key registered (jobs naming it afterwards get 404)."""
+        self._run(self._call_delete_robot(name))
 
     def health(self) -> dict[str, Any]:
         """``GET /healthz``: the service is alive (raises when not)."""

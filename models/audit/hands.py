@@ -86,6 +86,10 @@ def hand_specs() -> dict[str, HandSpec]:
             "leap", sp / "ghand" / "assets" / "models" / "urdf" / "ghand_right.urdf", "root",
             ("tip_soft_2", "tip_soft", "tip_soft_1", "tip_soft__thumb"),
         ),
+        "leap_hand": HandSpec(
+            "leap_hand", OUR_DESCRIPTIONS / "leap_hand" / "right_hand.xml", "palm",
+            ("if_ds", "mf_ds", "rf_ds", "th_ds"),
+        ),
         "shadow": HandSpec(
             "shadow", sp / "gymnasium_robotics" / "envs" / "assets" / "hand" / "reach.xml", "robot0:palm",
             tuple(f"robot0:{f}distal" for f in fingers),
@@ -194,6 +198,7 @@ def load_hand(name: str, prefer: str = "auto") -> AuditHand:
         KeyError: not a built-in hand (the message lists them).
     """
     specs = hand_specs()
+    specs["leap_kaizen"] = specs["leap"]  # the service's name for ghand's hand ("leap" stays its alias)
     if name not in specs:
         raise KeyError(f"unknown hand {name!r}; built-in hands: {', '.join(sorted(specs))}")
     return AuditHand(specs[name], prefer)

@@ -32,15 +32,20 @@ def register(subparsers: Any) -> None:
 def run_list(args: argparse.Namespace) -> int:
     """Print one row per built-in hand: DoF, fingertips, spheres, self-collision pairs."""
     from models.robots import get_hand, list_hands
+    from models.robots.registry import ALIASES
 
     header = f"{'name':<14} {'dof':>4} {'tips':>4} {'spheres':>7} {'pairs':>6}  fingertip links"
     print(header)
     print("-" * len(header))
-    for name in list_hands():
+    for name in list_hands(aliases=True):
+        if name in ALIASES:
+            print(f"{name:<14} alias of {ALIASES[name]}")
+            continue
         h = get_hand(name)
         tips = ", ".join(h.fingertip_links)
         counts = f"{h.dof:>4} {h.num_fingertips:>4} {len(h.sphere_radii):>7} {len(h.self_collision_pairs):>6}"
         print(f"{name:<14} {counts}  {tips}")
+    print("leap_hand: the original LEAP Hand (its joint names and zero pose); leap_kaizen: ghand's LEAP V1 KAIZEN")
     return EXIT_OK
 
 

@@ -6,6 +6,7 @@ into a tree of moving bodies (fixed joints collapsed) for batched forward kinema
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -42,6 +43,8 @@ class RobotDescription:
     root: str
     links: dict[str, list[trimesh.Trimesh]] = field(default_factory=dict)
     joints: list[JointSpec] = field(default_factory=list)
+    couplings: list[str] = field(default_factory=list)
+    """What the reader did with each coupling the file declares (mimic, tendon, equality), one line each."""
 
     def subtree(self, root: str) -> RobotDescription:
         """The description restricted to ``root`` and its descendants (e.g. the hand of an arm)."""
@@ -58,7 +61,9 @@ class RobotDescription:
                 keep_links.append(j.child)
                 keep_joints.append(j)
                 stack.append(j.child)
-        return RobotDescription(self.name, root, {k: self.links[k] for k in keep_links}, keep_joints)
+        kept = {j.name for j in keep_joints} | set(keep_links)
+        couplings = [c for c in self.couplings if kept & set(re.findall(r"[^\s'\"(),=*]+", c))]
+        return RobotDescription(self.name, root, {k: self.links[k] for k in keep_links}, keep_joints, couplings)
 
 
 def transform(xyz: np.ndarray | None = None, rpy: np.ndarray | None = None) -> np.ndarray:

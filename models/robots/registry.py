@@ -7,12 +7,21 @@ towards; rest poses have the fingers open and slightly flexed, thumbs opposing):
 name              source                                      free DoF  palm frame (link), fingers, approach
 ================  ==========================================  ========  ===============================================
 ``allegro``       example-robot-data ``allegro_right_hand``   16        ``palm_link``: fingers along +z, approach +x
-``leap``          ghand ``ghand_right.urdf`` (LEAP-style)     16        ``root``: fingers along +x, approach −z
+``leap_hand``     our ``descriptions/leap_hand/`` (the        16        ``palm`` (the LEAP Hand's palm body); approach
+                  original LEAP Hand, MIT: see its LICENSE)             towards the fingertips at rest
+``leap_kaizen``   ghand ``ghand_right.urdf`` ("LEAP V1        16        ``root``: fingers along +x, approach −z
+                  KAIZEN", a LEAP-style redesign)
 ``shadow``        gymnasium-robotics ``hand/reach.xml``       18 (22)   ``robot0:palm``: fingers along +z, approach −y
 ``panda_gripper`` example-robot-data ``panda.urdf`` (hand)    1 (2)     ``panda_hand``: fingers along +z, approach +z
 ``barrett``       our ``descriptions/barrett_bh8.urdf``       4 (7)     ``bh_palm``: fingers along +z, approach +z
 ``kinova3f``      our ``descriptions/kinova_3f.urdf``         3 (6)     ``k3f_palm``: fingers along +z, approach +z
 ================  ==========================================  ========  ===============================================
+
+``leap`` is an alias of ``leap_kaizen`` (what it named before the original LEAP Hand was offered): its joint values
+are ghand's (flexion −1.75..0.31 rad), not a LEAP Hand's. ``leap_hand`` is the original LEAP Hand (MCP flexion
+−0.314..2.23 rad, the LEAP Hand's joint names ``if_mcp``, ``if_rot``, ...): joint values mean what they mean on a
+real LEAP Hand. It is built from its MJCF and fingertip meshes with the same procedure as a user's hand
+(:mod:`models.robots.user_hand`).
 
 Fingertips are listed index, middle, ring, (little,) thumb. Numbers in parentheses count the moving joints
 before tying: Shadow's distal joints J0 follow J1 through the MJCF's coupling tendon (J0 = 0.00805/0.00705 · J1),
@@ -23,8 +32,10 @@ are coupled to the proximal ones, as are the Kinova ones (see the URDFs).
 from __future__ import annotations
 
 import functools
+import io
 import os
 import sysconfig
+import zipfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -37,6 +48,7 @@ from models.robots.hand import Hand
 from models.robots.meshcache import hull_loader
 from models.robots.mjcf import parse_mjcf
 from models.robots.urdf import MAX_URDF_BYTES, MeshLoader, parse_urdf
+from models.robots.user_hand import HandSource, build_user_hand
 
 DESCRIPTIONS = Path(__file__).parent / "descriptions"
 
@@ -103,7 +115,20 @@ def _leap() -> Hand:
     # palm frame = URDF root: fingers along +x, flexion (negative joint values) curls them towards -z
     rest = {"id9": -0.4, "id10": -0.4, "id11": -0.3, "id5": -0.4, "id6": -0.4, "id7": -0.3, "id1": -0.4}
     rest |= {"id2": -0.4, "id3": -0.3, "id12": -1.5, "id13": -0.18, "id14": -1.4, "id15": 0.3}
-    return Hand(desc, name="leap", fingertips=tips, tip_offsets=offsets, rest=rest, approach_axis=[0.0, 0.0, -1.0])
+    return Hand(
+        desc, name="leap_kaizen", fingertips=tips, tip_offsets=offsets, rest=rest, approach_axis=[0.0, 0.0, -1.0]
+    )
+
+
+def _leap_hand() -> Hand:
+    folder = DESCRIPTIONS / "leap_hand"
+    files = {name: (folder / name).read_bytes() for name in ("right_hand.xml", "tip.obj", "thumb_tip.obj")}
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w") as z:
+        for name, data in files.items():
+            z.writestr(name, data)
+    # fingertips: the distal bodies (leaves) if_ds, mf_ds, rf_ds, th_ds; tips at their distal ends
+    return build_user_hand(HandSource(name="leap_hand", archive=buf.getvalue(), palm="palm")).hand
 
 
 def _shadow() -> Hand:
@@ -140,16 +165,21 @@ def _kinova3f() -> Hand:
 BUILTINS: dict[str, Callable[[], Hand]] = {
     "allegro": _allegro,
     "panda_gripper": _panda_gripper,
-    "leap": _leap,
+    "leap_hand": _leap_hand,
+    "leap_kaizen": _leap,
     "shadow": _shadow,
     "barrett": _barrett,
     "kinova3f": _kinova3f,
 }
 
 
-def list_hands() -> list[str]:
-    """Names of the built-in hands."""
-    return sorted(BUILTINS)
+ALIASES: dict[str, str] = {"leap": "leap_kaizen"}
+"""Old names still accepted: alias -> built-in name."""
+
+
+def list_hands(*, aliases: bool = False) -> list[str]:
+    """Names of the built-in hands (with ``aliases``: and their old names, ``ALIASES``)."""
+    return sorted([*BUILTINS, *(ALIASES if aliases else ())])
 
 
 @functools.cache
@@ -159,8 +189,10 @@ def get_hand(name: str) -> Hand:
     Raises:
         UnknownHand: ``name`` is not a built-in (the message lists them).
     """
+    if name in ALIASES:
+        return get_hand(ALIASES[name])
     if name not in BUILTINS:
-        raise UnknownHand(f"unknown hand {name!r}; built-in hands: {', '.join(list_hands())}")
+        raise UnknownHand(f"unknown hand {name!r}; built-in hands: {', '.join(list_hands(aliases=True))}")
     return BUILTINS[name]()
 
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 
 import numpy as np
 import trimesh
@@ -106,6 +106,7 @@ def parse_urdf(
     mesh_loader: MeshLoader | None = None,
     use_visual: bool = False,
     max_bytes: int = MAX_URDF_BYTES,
+    only_links: Collection[str] | None = None,
 ) -> RobotDescription:
     """Parse (untrusted) URDF text into a :class:`RobotDescription`.
 
@@ -115,6 +116,8 @@ def parse_urdf(
         use_visual: take geometry from ``<visual>`` where a link has no ``<collision>`` (descriptions that ship
             only visual meshes).
         max_bytes: size cap.
+        only_links: read geometry for these links only (the others get none: a hand cut from a whole robot
+            needs no meshes of its legs); None reads every link's.
 
     Raises:
         HandLoadError: oversized, unsafe XML, malformed or structurally inconsistent description.
@@ -148,7 +151,10 @@ def parse_urdf(
             raise HandLoadError("a <link> has no name")
         if name in links:
             raise HandLoadError(f"link {name!r} defined twice")
-        meshes = []
+        meshes: list[trimesh.Trimesh] = []
+        if only_links is not None and name not in only_links:
+            links[name] = meshes
+            continue
         cols = le.findall("collision")
         if not cols and use_visual:
             cols = le.findall("visual")

@@ -1,11 +1,14 @@
-"""A plotly figure of a hand at its rest pose: collision meshes, collision spheres, surface points + normals."""
+"""A hand at its rest pose: a plotly figure (collision meshes, spheres, surface points + normals) and a light preview
+(coarse meshes, spheres, pads, tips) that the service's robot page draws."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import torch
+import trimesh
 
 from models.robots.hand import Hand
 
@@ -100,3 +103,67 @@ def hand_figure(hand: Hand, normal_length: float = 0.01) -> Any:
         scene={"aspectmode": "data"},
     )
     return fig
+
+
+PREVIEW_PART_VERTICES = 48
+"""A preview draws each connected part of a body mesh as the hull of at most this many of its vertices."""
+PREVIEW_PADS = 600
+
+
+@dataclass
+class RestPreview:
+    """A hand at rest in its palm frame, light enough to send to a browser.
+
+    Attributes:
+        vertices, faces: (V, 3), (F, 3) coarse collision meshes (hulls of each connected part).
+        spheres: (S, 4) collision sphere centres and radii.
+        pads: (P, 3) contact-pad samples (at most ``PREVIEW_PADS``).
+        tips: (m, 3) fingertip points.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    spheres: np.ndarray
+    pads: np.ndarray
+    tips: np.ndarray
+
+
+def _coarse_parts(mesh: trimesh.Trimesh) -> list[trimesh.Trimesh]:
+    from models.robots.spheres import farthest_points
+
+    pieces = [p for p in mesh.split(only_watertight=False) if len(p.faces) >= 4] or [mesh]
+    out = []
+    for piece in pieces[:32]:
+        v = np.asarray(piece.vertices)
+        pick = farthest_points(v, PREVIEW_PART_VERTICES)
+        try:
+            out.append(trimesh.convex.convex_hull(v[pick]))
+        except Exception:  # a flat piece has no hull: draw nothing of it
+            continue
+    return out
+
+
+def rest_preview(hand: Hand) -> RestPreview:
+    """The hand at its rest pose (palm frame): see :class:`RestPreview`."""
+    d = torch.float64
+    pos, quat, q = torch.zeros(1, 3, dtype=d), torch.tensor([[1.0, 0, 0, 0]], dtype=d), torch.as_tensor(hand.rest[None])
+    with torch.no_grad():
+        poses = {k: v[0].numpy() for k, v in hand.link_poses(pos, quat, q).items()}
+        centres, _ = hand.spheres(pos, quat, q, jacobian=False)
+        surf = hand.contact_surface
+        pad = np.flatnonzero(surf.pad)[:: max(1, int(np.ceil(surf.pad.sum() / PREVIEW_PADS)))]
+        pts, _, _ = hand.surface_samples(pos, quat, q, index=pad, jacobian=False)
+        tips = hand.fingertips(pos, quat, q)[0].numpy()
+    verts, faces, offset = [], [], 0
+    for body, mesh in hand.collision_meshes.items():
+        T = poses[body]
+        for part in _coarse_parts(mesh):
+            verts.append(np.asarray(part.vertices) @ T[:3, :3].T + T[:3, 3])
+            faces.append(np.asarray(part.faces) + offset)
+            offset += len(part.vertices)
+    spheres = np.hstack([centres[0].numpy(), np.asarray(hand.sphere_radii)[:, None]])
+    return RestPreview(
+        vertices=np.vstack(verts) if verts else np.zeros((0, 3)),
+        faces=np.vstack(faces).astype(np.int64) if faces else np.zeros((0, 3), dtype=np.int64),
+        spheres=spheres, pads=pts[0].numpy(), tips=tips,
+    )  # fmt: skip

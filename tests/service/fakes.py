@@ -219,7 +219,7 @@ class FakeQueue(JobQueue):
     async def register_robot(
         self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None
     ) -> RobotPublic:
-        if "<robot" not in robot.urdf:
+        if robot.urdf is not None and "<robot" not in robot.urdf:
             raise RobotInvalid("malformed URDF: no <robot> element")
         public = RobotPublic(
             name=robot.name,
@@ -228,7 +228,7 @@ class FakeQueue(JobQueue):
             joint_names=[],
             lower=[],
             upper=[],
-            fingertips=list(robot.fingertips),
+            fingertips=list(robot.fingertips or []),
             source="user",
         )
         self.robots.append(public)

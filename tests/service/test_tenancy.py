@@ -52,7 +52,8 @@ class World:
 @pytest.fixture(scope="module", params=["embedded", "redis"])
 def world(request: pytest.FixtureRequest) -> Iterator[World]:
     with start_queue_and_workers(request, stage_seconds=0.01, iterations=500) as queue:
-        settings = Settings(api_keys=[A, B], admin_keys=[ADMIN], rate_limit_per_s=0, sync_wait_max=20)
+        settings = Settings(api_keys=[A, B], admin_keys=[ADMIN], rate_limit_per_s=0, sync_wait_max=20,
+                            auth_failures_burst=50)  # one keyless call per route: more than the default 10
         with serving(create_app(settings, queue=queue)) as base:
             clients = {
                 k: httpx.Client(base_url=base, headers={"Authorization": f"Bearer {k}"}, timeout=60)
@@ -92,6 +93,8 @@ def routes(world: World) -> list[tuple[str, str]]:
         ("DELETE", f"/v1/jobs/{world.long_job}"),
         ("GET", f"/v1/batches/{batch}"),
         ("GET", "/v1/robots/only-a"),
+        ("GET", "/v1/robots/only-a/preview"),
+        ("GET", "/v1/robots/only-a/view"),
         ("DELETE", "/v1/robots/only-a"),
     ]
 

@@ -16,7 +16,7 @@ DOCUMENTED = {
     "Client", "AsyncClient", "RetryPolicy", "Job", "AsyncJob", "Batch", "AsyncBatch",
     # inputs
     "object_from_points", "object_from_mesh", "object_from_file", "save_object", "delta_pose", "target_points",
-    "force_closure", "wrench", "make_request", "robot_registration",
+    "force_closure", "wrench", "make_request", "robot_registration", "hand_registration", "zip_folder",
     # outputs
     "result_to_dict", "result_to_json", "load_result", "result_figure",
     # errors

@@ -124,8 +124,9 @@ def test_unknown_builtin_lists_names() -> None:
     with pytest.raises(UnknownHand) as err:
         get_hand("robotiq")
     assert all(n in str(err.value) for n in list_hands())
-    assert isinstance(err.value, KeyError)
-    assert set(list_hands()) == {"allegro", "leap", "shadow", "panda_gripper", "barrett", "kinova3f"}
+    assert isinstance(err.value, LookupError)
+    builtins = {"allegro", "leap_hand", "leap_kaizen", "shadow", "panda_gripper", "barrett", "kinova3f"}
+    assert set(list_hands()) == builtins and set(list_hands(aliases=True)) == builtins | {"leap"}
 
 
 def test_unknown_mimic_source_and_palm() -> None:
