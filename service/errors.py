@@ -5,7 +5,8 @@ Each class is one member of the contract's `ErrorType`, which also gives its HTT
     ApiError                      status + type + message (+ field errors, + headers)
     ├── BadRequest          400   malformed body (not JSON/msgpack), bad query parameter
     ├── Unauthorized        401   missing or unknown API key
-    ├── NotFound            404   unknown job, batch or hand
+    ├── NotFound            404   unknown job, batch or route
+    │   └── UnknownHand     404   a hand the caller cannot use
     ├── RequestTimeout      408   the body did not arrive in time
     ├── Conflict            409   e.g. registering a built-in hand's name
     ├── PayloadTooLarge     413   body over the limit (the message gives the limit)
@@ -76,6 +77,10 @@ class Unauthorized(ApiError):
 
 class NotFound(ApiError):
     kind = ErrorType.NOT_FOUND
+
+
+class UnknownHand(NotFound):
+    kind = ErrorType.UNKNOWN_HAND
 
 
 class RequestTimeout(ApiError):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 
 from clients.schemas import FieldError, RobotPublic, SynthesisRequest
-from service.errors import NotFound
+from service.errors import UnknownHand
 from workers.queue import JobQueue
 
 
@@ -36,10 +36,10 @@ class RobotCatalog:
         return None
 
     async def get(self, name: str, owner: str | None = None) -> RobotPublic:
-        """The hand called ``name``. Raises `NotFound`."""
+        """The hand called ``name``. Raises `UnknownHand` (404)."""
         found = await self.find(name, owner)
         if found is None:
-            raise NotFound(f"unknown hand {name!r}", detail=[FieldError(field="name", problem="unknown hand")])
+            raise UnknownHand(f"unknown hand {name!r}", detail=[FieldError(field="name", problem="unknown hand")])
         return found
 
     async def check(self, request: SynthesisRequest, owner: str | None = None, field: str = "robot.name") -> None:
@@ -49,7 +49,7 @@ class RobotCatalog:
             return
         if await self.find(name, owner) is None:
             known = ", ".join(r.name for r in await self.all(owner))
-            raise NotFound(
+            raise UnknownHand(
                 f"{field}: unknown hand {name!r} (known: {known})",
                 detail=[FieldError(field=field, problem=f"unknown hand {name!r}")],
             )

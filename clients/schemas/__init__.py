@@ -31,7 +31,15 @@ from clients.schemas.objects import (
 from clients.schemas.requests import ContactsIn, Method, SynthesisOptions, SynthesisRequest
 from clients.schemas.results import HandMesh, IterationRecord, Proposal, Quality, SynthesisResult
 from clients.schemas.robots import MAX_ARCHIVE_BYTES, MAX_URDF_BYTES, RobotIn, RobotPreview, RobotPublic, RobotRegister
-from clients.schemas.service import DashboardPublic, HealthPublic, JobList, QueueStats, Sample, ScenePublic
+from clients.schemas.service import (
+    DashboardPublic,
+    HealthPublic,
+    JobList,
+    QueueStats,
+    RobotList,
+    Sample,
+    ScenePublic,
+)
 from clients.schemas.states import JobState, Stage
 from clients.schemas.tasks import (
     DeltaPoseTask,
@@ -84,6 +92,7 @@ __all__ = [
     "QueueStats",
     "ReadyPublic",
     "RobotIn",
+    "RobotList",
     "RobotPreview",
     "RobotPublic",
     "RobotRegister",

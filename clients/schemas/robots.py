@@ -7,12 +7,13 @@ import binascii
 from typing import Annotated
 
 import numpy as np
-from pydantic import BeforeValidator, Field, PlainSerializer, SerializationInfo, model_validator
+from pydantic import AfterValidator, BeforeValidator, Field, PlainSerializer, SerializationInfo, model_validator
 
 from clients.arrays import spec
 from clients.schemas.common import Faces, Points, Rows3, UnitVec3, WireModel
 
 MAX_URDF_BYTES = 2 * 1024 * 1024
+"""Largest robot description (URDF or MJCF) in UTF-8 bytes (the science's loader has the same limit)."""
 MAX_ARCHIVE_BYTES = 16 * 1024 * 1024
 """Largest hand archive (zip or tar of a description and its meshes), compressed."""
 HAND_NAME_PATTERN = r"^[a-z0-9][a-z0-9_\-]{0,63}$"
@@ -45,11 +46,21 @@ ArchiveBytes = Annotated[
 ]
 
 
+def _description_bytes(value: str | None) -> str | None:
+    """A description's limit is in UTF-8 bytes (``max_length`` alone counts characters)."""
+    if value is not None and len(value.encode()) > MAX_URDF_BYTES:
+        raise ValueError(f"{len(value.encode())} bytes, over the {MAX_URDF_BYTES}-byte limit")
+    return value
+
+
+Description = Annotated[str, AfterValidator(_description_bytes)]
+
+
 class RobotIn(WireModel):
     """Which hand to use: exactly one of ``name`` (built-in or registered) or ``urdf`` (+ ``fingertips``)."""
 
     name: str | None = Field(None, pattern=HAND_NAME_PATTERN, examples=["leap"])
-    urdf: str | None = Field(None, max_length=MAX_URDF_BYTES, description="Inline URDF XML (untrusted).")
+    urdf: Description | None = Field(None, max_length=MAX_URDF_BYTES, description="Inline URDF XML (untrusted).")
     fingertips: list[str] | None = Field(None, min_length=1, max_length=8)
     tip_offsets: Rows3 | None = None
 
@@ -71,8 +82,8 @@ class RobotRegister(WireModel):
     ``urdf`` or ``mjcf`` (the description alone, primitives only)."""
 
     name: str = Field(..., pattern=HAND_NAME_PATTERN)
-    urdf: str | None = Field(None, min_length=1, max_length=MAX_URDF_BYTES)
-    mjcf: str | None = Field(None, min_length=1, max_length=MAX_URDF_BYTES)
+    urdf: Description | None = Field(None, min_length=1, max_length=MAX_URDF_BYTES)
+    mjcf: Description | None = Field(None, min_length=1, max_length=MAX_URDF_BYTES)
     archive: ArchiveBytes | None = Field(
         None,
         max_length=MAX_ARCHIVE_BYTES,

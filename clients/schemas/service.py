@@ -9,6 +9,7 @@ from pydantic import Field
 
 from clients.schemas.common import WireModel
 from clients.schemas.jobs import DeadLetter, JobPublic, WorkerPublic
+from clients.schemas.robots import RobotPublic
 from clients.schemas.states import JobState
 
 
@@ -24,6 +25,12 @@ class JobList(WireModel):
     """Answer of ``GET /v1/jobs``: the most recent jobs, newest first, without results (service-local)."""
 
     jobs: list[JobPublic]
+
+
+class RobotList(WireModel):
+    """Answer of ``GET /v1/robots``: the built-in hands and the caller's registered ones."""
+
+    robots: list[RobotPublic]
 
 
 class QueueStats(WireModel):

@@ -23,10 +23,13 @@ from clients.schemas import (
     BatchCreate,
     BatchPublic,
     ErrorBody,
+    HealthPublic,
     JobCreated,
+    JobList,
     JobPublic,
     JobState,
     ReadyPublic,
+    RobotList,
     RobotPreview,
     RobotPublic,
     RobotRegister,
@@ -266,27 +269,22 @@ class BaseClient:
         return self._model_call("GET", f"/v1/batches/{batch_id}", BatchPublic, params=params)
 
     def _call_jobs(self, limit: int = 50) -> Call[list[JobPublic]]:
-        return self._list_call("/v1/jobs", JobPublic, "jobs", {"limit": limit})
+        return self._list_call("/v1/jobs", JobList, {"limit": limit})
 
     def _call_robots(self) -> Call[list[RobotPublic]]:
-        return self._list_call("/v1/robots", RobotPublic, "robots")
+        return self._list_call("/v1/robots", RobotList)
 
     def _list_call(
-        self, path: str, model: type[ModelT], key: str, params: dict[str, Any] | None = None
-    ) -> Call[list[ModelT]]:
-        http = self.build_request("GET", path, params=params)
-        adapter = pydantic.TypeAdapter(list[model])  # type: ignore[valid-type]
+        self, path: str, model: type[JobList] | type[RobotList], params: dict[str, Any] | None = None
+    ) -> Call[Any]:
+        """A list answer in the contract's shape (`JobList`, `RobotList`), unwrapped to its one list."""
+        inner = self._model_call("GET", path, model, params=params)
 
-        def parse(response: httpx.Response) -> list[ModelT]:
-            data = self._plain(response)
-            if isinstance(data, dict):  # {"robots": [...]} / {"items": [...]} as well as a bare list
-                data = data.get(key, data.get("items", data))
-            try:
-                return list(adapter.validate_python(data))
-            except pydantic.ValidationError as exc:
-                raise ServerError(f"unreadable {key} list: {exc}", type="ProtocolError") from exc
+        def parse(response: httpx.Response) -> list[Any]:
+            answer = inner.parse(response)
+            return list(answer.jobs if isinstance(answer, JobList) else answer.robots)
 
-        return Call(http, parse)
+        return Call(inner.request, parse)
 
     def _plain(self, response: httpx.Response) -> Any:
         """The decoded (not validated) content of a 2xx answer."""
@@ -311,18 +309,8 @@ class BaseClient:
 
         return Call(self.build_request("DELETE", f"/v1/robots/{name}"), parse)
 
-    def _call_health(self) -> Call[dict[str, Any]]:
-        http = self.build_request("GET", "/healthz", accept=JSON)
-
-        def parse(response: httpx.Response) -> dict[str, Any]:
-            self.raise_for_status(response)
-            try:
-                data = decode_body(response.content, response.headers.get("content-type"))
-            except DecodeError:
-                data = None
-            return data if isinstance(data, dict) else {"status": "ok"}
-
-        return Call(http, parse)
+    def _call_health(self) -> Call[HealthPublic]:
+        return self._model_call("GET", "/healthz", HealthPublic)
 
     def _call_ready(self) -> Call[ReadyPublic]:
         http = self.build_request("GET", "/readyz")

@@ -18,6 +18,7 @@ from clients.schemas import (
     BatchItem,
     BatchPublic,
     ContactsIn,
+    HealthPublic,
     JobCreated,
     JobPublic,
     ReadyPublic,
@@ -203,7 +204,7 @@ class AsyncClient(BaseClient):
         """Remove a hand this key registered (jobs naming it afterwards get 404)."""
         await self._run(self._call_delete_robot(name))
 
-    async def health(self) -> dict[str, Any]:
+    async def health(self) -> HealthPublic:
         """``GET /healthz``."""
         return await self._run(self._call_health())
 

@@ -17,6 +17,7 @@ from clients.schemas import (
     BatchItem,
     BatchPublic,
     ContactsIn,
+    HealthPublic,
     JobCreated,
     JobPublic,
     ReadyPublic,
@@ -219,7 +220,7 @@ class Client(BaseClient):
         """Remove a hand this key registered (jobs naming it afterwards get 404)."""
         self._run(self._call_delete_robot(name))
 
-    def health(self) -> dict[str, Any]:
+    def health(self) -> HealthPublic:
         """``GET /healthz``: the service is alive (raises when not)."""
         return self._run(self._call_health())
 

@@ -28,8 +28,9 @@ from defusedxml.ElementTree import fromstring
 from models.robots.archive import HandArchive
 from models.robots.archive_meshes import ArchiveMeshes
 from models.robots.description import HandLoadError
+from models.robots.urdf import MAX_URDF_BYTES
 
-MAX_MJCF_BYTES = 2_000_000
+MAX_MJCF_BYTES = MAX_URDF_BYTES
 MAX_INCLUDE_DEPTH = 8
 MAX_ELEMENTS = 50_000
 REFUSED_TAGS = ("plugin", "extension", "model", "instance")

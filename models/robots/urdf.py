@@ -28,7 +28,8 @@ from models.robots.description import (
     transform,
 )
 
-MAX_URDF_BYTES = 2_000_000
+MAX_URDF_BYTES = 2 * 1024 * 1024
+"""Largest robot description (URDF or MJCF), UTF-8 bytes; the wire contract's limit too (a test keeps them equal)."""
 MAX_LINKS = 256
 MAX_JOINTS = 256
 MAX_GEOMETRIES = 512

@@ -12,7 +12,7 @@ import re
 from fastapi import APIRouter, Request
 from starlette.responses import HTMLResponse, Response
 
-from clients.schemas import ErrorBody, RobotPreview, RobotPublic, RobotRegister, WireModel
+from clients.schemas import ErrorBody, RobotList, RobotPreview, RobotPublic, RobotRegister
 from service.deps import Authorized, CallerDep, QueueDep, RobotsDep, SettingsDep
 from service.errors import Conflict, NotFound
 from service.negotiation import body_openapi, read_model, respond
@@ -21,12 +21,6 @@ from service.robot_page import robot_page
 
 MESH_FILE = re.compile(r"<mesh\b[^>]*\bfilename\s*=\s*[\"']([^\"']{1,300})[\"']")
 router = APIRouter(prefix="/v1/robots", tags=["robots"], dependencies=[Authorized])
-
-
-class RobotList(WireModel):
-    """Answer of ``GET /v1/robots`` (service-local wrapper)."""
-
-    robots: list[RobotPublic]
 
 
 def _brief(robot: RobotPublic, request: Request) -> RobotPublic:

@@ -128,7 +128,7 @@ def test_batches_with_paging(client: TestClient) -> None:
 def test_robots(client: TestClient) -> None:
     assert [r["name"] for r in client.get("/v1/robots").json()["robots"]] == ["fake_hand"]
     assert client.get("/v1/robots/fake_hand").json()["dof"] == 2
-    assert_error(client.get("/v1/robots/nope"), 404, "NotFound")
+    assert_error(client.get("/v1/robots/nope"), 404, "UnknownHand")
     urdf = '<robot name="r"><link name="tip"/></robot>'
     created = client.post("/v1/robots", json={"name": "my_hand", "urdf": urdf, "fingertips": ["tip"]})
     assert created.status_code == 201 and created.json()["name"] == "my_hand"
@@ -171,7 +171,7 @@ def test_unknown_job_and_hand(client: TestClient) -> None:
     assert_error(client.get("/v1/jobs/nope"), 404, "NotFound")
     assert_error(client.delete("/v1/jobs/nope"), 404, "NotFound")
     assert_error(client.get("/v1/jobs/nope/events"), 404, "NotFound")
-    error = assert_error(client.post("/v1/synthesize", json=request_body(hand="no_such_hand")), 404, "NotFound")
+    error = assert_error(client.post("/v1/synthesize", json=request_body(hand="no_such_hand")), 404, "UnknownHand")
     assert error.detail and error.detail[0].field == "robot.name"
 
 

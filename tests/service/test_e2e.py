@@ -145,7 +145,7 @@ def test_robots(service: Service) -> None:
     names = [r["name"] for r in service.http.get("/v1/robots").json()["robots"]]
     assert HAND in names
     assert service.http.get(f"/v1/robots/{HAND}").json()["fingertips"] == ["left_tip", "right_tip"]
-    error_of(service.http.get("/v1/robots/nope"), 404, "NotFound")
+    error_of(service.http.get("/v1/robots/nope"), 404, "UnknownHand")
     urdf = '<robot name="r"><link name="base"/><link name="tip"/></robot>'
     created = service.http.post("/v1/robots", json={"name": "e2e_hand", "urdf": urdf, "fingertips": ["tip"]})
     assert created.status_code == 201, created.text
@@ -157,7 +157,7 @@ def test_robots(service: Service) -> None:
 def test_errors(service: Service) -> None:
     http = service.http
     error_of(http.get("/v1/jobs/0123456789abcdef"), 404, "NotFound")
-    error_of(http.post("/v1/synthesize", json=request_body("no_such_hand")), 404, "NotFound")
+    error_of(http.post("/v1/synthesize", json=request_body("no_such_hand")), 404, "UnknownHand")
     broken = body()
     broken["object"]["points"][0] = [0.0, "x", 1.0]
     invalid = error_of(http.post("/v1/synthesize", json=broken), 422, "ValidationError")

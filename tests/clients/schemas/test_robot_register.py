@@ -39,3 +39,18 @@ def test_bad_registrations_name_the_field(fields: dict, words: str) -> None:
     with pytest.raises(ValidationError) as info:
         RobotRegister(name="h", **fields)
     assert words in str(info.value)
+
+
+def test_the_description_limit_is_in_bytes_and_is_the_loaders() -> None:
+    import pytest
+    from pydantic import ValidationError
+
+    from clients.schemas import MAX_URDF_BYTES, RobotRegister
+    from models.robots.mjcf_archive import MAX_MJCF_BYTES
+    from models.robots.urdf import MAX_URDF_BYTES as LOADER_LIMIT
+
+    assert MAX_URDF_BYTES == LOADER_LIMIT == MAX_MJCF_BYTES
+    wide = "<robot>" + "é" * (MAX_URDF_BYTES // 2) + "</robot>"  # fewer characters than the limit, more bytes
+    assert len(wide) < MAX_URDF_BYTES < len(wide.encode())
+    with pytest.raises(ValidationError, match="byte limit"):
+        RobotRegister(name="wide_hand", urdf=wide, fingertips=["tip"])

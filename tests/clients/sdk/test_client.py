@@ -126,7 +126,7 @@ def test_connection_errors_become_unreachable(make_client: MakeClient, service: 
         make_client(retries=3).health()
     assert len(sleeps) == 3
     service.script[:] = [httpx.ConnectError("refused")]
-    assert make_client(retries=3).health()["status"] == "ok"  # recovered on the retry
+    assert make_client(retries=3).health().status == "ok"  # recovered on the retry
 
 
 def test_unreadable_answer_is_a_server_error(make_client: MakeClient, service: InProcessService) -> None:
@@ -231,7 +231,7 @@ def test_robots_register_health_ready(make_client: MakeClient, tmp_path: Path) -
     assert [r.name for r in client.robots()] == [HAND, "my-gripper"]
     assert client.robot("my-gripper") == robot
     health = client.health()
-    assert health["status"] == "ok" and health["backend"] == "fake"
+    assert health.status == "ok" and health.backend == "fake"
     assert client.ready().ready
 
 
