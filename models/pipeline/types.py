@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from models.refine.refine import Cancelled
+from models.refine.state import HandPose
 
 METHODS = ("network", "contacts", "direct_grasp", "random_contacts")
 TASK_KINDS = ("delta_pose", "point_motion", "target_points", "wrench", "force_closure", "joint_motion")
@@ -97,6 +98,9 @@ class SynthesisInput:
         method: one of `METHODS`. num_proposals: K. refine: run the SOCP refinement.
         max_iterations: refinement cap. seed: seeds sampling. deadline: `time.monotonic()` value or None.
         return_history: keep per-iteration records. hand_key: cache key of the hand for the network.
+        initial_pose: a caller's start for the refinement (e.g. a planner's grasp carried from its previous step):
+            with it the pipeline refines this one pose (one proposal, source "initial_pose"), finds no contacts
+            of its own and never restarts from other approaches.
     """
 
     points: np.ndarray
@@ -118,6 +122,7 @@ class SynthesisInput:
     deadline: float | None = None
     return_history: bool = False
     hand_key: str | None = None
+    initial_pose: HandPose | None = None
 
 
 @dataclass
@@ -159,7 +164,7 @@ class ProposalOutput:
     joint_names: list[str]
     joint_values: np.ndarray
     quality: QualityOutput
-    contact_source: str = "given"  # given | random | network | random_fallback | direct_grasp
+    contact_source: str = "given"  # given | random | network | random_fallback | direct_grasp | initial_pose
     history: list[IterationOutput] | None = None
 
 
