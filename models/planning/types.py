@@ -86,7 +86,7 @@ class PlanOptions:
     repair: str = "nearest"
     max_repair_distance: float = 0.10
     collision_resolution: float = 0.004
-    workspace_margin: float = 0.25
+    workspace_margin: float = 0.4
     contacts: bool = True
     method: str = "network"
     num_proposals: int = 4

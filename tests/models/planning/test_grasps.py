@@ -1,0 +1,68 @@
+import numpy as np
+import pytest
+
+from models.pipeline.prepare import prepare
+from models.planning import InvalidPlan, PlanInput, PlanOptions, Pose, SupportPlane, plan_manipulation
+from models.planning.grasps import step_input
+from models.refine.state import HandPose
+from models.refine.verify import verify
+from models.robots import get_hand
+
+
+@pytest.fixture(scope="module")
+def lifted(block):
+    """A pure translation of the block, 15 cm along x at 20 cm above a table, carried by the Allegro hand."""
+    mesh, pts, nrm = block
+    inp = PlanInput(
+        points=pts, normals=nrm, hand=get_hand("allegro"), start=Pose(np.array([-0.075, 0.0, 0.2])),
+        waypoints=[Pose(np.array([0.075, 0.0, 0.2]))], support=SupportPlane(0.0),
+        mesh_vertices=np.asarray(mesh.vertices), mesh_faces=np.asarray(mesh.faces),
+        options=PlanOptions(translation_step=0.05, method="random_contacts", num_proposals=2, seed=1),
+    )
+    return inp, plan_manipulation(inp)
+
+
+def test_a_grasp_held_across_a_pure_translation_keeps_the_same_contacts(lifted):
+    inp, out = lifted
+    assert len(out.poses) == 4 and out.success
+    first, *later = out.steps
+    assert first.grasp == "new" and all(s.grasp == "kept" for s in later) and out.regrasps == []
+    assert out.kept_share == 1.0
+    body = [p.inverse().apply(s.proposal.contact_points) for p, s in zip(out.poses, out.steps, strict=False)]
+    for contacts in body[1:]:
+        np.testing.assert_allclose(contacts, body[0], atol=1e-6)  # the same points on the object
+    for s in later:  # the carried pose already produces the wrench: refinement starts converged
+        assert s.proposal.contact_source == "initial_pose" and s.proposal.quality.iterations == 0
+        assert s.calls == 1 and s.contact_shift < 1e-6
+    # the hand moved with the object: its pose relative to the object is constant
+    rel = [(p.inverse() @ Pose(s.proposal.palm_position, s.proposal.palm_quaternion)).matrix()
+           for p, s in zip(out.poses, out.steps, strict=False)]  # fmt: skip
+    for m in rel[1:]:
+        np.testing.assert_allclose(m, rel[0], atol=1e-9)
+
+
+def test_every_step_passes_the_single_request_verification(lifted):
+    inp, out = lifted
+    for k, s in enumerate(out.steps):
+        prep = prepare(step_input(inp, out.poses[k], out.poses[k + 1], seed=0))  # a fresh single request
+        pose = HandPose(s.proposal.palm_position, s.proposal.palm_quaternion, s.proposal.joint_values)
+        ver = verify(inp.hand, pose, prep.cloud, prep.task, prep.mu, prep.mesh)
+        assert ver.success, (k, ver.failures)
+        assert not s.hand_collisions
+
+
+def test_trajectory_only_and_invalid_requests_name_the_field(block):
+    mesh, pts, nrm = block
+    base = dict(points=pts, normals=nrm, hand=get_hand("allegro"), start=Pose(np.zeros(3) + [0, 0, 0.2]),
+                waypoints=[Pose(np.array([0.1, 0, 0.2]))], options=PlanOptions(contacts=False))  # fmt: skip
+    out = plan_manipulation(PlanInput(**base))
+    assert out.steps == [] and out.success and out.segments[0].straight
+    bad = Pose(np.array([0.1, 0, 0.2]), np.array([1.0, 1.0, 0, 0]))
+    with pytest.raises(InvalidPlan, match=r"waypoints\[1\]\.quaternion"):
+        plan_manipulation(PlanInput(**{**base, "waypoints": [base["waypoints"][0], bad]}))
+    with pytest.raises(InvalidPlan, match="options.translation_step"):
+        plan_manipulation(PlanInput(**{**base, "options": PlanOptions(translation_step=0.0)}))
+    with pytest.raises(InvalidPlan, match="options.method"):
+        plan_manipulation(PlanInput(**{**base, "options": PlanOptions(method="direct_grasp")}))
+    with pytest.raises(InvalidPlan, match="waypoints: 0 given"):
+        plan_manipulation(PlanInput(**{**base, "waypoints": []}))
