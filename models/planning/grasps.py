@@ -142,7 +142,7 @@ def synthesise_along(
             steps.append(PlanStep(k, None, "failed"))
             held = None
             continue
-        t0, calls, slid = time.perf_counter(), 0, None
+        t0, calls, slid, dropped = time.perf_counter(), 0, None, ""
         step: PlanStep | None = None
         if held is not None:
             start = carried(held, poses[k - 1], a)
@@ -151,21 +151,26 @@ def synthesise_along(
             calls += 1
             p = out.proposals[0]
             shift = contact_shift(held, poses[k - 1], p, a)
-            if p.quality.success and not hand_hits(scene, inp.hand, p, a, b):
-                if shift <= opt.max_contact_shift:
-                    step = PlanStep(k, p, "kept", shift)
-                else:
-                    slid = PlanStep(k, p, "regrasp", shift)
+            hits = hand_hits(scene, inp.hand, p, a, b) if p.quality.success else []
+            if not p.quality.success:
+                dropped = f"verification: {', '.join(p.quality.failures)}"
+            elif hits:
+                dropped = f"hand meets {', '.join(hits)}"
+            elif shift > opt.max_contact_shift:
+                dropped = f"contacts slid {1000 * shift:.1f} mm"
+                slid = PlanStep(k, p, "regrasp", shift, dropped=dropped)
+            else:
+                step = PlanStep(k, p, "kept", shift)
         if step is None:
             found, hits, n = _new_grasp(inp, scene, poses, k, predictor, should_cancel)
             calls += n
             change: GraspChange = "new" if held is None else "regrasp"
             if found is not None and found.quality.success and not hits:
-                step = PlanStep(k, found, change)
+                step = PlanStep(k, found, change, dropped=dropped)
             elif slid is not None:
                 step = slid
             else:
-                step = PlanStep(k, found, "failed", hand_collisions=hits)
+                step = PlanStep(k, found, "failed", hand_collisions=hits, dropped=dropped)
         step.seconds, step.calls = time.perf_counter() - t0, calls
         held = step.proposal if step.success else None
         steps.append(step)

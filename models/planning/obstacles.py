@@ -137,5 +137,5 @@ def _translation(centre: np.ndarray) -> np.ndarray:
 
 
 def obstacle_names(obstacles: list[Obstacle]) -> list[str]:
-    """Each obstacle's name, ``obstacles[i]`` for those without one (names are what errors and answers cite)."""
-    return [o.name or f"obstacles[{i}]" for i, o in enumerate(obstacles)]
+    """Each obstacle's name, ``scene.obstacles[i]`` for those without one (names are what errors and answers cite)."""
+    return [o.name or f"scene.obstacles[{i}]" for i, o in enumerate(obstacles)]

@@ -65,7 +65,8 @@ class CollisionScene:
         everything = [obj for part in self._parts for obj in part]
         self._all = _manager(everything) if everything else None
         self.object_vertices = np.asarray(object_vertices, dtype=np.float64)
-        self._object = fcl.CollisionObject(bvh(self.object_vertices, np.asarray(object_faces)), fcl.Transform())
+        self.object_faces = np.asarray(object_faces, dtype=np.int64)
+        self._object = fcl.CollisionObject(bvh(self.object_vertices, self.object_faces), fcl.Transform())
         self._hands: dict[int, _HandBodies] = {}
 
     @classmethod

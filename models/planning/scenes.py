@@ -33,13 +33,11 @@ def open_box(centre: np.ndarray, inner: np.ndarray, wall: float = 0.01, name: st
     floor = BoxObstacle(np.array([ix + 2 * wall, iy + 2 * wall, wall]), Pose(np.array([cx, cy, wall / 2])),
                         f"{name}_floor")  # fmt: skip
     z = wall + iz / 2
-    walls = [
-        BoxObstacle(np.array([wall, iy + 2 * wall, iz]), Pose(np.array([cx + s * (ix + wall) / 2, cy, z])), f"{name}_{n}")
-        for s, n in ((1, "wall_px"), (-1, "wall_nx"))
-    ] + [
-        BoxObstacle(np.array([ix, wall, iz]), Pose(np.array([cx, cy + s * (iy + wall) / 2, z])), f"{name}_{n}")
-        for s, n in ((1, "wall_py"), (-1, "wall_ny"))
-    ]
+    x_size, y_size = np.array([wall, iy + 2 * wall, iz]), np.array([ix, wall, iz])
+    walls = [BoxObstacle(x_size, Pose(np.array([cx + s * (ix + wall) / 2, cy, z])), f"{name}_wall_{n}x")
+             for s, n in ((1, "p"), (-1, "n"))]  # fmt: skip
+    walls += [BoxObstacle(y_size, Pose(np.array([cx, cy + s * (iy + wall) / 2, z])), f"{name}_wall_{n}y")
+              for s, n in ((1, "p"), (-1, "n"))]  # fmt: skip
     return [floor, *walls]
 
 

@@ -178,6 +178,8 @@ class PlanStep:
         contact_shift: m, the largest move of a contact on the object since the previous step (0 for a new grasp).
         hand_collisions: obstacles the chosen hand meets at the step's two poses (empty when free).
         seconds: synthesis time of this step (every pipeline call it took). calls: how many.
+        dropped: why the previous grasp was not kept (re-grasp and failed steps after a held grasp), e.g.
+            ``"verification: wrench_residual"``, ``"hand meets kettle"``, ``"contacts slid 14.2 mm"``.
     """
 
     index: int
@@ -187,6 +189,7 @@ class PlanStep:
     hand_collisions: list[str] = field(default_factory=list)
     seconds: float = 0.0
     calls: int = 0
+    dropped: str = ""
 
     @property
     def success(self) -> bool:

@@ -61,9 +61,9 @@ def check_options(opt: PlanOptions) -> None:
 
 def _check_obstacles(inp: PlanInput) -> None:
     if len(inp.obstacles) > MAX_OBSTACLES:
-        raise InvalidPlan(f"obstacles: {len(inp.obstacles)} given, at most {MAX_OBSTACLES}")
+        raise InvalidPlan(f"scene.obstacles: {len(inp.obstacles)} given, at most {MAX_OBSTACLES}")
     for i, obs in enumerate(inp.obstacles):
-        name = f"obstacles[{i}]"
+        name = f"scene.obstacles[{i}]"
         if isinstance(obs, BoxObstacle):
             size = _array(f"{name}.size", obs.size, (3,))
             if np.any(size <= 0):
@@ -89,7 +89,7 @@ def _check_obstacles(inp: PlanInput) -> None:
         else:
             raise InvalidPlan(f"{name}: unknown obstacle type {type(obs).__name__}")
     if inp.support is not None and not (np.isfinite(inp.support.height) and 0 <= inp.support.tolerance <= 0.05):
-        raise InvalidPlan("support: height must be finite and tolerance within [0, 0.05] m")
+        raise InvalidPlan("scene.support_plane: height must be finite and tolerance within [0, 0.05] m")
 
 
 def check_plan(inp: PlanInput) -> None:
