@@ -23,7 +23,7 @@ def lifted(block):
 
 
 def test_a_grasp_held_across_a_pure_translation_keeps_the_same_contacts(lifted):
-    inp, out = lifted
+    _, out = lifted
     assert len(out.poses) == 4 and out.success
     first, *later = out.steps
     assert first.grasp == "new" and all(s.grasp == "kept" for s in later) and out.regrasps == []
@@ -52,17 +52,17 @@ def test_every_step_passes_the_single_request_verification(lifted):
 
 
 def test_trajectory_only_and_invalid_requests_name_the_field(block):
-    mesh, pts, nrm = block
-    base = dict(points=pts, normals=nrm, hand=get_hand("allegro"), start=Pose(np.zeros(3) + [0, 0, 0.2]),
+    _, pts, nrm = block
+    base = dict(points=pts, normals=nrm, hand=get_hand("allegro"), start=Pose(np.array([0.0, 0, 0.2])),
                 waypoints=[Pose(np.array([0.1, 0, 0.2]))], options=PlanOptions(contacts=False))  # fmt: skip
     out = plan_manipulation(PlanInput(**base))
     assert out.steps == [] and out.success and out.segments[0].straight
     bad = Pose(np.array([0.1, 0, 0.2]), np.array([1.0, 1.0, 0, 0]))
     with pytest.raises(InvalidPlan, match=r"waypoints\[1\]\.quaternion"):
         plan_manipulation(PlanInput(**{**base, "waypoints": [base["waypoints"][0], bad]}))
-    with pytest.raises(InvalidPlan, match="options.translation_step"):
+    with pytest.raises(InvalidPlan, match=r"options\.translation_step"):
         plan_manipulation(PlanInput(**{**base, "options": PlanOptions(translation_step=0.0)}))
-    with pytest.raises(InvalidPlan, match="options.method"):
+    with pytest.raises(InvalidPlan, match=r"options\.method"):
         plan_manipulation(PlanInput(**{**base, "options": PlanOptions(method="direct_grasp")}))
     with pytest.raises(InvalidPlan, match="waypoints: 0 given"):
         plan_manipulation(PlanInput(**{**base, "waypoints": []}))
