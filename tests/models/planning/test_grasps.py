@@ -2,24 +2,11 @@ import numpy as np
 import pytest
 
 from models.pipeline.prepare import prepare
-from models.planning import InvalidPlan, PlanInput, PlanOptions, Pose, SupportPlane, plan_manipulation
+from models.planning import InvalidPlan, PlanInput, PlanOptions, Pose, plan_manipulation
 from models.planning.grasps import step_input
 from models.refine.state import HandPose
 from models.refine.verify import verify
 from models.robots import get_hand
-
-
-@pytest.fixture(scope="module")
-def lifted(block):
-    """A pure translation of the block, 15 cm along x at 20 cm above a table, carried by the Allegro hand."""
-    mesh, pts, nrm = block
-    inp = PlanInput(
-        points=pts, normals=nrm, hand=get_hand("allegro"), start=Pose(np.array([-0.075, 0.0, 0.2])),
-        waypoints=[Pose(np.array([0.075, 0.0, 0.2]))], support=SupportPlane(0.0),
-        mesh_vertices=np.asarray(mesh.vertices), mesh_faces=np.asarray(mesh.faces),
-        options=PlanOptions(translation_step=0.05, method="random_contacts", num_proposals=2, seed=1),
-    )
-    return inp, plan_manipulation(inp)
 
 
 def test_a_grasp_held_across_a_pure_translation_keeps_the_same_contacts(lifted):
