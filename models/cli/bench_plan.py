@@ -111,6 +111,12 @@ def run(args: argparse.Namespace) -> int:
         print(f"seed {seed}: {wall:.1f} s", flush=True)
     console = Console(width=160)
     console.print(table)
+    rrt = [seg for p in plans for seg in p.segments if not seg.straight]
+    if rrt:
+        console.print(f"RRT-Connect: {len(rrt)} segments, median {np.median([s.planner_seconds for s in rrt]):.3f} s "
+                      f"to connect, median {np.median([s.simplify_seconds for s in rrt]):.3f} s to simplify, "
+                      f"{np.median([s.raw_states for s in rrt]):.0f} → "
+                      f"{np.median([s.simplified_states for s in rrt]):.0f} states (median)")  # fmt: skip
     if all_steps:
         later = [s for p in plans for s in p.steps[1:]]
         share = sum(s.grasp == "kept" for s in later) / max(len(later), 1)

@@ -53,3 +53,28 @@ def test_trajectory_only_and_invalid_requests_name_the_field(block):
         plan_manipulation(PlanInput(**{**base, "options": PlanOptions(method="direct_grasp")}))
     with pytest.raises(InvalidPlan, match="waypoints: 0 given"):
         plan_manipulation(PlanInput(**{**base, "waypoints": []}))
+
+
+def test_no_hand_fits_through_a_tight_tunnel_and_the_steps_say_so(block):
+    """The block (4 x 6 x 6 cm) slides through a tube 1 cm wider than it: the object passes, no hand can."""
+    from models.planning import BoxObstacle
+
+    mesh, pts, nrm = block
+    walls = [BoxObstacle(np.array([0.1, 0.09, 0.01]), Pose(np.array([0.1, 0, z])), f"tube_{n}")
+             for z, n in ((0.04, "top"), (-0.04, "bottom"))]  # fmt: skip
+    walls += [BoxObstacle(np.array([0.1, 0.01, 0.09]), Pose(np.array([0.1, y, 0])), f"tube_{n}")
+              for y, n in ((0.045, "left"), (-0.045, "right"))]  # fmt: skip
+    inp = PlanInput(points=pts, normals=nrm, hand=get_hand("allegro"), start=Pose(np.array([-0.1, 0, 0])),
+                    waypoints=[Pose(np.array([0.1, 0, 0]))], obstacles=walls,
+                    mesh_vertices=np.asarray(mesh.vertices), mesh_faces=np.asarray(mesh.faces),
+                    options=PlanOptions(translation_step=0.05, method="random_contacts", num_proposals=2,
+                                        new_grasp_attempts=1, max_iterations=40, seed=1))  # fmt: skip
+    out = plan_manipulation(inp)
+    assert out.segments[0].straight  # the object itself fits
+    inside = [s for s, p in zip(out.steps, out.poses, strict=False) if p.position[0] > 0.0]
+    assert inside and all(s.grasp == "failed" and not s.success for s in inside)
+    assert all(s.hand_collisions and all(h.startswith("tube_") for h in s.hand_collisions)
+               for s in inside if s.proposal is not None and s.proposal.quality.success)  # fmt: skip
+    before = out.steps[0]
+    assert before.success and before.grasp == "new"
+    assert not out.success
