@@ -43,6 +43,10 @@ class InfeasibleWaypoint(InvalidPlan):
         super().__init__(f"{field_name}: {detail} (collides with {', '.join(obstacles) or 'the scene'})")
         self.field = field_name
         self.obstacles = obstacles
+        self.detail = detail
+
+    def __reduce__(self) -> tuple[type, tuple[str, list[str], str]]:  # picklable across worker processes
+        return type(self), (self.field, self.obstacles, self.detail)
 
 
 class NoPathFound(PlanningError):
@@ -52,6 +56,10 @@ class NoPathFound(PlanningError):
         super().__init__(f"no collision-free path from {source} to {target} in {seconds:.2f} s "
                          f"(segment {segment}; raise options.time_limit or move the waypoints)")
         self.segment = segment
+        self._args = (segment, source, target, seconds)
+
+    def __reduce__(self) -> tuple[type, tuple[int, str, str, float]]:  # picklable across worker processes
+        return type(self), self._args
 
 
 @dataclass

@@ -28,6 +28,15 @@ def test_a_grasp_held_across_a_pure_translation_keeps_the_same_contacts(lifted):
         np.testing.assert_allclose(m, rel[0], atol=1e-9)
 
 
+def test_same_request_same_plan(lifted):
+    inp, out = lifted
+    again = plan_manipulation(inp)
+    assert [s.grasp for s in again.steps] == [s.grasp for s in out.steps]
+    for a, b in zip(again.steps, out.steps, strict=True):
+        np.testing.assert_array_equal(a.proposal.contact_points, b.proposal.contact_points)
+        np.testing.assert_array_equal(a.proposal.joint_values, b.proposal.joint_values)
+
+
 def test_every_step_passes_the_single_request_verification(lifted):
     inp, out = lifted
     for k, s in enumerate(out.steps):

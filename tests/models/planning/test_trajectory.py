@@ -1,3 +1,5 @@
+import pickle
+
 import numpy as np
 import pytest
 import trimesh
@@ -81,6 +83,8 @@ def test_waypoint_in_collision_is_reported_when_asked(block, wall):
         plan_trajectory(scene, Pose(np.array([-0.15, 0, 0.1])),
                         [Pose(np.array([-0.1, 0, 0.1])), Pose(np.array([0.0, 0, 0.1]))], opts)  # fmt: skip
     assert err.value.field == "waypoints[1]" and err.value.obstacles == ["wall"]
+    again = pickle.loads(pickle.dumps(err.value))  # errors cross process boundaries in the workers
+    assert str(again) == str(err.value) and again.field == "waypoints[1]"
 
 
 def test_start_in_collision_and_unrepairable_waypoints_are_errors(block, wall):
@@ -109,6 +113,7 @@ def test_enclosed_goal_is_no_path_found(block):
         ([0.3, 0.02, 0.3], [0.5, 0.15, 0.15], "w3"), ([0.3, 0.02, 0.3], [0.5, -0.15, 0.15], "w4"),
     ]]  # fmt: skip
     scene = scene_with(block, cage, None)
-    with pytest.raises(NoPathFound, match=r"start to waypoints\[0\]"):
+    with pytest.raises(NoPathFound, match=r"start to waypoints\[0\]") as err:
         plan_trajectory(scene, Pose(np.array([0.0, 0, 0.15])), [Pose(np.array([0.5, 0, 0.15]))],
                         PlanOptions(time_limit=0.3, contacts=False))  # fmt: skip
+    assert str(pickle.loads(pickle.dumps(err.value))) == str(err.value)
