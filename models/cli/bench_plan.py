@@ -62,6 +62,7 @@ def bench_task(hand: Any, seed: int, waypoints: int, obstacles: int, options: An
 
 def run(args: argparse.Namespace) -> int:
     import time
+    from collections import Counter
 
     import numpy as np
     import torch
@@ -117,6 +118,9 @@ def run(args: argparse.Namespace) -> int:
                       f"to connect, median {np.median([s.simplify_seconds for s in rrt]):.3f} s to simplify, "
                       f"{np.median([s.raw_states for s in rrt]):.0f} → "
                       f"{np.median([s.simplified_states for s in rrt]):.0f} states (median)")  # fmt: skip
+    dropped = Counter(s.dropped.split(":")[0].split(" ")[0] for s in all_steps if s.dropped)
+    if dropped:
+        console.print("grasps given up because of: " + ", ".join(f"{why} {n}" for why, n in dropped.most_common()))
     if all_steps:
         later = [s for p in plans for s in p.steps[1:]]
         share = sum(s.grasp == "kept" for s in later) / max(len(later), 1)
