@@ -193,6 +193,7 @@ class PlanStep(WireModel):
     hand_collisions: list[str] = Field(default_factory=list)
     dropped: str = Field("", description="Why the previous grasp was not kept.")
     seconds: float = Field(0.0, ge=0, description="Synthesis time of this step.")
+    calls: int = Field(0, ge=0, description="Synthesis calls the step took.")
 
 
 class PlanResult(WireModel):
@@ -206,6 +207,7 @@ class PlanResult(WireModel):
     segments: list[SegmentReport] = Field(default_factory=list)
     steps: list[PlanStep] = Field(default_factory=list)
     regrasps: list[int] = Field(default_factory=list, description="Steps where a new grasp replaces a held one.")
+    kept_share: float = Field(1.0, ge=0, le=1, description="Share of the steps after the first that keep the grasp.")
     hand: str
     model_version: str | None = None
     timings: dict[str, float] = Field(default_factory=dict, description="Seconds per stage.")

@@ -1,7 +1,6 @@
 import numpy as np
 
 from models.planning import plan_manipulation
-from models.planning.export import plan_to_dict, summary_lines
 from models.planning.plan import scene_of
 from models.planning.view import plan_figure
 
@@ -13,14 +12,6 @@ def test_the_view_plays_every_pose_with_hand_and_contacts(lifted):
     # every frame: the object, the hand, the contacts (the last pose has no step: an empty hand)
     assert all(len(f.data) == 3 for f in fig.frames)
     np.testing.assert_allclose(fig.frames[1].data[2].x, out.steps[1].proposal.contact_points[:, 0])
-
-
-def test_export_has_the_wire_answer_fields(lifted):
-    _, out = lifted
-    data = plan_to_dict(out)
-    assert len(data["positions"]) == len(out.poses) and len(data["steps"]) == len(out.poses) - 1
-    assert data["steps"][1]["grasp"] == "kept" and data["steps"][0]["proposal"]["quality"]["success"]
-    assert any("keep the grasp" in line for line in summary_lines(out))
 
 
 def test_view_without_contacts(lifted):
