@@ -3,7 +3,7 @@
 - a box: an fcl ``Box`` primitive (solid: a body inside it collides);
 - a mesh: an fcl BVH of its triangles. A BVH is a surface, so a body entirely inside a closed mesh meets no
   triangle; poses the planner does not reach by a checked motion (start, waypoints, repairs) are therefore also
-  tested for containment (`MeshObstacle.contains`, winding number of a watertight mesh);
+  tested for containment (`MeshObstacle.contains`: trimesh's ray-cast inside test of a watertight mesh);
 - a point cloud (e.g. from a depth camera): the voxels of side ``resolution`` that hold a point, each a solid fcl
   ``Box`` — the occupied space, not a hull (a hull would fill a bowl's inside);
 - a support plane (a table, z up): not an fcl object; a body is above it when its lowest vertex is, which is
