@@ -61,6 +61,7 @@ def bench_task(hand: Any, seed: int, waypoints: int, obstacles: int, options: An
 
 
 def run(args: argparse.Namespace) -> int:
+    import resource
     import time
     from collections import Counter
 
@@ -109,7 +110,8 @@ def run(args: argparse.Namespace) -> int:
             f"{np.median(new):.2f}" if new else "-", f"{np.percentile(secs, 90):.3f}",
             f"{100 * plan.kept_share:.0f}" if plan.steps else "-", str(len(plan.regrasps)), str(failed),
         )  # fmt: skip
-        print(f"seed {seed}: {wall:.1f} s", flush=True)
+        cpu = resource.getrusage(resource.RUSAGE_SELF).ru_utime
+        print(f"seed {seed}: {wall:.1f} s wall, process CPU so far {cpu:.1f} s", flush=True)
     console = Console(width=160)
     console.print(table)
     rrt = [seg for p in plans for seg in p.segments if not seg.straight]
