@@ -13,7 +13,7 @@ from typing import Literal
 
 import numpy as np
 
-from models.pipeline.types import InvalidInput, PipelineError, ProposalOutput
+from models.pipeline.types import InvalidInput, ProposalOutput
 from models.planning.obstacles import Obstacle, SupportPlane
 from models.planning.poses import Pose
 from models.robots.hand import Hand
@@ -22,11 +22,12 @@ REPAIR_MODES = ("nearest", "report")
 GraspChange = Literal["new", "kept", "regrasp", "failed"]
 
 
-class PlanningError(PipelineError):
-    """Base of the planner's errors."""
+class PlanningError(InvalidInput):
+    """Base of the planner's errors. Each is the caller's to fix (a 422 for the route: the message starts with the
+    field), so all are `InvalidInput`s."""
 
 
-class InvalidPlan(InvalidInput):
+class InvalidPlan(PlanningError):
     """A plan request that cannot be processed (the message names the field)."""
 
 
@@ -53,7 +54,7 @@ class NoPathFound(PlanningError):
     """RRT-Connect found no collision-free motion between two consecutive waypoints within its time."""
 
     def __init__(self, segment: int, source: str, target: str, seconds: float) -> None:
-        super().__init__(f"no collision-free path from {source} to {target} in {seconds:.2f} s "
+        super().__init__(f"waypoints: no collision-free path from {source} to {target} in {seconds:.2f} s "
                          f"(segment {segment}; raise options.time_limit or move the waypoints)")
         self.segment = segment
         self._args = (segment, source, target, seconds)
