@@ -172,7 +172,7 @@ def plan_from_dict(data: Any, base: Path, get_hand: Callable[[str], Hand]) -> Pl
     robot = _mapping("robot", top["robot"], {"name"}, {"name"})
     try:
         hand = get_hand(str(robot["name"]))
-    except KeyError as exc:
+    except LookupError as exc:  # `models.robots.UnknownHand`
         raise InvalidPlan(f"robot.name: {exc.args[0] if exc.args else robot['name']}") from exc
     waypoints = top["waypoints"]
     if not isinstance(waypoints, list):
