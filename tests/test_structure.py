@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("clients", "service", "workers", "models")
 
 MODELS_ORDER = (
-    "errors", "objects", "robots", "geometry", "network", "audit", "refine", "pipeline", "data", "training",
+    "errors", "objects", "robots", "geometry", "network", "audit", "refine", "pipeline", "planning", "data", "training",
     "evaluation", "cli",
 )  # fmt: skip
 """Bottom to top: a subpackage of `models` imports only from those before it (and itself). ``audit`` imports none:

@@ -93,7 +93,9 @@ def prepare(inp: SynthesisInput) -> Prepared:
     if not 0 < mu <= 5:
         raise InvalidInput(f"properties.friction: {mu} is outside (0, 5]")
     tip_field = cloud.region_distance if mask is not None else None
-    if inp.method == "contacts":
+    if inp.initial_pose is not None:
+        _initial_pose(inp)
+    elif inp.method == "contacts":
         if inp.contacts is None:
             raise InvalidInput("contacts: required with method 'contacts'")
         contacts = _array("contacts", inp.contacts, (None, 3))
@@ -102,6 +104,17 @@ def prepare(inp: SynthesisInput) -> Prepared:
                 f"contacts: {len(contacts)} contacts for a hand with {inp.hand.num_fingertips} fingertips"
             )
     return Prepared(inp, cloud, exact, centre, mp.mass, inertia, task, mu, tip_field, time.perf_counter() - t0)
+
+
+def _initial_pose(inp: SynthesisInput) -> None:
+    """Check a caller's start pose: palm position (3,), unit quaternion (4,), one value per finger joint."""
+    pose = inp.initial_pose
+    assert pose is not None
+    _array("initial_pose.palm_pos", pose.palm_pos, (3,))
+    quat = _array("initial_pose.palm_quat", pose.palm_quat, (4,))
+    if abs(float(np.linalg.norm(quat)) - 1.0) > 1e-6:
+        raise InvalidInput("initial_pose.palm_quat: not a unit quaternion")
+    _array("initial_pose.q", pose.q, (inp.hand.dof,))
 
 
 def network_inputs(batch: Sequence[Prepared]) -> list[Any]:

@@ -51,7 +51,7 @@ def _network(batch: Sequence[Prepared], predictor: Any) -> list[Any]:
     outputs: list[Any] = [None] * len(batch)
     by_k: dict[int, list[int]] = {}
     for i, prep in enumerate(batch):
-        if prep.inp.method == "network":
+        if prep.inp.method == "network" and prep.inp.initial_pose is None:
             by_k.setdefault(prep.inp.num_proposals, []).append(i)
     if by_k and predictor is None:
         raise ModelUnavailable("method 'network' needs a trained model; none is loaded (use 'contacts')")
@@ -126,7 +126,10 @@ def _finish(
     t0 = time.perf_counter()
     starts: list[HandPose] = []
     sources: list[str] = []
-    if inp.method == "direct_grasp":
+    if inp.initial_pose is not None:  # the caller's start (a planner's carried grasp): refined as given
+        starts.append(inp.initial_pose)
+        sources.append("initial_pose")
+    elif inp.method == "direct_grasp":
         for k in range(inp.num_proposals):
             start = _start_pose(replace(prep, inp=replace(inp, seed=inp.seed + k)))
             starts.append(direct_grasp(hand, prep.cloud, start, prep.centre)[0])
@@ -152,7 +155,7 @@ def _finish(
     results: list[Any] = []
     total = max(1, len(starts) * inp.max_iterations)
     for k, start in enumerate(starts):
-        if not inp.refine or inp.method == "direct_grasp":
+        if not inp.refine or (inp.method == "direct_grasp" and inp.initial_pose is None):
             results.append(None)
             continue
         if inp.deadline is not None and time.monotonic() >= inp.deadline:
@@ -166,7 +169,8 @@ def _finish(
             should_cancel=should_cancel, progress=step_done,
         )
         left = inp.max_iterations - res.iterations
-        if not res.converged and res.reason != "deadline" and inp.method != "contacts" and left >= 10:
+        restart = inp.method != "contacts" and inp.initial_pose is None
+        if not res.converged and res.reason != "deadline" and restart and left >= 10:
             # the initial pose led to a local minimum: restart from approach alignments (models.refine.strategy)
             again = refine_from_start(
                 hand, prep.cloud, prep.task, start, prep.mu, replace(config, max_iterations=left),

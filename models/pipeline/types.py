@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from models.errors import Cancelled, InvalidInput, ModelUnavailable
+from models.refine.state import HandPose
 
 if TYPE_CHECKING:
     from models.robots.hand import Hand
@@ -88,6 +89,9 @@ class SynthesisInput:
         method: one of `METHODS`. num_proposals: K. refine: run the SOCP refinement.
         max_iterations: refinement cap. seed: seeds sampling. deadline: `time.monotonic()` value or None.
         return_history: keep per-iteration records. hand_key: cache key of the hand for the network.
+        initial_pose: a caller's start for the refinement (e.g. a planner's grasp carried from its previous step):
+            with it the pipeline refines this one pose (one proposal, source "initial_pose"), finds no contacts
+            of its own and never restarts from other approaches.
     """
 
     points: np.ndarray
@@ -109,6 +113,7 @@ class SynthesisInput:
     deadline: float | None = None
     return_history: bool = False
     hand_key: str | None = None
+    initial_pose: HandPose | None = None
 
 
 @dataclass
@@ -150,7 +155,7 @@ class ProposalOutput:
     joint_names: list[str]
     joint_values: np.ndarray
     quality: QualityOutput
-    contact_source: str = "given"  # given | random | network | random_fallback | direct_grasp
+    contact_source: str = "given"  # given | random | network | random_fallback | direct_grasp | initial_pose
     history: list[IterationOutput] | None = None
 
 
