@@ -16,7 +16,7 @@ ROOT = Path(__file__).resolve().parents[1]
 FORBIDDEN: dict[str, set[str]] = {
     "models": {"service", "workers", "clients", "fastapi", "starlette", "redis", "pydantic_settings", "uvicorn"},
     "clients": {"models", "workers", "service", "torch", "fastapi", "uvicorn"},
-    "service": {"models", "torch", "pytorch_kinematics", "cvxpy", "clarabel", "fcl", "trimesh"},
+    "service": {"models", "torch", "pytorch_kinematics", "cvxpy", "clarabel", "fcl", "trimesh", "ompl", "mujoco"},
     "workers/queue": {"service", "models", "torch"},
     "workers": {"service"},
 }
