@@ -11,7 +11,9 @@ instead of listing fields:
 - a message with a ``kind`` oneof (``TaskIn``) is the contract's discriminated union: the chosen field's name is
   ``kind`` and its message's fields sit beside it;
 - an unset message, an unset ``optional`` scalar and an empty repeated field are left out, so the contract's
-  defaults apply; a plain proto3 scalar is always present (its zero value included), as proto3 defines it;
+  defaults apply; a plain proto3 scalar is always present (its zero value included), as proto3 defines it. In an
+  answer (``answer=True``: a result, a job, a hand, which the service fills completely) an empty repeated field is
+  an empty list, since proto3 cannot tell "empty" from "unset";
 - a ``map<string, ...>`` is a dict; enumerations are their contract strings.
 """
 
@@ -34,13 +36,13 @@ ModelT = TypeVar("ModelT", bound=WireModel)
 MessageT = TypeVar("MessageT", bound=Message)
 
 
-def from_proto(message: Message, model: type[ModelT]) -> ModelT:
-    """Validate ``message`` as the contract's ``model``.
+def from_proto(message: Message, model: type[ModelT], *, answer: bool = False) -> ModelT:
+    """Validate ``message`` as the contract's ``model`` (``answer``: a complete answer, see the module doc).
 
     Raises:
         pydantic.ValidationError: the contract's own errors, naming each field by its path.
     """
-    return model.model_validate(to_data(message))
+    return model.model_validate(to_data(message, answer=answer))
 
 
 def to_proto(value: WireModel, message: type[MessageT]) -> MessageT:
@@ -50,24 +52,24 @@ def to_proto(value: WireModel, message: type[MessageT]) -> MessageT:
     return out
 
 
-def to_data(message: Message) -> dict[str, Any]:
-    """Plain data for ``model_validate``: what the client set, arrays as typed-binary maps."""
+def to_data(message: Message, *, answer: bool = False) -> dict[str, Any]:
+    """Plain data for ``model_validate``: what the sender set, arrays as typed-binary maps."""
     descriptor: Descriptor = message.DESCRIPTOR
     if UNION in descriptor.oneofs_by_name:
         chosen = message.WhichOneof(UNION)
-        return {} if chosen is None else {UNION: chosen, **to_data(getattr(message, chosen))}
+        return {} if chosen is None else {UNION: chosen, **to_data(getattr(message, chosen), answer=answer)}
     data: dict[str, Any] = {}
     for field in descriptor.fields:
         value = getattr(message, field.name)
         if _is_map(field):
-            if value:
+            if value or answer:
                 data[field.name] = dict(value)
         elif field.is_repeated:
-            if value:
-                data[field.name] = [_read(field, item) for item in value]
+            if value or answer:
+                data[field.name] = [_read(field, item, answer) for item in value]
         elif field.message_type is not None or field.has_presence:
             if message.HasField(field.name):
-                data[field.name] = _read(field, value)
+                data[field.name] = _read(field, value, answer)
         else:
             data[field.name] = value
     return data
@@ -106,12 +108,12 @@ def fill(message: Message, data: Mapping[str, Any]) -> None:
             setattr(message, name, _scalar(field, value))
 
 
-def _read(field: FieldDescriptor, value: Any) -> Any:
+def _read(field: FieldDescriptor, value: Any, answer: bool) -> Any:
     if field.message_type is None:
         return value
     if field.message_type.full_name == ARRAY:
         return {"dtype": value.dtype, "shape": list(value.shape), "data": value.data}
-    return to_data(value)
+    return to_data(value, answer=answer)
 
 
 def _write(message: Message, value: Any) -> None:

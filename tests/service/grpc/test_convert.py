@@ -106,7 +106,7 @@ def test_result_and_job_to_proto() -> None:
     message = to_proto(job, pb.JobPublic)
     assert message.state == "succeeded" and message.result.timings["network"] == 0.25
     assert message.result.proposals[0].quality.iterations == 0 and not message.HasField("error")
-    back = from_proto(message, JobPublic)
+    back = from_proto(message, JobPublic, answer=True)
     assert back.result is not None and np.array_equal(back.result.proposals[0].forces, rows)
     assert back.result.proposals[0].quality == quality
     assert to_data(pb.BatchPublic(counts={"queued": 2}))["counts"] == {"queued": 2}
