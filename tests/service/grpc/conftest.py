@@ -4,6 +4,7 @@ about (k + 3) × 0.05 s)."""
 
 from __future__ import annotations
 
+import contextlib
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -54,6 +55,21 @@ def request(n: int = 128, **options: Any) -> pb.SynthesisRequest:
 
 @pytest.fixture(scope="package")
 def service(request: pytest.FixtureRequest) -> Iterator[Service]:
+    """The service on the embedded backend, shared by the package's tests."""
+    with running(request) as svc:
+        yield svc
+
+
+@pytest.fixture(scope="module", params=["redis"])
+def redis_service(request: pytest.FixtureRequest) -> Iterator[Service]:
+    """The service in front of Redis Streams, a `mani worker` process behind it (skipped without Redis)."""
+    with running(request) as svc:
+        yield svc
+
+
+@contextlib.contextmanager
+def running(request: pytest.FixtureRequest) -> Iterator[Service]:
+    """The app with gRPC on a free port, over the backend ``request.param`` names (default: embedded)."""
     with start_queue_and_workers(request, stage_seconds=0.05, iterations=20, max_queue=8) as queue:
         port = free_port()
         settings = Settings(
