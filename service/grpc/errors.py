@@ -58,9 +58,10 @@ GRPC_CODE: dict[ErrorType, grpc.StatusCode] = {
 class JobFailed(Exception):
     """A job ended without a result; the call answers with the job's own error."""
 
-    def __init__(self, error: ErrorBody) -> None:
+    def __init__(self, error: ErrorBody, job_id: str) -> None:
         super().__init__(error.error)
         self.error = error
+        self.job_id = job_id
 
 
 def code_of(error: ErrorBody) -> grpc.StatusCode:
@@ -78,7 +79,7 @@ def translate(exc: BaseException) -> tuple[ErrorBody, float | None]:
     return api.body(), float(retry) if retry is not None else None
 
 
-def trailers(error: ErrorBody, retry_after: float | None = None) -> tuple[tuple[str, bytes], ...]:
+def trailers(error: ErrorBody, retry_after: float | None = None) -> tuple[tuple[str, str | bytes], ...]:
     """The trailing metadata of a failed call: the rich status details and our own ErrorBody."""
     code = code_of(error)
     details = [error_details_pb2.ErrorInfo(reason=error.type, domain=DOMAIN)]
@@ -108,5 +109,8 @@ def trailers(error: ErrorBody, retry_after: float | None = None) -> tuple[tuple[
 async def abort(context: grpc.aio.ServicerContext, exc: BaseException) -> NoReturn:
     """End the call with the status ``exc`` translates to (raises, as `ServicerContext.abort` does)."""
     error, retry_after = translate(exc)
-    await context.abort(code_of(error), error.error, trailing_metadata=trailers(error, retry_after))
+    metadata = trailers(error, retry_after)
+    if isinstance(exc, JobFailed):
+        metadata += (("x-job-id", exc.job_id),)
+    await context.abort(code_of(error), error.error, trailing_metadata=metadata)
     raise AssertionError("unreachable: abort raises")  # pragma: no cover

@@ -1,5 +1,7 @@
 """The `manifoundation.v1.ManiFoundation` service: each RPC over the same queue and objects as the HTTP routes.
 
+`Synthesize` names its job in the initial and the trailing metadata (``x-job-id``), failed or not.
+
 Deadlines and cancellation: `Synthesize` gives its job the deadline min(now + ``options.timeout``, the call's
 deadline), so the worker stops (the job ends *expired*) when the client would stop waiting; a client that cancels
 or disconnects before its deadline cancels the job (it ends *cancelled*; the worker stops at its next stage or
@@ -66,12 +68,9 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
             raise
         self.state.metrics.observe_job(job)
         if job.result is None:
-            raise JobFailed(
-                job.error
-                or ErrorBody(
-                    error=f"job ended {job.state.value}", type=_WITHOUT_ERROR.get(job.state, "DeadlineExceeded")
-                )
-            )
+            kind = _WITHOUT_ERROR.get(job.state, "DeadlineExceeded")
+            raise JobFailed(job.error or ErrorBody(error=f"job ended {job.state.value}", type=kind), job_id)
+        context.set_trailing_metadata((("x-job-id", job_id),))
         return to_proto(job.result, pb.SynthesisResult)
 
     async def _wait(self, job_id: str, deadline: float) -> JobPublic:

@@ -31,6 +31,7 @@ from ..workers import start_queue_and_workers
 KEY, OTHER = "grpc-test-key-1", "grpc-test-key-2"
 HAND = "test_gripper"
 LIMIT = 64 * 1024 * 1024
+FAIL_SEED = 666  # a request with this seed makes the staged pipeline raise
 
 
 @dataclass
@@ -70,7 +71,7 @@ def redis_service(request: pytest.FixtureRequest) -> Iterator[Service]:
 @contextlib.contextmanager
 def running(request: pytest.FixtureRequest) -> Iterator[Service]:
     """The app with gRPC on a free port, over the backend ``request.param`` names (default: embedded)."""
-    with start_queue_and_workers(request, stage_seconds=0.05, iterations=20, max_queue=8) as queue:
+    with start_queue_and_workers(request, stage_seconds=0.05, iterations=20, max_queue=8, fail_seed=FAIL_SEED) as queue:
         port = free_port()
         settings = Settings(
             api_keys=[KEY, OTHER], rate_limit_per_s=0, grpc_port=port, sse_interval=0.05, grpc_health_interval=0.2

@@ -14,7 +14,7 @@ from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from service.grpc.server import SERVICE_NAME
 from service.security import RateLimiter
 
-from .conftest import OTHER, Service, request
+from .conftest import FAIL_SEED, OTHER, Service, request
 
 
 def failure(call: object) -> tuple[grpc.RpcError, status_pb2.Status, pb.ErrorBody]:
@@ -137,3 +137,13 @@ def test_reflection_lists_and_describes_the_service(service: Service) -> None:
     assert {SERVICE_NAME, "grpc.health.v1.Health", "grpc.reflection.v1alpha.ServerReflection"} <= services
     described = database.FindFileContainingSymbol(SERVICE_NAME)
     assert [m.name for m in described.service[0].method][:2] == ["Synthesize", "SubmitJob"]
+
+
+def test_a_failed_job_answers_its_own_error_and_names_the_job(service: Service) -> None:
+    error, _, body = failure(lambda: service.stub.Synthesize(request(seed=FAIL_SEED), metadata=service.auth()))
+    assert error.code() is grpc.StatusCode.INTERNAL and body.type == "InternalError"
+    job_id = dict(error.trailing_metadata())["x-job-id"]  # type: ignore[attr-defined]
+    job = service.stub.GetJob(pb.GetJobRequest(id=job_id), metadata=service.auth())
+    assert job.state == "failed" and job.error.type == "InternalError"
+    _, call = service.stub.Synthesize.with_call(request(), metadata=service.auth())
+    assert dict(call.trailing_metadata())["x-job-id"]
