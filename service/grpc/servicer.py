@@ -19,8 +19,17 @@ from typing import Any
 
 import grpc
 
-from clients.schemas import BatchItem, BatchPublic, ErrorBody, JobPublic, JobState, RobotRegister
-from service.errors import Conflict, PayloadTooLarge, Unavailable
+from clients.schemas import (
+    MAX_BATCH_SIZE,
+    BatchItem,
+    BatchPublic,
+    ErrorBody,
+    FieldError,
+    JobPublic,
+    JobState,
+    RobotRegister,
+)
+from service.errors import Conflict, InvalidInput, PayloadTooLarge, Unavailable
 from service.grpc.calls import GrpcMetrics, streaming, unary
 from service.grpc.convert import to_proto
 from service.grpc.errors import JobFailed
@@ -137,8 +146,12 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
     async def GetBatch(self, request: pb.GetBatchRequest, context: Any, caller: Caller) -> pb.BatchPublic:
         queue, settings = self.submission.queue, self.state.settings
         job_ids = await queue.batch_job_ids(request.id, owner=caller.scope)
-        offset = max(0, request.offset)
-        limit = max(1, min(request.limit if request.HasField("limit") else 100, settings.batch_page_max))
+        offset, limit = request.offset, request.limit if request.HasField("limit") else 100
+        if offset < 0 or not 1 <= limit <= MAX_BATCH_SIZE:
+            field = "offset" if offset < 0 else "limit"
+            problem = "must be ≥ 0" if offset < 0 else f"must be 1..{MAX_BATCH_SIZE}"
+            raise InvalidInput(f"{field}: {problem}", detail=[FieldError(field=field, problem=problem)])
+        limit = min(limit, settings.batch_page_max)
         states = await asyncio.gather(*(queue.get(j, with_result=False) for j in job_ids))
         page = await asyncio.gather(*(queue.get(j) for j in job_ids[offset : offset + limit]))
         counts: dict[JobState, int] = {}

@@ -147,3 +147,10 @@ def test_a_failed_job_answers_its_own_error_and_names_the_job(service: Service) 
     assert job.state == "failed" and job.error.type == "InternalError"
     _, call = service.stub.Synthesize.with_call(request(), metadata=service.auth())
     assert dict(call.trailing_metadata())["x-job-id"]
+
+
+def test_a_bad_page_names_its_parameter(service: Service) -> None:
+    batch = service.stub.SubmitBatch(pb.BatchCreate(requests=[request()]), metadata=service.auth())
+    bad = pb.GetBatchRequest(id=batch.id, limit=0)
+    error, _, body = failure(lambda: service.stub.GetBatch(bad, metadata=service.auth()))
+    assert error.code() is grpc.StatusCode.INVALID_ARGUMENT and body.detail[0].field == "limit"
