@@ -60,9 +60,14 @@ class GrpcServer:
         names = (SERVICE_NAME, health_pb2.DESCRIPTOR.services_by_name["Health"].full_name, reflection.SERVICE_NAME)
         reflection.enable_server_reflection(names, self.server)
         address = f"{settings.grpc_host or settings.host}:{settings.grpc_port}"
-        self.port = self.server.add_insecure_port(address)
+        try:
+            self.port = self.server.add_insecure_port(address)
+        except RuntimeError:
+            self.port = 0
         if not self.port:
-            raise RuntimeError(f"gRPC: cannot listen on {address}")
+            raise RuntimeError(
+                f"gRPC: cannot listen on {address} (in use?): set --grpc-port / MANI_GRPC_PORT, or --no-grpc"
+            )
         self.address = address.rsplit(":", 1)[0] + f":{self.port}"
         self._watch: asyncio.Task[None] | None = None
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -11,6 +12,7 @@ from pathlib import Path
 
 import grpc
 import httpx
+import pytest
 from grpc_health.v1 import health_pb2, health_pb2_grpc
 
 from service.cli import settings_from
@@ -48,9 +50,10 @@ def _stop(proc: subprocess.Popen[bytes]) -> None:
     assert b"Traceback" not in stderr, stderr.decode()[-3000:]
 
 
-def test_the_flags() -> None:
+def test_the_flags(monkeypatch: pytest.MonkeyPatch) -> None:
     import argparse
 
+    monkeypatch.delenv("MANI_GRPC_PORT", raising=False)  # the suite's conftest turns gRPC off for spawned servers
     parser = argparse.ArgumentParser()
     from service.cli import register
 
@@ -84,3 +87,16 @@ def test_no_grpc_serves_http_only() -> None:
                 pass
     finally:
         _stop(proc)
+
+
+def test_a_busy_grpc_port_is_a_clear_error() -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        port = taken.getsockname()[1]
+        env = dict(os.environ, MANI_PIPELINE="workers.testing:StagedPipeline", MANI_LOG_LEVEL="WARNING")
+        cmd = [sys.executable, "-m", "clients.cli.main", "serve", "--port", str(free_port()), "--workers", "1",
+               "--grpc-port", str(port)]  # fmt: skip
+        done = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode != 0
+    assert f"cannot listen on 127.0.0.1:{port}" in done.stderr, done.stderr[-2000:]
