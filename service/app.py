@@ -40,8 +40,10 @@ def build_queue(settings: Settings) -> JobQueue:
     return create_queue(settings.queue_settings())
 
 
-def create_app(settings: Settings | None = None, *, queue: JobQueue | None = None) -> FastAPI:
-    """The app. ``queue``: an already-built queue (tests); the lifespan starts and closes it either way."""
+def create_app(settings: Settings | None = None, *, queue: JobQueue | None = None, grpc: bool = False) -> FastAPI:
+    """The app. ``queue``: an already-built queue (tests); the lifespan starts and closes it either way.
+    ``grpc``: also serve gRPC on ``settings.grpc_port`` (unless 0) from the lifespan, over the same queue
+    (`mani serve` asks for it; `app.state.grpc` is the running `service.grpc.server.GrpcServer`)."""
     settings = settings or Settings()
     metrics = Metrics()
 
@@ -55,11 +57,18 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
         app.state.history = history
         app.state.shutting_down = False  # an app started again after a shutdown serves again
         sampler = asyncio.create_task(history.run(), name="dashboard-sampler")
+        app.state.grpc = None
+        if grpc and settings.grpc_port:
+            from service.grpc.server import start_grpc
+
+            app.state.grpc = await start_grpc(app.state, settings)
         log.info("service started", extra={"backend": the_queue.backend})
         try:
             yield
         finally:
             app.state.shutting_down = True
+            if app.state.grpc is not None:
+                await app.state.grpc.stop()
             sampler.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await sampler

@@ -1,4 +1,4 @@
-"""`mani serve`: the HTTP API, with embedded workers (default) or in front of a Redis Streams queue.
+"""`mani serve`: the HTTP API (and gRPC beside it), with embedded workers (default) or in front of a Redis queue.
 
 Kept light at import time: FastAPI, uvicorn and the queue are imported when the command runs.
 """
@@ -12,7 +12,9 @@ EXAMPLE = """examples:
   mani serve                                  # API + 2 embedded worker processes on 127.0.0.1:8000
   mani serve --port 9000 --workers 4
   mani serve --redis redis://localhost:6379/0 # API only; run `mani worker --redis ...` elsewhere
-environment: MANI_HOST, MANI_PORT, MANI_CONCURRENCY, MANI_REDIS_URL, MANI_API_KEYS, MANI_RATE_LIMIT_PER_S, ..."""
+  mani serve --grpc-port 50052                # gRPC on another port (default 50051; --no-grpc: HTTP only)
+environment: MANI_HOST, MANI_PORT, MANI_GRPC_PORT, MANI_GRPC_MAX_MESSAGE_BYTES, MANI_CONCURRENCY,
+  MANI_REDIS_URL, MANI_API_KEYS, MANI_RATE_LIMIT_PER_S, ..."""
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -28,6 +30,13 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--port", type=int, help="port (MANI_PORT, default 8000)")
     parser.add_argument("--workers", type=int, help="embedded worker processes (MANI_CONCURRENCY, default 2)")
     parser.add_argument("--redis", metavar="URL", help="Redis URL: API only, workers run as `mani worker`")
+    grpc = parser.add_mutually_exclusive_group()
+    grpc.add_argument(
+        "--grpc-port",
+        type=int,
+        help="gRPC port beside HTTP, same process and queue (MANI_GRPC_PORT, default 50051; 0: off)",
+    )
+    grpc.add_argument("--no-grpc", action="store_true", help="serve HTTP only (same as --grpc-port 0)")
     parser.add_argument("--log-level", help="DEBUG, INFO, WARNING, ... (MANI_LOG_LEVEL)")
     parser.set_defaults(func=serve)
 
@@ -36,7 +45,13 @@ def settings_from(args: argparse.Namespace) -> Any:
     """`Settings` from the environment with the command line on top."""
     from service.settings import Settings
 
-    given = {"host": args.host, "port": args.port, "log_level": getattr(args, "log_level", None)}
+    grpc_port = 0 if getattr(args, "no_grpc", False) else getattr(args, "grpc_port", None)
+    given = {
+        "host": args.host,
+        "port": args.port,
+        "log_level": getattr(args, "log_level", None),
+        "grpc_port": grpc_port,
+    }
     queue = {"concurrency": args.workers, "redis_url": args.redis}
     return Settings(
         **{k: v for k, v in given.items() if v is not None}, queue={k: v for k, v in queue.items() if v is not None}
@@ -77,7 +92,7 @@ def serve(args: argparse.Namespace) -> int:
         print(f"mani serve: invalid settings:\n{exc}", file=sys.stderr)
         return 2
     configure_logging(settings)
-    app = create_app(settings)
+    app = create_app(settings, grpc=True)
 
     class Server(uvicorn.Server):
         def handle_exit(self, sig: int, frame: Any) -> None:

@@ -27,6 +27,16 @@ class Settings(BaseSettings):
     host: str = "127.0.0.1"
     port: int = Field(8000, ge=0, le=65535)
 
+    # --- gRPC beside HTTP (`mani serve`; docs/grpc.md): same process, queue, keys and limits
+    grpc_port: int = Field(50051, ge=0, le=65535, description="gRPC port of `mani serve`; 0: no gRPC.")
+    grpc_host: str | None = Field(None, description="Address gRPC listens on; unset: the HTTP `host`.")
+    grpc_max_message_bytes: int = Field(
+        MAX_BODY_BYTES, ge=1024 * 1024, le=1024 * 1024 * 1024,
+        description="Largest gRPC message in and out (default: the HTTP body limit; 200 000 points fit).",
+    )  # fmt: skip
+    grpc_grace_s: float = Field(5.0, ge=0, le=600, description="Calls in flight get this long at shutdown, s.")
+    grpc_health_interval: float = Field(1.0, gt=0, le=60, description="Readiness re-check period of grpc.health.v1.")
+
     # --- queue: embedded workers (default) or Redis Streams (scale-out; workers run as `mani worker`). Its knobs
     # (MANI_REDIS_URL, MANI_CONCURRENCY, MANI_MAX_QUEUE, MANI_BATCH_SIZE, ...) are `workers.settings.QueueSettings`'
     # alone; `queue` holds what the command line set on top of the environment.

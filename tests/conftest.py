@@ -17,6 +17,10 @@ from collections.abc import Iterator
 
 import pytest
 
+# `mani serve` listens for gRPC on 50051 by default; the `mani serve` processes tests start (each on a free HTTP
+# port) would race for that one port, so they serve HTTP only unless a test asks for gRPC (`--grpc-port`).
+os.environ.setdefault("MANI_GRPC_PORT", "0")
+
 
 def _free_port() -> int:
     with socket.socket() as sock:

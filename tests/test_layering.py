@@ -50,7 +50,16 @@ def _modules_after_import(*modules: str) -> set[str]:
 
 
 @pytest.mark.parametrize(
-    "module", ["clients", "clients.schemas", "clients.codec", "clients.cli.main", "workers.queue", "service.app"]
+    "module",
+    [
+        "clients",
+        "clients.schemas",
+        "clients.codec",
+        "clients.cli.main",
+        "workers.queue",
+        "service.app",
+        "service.grpc.server",
+    ],
 )
 def test_torch_free_at_run_time(module: str) -> None:
     loaded = _modules_after_import(module)

@@ -1,9 +1,9 @@
 """The error vocabulary: every error the service answers or a job ends with, its HTTP status and job state.
 
-One enum, read by every side: the service maps `ErrorType.status` to the HTTP answer (and, later, to gRPC
-codes), the workers put an `ErrorType` in a failed job's `ErrorBody`, the SDK maps it back to its exception
-classes. A job whose error is `CANCELLED` ends *cancelled*, `DEADLINE_EXCEEDED` / `RESULT_EXPIRED` end
-*expired*, every other error ends *failed* (`ErrorType.job_state`).
+One enum, read by every side: the service maps `ErrorType.status` to the HTTP answer (and each type to a gRPC
+code: ``GRPC_CODE`` in `service/grpc/errors.py`), the workers put an `ErrorType` in a failed job's `ErrorBody`,
+the SDK maps it back to its exception classes. A job whose error is `CANCELLED` ends *cancelled*,
+`DEADLINE_EXCEEDED` / `RESULT_EXPIRED` end *expired*, every other error ends *failed* (`ErrorType.job_state`).
 
 Compatibility: a newer service may add members. A client that reads a type it does not know keeps the string
 (`ErrorBody.type` accepts any name) and classifies the error by its HTTP status.

@@ -1,0 +1,1 @@
+"""Tests of the gRPC front end (`service.grpc`)."""
