@@ -169,6 +169,7 @@ def _start_service(args: argparse.Namespace) -> tuple[subprocess.Popen[bytes], s
         str(port),
         "--workers",
         str(args.workers),
+        "--no-grpc",  # the HTTP service alone (a second instance would race for the gRPC port)
     ]
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return proc, f"http://127.0.0.1:{port}"

@@ -225,8 +225,8 @@ def _serve(max_queue: int, stage_seconds: float) -> tuple[subprocess.Popen[bytes
                MANI_MAX_QUEUE=str(max_queue), MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING", MANI_CONCURRENCY="1",
                MANI_BODY_TIMEOUT="120")  # fmt: skip
     env.pop("MANI_REDIS_URL", None)
-    proc = subprocess.Popen([sys.executable, "-m", "clients.cli.main", "serve", "--port", str(port)], env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)  # fmt: skip
+    cmd = [sys.executable, "-m", "clients.cli.main", "serve", "--port", str(port), "--no-grpc"]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     base = f"http://127.0.0.1:{port}"
     end = time.monotonic() + 120
     while time.monotonic() < end:
