@@ -117,7 +117,10 @@ class ModelsPipeline:
 
         material = job.request.object.material.value
         card = getattr(self.predictor, "card", None)
-        if method_of(job.request) == "network" and card is not None and material not in (card.materials or [material]):
+        per_point = job.request.task.kind in ("point_motion", "target_points")  # deformables: contacts + motions
+        deformable = material in ("cloth", "rope", "plasticine") and per_point
+        if (method_of(job.request) == "network" and card is not None and not deformable
+                and material not in (card.materials or [material])):  # fmt: skip
             raise ValueError(
                 f"object.material: '{material}' is not supported by the loaded model "
                 f"{self.model_version} (trained on: {', '.join(card.materials)}); "
