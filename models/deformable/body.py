@@ -7,9 +7,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from models.deformable.materials import check_material
+from models.deformable.materials import ROPE_RADIUS, check_material
 
-ELEMENT_SIZE = {"rope": 2, "cloth": 3, "plasticine": 4}  # vertices per element: edge, triangle, tetrahedron
+ELEMENT_SIZE = {"rope": 4, "cloth": 3, "plasticine": 4}  # vertices per element: triangle or tetrahedron
 
 
 @dataclass(frozen=True)
@@ -17,13 +17,13 @@ class DeformableBody:
     """A deformable object at rest on the table (z = 0 is the table, +z up), metres.
 
     Attributes:
-        material: cloth (triangles), rope (edges) or plasticine (tetrahedra).
+        material: cloth (triangles), rope or plasticine (tetrahedra).
         kind: the shape's name (square, tshirt, rope, sphere, ...).
         vertices: (V, 3) rest positions of the simulation mesh.
-        elements: (E, k) vertex indices, k = 2, 3 or 4 by material.
+        elements: (E, k) vertex indices, k = 3 (cloth) or 4 (rope, plasticine).
         surface: (N,) indices of the vertices that form the object's point cloud (all of them for cloth and
             rope, the boundary vertices for plasticine).
-        normals: (N, 3) unit normals of the cloud (up for cloth and rope, outward for plasticine).
+        normals: (N, 3) unit normals of the cloud (up for cloth, outward for rope and plasticine).
         properties: contract properties (friction, density, stretch, bending, youngs_modulus, poisson_ratio,
             yield_stress; those of the material).
         seed: the seed the shape was drawn with.
@@ -67,14 +67,13 @@ class DeformableBody:
         return float(np.ptp(self.points, axis=0).max())
 
     def measure(self) -> float:
-        """Area (cloth, m²), length (rope, m) or volume (plasticine, m³) of the rest mesh."""
+        """Area (cloth, m²), length (rope, m: volume over the cross-section) or volume (plasticine, m³)."""
         v, e = np.asarray(self.vertices, dtype=np.float64), np.asarray(self.elements)
-        if self.material == "rope":
-            return float(np.linalg.norm(v[e[:, 1]] - v[e[:, 0]], axis=1).sum())
         if self.material == "cloth":
             return float(0.5 * np.linalg.norm(np.cross(v[e[:, 1]] - v[e[:, 0]], v[e[:, 2]] - v[e[:, 0]]), axis=1).sum())
         a, b, c, d = (v[e[:, i]] for i in range(4))
-        return float(np.abs(np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a))).sum() / 6.0)
+        volume = float(np.abs(np.einsum("ij,ij->i", b - a, np.cross(c - a, d - a))).sum() / 6.0)
+        return volume / (2 * ROPE_RADIUS) ** 2 if self.material == "rope" else volume
 
     def with_properties(self, properties: dict[str, float]) -> DeformableBody:
         """The same shape with other properties."""

@@ -117,7 +117,7 @@ def flex_parameters(material: str, properties: dict[str, float], measure: float)
         young = p["stretch"] * (1.0 - CLOTH_POISSON**2) / thickness
         return FlexParameters(young, CLOTH_POISSON, thickness, 0.0, mu, p["density"] * thickness * measure)
     if material == "rope":
-        mass = ROPE_DENSITY * np.pi * ROPE_RADIUS**2 * measure
+        mass = ROPE_DENSITY * (2 * ROPE_RADIUS) ** 2 * measure  # square cross-section (models.deformable.rope)
         return FlexParameters(p["youngs_modulus"], p["poisson_ratio"], 0.0, 0.0, mu, float(mass))
     strain = max(p["yield_stress"] / p["youngs_modulus"], MIN_YIELD_STRAIN)
     return FlexParameters(

@@ -14,12 +14,10 @@ from collections.abc import Callable
 import numpy as np
 
 from models.deformable.body import DeformableBody
+from models.deformable.lattice import CORNERS, KUHN, boundary
 from models.deformable.materials import sample_properties
 
 PLASTICINE_SIZE = (0.04, 0.1)  # m
-# Kuhn's six tetrahedra of the unit cube, corners indexed by (x, y, z) bits: 0 = (0,0,0) ... 7 = (1,1,1).
-_KUHN = np.array([[0, 1, 3, 7], [0, 3, 2, 7], [0, 2, 6, 7], [0, 6, 4, 7], [0, 4, 5, 7], [0, 5, 1, 7]])
-_CORNERS = np.array([[(c >> 0) & 1, (c >> 1) & 1, (c >> 2) & 1] for c in range(8)])
 Inside = Callable[[np.ndarray], np.ndarray]
 
 
@@ -67,31 +65,13 @@ def tetrahedralise(inside: Inside, cells: int) -> tuple[np.ndarray, np.ndarray]:
     ijk = np.stack(np.meshgrid(np.arange(n), np.arange(n), np.arange(n), indexing="ij"), axis=-1).reshape(-1, 3)
     flag = inside(ticks[ijk]).reshape(n, n, n)
     cubes = np.argwhere(np.all([flag[c[0]:n - 1 + c[0], c[1]:n - 1 + c[1], c[2]:n - 1 + c[2]]
-                                for c in _CORNERS], axis=0))  # fmt: skip
+                                for c in CORNERS], axis=0))  # fmt: skip
     if len(cubes) == 0:
         raise ValueError("shape holds no lattice cube; use more cells")
-    corner_ids = np.ravel_multi_index((cubes[:, None, :] + _CORNERS[None]).reshape(-1, 3).T, (n, n, n))
-    tets = corner_ids.reshape(-1, 8)[:, _KUHN].reshape(-1, 4)
+    corner_ids = np.ravel_multi_index((cubes[:, None, :] + CORNERS[None]).reshape(-1, 3).T, (n, n, n))
+    tets = corner_ids.reshape(-1, 8)[:, KUHN].reshape(-1, 4)
     used, tets = np.unique(tets, return_inverse=True)
     return ticks[np.stack(np.unravel_index(used, (n, n, n)), axis=1)], tets.reshape(-1, 4)
-
-
-def boundary(vertices: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Boundary vertex indices (N,) and their outward unit normals (N, 3)."""
-    faces = np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]], tets[:, [0, 1, 2]]])
-    opposite = np.concatenate([tets[:, 0], tets[:, 1], tets[:, 2], tets[:, 3]])
-    key = np.sort(faces, axis=1)
-    _, first, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
-    outer = first[counts == 1]
-    f, o = faces[outer], opposite[outer]
-    n = np.cross(vertices[f[:, 1]] - vertices[f[:, 0]], vertices[f[:, 2]] - vertices[f[:, 0]])
-    n *= np.where(np.einsum("ij,ij->i", n, vertices[f[:, 0]] - vertices[o]) < 0, -1.0, 1.0)[:, None]
-    acc = np.zeros_like(vertices)
-    for k in range(3):
-        np.add.at(acc, f[:, k], n)
-    surface = np.unique(f)
-    normals = acc[surface] / np.linalg.norm(acc[surface], axis=1, keepdims=True)
-    return surface, normals
 
 
 def make_plasticine(kind: str, seed: int, properties: dict[str, float] | None = None, size: float | None = None,

@@ -111,17 +111,18 @@ def simulate(body: DeformableBody, contacts: np.ndarray, motions: np.ndarray,
     lift = LIFT[body.material] if cfg.lift is None else cfg.lift
     bad = [int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
                             mujoco.mjtWarning.mjWARN_BADQACC)]  # MuJoCo resets the state after these
-    model = mujoco.MjModel.from_xml_string(scene_xml(body, verts, dt))
-    data = mujoco.MjData(model)
-    mujoco.mj_forward(model, data)
     start = np.asarray(body.vertices, dtype=np.float64)[verts]
     move, settle = round(cfg.move_seconds / dt), round(cfg.settle_seconds / dt)
     previous = mujoco.get_mju_user_warning()
     mujoco.set_mju_user_warning(lambda message: log.debug("mujoco: %s", message))  # counted in data.warning
     t0 = time.perf_counter()
-    last_good, reached = data.flexvert_xpos.copy(), start
+    last_good, reached = np.asarray(body.vertices, dtype=np.float64), start
     stable, k = True, -1
     try:
+        model = mujoco.MjModel.from_xml_string(scene_xml(body, verts, dt))
+        data = mujoco.MjData(model)
+        mujoco.mj_forward(model, data)
+        last_good = data.flexvert_xpos.copy()
         for k in range(move + settle):
             if k < move and len(verts):
                 data.mocap_pos[:] = path_points(start, mot, (k + 1) / move, lift)

@@ -24,7 +24,7 @@ def test_shipped_network_answers_a_rope_drag_with_contacts_and_motions() -> None
     from workers.pipeline import JobInput
 
     pipeline = ModelsPipeline(hands=["panda_gripper"])
-    motion = np.zeros((72, 3))
+    motion = np.zeros((len(make_rope(seed=0).points), 3))
     motion[:10] = [0.05, 0.0, 0.0]
     request = _rope_request({"kind": "point_motion", "motion": motion})
     [result] = pipeline.run([JobInput(id="rope", request=request)], lambda *a: None, lambda job_id: False)
@@ -37,7 +37,7 @@ def test_shipped_network_answers_a_rope_drag_with_contacts_and_motions() -> None
 
 
 def test_unordered_targets_may_differ_in_count_but_ordered_ones_may_not() -> None:
-    targets = np.zeros((90, 3)) + np.linspace(0, 1, 90)[:, None]
+    targets = np.zeros((190, 3)) + np.linspace(0, 1, 190)[:, None]
     assert _rope_request({"kind": "target_points", "targets": targets, "correspondence": "unknown"})
     with pytest.raises(ValidationError, match="targets"):
         _rope_request({"kind": "target_points", "targets": targets})

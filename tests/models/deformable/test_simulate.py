@@ -27,8 +27,7 @@ def test_dragged_rope_end_arrives_at_its_goal() -> None:
     out = simulate(rope, np.array([0]), motion)
     assert out.stable and out.tracking_error < 2e-3
     assert np.linalg.norm(out.cloud[0] - (rope.points[0] + motion[0])) < 0.01
-    # the far end follows less than the grasped one
-    assert np.linalg.norm(out.cloud[-1] - rope.points[-1]) < np.linalg.norm(motion)
+    assert np.abs(out.cloud[:, 2]).max() < 0.03  # it stays on the table
 
 
 def test_plasticine_keeps_a_press_and_an_elastic_body_does_not() -> None:

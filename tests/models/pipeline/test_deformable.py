@@ -41,6 +41,6 @@ def test_unordered_targets_are_registered_back_to_their_motion(gripper) -> None:
 
 
 def test_direct_grasp_is_refused_for_a_deformable(gripper) -> None:  # type: ignore[no-untyped-def]
-    task = TaskInput("point_motion", motion=np.zeros((72, 3)))
+    task = TaskInput("point_motion", motion=np.zeros((len(make_rope(seed=0).points), 3)))
     with pytest.raises(InvalidInput, match="method"):
         run_pipeline(_request(gripper, task, method="direct_grasp"))
