@@ -159,6 +159,8 @@ def add_deformable(sub: Any) -> None:
     d.add_argument("--weights", default="models/weights/cpu", help="checkpoint directory of the network")
     d.add_argument("--seed", type=int, default=0, help="seed of the cases and the baselines")
     d.add_argument("--data-seed", type=int, default=0, help="seed of the data set whose bodies are used")
+    d.add_argument("--sensitivity", type=int, default=0,
+                   help="also run the property pairs (handkerchief vs card, rope vs stick) on this many shapes")
     d.add_argument("--json", default=None, help="also write the summary to this JSON file")
     d.set_defaults(func=run_deformable)
 
@@ -217,8 +219,28 @@ def run_deformable(args: argparse.Namespace) -> int:
         table.add_row(str(r["material"]), str(r["split"]), str(r["method"]), str(r["cases"]),
                       f"{r['success']:.1f}", f"{r['mean_error']:.3f}", f"{r['top_mean_error']:.3f}",
                       str(r["network_contacts"]) if r["method"] == "network" else "-")
-    Console(width=160).print(table)
+    console = Console(width=160)
+    console.print(table)
+    figures: dict[str, Any] = {"table": rows}
+    if args.sensitivity:
+        from models.evaluation.deformable import SENSITIVITY_PAIRS, property_sensitivity
+
+        pairs = Table(title=f"property sensitivity: one shape, two property sets, {args.sensitivity} shapes each")
+        for col in ("pair", "shapes", "median rollout gap (same manipulation)", "network contacts differ",
+                    "network (not fallback) answers"):
+            pairs.add_column(col, justify="left" if col == "pair" else "right")
+        figures["sensitivity"] = []
+        for material in [m for m in materials if m in SENSITIVITY_PAIRS]:
+            res = property_sensitivity(material, args.sensitivity, args.seed, network)
+            a, _, b, _ = SENSITIVITY_PAIRS[material]
+            differ = [r.contacts_differ for r in res if r.contacts_differ is not None]
+            own = sum(s == "network" for r in res for s in r.sources)
+            pairs.add_row(f"{a} / {b}", str(len(res)), f"{np.median([r.rollout_gap for r in res]):.3f}",
+                          f"{sum(differ)}/{len(differ)}" if differ else "-", f"{own}/{2 * len(res)}")
+            figures["sensitivity"].append({"pair": f"{a}/{b}", "gaps": [r.rollout_gap for r in res],
+                                           "differ": differ, "network_answers": own})
+        console.print(pairs)
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump(rows, fh, indent=1)
+            json.dump(figures, fh, indent=1)
     return EXIT_OK

@@ -9,7 +9,7 @@ Units and ranges (the data generator samples inside them; log-uniform where mark
 | cloth | stretch (membrane stiffness k_s = E t / (1 − ν²)) | N/m | 3·10² – 3·10⁴ (log) |
 | cloth | bending (plate stiffness D = E t³ / (12 (1 − ν²))) | N·m | 10⁻⁶ – 10⁻³ (log); a card ≈ 10⁻² |
 | rope | friction | – | 0.3 – 1.0 |
-| rope | youngs_modulus | Pa | 10⁵ – 10⁸ (log) |
+| rope | youngs_modulus | Pa | 10³ – 10⁶ (log); a stick ≈ 10⁹ |
 | rope | poisson_ratio | – | 0.2 – 0.45 |
 | plasticine | friction | – | 0.3 – 1.0 |
 | plasticine | youngs_modulus | Pa | 3·10⁵ – 3·10⁶ (log) |
@@ -21,6 +21,8 @@ two stiffnesses give both: t = √(12 D / k_s) and E = k_s (1 − ν²) / t with
 density · t. MuJoCo's yield is a strain, so plasticine's yield stress becomes σ_y / E. A rope has no density in
 the contract: ``ROPE_DENSITY`` and ``ROPE_RADIUS`` are fixed.
 
+The rope's range is for its 1 cm rod (`models.deformable.rope`): dragged by its middle, a 60 cm rope at 10³ Pa
+leaves both ends in place, at 10⁵ Pa both ends follow by 8-10 cm, at 10⁷ Pa and above it moves like a stick.
 Plasticine's ranges were chosen by simulation (docs/deformables.md): below E ≈ 3·10⁵ Pa with yield ≈ 2·10³ Pa an
 8 cm body keeps flowing after a press is released; above yield ≈ 10⁵ Pa it springs back (elastic).
 """
@@ -48,7 +50,7 @@ RANGES: dict[str, dict[str, tuple[float, float, bool]]] = {
     },
     "rope": {
         "friction": (0.3, 1.0, False),
-        "youngs_modulus": (1e5, 1e8, True),
+        "youngs_modulus": (1e3, 1e6, True),
         "poisson_ratio": (0.2, 0.45, False),
     },
     "plasticine": {
@@ -61,7 +63,7 @@ RANGES: dict[str, dict[str, tuple[float, float, bool]]] = {
 
 DEFAULTS: dict[str, dict[str, float]] = {
     "cloth": {"friction": 0.6, "density": 800.0, "stretch": 3e3, "bending": 3e-5},
-    "rope": {"friction": 0.6, "youngs_modulus": 1e6, "poisson_ratio": 0.3},
+    "rope": {"friction": 0.6, "youngs_modulus": 3e4, "poisson_ratio": 0.3},
     "plasticine": {"friction": 0.8, "youngs_modulus": 1e6, "poisson_ratio": 0.4, "yield_stress": 2e4},
 }
 

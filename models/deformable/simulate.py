@@ -42,7 +42,8 @@ class Rollout:
     Attributes:
         cloud: (N, 3) final positions of the body's cloud points.
         vertices: (V, 3) final positions of every vertex.
-        stable: no NaN and no MuJoCo reset (bad accelerations) during the run.
+        stable: no NaN, no MuJoCo reset (bad accelerations) and no vertex flung farther than twice the body's
+            size plus the largest motion during the run.
         tracking_error: largest distance (m) between a grasped vertex and its path's end when released.
         steps: physics steps taken. seconds: wall time of the stepping.
     """
@@ -116,7 +117,10 @@ def simulate(body: DeformableBody, contacts: np.ndarray, motions: np.ndarray,
     previous = mujoco.get_mju_user_warning()
     mujoco.set_mju_user_warning(lambda message: log.debug("mujoco: %s", message))  # counted in data.warning
     t0 = time.perf_counter()
-    last_good, reached = np.asarray(body.vertices, dtype=np.float64), start
+    rest = np.asarray(body.vertices, dtype=np.float64)
+    last_good, reached = rest, start
+    # no vertex can honestly end farther from rest than the largest motion plus the body's own size (twice)
+    reach = 2.0 * (body.size + float(np.linalg.norm(mot, axis=1).max(initial=0.0)))
     stable, k = True, -1
     try:
         model = mujoco.MjModel.from_xml_string(scene_xml(body, verts, dt))
@@ -135,6 +139,9 @@ def simulate(body: DeformableBody, contacts: np.ndarray, motions: np.ndarray,
                 stable = False
                 break
             if k % 10 == 0:
+                if np.abs(data.flexvert_xpos - rest).max() > reach:  # flung away: a silent blow-up
+                    stable = False
+                    break
                 last_good = data.flexvert_xpos.copy()
         else:
             last_good = data.flexvert_xpos.copy()

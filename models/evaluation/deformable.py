@@ -167,3 +167,59 @@ def pipeline_network(predictor: object, hand: object, seed: int) -> Answer:
         return np.asarray(p.contact_points), np.asarray(p.contact_motions), p.contact_source
 
     return answer
+
+
+# The paper's property-sensitivity pairs: the same shape with two property sets.
+SENSITIVITY_PAIRS: dict[str, tuple[str, dict[str, float], str, dict[str, float]]] = {
+    "cloth": ("handkerchief", {"friction": 0.6, "density": 600.0, "stretch": 1e3, "bending": 1e-5},
+              "card", {"friction": 0.6, "density": 600.0, "stretch": 1e5, "bending": 1e-2}),
+    "rope": ("rope", {"friction": 0.6, "youngs_modulus": 1e4, "poisson_ratio": 0.3},
+             "stick", {"friction": 0.6, "youngs_modulus": 1e9, "poisson_ratio": 0.3}),
+}  # fmt: skip
+
+
+@dataclass
+class SensitivityResult:
+    """One shape as both members of a pair: their rollouts under the same manipulation, and the network's contacts.
+
+    Attributes:
+        rollout_gap: mean distance between the two rollouts (normalised 2 m cube).
+        contacts_differ: the network's contact sets for the same target motion differ (some contact farther than
+            ``CONTACT_GAP`` of the size from every contact of the other set), or None without a network.
+        sources: the network's contact source for each member.
+    """
+
+    material: str
+    rollout_gap: float
+    contacts_differ: bool | None
+    sources: tuple[str, str]
+
+
+CONTACT_GAP = 0.1
+
+
+def property_sensitivity(material: str, count: int, seed: int, network: Answer | None) -> list[SensitivityResult]:
+    """``count`` shapes of ``material`` (square cloths or ropes) as both members of its `SENSITIVITY_PAIRS`."""
+    from models.deformable.metrics import NORMALISED_SIDE
+    from models.deformable.shapes import make_body
+
+    _, first, _, second = SENSITIVITY_PAIRS[material]
+    kind = "square" if material == "cloth" else "rope"
+    rng = np.random.default_rng([seed, 7])
+    out = []
+    for k in range(count):
+        a = make_body(material, kind, seed + k, first)
+        b = a.with_properties(second)
+        manip = random_manipulation(a, rng)
+        ra, rb = simulate(a, manip.contacts, manip.motions), simulate(b, manip.contacts, manip.motions)
+        gap = float(np.linalg.norm(ra.cloud - rb.cloud, axis=1).mean()) * NORMALISED_SIDE / a.size
+        differ, sources = None, ("", "")
+        if network is not None:
+            target = ra.cloud  # the same target for both: the shape the first member reaches
+            pa, _, sa = network(DeformableCase(material, "sensitivity", a, manip, target))
+            pb, _, sb = network(DeformableCase(material, "sensitivity", b, manip, target))
+            d = np.linalg.norm(pa[:, None] - pb[None], axis=-1)
+            differ = bool(max(d.min(axis=1).max(), d.min(axis=0).max()) > CONTACT_GAP * a.size)
+            sources = (sa, sb)
+        out.append(SensitivityResult(material, gap, differ, sources))
+    return out
