@@ -80,6 +80,7 @@ class DeformableReport:
                     "mean_error": float(np.median([r.score.mean_error for r in rs])),
                     "top_mean_error": float(np.median([r.score.top_mean_error for r in rs])),
                     "network_contacts": sum(r.source == "network" for r in rs),
+                    "network_successes": sum(r.source == "network" and r.score.success for r in rs),
                 })  # fmt: skip
         return rows
 
