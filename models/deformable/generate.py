@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from models.deformable.body import DeformableBody
 from models.deformable.materials import MATERIALS
 from models.deformable.shapes import KINDS, make_body
 
@@ -53,7 +54,7 @@ class BodyResult:
     seconds: float = 0.0
 
 
-def dataset_body(cfg: DeformableDataConfig, material: str, i: int):  # type: ignore[no-untyped-def]
+def dataset_body(cfg: DeformableDataConfig, material: str, i: int) -> DeformableBody:
     """Body ``i`` of ``material`` in the data set."""
     kinds = KINDS[material]
     seed = int(np.random.default_rng([cfg.seed, MATERIALS.index(material), i]).integers(2**31))
@@ -109,7 +110,8 @@ def _run_star(args: tuple[DeformableDataConfig, str, int, str]) -> BodyResult:
     return run_body(*args)
 
 
-def generate(cfg: DeformableDataConfig, out_dir: str | Path, workers: int = 1, progress: bool = True) -> dict[str, Any]:
+def generate(cfg: DeformableDataConfig, out_dir: str | Path, workers: int = 1,
+             progress: bool = True) -> dict[str, Any]:  # fmt: skip
     """Generate (or resume) the deformable part of a data set under ``out_dir/deformable``; returns the manifest.
 
     Raises:

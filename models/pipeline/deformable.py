@@ -14,10 +14,14 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from models.pipeline.types import InvalidInput, ProposalOutput, QualityOutput, SynthesisInput, SynthesisOutput
+
+if TYPE_CHECKING:
+    from models.network.inference import NetworkInput, NetworkOutput
 
 DEFORMABLE_MATERIALS = ("cloth", "rope", "plasticine")
 DEFORMABLE_TASKS = ("point_motion", "target_points")
@@ -76,7 +80,7 @@ def prepare_deformable(inp: SynthesisInput) -> PreparedDeformable:
     return PreparedDeformable(inp, points, normals, mask, motion, time.perf_counter() - t0)
 
 
-def network_input(p: PreparedDeformable):  # type: ignore[no-untyped-def]
+def network_input(p: PreparedDeformable) -> NetworkInput:
     """The `models.network.inference.NetworkInput` of a deformable request."""
     from models.network.inference import NetworkInput
 
@@ -90,7 +94,8 @@ def network_input(p: PreparedDeformable):  # type: ignore[no-untyped-def]
     )  # fmt: skip
 
 
-def finish_deformable(p: PreparedDeformable, net_out: object | None, timings: dict[str, float]) -> SynthesisOutput:
+def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timings: dict[str, float]
+                      ) -> SynthesisOutput:  # fmt: skip
     """Proposals of contacts + post-contact motions (see the module doc)."""
     from models.deformable.answer import DeformableContacts, deformable_contacts, spread_indices
     from models.refine.field import PointCloudField
@@ -104,7 +109,7 @@ def finish_deformable(p: PreparedDeformable, net_out: object | None, timings: di
     sets: list[DeformableContacts] = []
     for k in range(inp.num_proposals):
         if inp.method == "network" and net_out is not None:
-            heat, motion_map = net_out.heatmaps[k], net_out.force_maps[k]  # type: ignore[attr-defined]
+            heat, motion_map = net_out.heatmaps[k], net_out.force_maps[k]
             sets.append(deformable_contacts(p.points, heat, motion_map, p.motion, p.mask, m, rng))
         elif inp.method == "contacts":
             given = np.asarray(inp.contacts, dtype=np.float64).reshape(-1, 3)[:m]
@@ -130,7 +135,7 @@ def finish_deformable(p: PreparedDeformable, net_out: object | None, timings: di
     timings["initialisation"] = time.perf_counter() - t0
     heat = force = None
     if net_out is not None:
-        heat = np.asarray(net_out.heatmaps[0], dtype=np.float64)  # type: ignore[attr-defined]
-        force = np.asarray(net_out.force_maps[0], dtype=np.float64)  # type: ignore[attr-defined]
+        heat = np.asarray(net_out.heatmaps[0], dtype=np.float64)
+        force = np.asarray(net_out.force_maps[0], dtype=np.float64)
     return SynthesisOutput(hand=getattr(hand, "name", "hand"), proposals=proposals, heatmap=heat, force_map=force,
                            timings=timings)  # fmt: skip
