@@ -117,10 +117,9 @@ class ModelsPipeline:
 
         material = job.request.object.material.value
         card = getattr(self.predictor, "card", None)
-        per_point = job.request.task.kind in ("point_motion", "target_points")  # deformables: contacts + motions
-        deformable = material in ("cloth", "rope", "plasticine") and per_point
-        if (method_of(job.request) == "network" and card is not None and not deformable
-                and material not in (card.materials or [material])):  # fmt: skip
+        if material in ("cloth", "rope", "plasticine") and job.request.task.kind in ("point_motion", "target_points"):
+            card = None  # deformables' contacts + motions: the network's answer as it is (models.pipeline.deformable)
+        if method_of(job.request) == "network" and card is not None and material not in (card.materials or [material]):
             raise ValueError(
                 f"object.material: '{material}' is not supported by the loaded model "
                 f"{self.model_version} (trained on: {', '.join(card.materials)}); "
