@@ -21,6 +21,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -31,6 +32,10 @@ from models.deformable.materials import MATERIALS
 from models.deformable.metrics import ShapeScore, shape_score
 from models.deformable.procedures import Manipulation, random_manipulation
 from models.deformable.simulate import simulate
+
+if TYPE_CHECKING:
+    from models.network.inference import ContactPredictor
+    from models.robots import Hand
 
 METHODS = ("random_motion", "random_target_motion", "ground_truth", "network")
 SPLITS = ("test_so", "test_uo")
@@ -153,7 +158,7 @@ def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int,
 Answer = Callable[[DeformableCase], tuple[np.ndarray, np.ndarray, str]]
 
 
-def pipeline_network(predictor: object, hand: object, seed: int) -> Answer:
+def pipeline_network(predictor: ContactPredictor, hand: Hand, seed: int) -> Answer:
     """The service's answer for a case: `run_pipeline` with method "network", first proposal."""
     from models.pipeline import SynthesisInput, TaskInput, run_pipeline
 
