@@ -33,7 +33,7 @@ def register(subparsers: Any) -> None:
     g.add_argument(
         "--materials",
         default="rigid,articulated",
-        help="comma-separated materials; cloth, rope, plasticine go to OUT/deformable (models.deformable.generate)",
+        help="comma-separated materials; cloth, rope, plasticine go to OUT/deformable (data.deformable_generate)",
     )
     g.add_argument("--bodies", type=int, default=12, help="deformable bodies per material")
     g.add_argument("--examples-per-body", type=int, default=4, help="simulated manipulations per deformable body")
@@ -52,8 +52,8 @@ def _generate(args: argparse.Namespace) -> int:
     if unknown:
         raise SystemExit(f"--materials: unknown {', '.join(unknown)} (rigid, articulated, cloth, rope, plasticine)")
     if deformable:
-        from models.deformable.generate import DeformableDataConfig
-        from models.deformable.generate import generate as generate_deformable
+        from models.data.deformable_generate import DeformableDataConfig
+        from models.data.deformable_generate import generate as generate_deformable
 
         dcfg = DeformableDataConfig(materials=tuple(deformable), bodies=args.bodies,
                                     examples_per_body=args.examples_per_body, seed=args.seed)  # fmt: skip

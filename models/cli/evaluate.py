@@ -175,7 +175,7 @@ def run_deformable(args: argparse.Namespace) -> int:
     from rich.table import Table
     from tqdm import tqdm
 
-    from models.deformable.generate import DeformableDataConfig
+    from models.data.deformable_generate import DeformableDataConfig
     from models.evaluation.deformable import (
         METHODS,
         SPLITS,

@@ -1,10 +1,11 @@
 """Deformable evaluation (paper Table I, deformable columns): apply an answer in the simulator, compare with the target.
 
-Cases, per material and split, are drawn exactly as `models.deformable.generate` draws its bodies (same seed,
+Cases, per material and split, are drawn exactly as `models.data.deformable_generate` draws its bodies (same seed,
 same ids, same train/test split by id): ``test_so`` takes training bodies, ``test_uo`` test bodies, and each case
 is one of the material's procedures (`models.deformable.procedures`) redrawn until its motion is an unseen one
-(`examples.is_unseen_motion`), simulated from rest to give the target cloud. Every method's contacts and motions
-are then simulated from the same rest state with the same `simulate` and scored by `metrics.shape_score`.
+(`models.data.deformable_examples.is_unseen_motion`), simulated from rest to give the target cloud. Every
+method's contacts and motions are then simulated from the same rest state with the same `simulate` and scored by
+`metrics.shape_score`.
 
 Methods (all in one run, on the same cases):
 
@@ -25,9 +26,9 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from models.data.deformable_examples import is_unseen_motion
+from models.data.deformable_generate import DeformableDataConfig, dataset_body
 from models.deformable.body import DeformableBody
-from models.deformable.examples import is_unseen_motion
-from models.deformable.generate import DeformableDataConfig, dataset_body
 from models.deformable.materials import MATERIALS
 from models.deformable.metrics import ShapeScore, shape_score
 from models.deformable.procedures import Manipulation, random_manipulation

@@ -5,14 +5,11 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from models.pipeline.tasks import build_task, network_motion
-
-if TYPE_CHECKING:
-    from models.pipeline.deformable import PreparedDeformable
 from models.pipeline.types import MATERIALS, METHODS, InvalidInput, SynthesisInput
 from models.refine.evaluation import spread_contacts
 from models.refine.field import PointCloudField
@@ -108,16 +105,12 @@ def prepare(inp: SynthesisInput) -> Prepared:
     return Prepared(inp, cloud, exact, centre, mp.mass, inertia, task, mu, tip_field, time.perf_counter() - t0)
 
 
-def network_inputs(batch: Sequence[Prepared | PreparedDeformable]) -> list[Any]:
+def network_inputs(batch: Sequence[Prepared]) -> list[Any]:
     """`models.network.inference.NetworkInput` rows for the predictor."""
     from models.network.inference import NetworkInput
-    from models.pipeline.deformable import PreparedDeformable, network_input
 
     rows = []
     for p in batch:
-        if isinstance(p, PreparedDeformable):  # deformable requests: their own cloud and motion
-            rows.append(network_input(p))
-            continue
         inp, hand = p.inp, p.inp.hand
         mask = p.cloud.mask if p.cloud.mask is not None else np.ones(len(p.cloud.points), dtype=bool)
         rows.append(

@@ -20,7 +20,13 @@ from typing import Any
 
 import numpy as np
 
-from models.pipeline.deformable import PreparedDeformable, finish_deformable, is_deformable_task, prepare_deformable
+from models.pipeline.deformable import (
+    PreparedDeformable,
+    finish_deformable,
+    is_deformable_task,
+    network_input,
+    prepare_deformable,
+)
 from models.pipeline.prepare import Prepared, contact_sets, network_inputs, prepare
 from models.pipeline.types import (
     Cancelled,
@@ -58,7 +64,9 @@ def _network(batch: Sequence[Prepared | PreparedDeformable], predictor: Any) -> 
     if by_k and predictor is None:
         raise ModelUnavailable("method 'network' needs a trained model; none is loaded (use 'contacts')")
     for k, idx in by_k.items():
-        res = predictor.predict(network_inputs([batch[i] for i in idx]), num_samples=k,
+        rows = [network_input(p) if isinstance(p, PreparedDeformable) else network_inputs([p])[0]
+                for p in (batch[i] for i in idx)]  # fmt: skip
+        res = predictor.predict(rows, num_samples=k,
                                 seed=[batch[i].inp.seed for i in idx])
         for i, out in zip(idx, res, strict=True):
             outputs[i] = out

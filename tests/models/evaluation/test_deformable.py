@@ -1,6 +1,6 @@
 import numpy as np
 
-from models.deformable.generate import DeformableDataConfig
+from models.data.deformable_generate import DeformableDataConfig
 from models.evaluation.deformable import build_cases, evaluate_case
 
 

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from models.data.dataset import Examples
-from models.deformable.generate import MANIFEST, PROPERTY_KEYS, SUBDIR, load_body_file
+from models.data.deformable_generate import MANIFEST, PROPERTY_KEYS, SUBDIR, load_body_file
 
 DEFAULT_POINTS = 256
 DEFAULT_HAND = "panda_gripper"

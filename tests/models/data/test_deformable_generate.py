@@ -4,8 +4,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from models.deformable.examples import is_unseen_motion, labels, make_example
-from models.deformable.generate import DeformableDataConfig, generate, load_body_file
+from models.data.deformable_examples import is_unseen_motion, labels, make_example
+from models.data.deformable_generate import DeformableDataConfig, generate, load_body_file
 from models.deformable.procedures import cloth_fold, plasticine_push
 from models.deformable.rope import make_rope
 from models.deformable.shapes import make_body

@@ -3,8 +3,8 @@
 Body ``i`` of material m in a data set of seed S has kind ``KINDS[m][i mod len]`` and seed
 ``default_rng([S, material index, i])``; its split (train/test) is fixed by its id like the rigid data's. Each
 body is one file ``<out>/deformable/<material>-<i>.npz`` (written atomically) with its cloud and
-``examples_per_body`` examples (`examples.make_example`, examples' rng ``default_rng([S, m, i, 1])``), recorded
-in ``<out>/deformable/manifest.json``; a rerun skips recorded files (resume). Example splits: ``train``,
+``examples_per_body`` examples (`deformable_examples.make_example`, their rng ``default_rng([S, m, i, 1])``),
+recorded in ``<out>/deformable/manifest.json``; a rerun skips recorded files (resume). Example splits: ``train``,
 ``test_so`` (train bodies, unseen motions), ``test_uo`` (test bodies, unseen motions); test bodies' seen-motion
 examples are dropped, as the paper's test sets hold unseen motions only.
 """
@@ -63,8 +63,8 @@ def dataset_body(cfg: DeformableDataConfig, material: str, i: int) -> Deformable
 
 def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> BodyResult:
     """Generate and write body ``i`` of ``material``."""
+    from models.data.deformable_examples import make_example
     from models.data.generate import object_split
-    from models.deformable.examples import make_example
 
     t0 = time.perf_counter()
     body = dataset_body(cfg, material, i)

@@ -4,8 +4,8 @@ import numpy as np
 import torch
 
 from models.data.dataset import make_batch
-from models.deformable.dataset import load_deformable_examples
-from models.deformable.generate import DeformableDataConfig, generate
+from models.data.deformable_dataset import load_deformable_examples
+from models.data.deformable_generate import DeformableDataConfig, generate
 
 
 def test_deformable_examples_make_network_batches_with_all_their_properties(tmp_path: Path) -> None:
