@@ -67,3 +67,26 @@ def test_direct_grasp_on_a_deformable_is_a_422_naming_the_method(base: str) -> N
     response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=120)
     assert response.status_code == 422, response.text[:500]
     assert "method" in response.text
+
+
+def test_cloth_fold_with_given_contacts_reaches_its_target_in_simulation(base: str) -> None:
+    from models.deformable.cloth import make_cloth
+    from models.deformable.procedures import cloth_fold
+
+    cloth = make_cloth("tshirt", seed=1)
+    fold = cloth_fold(cloth, np.random.default_rng(0))
+    target = simulate(cloth, fold.contacts, fold.motions).cloud
+    body = {
+        "object": {"points": cloth.points.tolist(), "normals": cloth.normals.tolist(), "material": "cloth",
+                   "properties": cloth.properties},
+        "task": {"kind": "point_motion", "motion": (target - cloth.points).tolist()},
+        "robot": {"name": "panda_gripper"},
+        "contacts": {"points": cloth.points[fold.contacts].tolist()},
+        "options": {"method": "contacts", "timeout": 60},
+    }  # fmt: skip
+    response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=120)
+    assert response.status_code == 200, response.text[:2000]
+    [proposal] = SynthesisResult.model_validate(response.json()).proposals
+    assert proposal.contact_source == "given" and proposal.contact_motions is not None
+    rollout = simulate(cloth, proposal.contact_points, proposal.contact_motions).cloud
+    assert shape_score("cloth", cloth.points, target, rollout).success
