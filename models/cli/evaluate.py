@@ -221,6 +221,13 @@ def run_deformable(args: argparse.Namespace) -> int:
                       f"{r['network_contacts']} ({r['network_successes']})" if r["method"] == "network" else "-")
     console = Console(width=160)
     console.print(table)
+    for material in materials:  # the goals, on unseen objects
+        rates = report.success_rates(material, "test_uo")
+        if "network" in rates:
+            stronger = max(rates.get("random_motion", 0.0), rates.get("random_target_motion", 0.0))
+            met = rates["network"] >= 85.0 and rates["network"] >= stronger + 30.0
+            console.print(f"{material}: network {rates['network']:.1f} % on unseen objects, stronger random "
+                          f"baseline {stronger:.1f} %: goal (≥ 85 %, ≥ baseline + 30) {'met' if met else 'not met'}")
     figures: dict[str, Any] = {"table": rows}
     if args.sensitivity:
         from models.evaluation.deformable import SENSITIVITY_PAIRS, property_sensitivity

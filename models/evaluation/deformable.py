@@ -71,6 +71,13 @@ class DeformableReport:
     cases: list[DeformableCase] = field(default_factory=list)
     results: list[list[MethodResult]] = field(default_factory=list)
 
+    def success_rates(self, material: str, split: str) -> dict[str, float]:
+        """Success % per method on the (material, split) cases."""
+        idx = [i for i, c in enumerate(self.cases) if (c.material, c.split) == (material, split)]
+        found = {r.method for i in idx for r in self.results[i]}
+        return {m: 100.0 * float(np.mean([r.score.success for i in idx for r in self.results[i] if r.method == m]))
+                for m in found}  # fmt: skip
+
     def summary(self) -> list[dict[str, object]]:
         rows: list[dict[str, object]] = []
         keys = sorted({(c.material, c.split) for c in self.cases}, key=lambda k: (MATERIALS.index(k[0]), k[1]))
