@@ -6,8 +6,8 @@ the task's motion at them), "contacts" (the given points, with the task's motion
 proposal names the fingertip at each contact from the rigid fit of the hand's fingertips onto the contacts
 (`models.refine.initialise`, the pose is that fit's, not refined); ``quality.success`` is False with reason
 ``deformable_open_loop``: the service does not simulate the rollout (`mani eval deformable` does).
-Unordered targets (``target_points`` with ``correspondence="unknown"``) get their per-point motion by optimal
-transport (`models.deformable.registration`).
+Unordered targets (``target_points`` with ``correspondence="unknown"``) get their per-point motion by coherent
+point drift and optimal transport (`models.deformable.registration`).
 """
 
 from __future__ import annotations
