@@ -53,6 +53,7 @@ def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = Non
         targets=getattr(task, "targets", None),
         wrench=getattr(task, "wrench", None),
         delta=getattr(task, "delta", None),
+        correspondence=getattr(task, "correspondence", "index"),
     )
     return SynthesisInput(
         points=obj.points.astype(np.float64),
@@ -184,6 +185,7 @@ def to_result(
                 if hand is None or not request.options.return_hand_mesh
                 else hand_mesh(hand, p.palm_position, p.palm_quaternion, p.joint_values),
                 history=history,
+                contact_motions=None if p.contact_motions is None else np.asarray(p.contact_motions, np.float64),
             )
         )
     options = request.options

@@ -154,6 +154,8 @@ class ModelsPipeline:
 
         material = job.request.object.material.value
         card = getattr(self.predictor, "card", None)
+        if material in ("cloth", "rope", "plasticine") and job.request.task.kind in ("point_motion", "target_points"):
+            card = None  # deformables' contacts + motions: the network's answer as it is (models.pipeline.deformable)
         if method_of(job.request) == "network" and card is not None and material not in (card.materials or [material]):
             raise InvalidInput(
                 f"object.material: '{material}' is not supported by the loaded model "

@@ -41,7 +41,7 @@ MATERIAL_PROPERTIES: dict[Material, frozenset[str]] = {
     Material.ARTICULATED: frozenset({"friction", "density"}),
     Material.CLOTH: frozenset({"friction", "density", "stretch", "bending"}),
     Material.ROPE: frozenset({"friction", "youngs_modulus", "poisson_ratio"}),
-    Material.PLASTICINE: frozenset({"friction", "youngs_modulus", "poisson_ratio"}),
+    Material.PLASTICINE: frozenset({"friction", "youngs_modulus", "poisson_ratio", "yield_stress"}),
 }
 
 
@@ -54,10 +54,12 @@ class PhysicalProperties(WireModel):
     bending: float | None = Field(None, gt=0, le=10, description="Cloth bending stiffness, N·m.")
     youngs_modulus: float | None = Field(None, gt=0, le=1e10, description="Young's modulus, Pa.")
     poisson_ratio: float | None = Field(None, ge=0, lt=0.5, description="Poisson's ratio (dimensionless).")
+    yield_stress: float | None = Field(None, gt=0, le=1e8, description="Plasticine: von Mises yield stress, Pa.")
 
     def present(self) -> dict[str, float]:
-        """The properties that were given, by name."""
-        return {name: value for name in PROPERTY_NAMES if (value := getattr(self, name)) is not None}
+        """The properties that were given, by name (the network's six, then yield_stress)."""
+        names = (*PROPERTY_NAMES, "yield_stress")
+        return {name: value for name in names if (value := getattr(self, name)) is not None}
 
 
 class MeshIn(WireModel):

@@ -70,7 +70,8 @@ class SynthesisRequest(WireModel):
         n = self.object.num_points
         if isinstance(self.task, PointMotionTask) and self.task.motion.shape != (n, 3):
             raise ValueError(f"task.motion: shape {self.task.motion.shape} does not match points ({n}, 3)")
-        if isinstance(self.task, TargetPointsTask) and self.task.targets.shape != (n, 3):
+        if (isinstance(self.task, TargetPointsTask) and self.task.correspondence == "index"
+                and self.task.targets.shape != (n, 3)):  # fmt: skip
             raise ValueError(f"task.targets: shape {self.task.targets.shape} does not match points ({n}, 3)")
         if isinstance(self.task, JointMotionTask) and self.object.material is not Material.ARTICULATED:
             raise ValueError("task: joint_motion needs an articulated object")

@@ -74,6 +74,9 @@ class Proposal(WireModel):
         None, description="The hand's collision meshes at this pose (what the contacts were verified on)."
     )
     history: list[IterationRecord] | None = None
+    contact_motions: Rows3 | None = Field(
+        None, description="Deformables: the post-contact motion of each contact (m): grasp it and move it so."
+    )
 
 
 class SynthesisResult(WireModel):

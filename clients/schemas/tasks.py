@@ -48,12 +48,16 @@ class PointMotionTask(WireModel):
 
 
 class TargetPointsTask(WireModel):
-    """The object's target point cloud (N, 3), point-to-point with the input points."""
+    """The object's target point cloud: (N, 3) point-to-point with the input points, or with
+    ``correspondence="unknown"`` an (M, 3) cloud in any order (the per-point motion is then registered)."""
 
     model_config = KIND_REQUIRED
 
     kind: Literal["target_points"] = "target_points"
     targets: Points
+    correspondence: Literal["index", "unknown"] = Field(
+        "index", description="'index': targets[i] is where point i goes; 'unknown': an unordered target cloud."
+    )
 
 
 class WrenchTask(WireModel):

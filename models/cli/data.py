@@ -30,6 +30,13 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="label only the test objects (the evaluation set: test_uo and the held-out hands, ~7x faster)",
     )
+    g.add_argument(
+        "--materials",
+        default="rigid,articulated",
+        help="comma-separated materials; cloth, rope, plasticine go to OUT/deformable (data.deformable_generate)",
+    )
+    g.add_argument("--bodies", type=int, default=12, help="deformable bodies per material")
+    g.add_argument("--examples-per-body", type=int, default=4, help="simulated manipulations per deformable body")
     g.add_argument("--no-progress", action="store_true")
     g.set_defaults(func=_generate)
 
@@ -39,6 +46,21 @@ def _generate(args: argparse.Namespace) -> int:
 
     from models.data.generate import HELD_OUT_HANDS, TRAIN_HANDS, DataConfig, generate
 
+    materials = [m for m in args.materials.split(",") if m]
+    deformable = [m for m in materials if m in ("cloth", "rope", "plasticine")]
+    unknown = sorted(set(materials) - {"rigid", "articulated", *deformable})
+    if unknown:
+        raise SystemExit(f"--materials: unknown {', '.join(unknown)} (rigid, articulated, cloth, rope, plasticine)")
+    if deformable:
+        from models.data.deformable_generate import DeformableDataConfig
+        from models.data.deformable_generate import generate as generate_deformable
+
+        dcfg = DeformableDataConfig(materials=tuple(deformable), bodies=args.bodies,
+                                    examples_per_body=args.examples_per_body, seed=args.seed)  # fmt: skip
+        made = generate_deformable(dcfg, args.out, workers=args.workers, progress=not args.no_progress)
+        print(json.dumps(made["totals"], indent=1))
+    if not {"rigid", "articulated"} & set(materials):
+        return 0
     cfg = DataConfig(
         objects=args.objects,
         seed=args.seed,

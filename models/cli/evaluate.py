@@ -24,15 +24,17 @@ EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 
 
 def register(subparsers: Any) -> None:
-    """Add ``eval`` with its ``refine`` (Table II), ``network`` (Table I) and ``audit`` sub-commands to ``mani``."""
+    """Add ``eval`` with its ``refine`` (Table II), ``network`` (Table I), ``audit`` and ``deformable`` (Table I,
+    deformable columns) sub-commands to ``mani``."""
     p = subparsers.add_parser(
         "eval", help="evaluate refinement / network", description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    sub = p.add_subparsers(dest="eval_command", metavar="{refine,network,audit}")
+    sub = p.add_subparsers(dest="eval_command", metavar="{refine,network,audit,deformable}")
     add_refine(sub)
     add_network_parser(sub)
     add_audit_parser(sub)
+    add_deformable(sub)
     p.set_defaults(func=lambda args: (p.print_help(), EXIT_USAGE)[1])
 
 
@@ -142,4 +144,110 @@ def run_refine(args: argparse.Namespace) -> int:
         with open(args.json, "w") as fh:
             json.dump([{"hand": r.hand, "mode": r.mode, "ground_truth": r.ground_truth, "summary": r.summary(),
                         "trials": [asdict(t) for t in r.trials]} for r in reports], fh, indent=1, default=float)
+    return EXIT_OK
+
+
+def add_deformable(sub: Any) -> None:
+    """The ``eval deformable`` sub-command (logic in `models.evaluation.deformable`)."""
+    d = sub.add_parser("deformable", help="cloth / rope / plasticine: simulated rollout vs target, with baselines")
+    d.add_argument("--materials", default="cloth,rope,plasticine", help="comma-separated materials")
+    d.add_argument("--splits", default="test_so,test_uo", help="test_so (seen objects), test_uo (unseen objects)")
+    d.add_argument("--methods", default="random_motion,random_target_motion,ground_truth,network")
+    d.add_argument("--cases", type=int, default=10, help="cases per (material, split)")
+    d.add_argument("--contacts", type=int, default=2, help="contacts of the random baselines (default 2)")
+    d.add_argument("--hand", default="panda_gripper", help="hand the network is conditioned on (H ≤ fingertips)")
+    d.add_argument("--weights", default="models/weights/cpu", help="checkpoint directory of the network")
+    d.add_argument("--seed", type=int, default=0, help="seed of the cases and the baselines")
+    d.add_argument("--data-seed", type=int, default=0, help="seed of the data set whose bodies are used")
+    d.add_argument("--sensitivity", type=int, default=0,
+                   help="also run the property pairs (handkerchief vs card, rope vs stick) on this many shapes")
+    d.add_argument("--json", default=None, help="also write the summary to this JSON file")
+    d.set_defaults(func=run_deformable)
+
+
+def run_deformable(args: argparse.Namespace) -> int:
+    """Build the cases, run every method on them and print the table."""
+    import json
+
+    import numpy as np
+    import torch
+    from rich.console import Console
+    from rich.table import Table
+    from tqdm import tqdm
+
+    from models.data.deformable_generate import DeformableDataConfig
+    from models.evaluation.deformable import (
+        METHODS,
+        SPLITS,
+        DeformableReport,
+        build_cases,
+        evaluate_case,
+        pipeline_network,
+    )
+
+    torch.set_num_threads(1)
+    materials = [m for m in args.materials.split(",") if m]
+    splits = [s for s in args.splits.split(",") if s]
+    methods = tuple(m for m in args.methods.split(",") if m)
+    if not set(splits) <= set(SPLITS) or not set(methods) <= set(METHODS) or args.cases < 1:
+        print(f"--splits from {', '.join(SPLITS)}, --methods from {', '.join(METHODS)}, --cases ≥ 1")
+        return EXIT_USAGE
+    network = None
+    if "network" in methods:
+        from models.network.inference import ContactPredictor
+        from models.robots import get_hand
+
+        network = pipeline_network(ContactPredictor.from_checkpoint(args.weights), get_hand(args.hand), args.seed)
+    data = DeformableDataConfig(seed=args.data_seed)
+    report = DeformableReport()
+    rng = np.random.default_rng(args.seed)
+    bar = tqdm(total=len(materials) * len(splits) * args.cases, unit="case")
+    for material in materials:
+        for split in splits:
+            for case in build_cases(material, split, args.cases, args.seed, data):
+                report.cases.append(case)
+                report.results.append(evaluate_case(case, methods, args.contacts, rng, network))
+                bar.update(1)
+    bar.close()
+    table = Table(title=f"deformables: simulated rollout vs target (paper metric), {args.cases} cases per row "
+                        f"group, seed {args.seed}")
+    for col in ("material", "split", "method", "cases", "success %", "median mean err", "median top err",
+                "network's own contacts (successes)"):
+        table.add_column(col, justify="left" if col in ("material", "split", "method") else "right")
+    rows = report.summary()
+    for r in rows:
+        table.add_row(str(r["material"]), str(r["split"]), str(r["method"]), str(r["cases"]),
+                      f"{r['success']:.1f}", f"{r['mean_error']:.3f}", f"{r['top_mean_error']:.3f}",
+                      f"{r['network_contacts']} ({r['network_successes']})" if r["method"] == "network" else "-")
+    console = Console(width=160)
+    console.print(table)
+    for material in materials:  # the issue's goals, on unseen objects
+        rates = report.success_rates(material, "test_uo")
+        if "network" in rates:
+            stronger = max(rates.get("random_motion", 0.0), rates.get("random_target_motion", 0.0))
+            met = rates["network"] >= 85.0 and rates["network"] >= stronger + 30.0
+            console.print(f"{material}: network {rates['network']:.1f} % on unseen objects, stronger random "
+                          f"baseline {stronger:.1f} %: goal (≥ 85 %, ≥ baseline + 30) {'met' if met else 'not met'}")
+    figures: dict[str, Any] = {"table": rows}
+    if args.sensitivity:
+        from models.evaluation.deformable import SENSITIVITY_PAIRS, property_sensitivity
+
+        pairs = Table(title=f"property sensitivity: one shape, two property sets, {args.sensitivity} shapes each")
+        for col in ("pair", "shapes", "median rollout gap (same manipulation)", "network contacts differ",
+                    "network (not fallback) answers"):
+            pairs.add_column(col, justify="left" if col == "pair" else "right")
+        figures["sensitivity"] = []
+        for material in [m for m in materials if m in SENSITIVITY_PAIRS]:
+            res = property_sensitivity(material, args.sensitivity, args.seed, network)
+            a, _, b, _ = SENSITIVITY_PAIRS[material]
+            differ = [r.contacts_differ for r in res if r.contacts_differ is not None]
+            own = sum(s == "network" for r in res for s in r.sources)
+            pairs.add_row(f"{a} / {b}", str(len(res)), f"{np.median([r.rollout_gap for r in res]):.3f}",
+                          f"{sum(differ)}/{len(differ)}" if differ else "-", f"{own}/{2 * len(res)}")
+            figures["sensitivity"].append({"pair": f"{a}/{b}", "gaps": [r.rollout_gap for r in res],
+                                           "differ": differ, "network_answers": own})
+        console.print(pairs)
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(figures, fh, indent=1)
     return EXIT_OK

@@ -166,7 +166,14 @@ def make_batch(ex: Examples, idx: np.ndarray, hand_scale_m: float, rng: np.rando
         rows["heat"].append(ex.heat[i])
         rows["hand"].append(hand_cloud(str(ex.hand[i]), hand_scale_m))
         rows["s"].append(nz.scale)
-    values, present = property_tensors([{"friction": float(ex.friction[i])} for i in idx])
+    if "properties" in ex.extra:  # every property channel the examples carry (deformables), NaN = absent
+        from models.network.properties import PROPERTY_NAMES
+
+        table = ex.extra["properties"]
+        props = [{n: float(v) for n, v in zip(PROPERTY_NAMES, table[i], strict=True) if np.isfinite(v)} for i in idx]
+    else:
+        props = [{"friction": float(ex.friction[i])} for i in idx]
+    values, present = property_tensors(props)
 
     def t(key: str) -> torch.Tensor:
         return torch.as_tensor(np.stack(rows[key]), dtype=torch.float32)

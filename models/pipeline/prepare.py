@@ -131,7 +131,7 @@ def network_inputs(batch: Sequence[Prepared]) -> list[Any]:
                 normals=p.cloud.normals,
                 motion=network_motion(inp.task, p.cloud.points, p.centre, p.mass, p.inertia, inp.joint),
                 mask=mask,
-                properties=dict(inp.properties),
+                properties={k: v for k, v in inp.properties.items() if k != "yield_stress"},  # not a channel
                 hand_points=np.asarray(hand.surface_points),
                 hand_normals=np.asarray(hand.surface_normals),
                 hand_key=str(inp.hand_key or hand.name),

@@ -6,8 +6,9 @@ refinement iteration (raises `Cancelled`). A ``deadline`` (time.monotonic()) tha
 it and returns the best iterate, not converged, reason "deadline"; later proposals are then not refined. For
 methods "network" and "random_contacts" a refinement that stalls is restarted from approach alignments
 (`models.refine.strategy`) within the same iteration budget; given contacts ("contacts") are never abandoned.
-Deformable materials (cloth, rope, plasticine) are handled as rigid bodies for the hand: the task's motion is
-fitted rigidly (Kabsch) and the hand must produce that wrench.
+Deformable materials (cloth, rope, plasticine) with a per-point task (``point_motion``, ``target_points``) get
+contacts with a post-contact motion each and no refinement (`models.pipeline.deformable`); with other tasks they
+are handled as rigid bodies for the hand (the motion fitted rigidly, Kabsch).
 """
 
 from __future__ import annotations
@@ -19,6 +20,13 @@ from typing import Any
 
 import numpy as np
 
+from models.pipeline.deformable import (
+    PreparedDeformable,
+    finish_deformable,
+    is_deformable_task,
+    network_input,
+    prepare_deformable,
+)
 from models.pipeline.prepare import Prepared, contact_sets, network_inputs, prepare
 from models.pipeline.types import (
     Cancelled,
@@ -46,7 +54,7 @@ def _check(should_cancel: CancelCheck | None) -> None:
         raise Cancelled("synthesis cancelled")
 
 
-def _network(batch: Sequence[Prepared], predictor: Any) -> list[Any]:
+def _network(batch: Sequence[Prepared | PreparedDeformable], predictor: Any) -> list[Any]:
     """One predictor call for every network input of the batch (grouped by K); returns outputs in order."""
     outputs: list[Any] = [None] * len(batch)
     by_k: dict[int, list[int]] = {}
@@ -56,7 +64,9 @@ def _network(batch: Sequence[Prepared], predictor: Any) -> list[Any]:
     if by_k and predictor is None:
         raise ModelUnavailable("method 'network' needs a trained model; none is loaded (use 'contacts')")
     for k, idx in by_k.items():
-        res = predictor.predict(network_inputs([batch[i] for i in idx]), num_samples=k,
+        rows = [network_input(p) if isinstance(p, PreparedDeformable) else network_inputs([p])[0]
+                for p in (batch[i] for i in idx)]  # fmt: skip
+        res = predictor.predict(rows, num_samples=k,
                                 seed=[batch[i].inp.seed for i in idx])
         for i, out in zip(idx, res, strict=True):
             outputs[i] = out
@@ -244,16 +254,16 @@ def run_pipeline_batch(
     propagates.
     """
     report = progress or (lambda stage, fraction: None)
-    preps: list[Prepared | Exception] = []
+    preps: list[Prepared | PreparedDeformable | Exception] = []
     for inp in inputs:
         try:
-            preps.append(prepare(inp))
+            preps.append(prepare_deformable(inp) if is_deformable_task(inp) else prepare(inp))
         except InvalidInput as exc:
             if raise_errors:
                 raise
             preps.append(exc)
     _check(should_cancel)
-    ok = [p for p in preps if isinstance(p, Prepared)]
+    ok = [p for p in preps if isinstance(p, Prepared | PreparedDeformable)]
     t0 = time.perf_counter()
     report("network", 0.0)
     try:
@@ -267,7 +277,7 @@ def run_pipeline_batch(
     results: list[SynthesisOutput | Exception] = []
     j = 0
     for p in preps:
-        if not isinstance(p, Prepared):
+        if isinstance(p, Exception):
             results.append(p)
             continue
         net_out = net[j]
@@ -277,7 +287,10 @@ def run_pipeline_batch(
             continue
         timings = {"prepare": p.seconds, "network": net_s if p.inp.method == "network" else 0.0}
         try:
-            results.append(_finish(p, net_out, progress, should_cancel, timings))
+            if isinstance(p, PreparedDeformable):
+                results.append(finish_deformable(p, net_out, timings))
+            else:
+                results.append(_finish(p, net_out, progress, should_cancel, timings))
         except InvalidInput as exc:
             if raise_errors:
                 raise

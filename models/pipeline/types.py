@@ -50,6 +50,7 @@ class TaskInput:
         targets: (N, 3) target cloud, point-to-point (``target_points``).
         wrench: (6,) force N and torque N·m about the centre of mass (``wrench``).
         delta: signed joint displacement, rad or m (``joint_motion``).
+        correspondence: ``target_points`` only: "index" or "unknown" (targets (M, 3) in any order).
     """
 
     kind: str
@@ -59,6 +60,7 @@ class TaskInput:
     targets: np.ndarray | None = None
     wrench: np.ndarray | None = None
     delta: float | None = None
+    correspondence: str = "index"  # target_points: "index" (point i → target i) or "unknown" (registered)
 
 
 @dataclass
@@ -157,6 +159,7 @@ class ProposalOutput:
     quality: QualityOutput
     contact_source: str = "given"  # given | random | network | random_fallback | direct_grasp | initial_pose
     history: list[IterationOutput] | None = None
+    contact_motions: np.ndarray | None = None  # (H, 3) post-contact motion per contact (deformables), m
 
 
 @dataclass

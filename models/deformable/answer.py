@@ -1,0 +1,65 @@
+"""The service's answer for a deformable object: contacts from the network's heatmap, a post-contact motion each.
+
+For each latent sample k: NMS on the heatmap (`models.network.selection.select_contacts`, the region mask hard)
+picks H ≤ ``max_contacts`` contacts; the motion of each is the motion map's vector there (the network's φ_f map,
+which for deformables is the post-contact motion map). No hand refinement: a deformable is moved by grasping
+its points, not by balancing a wrench. A heatmap with no peak gives no network contacts; the answer then takes
+H spread points of the allowed region with the target motion at them and says ``random_fallback``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from models.network.selection import select_contacts
+
+TASK_KINDS = ("point_motion", "target_points")
+
+
+@dataclass(frozen=True)
+class DeformableContacts:
+    """One proposal: cloud indices (H,), points (H, 3), post-contact motions (H, 3) m, and their source."""
+
+    indices: np.ndarray
+    points: np.ndarray
+    motions: np.ndarray
+    source: str
+
+
+def spread_indices(points: np.ndarray, allowed: np.ndarray, count: int, rng: np.random.Generator) -> np.ndarray:
+    """``count`` indices of ``allowed`` points spread by farthest-point sampling from a random start."""
+    pick = [int(rng.choice(allowed))]
+    dist = np.linalg.norm(points[allowed] - points[pick[0]], axis=1)
+    while len(pick) < min(count, len(allowed)):
+        nxt = int(allowed[int(np.argmax(dist))])
+        pick.append(nxt)
+        dist = np.minimum(dist, np.linalg.norm(points[allowed] - points[nxt], axis=1))
+    return np.array(pick, dtype=np.int64)
+
+
+def deformable_contacts(
+    points: np.ndarray,
+    heatmap: np.ndarray,
+    motion_map: np.ndarray,
+    target_motion: np.ndarray,
+    mask: np.ndarray | None,
+    max_contacts: int,
+    rng: np.random.Generator,
+) -> DeformableContacts:
+    """Contacts and post-contact motions of one latent sample.
+
+    Args:
+        points: (N, 3) cloud. heatmap: (N,) predicted contact heat. motion_map: (N, 3) predicted motion map (m).
+        target_motion: (N, 3) the task's per-point motion (used only by the fallback).
+        mask: (N,) bool allowed region or None. max_contacts: H, e.g. the hand's fingertips.
+        rng: draws the fallback's spread points.
+    """
+    sel = select_contacts(points, heatmap, motion_map, mask, max_contacts)
+    if len(sel):
+        return DeformableContacts(sel.indices, points[sel.indices], np.asarray(sel.forces, dtype=np.float64),
+                                  "network")  # fmt: skip
+    allowed = np.flatnonzero(mask) if mask is not None else np.arange(len(points))
+    idx = spread_indices(points, allowed, max_contacts, rng)
+    return DeformableContacts(idx, points[idx], np.asarray(target_motion, dtype=np.float64)[idx], "random_fallback")

@@ -1,0 +1,32 @@
+"""Lattice tetrahedra shared by the solid bodies (plasticine blobs, rope rods): Kuhn's cube split and boundaries.
+
+Kuhn's split cuts a cube into six tetrahedra around its main diagonal (corner 0 to corner 7); neighbouring cubes
+split this way share their face diagonals, so the tetrahedra conform. The boundary of a tetrahedral mesh is the
+faces used by one tetrahedron only; a boundary vertex's normal is the area-weighted sum of its faces' outward
+normals.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+# Kuhn's six tetrahedra of the unit cube, corners indexed by (x, y, z) bits: 0 = (0,0,0) ... 7 = (1,1,1).
+KUHN = np.array([[0, 1, 3, 7], [0, 3, 2, 7], [0, 2, 6, 7], [0, 6, 4, 7], [0, 4, 5, 7], [0, 5, 1, 7]])
+CORNERS = np.array([[(c >> 0) & 1, (c >> 1) & 1, (c >> 2) & 1] for c in range(8)])
+
+def boundary(vertices: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Boundary vertex indices (N,) and their outward unit normals (N, 3)."""
+    faces = np.concatenate([tets[:, [1, 2, 3]], tets[:, [0, 2, 3]], tets[:, [0, 1, 3]], tets[:, [0, 1, 2]]])
+    opposite = np.concatenate([tets[:, 0], tets[:, 1], tets[:, 2], tets[:, 3]])
+    key = np.sort(faces, axis=1)
+    _, first, counts = np.unique(key, axis=0, return_index=True, return_counts=True)
+    outer = first[counts == 1]
+    f, o = faces[outer], opposite[outer]
+    n = np.cross(vertices[f[:, 1]] - vertices[f[:, 0]], vertices[f[:, 2]] - vertices[f[:, 0]])
+    n *= np.where(np.einsum("ij,ij->i", n, vertices[f[:, 0]] - vertices[o]) < 0, -1.0, 1.0)[:, None]
+    acc = np.zeros_like(vertices)
+    for k in range(3):
+        np.add.at(acc, f[:, k], n)
+    surface = np.unique(f)
+    normals = acc[surface] / np.linalg.norm(acc[surface], axis=1, keepdims=True)
+    return surface, normals

@@ -1,0 +1,53 @@
+"""Success of a rollout against its target shape (paper Table I, deformable columns).
+
+Both clouds are point-to-point (the rollout's point i is the target's point i) and normalised together to a 2 m
+cube: positions × 2 / s, s the longest bounding-box side of the start cloud. Then, for displacement errors
+e_i = |rollout_i − target_i| (normalised units):
+
+- 2D (cloth) and 1D (rope, our choice: a rope is judged like a cloth edge): take the ``CLOTH_TOP`` = 50 points
+  that move most from start to target; failure if any of their errors exceeds 0.5, or more than half of them
+  exceed 0.3.
+- 3D (plasticine): success if the mean error over all points is below 0.5 cm and the mean over the
+  ``SOLID_TOP`` = 100 most-moving points is below 5 cm (the paper's figures, in the normalised 2 m cube).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+NORMALISED_SIDE = 2.0  # m
+CLOTH_TOP, CLOTH_ANY, CLOTH_HALF = 50, 0.5, 0.3
+SOLID_TOP, SOLID_ALL, SOLID_MOVING = 100, 0.005, 0.05
+
+
+@dataclass(frozen=True)
+class ShapeScore:
+    """Errors in the normalised 2 m cube: mean over all points, max and mean over the most-moving ones."""
+
+    success: bool
+    mean_error: float
+    top_mean_error: float
+    top_max_error: float
+    top_fraction_over: float  # fraction of the most-moving points with error > 0.3 (cloth and rope)
+
+
+def shape_score(material: str, start: np.ndarray, target: np.ndarray, rollout: np.ndarray) -> ShapeScore:
+    """Score ``rollout`` (N, 3) against ``target`` (N, 3), both from ``start`` (N, 3), by the material's metric."""
+    start, target, rollout = (np.asarray(a, dtype=np.float64) for a in (start, target, rollout))
+    if not start.shape == target.shape == rollout.shape:
+        raise ValueError(f"clouds differ in shape: {start.shape}, {target.shape}, {rollout.shape}")
+    scale = NORMALISED_SIDE / max(float(np.ptp(start, axis=0).max()), 1e-12)
+    err = np.linalg.norm(rollout - target, axis=1) * scale
+    if not np.all(np.isfinite(err)):
+        return ShapeScore(False, float("inf"), float("inf"), float("inf"), 1.0)
+    moving = np.argsort(-np.linalg.norm(target - start, axis=1))
+    if material == "plasticine":
+        top = err[moving[:SOLID_TOP]]
+        ok = float(err.mean()) < SOLID_ALL and float(top.mean()) < SOLID_MOVING
+        return ShapeScore(bool(ok), float(err.mean()), float(top.mean()), float(top.max()), 0.0)
+    top = err[moving[:CLOTH_TOP]]
+    over = float(np.mean(top > CLOTH_HALF))
+    ok = float(top.max()) <= CLOTH_ANY and over <= 0.5
+    return ShapeScore(bool(ok), float(err.mean()), float(top.mean()), float(top.max()), over)

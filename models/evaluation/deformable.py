@@ -1,0 +1,239 @@
+"""Deformable evaluation (paper Table I, deformable columns): apply an answer in the simulator, compare with the target.
+
+Cases, per material and split, are drawn exactly as `models.data.deformable_generate` draws its bodies (same seed,
+same ids, same train/test split by id): ``test_so`` takes training bodies, ``test_uo`` test bodies, and each case
+is one of the material's procedures (`models.deformable.procedures`) redrawn until its motion is an unseen one
+(`models.data.deformable_examples.is_unseen_motion`), simulated from rest to give the target cloud. Every
+method's contacts and motions are then simulated from the same rest state with the same `simulate` and scored by
+`metrics.shape_score`.
+
+Methods (all in one run, on the same cases):
+
+- ``random_motion``: H random cloud points (spread), each with a random motion (uniform direction, length
+  uniform up to the target's largest displacement) — the paper's baseline.
+- ``random_target_motion``: the same points, each with the target's displacement at it.
+- ``ground_truth``: the procedure's own contacts and motions — the ceiling the simulator allows (the target was
+  made by them, so it measures the simulator's repeatability: 100 % when deterministic).
+- ``network``: `models.pipeline.run_pipeline` with method "network" (what the service answers: NMS contacts on
+  the heatmap, the motion map there; H ≤ the hand's fingertips), first proposal.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from models.data.deformable_examples import is_unseen_motion
+from models.data.deformable_generate import DeformableDataConfig, dataset_body
+from models.deformable.body import DeformableBody
+from models.deformable.materials import MATERIALS
+from models.deformable.metrics import ShapeScore, shape_score
+from models.deformable.procedures import Manipulation, random_manipulation
+from models.deformable.simulate import simulate
+
+if TYPE_CHECKING:
+    from models.network.inference import ContactPredictor
+    from models.robots import Hand
+
+METHODS = ("random_motion", "random_target_motion", "ground_truth", "network")
+SPLITS = ("test_so", "test_uo")
+MOTION_TRIES = 60
+
+
+@dataclass
+class DeformableCase:
+    """One held-out case: a body at rest, the manipulation that made the target, and the target cloud (N, 3)."""
+
+    material: str
+    split: str
+    body: DeformableBody
+    manipulation: Manipulation
+    target: np.ndarray
+
+
+@dataclass
+class MethodResult:
+    """One method on one case."""
+
+    method: str
+    score: ShapeScore
+    contacts: int
+    source: str = ""
+
+
+@dataclass
+class DeformableReport:
+    """All cases and their methods' results, with a summary per (material, split, method)."""
+
+    cases: list[DeformableCase] = field(default_factory=list)
+    results: list[list[MethodResult]] = field(default_factory=list)
+
+    def success_rates(self, material: str, split: str) -> dict[str, float]:
+        """Success % per method on the (material, split) cases."""
+        idx = [i for i, c in enumerate(self.cases) if (c.material, c.split) == (material, split)]
+        found = {r.method for i in idx for r in self.results[i]}
+        return {m: 100.0 * float(np.mean([r.score.success for i in idx for r in self.results[i] if r.method == m]))
+                for m in found}  # fmt: skip
+
+    def summary(self) -> list[dict[str, object]]:
+        rows: list[dict[str, object]] = []
+        keys = sorted({(c.material, c.split) for c in self.cases}, key=lambda k: (MATERIALS.index(k[0]), k[1]))
+        for material, split in keys:
+            idx = [i for i, c in enumerate(self.cases) if (c.material, c.split) == (material, split)]
+            for method in METHODS:
+                rs = [r for i in idx for r in self.results[i] if r.method == method]
+                if not rs:
+                    continue
+                rows.append({
+                    "material": material, "split": split, "method": method, "cases": len(rs),
+                    "success": 100.0 * float(np.mean([r.score.success for r in rs])),
+                    "mean_error": float(np.median([r.score.mean_error for r in rs])),
+                    "top_mean_error": float(np.median([r.score.top_mean_error for r in rs])),
+                    "network_contacts": sum(r.source == "network" for r in rs),
+                    "network_successes": sum(r.source == "network" and r.score.success for r in rs),
+                })  # fmt: skip
+        return rows
+
+
+def build_cases(material: str, split: str, count: int, seed: int, data: DeformableDataConfig) -> list[DeformableCase]:
+    """``count`` cases of ``material`` on the ``split``'s bodies (see the module doc)."""
+    from models.data.generate import object_split
+
+    cases: list[DeformableCase] = []
+    want = "train" if split == "test_so" else "test"
+    m_index = MATERIALS.index(material)
+    for i in range(count * 20):
+        if len(cases) == count:
+            break
+        body = dataset_body(data, material, i)
+        if object_split(body.id, data.test_fraction) != want:
+            continue
+        rng = np.random.default_rng([seed, m_index, i, 2])
+        for _ in range(MOTION_TRIES):
+            manip = random_manipulation(body, rng)
+            if is_unseen_motion(manip.motions):
+                break
+        else:
+            continue
+        out = simulate(body, manip.contacts, manip.motions)
+        if out.stable:
+            cases.append(DeformableCase(material, split, body, manip, out.cloud))
+    return cases
+
+
+def _random_points(body: DeformableBody, count: int, rng: np.random.Generator) -> np.ndarray:
+    from models.deformable.answer import spread_indices
+
+    return spread_indices(body.points, np.arange(len(body.points)), count, rng)
+
+
+def _score(case: DeformableCase, contacts: np.ndarray, motions: np.ndarray) -> ShapeScore:
+    out = simulate(case.body, contacts, motions)
+    return shape_score(case.material, case.body.points, case.target, out.cloud)
+
+
+def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int, rng: np.random.Generator,
+                  network: Answer | None = None,
+                  ) -> list[MethodResult]:  # fmt: skip
+    """Every method of ``methods`` on one case (``network`` needs the callable: case → contacts, motions, source)."""
+    target_motion = case.target - case.body.points
+    rand = _random_points(case.body, contacts, rng)
+    out = []
+    for method in methods:
+        if method == "random_motion":
+            d = rng.normal(size=(len(rand), 3))
+            d /= np.linalg.norm(d, axis=1, keepdims=True)
+            d *= rng.uniform(0, np.linalg.norm(target_motion, axis=1).max(), size=(len(rand), 1))
+            out.append(MethodResult(method, _score(case, rand, d), len(rand)))
+        elif method == "random_target_motion":
+            out.append(MethodResult(method, _score(case, rand, target_motion[rand]), len(rand)))
+        elif method == "ground_truth":
+            m = case.manipulation
+            out.append(MethodResult(method, _score(case, m.contacts, m.motions), len(m.contacts)))
+        elif method == "network":
+            if network is None:
+                raise ValueError("methods: 'network' needs a predictor")
+            idx, mot, source = network(case)
+            out.append(MethodResult(method, _score(case, idx, mot), len(idx), source))
+        else:
+            raise ValueError(f"methods: unknown {method!r} (one of {', '.join(METHODS)})")
+    return out
+
+
+Answer = Callable[[DeformableCase], tuple[np.ndarray, np.ndarray, str]]
+
+
+def pipeline_network(predictor: ContactPredictor, hand: Hand, seed: int) -> Answer:
+    """The service's answer for a case: `run_pipeline` with method "network", first proposal."""
+    from models.pipeline import SynthesisInput, TaskInput, run_pipeline
+
+    def answer(case: DeformableCase) -> tuple[np.ndarray, np.ndarray, str]:
+        body = case.body
+        task = TaskInput("point_motion", motion=case.target - body.points)
+        inp = SynthesisInput(points=body.points, hand=hand, task=task, normals=body.normals,
+                             material=body.material, properties=dict(body.properties), method="network",
+                             num_proposals=1, seed=seed)
+        p = run_pipeline(inp, predictor).proposals[0]
+        assert p.contact_motions is not None
+        return np.asarray(p.contact_points), np.asarray(p.contact_motions), p.contact_source
+
+    return answer
+
+
+# The paper's property-sensitivity pairs: the same shape with two property sets.
+SENSITIVITY_PAIRS: dict[str, tuple[str, dict[str, float], str, dict[str, float]]] = {
+    "cloth": ("handkerchief", {"friction": 0.6, "density": 600.0, "stretch": 1e3, "bending": 1e-5},
+              "card", {"friction": 0.6, "density": 600.0, "stretch": 1e5, "bending": 1e-2}),
+    "rope": ("rope", {"friction": 0.6, "youngs_modulus": 1e4, "poisson_ratio": 0.3},
+             "stick", {"friction": 0.6, "youngs_modulus": 1e9, "poisson_ratio": 0.3}),
+}  # fmt: skip
+
+
+@dataclass
+class SensitivityResult:
+    """One shape as both members of a pair: their rollouts under the same manipulation, and the network's contacts.
+
+    Attributes:
+        rollout_gap: mean distance between the two rollouts (normalised 2 m cube).
+        contacts_differ: the network's contact sets for the same target motion differ (some contact farther than
+            ``CONTACT_GAP`` of the size from every contact of the other set), or None without a network.
+        sources: the network's contact source for each member.
+    """
+
+    material: str
+    rollout_gap: float
+    contacts_differ: bool | None
+    sources: tuple[str, str]
+
+
+CONTACT_GAP = 0.1
+
+
+def property_sensitivity(material: str, count: int, seed: int, network: Answer | None) -> list[SensitivityResult]:
+    """``count`` shapes of ``material`` (square cloths or ropes) as both members of its `SENSITIVITY_PAIRS`."""
+    from models.deformable.metrics import NORMALISED_SIDE
+    from models.deformable.shapes import make_body
+
+    _, first, _, second = SENSITIVITY_PAIRS[material]
+    kind = "square" if material == "cloth" else "rope"
+    rng = np.random.default_rng([seed, 7])
+    out = []
+    for k in range(count):
+        a = make_body(material, kind, seed + k, first)
+        b = a.with_properties(second)
+        manip = random_manipulation(a, rng)
+        ra, rb = simulate(a, manip.contacts, manip.motions), simulate(b, manip.contacts, manip.motions)
+        gap = float(np.linalg.norm(ra.cloud - rb.cloud, axis=1).mean()) * NORMALISED_SIDE / a.size
+        differ, sources = None, ("", "")
+        if network is not None:
+            target = ra.cloud  # the same target for both: the shape the first member reaches
+            pa, _, sa = network(DeformableCase(material, "sensitivity", a, manip, target))
+            pb, _, sb = network(DeformableCase(material, "sensitivity", b, manip, target))
+            d = np.linalg.norm(pa[:, None] - pb[None], axis=-1)
+            differ = bool(max(d.min(axis=1).max(), d.min(axis=0).max()) > CONTACT_GAP * a.size)
+            sources = (sa, sb)
+        out.append(SensitivityResult(material, gap, differ, sources))
+    return out

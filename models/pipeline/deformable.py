@@ -1,0 +1,141 @@
+"""Deformable requests (cloth, rope, plasticine with a ``point_motion`` or ``target_points`` task) in the pipeline.
+
+No wrench and no refinement: the answer is contacts with a post-contact motion each (`models.deformable.answer`).
+Methods: "network" (the heatmap's NMS contacts and the motion map there), "random_contacts" (spread points with
+the task's motion at them), "contacts" (the given points, with the task's motion at them). With a hand, each
+proposal names the fingertip at each contact from the rigid fit of the hand's fingertips onto the contacts
+(`models.refine.initialise`, the pose is that fit's, not refined); ``quality.success`` is False with reason
+``deformable_open_loop``: the service does not simulate the rollout (`mani eval deformable` does).
+Unordered targets (``target_points`` with ``correspondence="unknown"``) get their per-point motion by coherent
+point drift and optimal transport (`models.deformable.registration`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from models.pipeline.types import InvalidInput, ProposalOutput, QualityOutput, SynthesisInput, SynthesisOutput
+
+if TYPE_CHECKING:
+    from models.network.inference import NetworkInput, NetworkOutput
+
+DEFORMABLE_MATERIALS = ("cloth", "rope", "plasticine")
+DEFORMABLE_TASKS = ("point_motion", "target_points")
+DEFORMABLE_METHODS = ("network", "random_contacts", "contacts")
+
+
+@dataclass
+class PreparedDeformable:
+    """A validated deformable request: its cloud (points, normals, mask) and the per-point target motion."""
+
+    inp: SynthesisInput
+    points: np.ndarray
+    normals: np.ndarray
+    mask: np.ndarray | None
+    motion: np.ndarray
+    seconds: float
+
+
+def is_deformable_task(inp: SynthesisInput) -> bool:
+    """A deformable material with a per-point task (other tasks on deformables are fitted rigidly)."""
+    return inp.material in DEFORMABLE_MATERIALS and inp.task.kind in DEFORMABLE_TASKS
+
+
+def prepare_deformable(inp: SynthesisInput) -> PreparedDeformable:
+    """Check the arrays and derive the per-point motion (registration for unordered targets)."""
+    from models.geometry.object import estimate_normals
+    from models.pipeline.prepare import _array
+
+    t0 = time.perf_counter()
+    points = _array("points", inp.points, (None, 3))
+    n = len(points)
+    if inp.method not in DEFORMABLE_METHODS:
+        raise InvalidInput(f"method: {inp.method!r} is for rigid objects; a deformable takes "
+                           f"{', '.join(DEFORMABLE_METHODS)}")  # fmt: skip
+    if inp.normals is not None:
+        normals = _array("normals", inp.normals, (n, 3))
+    else:
+        from scipy.spatial import cKDTree
+
+        normals = estimate_normals(points, cKDTree(points))
+    mask = None if inp.mask is None else np.asarray(inp.mask, dtype=bool).reshape(-1)
+    if mask is not None and (mask.shape != (n,) or not mask.any()):
+        raise InvalidInput(f"mask: expected ({n},) with at least one allowed point")
+    task = inp.task
+    if task.kind == "point_motion":
+        motion = _array("task.motion", task.motion, (n, 3))
+    elif getattr(task, "correspondence", "index") == "unknown":
+        from models.deformable.registration import transport_motion
+
+        targets = _array("task.targets", task.targets, (None, 3))
+        motion = transport_motion(points, targets)
+    else:
+        motion = _array("task.targets", task.targets, (n, 3)) - points
+    if inp.method == "contacts" and inp.contacts is None:
+        raise InvalidInput("contacts: required with method 'contacts'")
+    return PreparedDeformable(inp, points, normals, mask, motion, time.perf_counter() - t0)
+
+
+def network_input(p: PreparedDeformable) -> NetworkInput:
+    """The `models.network.inference.NetworkInput` of a deformable request."""
+    from models.network.inference import NetworkInput
+
+    hand = p.inp.hand
+    return NetworkInput(
+        points=p.points, normals=p.normals, motion=p.motion,
+        mask=p.mask if p.mask is not None else np.ones(len(p.points), dtype=bool),
+        properties={k: v for k, v in p.inp.properties.items() if k != "yield_stress"},
+        hand_points=np.asarray(hand.surface_points), hand_normals=np.asarray(hand.surface_normals),
+        hand_key=str(p.inp.hand_key or getattr(hand, "name", "hand")),
+    )  # fmt: skip
+
+
+def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timings: dict[str, float]
+                      ) -> SynthesisOutput:  # fmt: skip
+    """Proposals of contacts + post-contact motions (see the module doc)."""
+    from models.deformable.answer import DeformableContacts, deformable_contacts, spread_indices
+    from models.refine.field import PointCloudField
+    from models.refine.initialise import initialise
+
+    inp, hand = p.inp, p.inp.hand
+    t0 = time.perf_counter()
+    m = int(hand.num_fingertips)
+    rng = np.random.default_rng(inp.seed)
+    allowed = np.flatnonzero(p.mask) if p.mask is not None else np.arange(len(p.points))
+    sets: list[DeformableContacts] = []
+    for k in range(inp.num_proposals):
+        if inp.method == "network" and net_out is not None:
+            heat, motion_map = net_out.heatmaps[k], net_out.force_maps[k]
+            sets.append(deformable_contacts(p.points, heat, motion_map, p.motion, p.mask, m, rng))
+        elif inp.method == "contacts":
+            given = np.asarray(inp.contacts, dtype=np.float64).reshape(-1, 3)[:m]
+            idx = PointCloudField(p.points, p.normals).nearest_index(given)
+            sets.append(DeformableContacts(idx, p.points[idx], p.motion[idx], "given"))
+        else:
+            idx = spread_indices(p.points, allowed, m, rng)
+            sets.append(DeformableContacts(idx, p.points[idx], p.motion[idx], "random"))
+    cloud = PointCloudField(p.points, p.normals, p.mask)
+    proposals = []
+    for s in sets:
+        cand = initialise(hand, cloud, s.points, p.normals[s.indices])[0]
+        tips = [hand.fingertip_links[j] for j in cand.assignment]
+        quality = QualityOutput(success=False, converged=False, reason="deformable_open_loop", iterations=0,
+                                wrench_residual=0.0, max_tip_distance=float(cand.rms), penetration_depth=0.0,
+                                self_collision_depth=0.0, epsilon=None, failures=["not_simulated"])  # fmt: skip
+        proposals.append(ProposalOutput(
+            contact_points=s.points, contact_normals=p.normals[s.indices], forces=np.zeros_like(s.points),
+            fingertips=tips, palm_position=cand.pose.palm_pos.copy(), palm_quaternion=cand.pose.palm_quat.copy(),
+            joint_names=list(hand.joint_names), joint_values=cand.pose.q.copy(), quality=quality,
+            contact_source=s.source, contact_motions=s.motions,
+        ))  # fmt: skip
+    timings["initialisation"] = time.perf_counter() - t0
+    heat = force = None
+    if net_out is not None:
+        heat = np.asarray(net_out.heatmaps[0], dtype=np.float64)
+        force = np.asarray(net_out.force_maps[0], dtype=np.float64)
+    return SynthesisOutput(hand=getattr(hand, "name", "hand"), proposals=proposals, heatmap=heat, force_map=force,
+                           timings=timings)  # fmt: skip

@@ -1,0 +1,92 @@
+"""A rope drag through the HTTP API with the real science in the worker: the answer's contacts and post-contact
+motions are applied in the simulator and the rollout is scored against the target (paper metric)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+
+import httpx
+import numpy as np
+import pytest
+
+from clients.schemas import SynthesisResult
+from models.deformable.metrics import shape_score
+from models.deformable.procedures import rope_drag
+from models.deformable.rope import make_rope
+from models.deformable.simulate import simulate
+from service.app import create_app
+from service.settings import Settings
+
+from .server import serving
+from .workers import start_queue_and_workers
+
+
+@pytest.fixture(scope="module")
+def base(request: pytest.FixtureRequest) -> Iterator[str]:
+    with (
+        start_queue_and_workers(request, pipeline="workers.models_pipeline:ModelsPipeline", hands=["panda_gripper"])
+        as queue,
+        serving(create_app(Settings(sync_wait_max=120), queue=queue)) as url,
+    ):
+        deadline = time.monotonic() + 240
+        while not httpx.get(f"{url}/v1/robots", timeout=10).json()["robots"]:
+            assert time.monotonic() < deadline, "no worker published its hands"
+            time.sleep(0.5)
+        yield url
+
+
+def test_rope_drag_answer_reaches_its_target_in_simulation(base: str) -> None:
+    rope = make_rope(seed=5, length=0.5)
+    drag = rope_drag(rope, np.random.default_rng(0))
+    target = simulate(rope, drag.contacts, drag.motions).cloud
+    body = {
+        "object": {"points": rope.points.tolist(), "normals": rope.normals.tolist(), "material": "rope",
+                   "properties": rope.properties},
+        "task": {"kind": "point_motion", "motion": (target - rope.points).tolist()},
+        "robot": {"name": "panda_gripper"},
+        "options": {"method": "random_contacts", "num_proposals": 1, "seed": 3, "timeout": 60},
+    }  # fmt: skip
+    response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=120)
+    assert response.status_code == 200, response.text[:2000]
+    [proposal] = SynthesisResult.model_validate(response.json()).proposals
+    assert proposal.contact_motions is not None and len(proposal.fingertips) == len(proposal.contact_points)
+    assert proposal.quality.reason == "deformable_open_loop"
+    rollout = simulate(rope, proposal.contact_points, proposal.contact_motions).cloud
+    assert shape_score("rope", rope.points, target, rollout).success
+
+
+def test_direct_grasp_on_a_deformable_is_a_422_naming_the_method(base: str) -> None:
+    rope = make_rope(seed=5, length=0.5)
+    body = {
+        "object": {"points": rope.points.tolist(), "material": "rope"},
+        "task": {"kind": "point_motion", "motion": np.zeros_like(rope.points).tolist()},
+        "robot": {"name": "panda_gripper"},
+        "options": {"method": "direct_grasp", "timeout": 60},
+    }
+    response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=120)
+    assert response.status_code == 422, response.text[:500]
+    assert "method" in response.text
+
+
+def test_cloth_fold_with_given_contacts_reaches_its_target_in_simulation(base: str) -> None:
+    from models.deformable.cloth import make_cloth
+    from models.deformable.procedures import cloth_fold
+
+    cloth = make_cloth("tshirt", seed=1)
+    fold = cloth_fold(cloth, np.random.default_rng(0))
+    target = simulate(cloth, fold.contacts, fold.motions).cloud
+    body = {
+        "object": {"points": cloth.points.tolist(), "normals": cloth.normals.tolist(), "material": "cloth",
+                   "properties": cloth.properties},
+        "task": {"kind": "point_motion", "motion": (target - cloth.points).tolist()},
+        "robot": {"name": "panda_gripper"},
+        "contacts": {"points": cloth.points[fold.contacts].tolist()},
+        "options": {"method": "contacts", "timeout": 60},
+    }  # fmt: skip
+    response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=120)
+    assert response.status_code == 200, response.text[:2000]
+    [proposal] = SynthesisResult.model_validate(response.json()).proposals
+    assert proposal.contact_source == "given" and proposal.contact_motions is not None
+    rollout = simulate(cloth, proposal.contact_points, proposal.contact_motions).cloud
+    assert shape_score("cloth", cloth.points, target, rollout).success
