@@ -11,8 +11,8 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("clients", "service", "workers", "models")
 
 MODELS_ORDER = (
-    "errors", "objects", "robots", "geometry", "network", "audit", "refine", "pipeline", "planning", "data", "training",
-    "evaluation", "cli",
+    "errors", "objects", "robots", "geometry", "network", "audit", "refine", "deformable", "pipeline", "planning",
+    "data", "training", "evaluation", "cli",
 )  # fmt: skip
 """Bottom to top: a subpackage of `models` imports only from those before it (and itself). ``audit`` imports none:
 it is the outside check and shares no code with what it checks."""
