@@ -95,7 +95,7 @@ def main() -> int:
         print(f"plan file: {write_plan_file(inp, args.write_plan)}")
     predictor = None
     if args.method == "network":
-        from models.cli.plan import load_predictor
+        from lab.plan import load_predictor
 
         predictor = load_predictor(None)
     plan = plan_manipulation(inp, predictor, progress=lambda stage, f: None)

@@ -14,11 +14,15 @@ ROOT = Path(__file__).resolve().parents[1]
 
 # package → top-level modules it must never import (anywhere in its files, lazily or not)
 FORBIDDEN: dict[str, set[str]] = {
-    "models": {"service", "workers", "clients", "fastapi", "starlette", "redis", "pydantic_settings", "uvicorn"},
-    "clients": {"models", "workers", "service", "torch", "fastapi", "uvicorn"},
-    "service": {"models", "torch", "pytorch_kinematics", "cvxpy", "clarabel", "fcl", "trimesh", "ompl", "mujoco"},
+    "models": {"service", "workers", "clients", "lab", "fastapi", "starlette", "redis", "pydantic_settings", "uvicorn",
+               "rich"},
+    "clients": {"models", "workers", "service", "lab", "torch", "fastapi", "uvicorn"},
+    "lab": {"service", "workers", "clients", "fastapi", "starlette", "redis", "uvicorn"},
+    "service": {
+        "models", "lab", "torch", "pytorch_kinematics", "cvxpy", "clarabel", "fcl", "trimesh", "ompl", "mujoco",
+    },
     "workers/queue": {"service", "models", "torch"},
-    "workers": {"service"},
+    "workers": {"service", "lab"},
 }
 
 

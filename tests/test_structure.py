@@ -8,11 +8,11 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("clients", "service", "workers", "models")
+PACKAGES = ("clients", "service", "workers", "models", "lab")
 
 MODELS_ORDER = (
     "errors", "objects", "robots", "geometry", "network", "audit", "refine", "deformable", "pipeline", "planning",
-    "data", "training", "evaluation", "cli",
+    "data", "training", "evaluation",
 )  # fmt: skip
 """Bottom to top: a subpackage of `models` imports only from those before it (and itself). ``audit`` imports none:
 it is the outside check and shares no code with what it checks."""

@@ -1,6 +1,6 @@
 """`mani bench NAME`: the benchmarks of every component, found through the ``mani.bench`` entry points.
 
-Each benchmark module (``models.cli.bench_refine``, ``service.bench``, ...) has ``register(subparsers)`` and adds
+Each benchmark module (``lab.bench_refine``, ``service.bench``, ...) has ``register(subparsers)`` and adds
 its own sub-parser to the ``bench`` sub-parsers, exactly like the top-level commands.
 """
 

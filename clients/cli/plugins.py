@@ -1,6 +1,6 @@
 """Discovery of `mani` subcommands from entry points.
 
-Subcommands live next to the code they drive (`service.cli`, `models.cli.train`, ...). They are found through
+Subcommands live next to the code they drive (`service.cli`, `lab.train`, ...). They are found through
 the `mani.commands` entry-point group so that the `clients` package never imports server or science code; a
 command's module must keep its top level light and import its heavy dependencies when the command runs.
 """

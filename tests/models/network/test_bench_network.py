@@ -6,7 +6,7 @@ import argparse
 
 import pytest
 
-from models.cli import bench_network
+from lab import bench_network
 
 
 def test_register_and_run_tiny(capsys: pytest.CaptureFixture[str]) -> None:

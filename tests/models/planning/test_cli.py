@@ -1,4 +1,4 @@
-"""`mani plan` and `mani bench plan` (models/cli/plan.py, bench_plan.py) on small real problems."""
+"""`mani plan` and `mani bench plan` (lab/plan.py, bench_plan.py) on small real problems."""
 
 import argparse
 import json
@@ -6,7 +6,7 @@ import json
 import numpy as np
 import yaml
 
-from models.cli import bench_plan, plan
+from lab import bench_plan, plan
 
 
 def _parser():

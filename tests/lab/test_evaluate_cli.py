@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from models.cli.evaluate import add_refine
+from lab.evaluate import add_refine
 
 
 def _parse(argv: list[str]) -> argparse.Namespace:

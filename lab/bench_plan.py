@@ -70,7 +70,7 @@ def run(args: argparse.Namespace) -> int:
     from rich.console import Console
     from rich.table import Table
 
-    from models.cli.plan import load_predictor
+    from lab.plan import load_predictor
     from models.planning import PlanningError, PlanOptions, plan_manipulation
     from models.robots import get_hand
 

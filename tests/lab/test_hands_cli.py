@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from models.cli import bench_hands, hands
+from lab import bench_hands, hands
 
 
 def _parse(register, argv: list[str]) -> argparse.Namespace:  # type: ignore[no-untyped-def]

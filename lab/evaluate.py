@@ -17,8 +17,8 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
-from models.cli.eval_audit import add_audit_parser
-from models.cli.eval_network import add_network_parser
+from lab.eval_audit import add_audit_parser
+from lab.eval_network import add_network_parser
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 

@@ -1,6 +1,6 @@
 """`mani eval network`: the Table I protocol and the network property checks (see models/evaluation).
 
-The ``eval`` parser is owned by `models.cli.evaluate`; it calls :func:`add_network_parser` with its
+The ``eval`` parser is owned by `lab.evaluate`; it calls :func:`add_network_parser` with its
 sub-parsers.
 """
 

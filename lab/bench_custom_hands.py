@@ -2,7 +2,7 @@
 checks, palm cut, spheres, pads, point cloud), then force-closure grasps of a small set of boxes and cylinders,
 every proposal audited against the package's original files (`models.evaluation.custom_hands`).
 
-Run: ``python -m models.cli.bench_custom_hands [--hands g1_dex3,orca] [--proposals 4]`` (one torch thread).
+Run: ``python -m lab.bench_custom_hands [--hands g1_dex3,orca] [--proposals 4]`` (one torch thread).
 Columns: build = seconds to read the archive and build the hand (what registration costs a worker); best ok =
 objects whose best proposal the service calls a success and the audit passes; proposals = audited / claimed
 successes over all proposals (a claim the audit rejects is a false claim); s/obj = seconds per request.
@@ -97,7 +97,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def main() -> None:
-    """``python -m models.cli.bench_custom_hands``."""
+    """``python -m lab.bench_custom_hands``."""
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     _arguments(parser)
     raise SystemExit(run(parser.parse_args()))

@@ -1,1 +1,0 @@
-"""`mani` subcommands backed by the science package (heavy imports happen inside the commands)."""
