@@ -17,20 +17,22 @@ class Array(_message.Message):
     def __init__(self, dtype: _Optional[str] = ..., shape: _Optional[_Iterable[int]] = ..., data: _Optional[bytes] = ...) -> None: ...
 
 class PhysicalProperties(_message.Message):
-    __slots__ = ("friction", "density", "stretch", "bending", "youngs_modulus", "poisson_ratio")
+    __slots__ = ("friction", "density", "stretch", "bending", "youngs_modulus", "poisson_ratio", "yield_stress")
     FRICTION_FIELD_NUMBER: _ClassVar[int]
     DENSITY_FIELD_NUMBER: _ClassVar[int]
     STRETCH_FIELD_NUMBER: _ClassVar[int]
     BENDING_FIELD_NUMBER: _ClassVar[int]
     YOUNGS_MODULUS_FIELD_NUMBER: _ClassVar[int]
     POISSON_RATIO_FIELD_NUMBER: _ClassVar[int]
+    YIELD_STRESS_FIELD_NUMBER: _ClassVar[int]
     friction: float
     density: float
     stretch: float
     bending: float
     youngs_modulus: float
     poisson_ratio: float
-    def __init__(self, friction: _Optional[float] = ..., density: _Optional[float] = ..., stretch: _Optional[float] = ..., bending: _Optional[float] = ..., youngs_modulus: _Optional[float] = ..., poisson_ratio: _Optional[float] = ...) -> None: ...
+    yield_stress: float
+    def __init__(self, friction: _Optional[float] = ..., density: _Optional[float] = ..., stretch: _Optional[float] = ..., bending: _Optional[float] = ..., youngs_modulus: _Optional[float] = ..., poisson_ratio: _Optional[float] = ..., yield_stress: _Optional[float] = ...) -> None: ...
 
 class MeshIn(_message.Message):
     __slots__ = ("vertices", "faces")
@@ -85,10 +87,12 @@ class PointMotionTask(_message.Message):
     def __init__(self, motion: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class TargetPointsTask(_message.Message):
-    __slots__ = ("targets",)
+    __slots__ = ("targets", "correspondence")
     TARGETS_FIELD_NUMBER: _ClassVar[int]
+    CORRESPONDENCE_FIELD_NUMBER: _ClassVar[int]
     targets: Array
-    def __init__(self, targets: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
+    correspondence: str
+    def __init__(self, targets: _Optional[_Union[Array, _Mapping]] = ..., correspondence: _Optional[str] = ...) -> None: ...
 
 class WrenchTask(_message.Message):
     __slots__ = ("wrench",)
@@ -223,7 +227,7 @@ class HandMesh(_message.Message):
     def __init__(self, vertices: _Optional[_Union[Array, _Mapping]] = ..., faces: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class Proposal(_message.Message):
-    __slots__ = ("contact_points", "contact_normals", "forces", "fingertips", "palm_position", "palm_quaternion", "joint_names", "joint_values", "quality", "contact_source", "hand_spheres", "hand_mesh", "history")
+    __slots__ = ("contact_points", "contact_normals", "forces", "fingertips", "palm_position", "palm_quaternion", "joint_names", "joint_values", "quality", "contact_source", "hand_spheres", "hand_mesh", "history", "contact_motions")
     CONTACT_POINTS_FIELD_NUMBER: _ClassVar[int]
     CONTACT_NORMALS_FIELD_NUMBER: _ClassVar[int]
     FORCES_FIELD_NUMBER: _ClassVar[int]
@@ -237,6 +241,7 @@ class Proposal(_message.Message):
     HAND_SPHERES_FIELD_NUMBER: _ClassVar[int]
     HAND_MESH_FIELD_NUMBER: _ClassVar[int]
     HISTORY_FIELD_NUMBER: _ClassVar[int]
+    CONTACT_MOTIONS_FIELD_NUMBER: _ClassVar[int]
     contact_points: Array
     contact_normals: Array
     forces: Array
@@ -250,7 +255,8 @@ class Proposal(_message.Message):
     hand_spheres: Array
     hand_mesh: HandMesh
     history: _containers.RepeatedCompositeFieldContainer[IterationRecord]
-    def __init__(self, contact_points: _Optional[_Union[Array, _Mapping]] = ..., contact_normals: _Optional[_Union[Array, _Mapping]] = ..., forces: _Optional[_Union[Array, _Mapping]] = ..., fingertips: _Optional[_Iterable[str]] = ..., palm_position: _Optional[_Iterable[float]] = ..., palm_quaternion: _Optional[_Iterable[float]] = ..., joint_names: _Optional[_Iterable[str]] = ..., joint_values: _Optional[_Iterable[float]] = ..., quality: _Optional[_Union[Quality, _Mapping]] = ..., contact_source: _Optional[str] = ..., hand_spheres: _Optional[_Union[Array, _Mapping]] = ..., hand_mesh: _Optional[_Union[HandMesh, _Mapping]] = ..., history: _Optional[_Iterable[_Union[IterationRecord, _Mapping]]] = ...) -> None: ...
+    contact_motions: Array
+    def __init__(self, contact_points: _Optional[_Union[Array, _Mapping]] = ..., contact_normals: _Optional[_Union[Array, _Mapping]] = ..., forces: _Optional[_Union[Array, _Mapping]] = ..., fingertips: _Optional[_Iterable[str]] = ..., palm_position: _Optional[_Iterable[float]] = ..., palm_quaternion: _Optional[_Iterable[float]] = ..., joint_names: _Optional[_Iterable[str]] = ..., joint_values: _Optional[_Iterable[float]] = ..., quality: _Optional[_Union[Quality, _Mapping]] = ..., contact_source: _Optional[str] = ..., hand_spheres: _Optional[_Union[Array, _Mapping]] = ..., hand_mesh: _Optional[_Union[HandMesh, _Mapping]] = ..., history: _Optional[_Iterable[_Union[IterationRecord, _Mapping]]] = ..., contact_motions: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class SynthesisResult(_message.Message):
     __slots__ = ("hand", "model_version", "proposals", "heatmap", "force_map", "timings")
@@ -435,8 +441,22 @@ class BatchRef(_message.Message):
     id: str
     def __init__(self, id: _Optional[str] = ...) -> None: ...
 
+class RobotPreview(_message.Message):
+    __slots__ = ("vertices", "faces", "spheres", "pads", "tips")
+    VERTICES_FIELD_NUMBER: _ClassVar[int]
+    FACES_FIELD_NUMBER: _ClassVar[int]
+    SPHERES_FIELD_NUMBER: _ClassVar[int]
+    PADS_FIELD_NUMBER: _ClassVar[int]
+    TIPS_FIELD_NUMBER: _ClassVar[int]
+    vertices: Array
+    faces: Array
+    spheres: Array
+    pads: Array
+    tips: Array
+    def __init__(self, vertices: _Optional[_Union[Array, _Mapping]] = ..., faces: _Optional[_Union[Array, _Mapping]] = ..., spheres: _Optional[_Union[Array, _Mapping]] = ..., pads: _Optional[_Union[Array, _Mapping]] = ..., tips: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
+
 class RobotPublic(_message.Message):
-    __slots__ = ("name", "builtin", "dof", "joint_names", "lower", "upper", "fingertips", "num_spheres", "source", "warnings")
+    __slots__ = ("name", "builtin", "dof", "joint_names", "lower", "upper", "fingertips", "num_spheres", "source", "warnings", "palm", "format", "surface_points", "pad_area_cm2", "couplings", "ignored", "meshes", "registration_s", "stored_bytes", "view_url", "preview")
     NAME_FIELD_NUMBER: _ClassVar[int]
     BUILTIN_FIELD_NUMBER: _ClassVar[int]
     DOF_FIELD_NUMBER: _ClassVar[int]
@@ -447,6 +467,17 @@ class RobotPublic(_message.Message):
     NUM_SPHERES_FIELD_NUMBER: _ClassVar[int]
     SOURCE_FIELD_NUMBER: _ClassVar[int]
     WARNINGS_FIELD_NUMBER: _ClassVar[int]
+    PALM_FIELD_NUMBER: _ClassVar[int]
+    FORMAT_FIELD_NUMBER: _ClassVar[int]
+    SURFACE_POINTS_FIELD_NUMBER: _ClassVar[int]
+    PAD_AREA_CM2_FIELD_NUMBER: _ClassVar[int]
+    COUPLINGS_FIELD_NUMBER: _ClassVar[int]
+    IGNORED_FIELD_NUMBER: _ClassVar[int]
+    MESHES_FIELD_NUMBER: _ClassVar[int]
+    REGISTRATION_S_FIELD_NUMBER: _ClassVar[int]
+    STORED_BYTES_FIELD_NUMBER: _ClassVar[int]
+    VIEW_URL_FIELD_NUMBER: _ClassVar[int]
+    PREVIEW_FIELD_NUMBER: _ClassVar[int]
     name: str
     builtin: bool
     dof: int
@@ -457,7 +488,18 @@ class RobotPublic(_message.Message):
     num_spheres: int
     source: str
     warnings: _containers.RepeatedScalarFieldContainer[str]
-    def __init__(self, name: _Optional[str] = ..., builtin: _Optional[bool] = ..., dof: _Optional[int] = ..., joint_names: _Optional[_Iterable[str]] = ..., lower: _Optional[_Iterable[float]] = ..., upper: _Optional[_Iterable[float]] = ..., fingertips: _Optional[_Iterable[str]] = ..., num_spheres: _Optional[int] = ..., source: _Optional[str] = ..., warnings: _Optional[_Iterable[str]] = ...) -> None: ...
+    palm: str
+    format: str
+    surface_points: int
+    pad_area_cm2: _containers.RepeatedScalarFieldContainer[float]
+    couplings: _containers.RepeatedScalarFieldContainer[str]
+    ignored: _containers.RepeatedScalarFieldContainer[str]
+    meshes: int
+    registration_s: float
+    stored_bytes: int
+    view_url: str
+    preview: RobotPreview
+    def __init__(self, name: _Optional[str] = ..., builtin: _Optional[bool] = ..., dof: _Optional[int] = ..., joint_names: _Optional[_Iterable[str]] = ..., lower: _Optional[_Iterable[float]] = ..., upper: _Optional[_Iterable[float]] = ..., fingertips: _Optional[_Iterable[str]] = ..., num_spheres: _Optional[int] = ..., source: _Optional[str] = ..., warnings: _Optional[_Iterable[str]] = ..., palm: _Optional[str] = ..., format: _Optional[str] = ..., surface_points: _Optional[int] = ..., pad_area_cm2: _Optional[_Iterable[float]] = ..., couplings: _Optional[_Iterable[str]] = ..., ignored: _Optional[_Iterable[str]] = ..., meshes: _Optional[int] = ..., registration_s: _Optional[float] = ..., stored_bytes: _Optional[int] = ..., view_url: _Optional[str] = ..., preview: _Optional[_Union[RobotPreview, _Mapping]] = ...) -> None: ...
 
 class ListRobotsRequest(_message.Message):
     __slots__ = ()
@@ -470,13 +512,32 @@ class RobotList(_message.Message):
     def __init__(self, robots: _Optional[_Iterable[_Union[RobotPublic, _Mapping]]] = ...) -> None: ...
 
 class RobotRegister(_message.Message):
-    __slots__ = ("name", "urdf", "fingertips", "tip_offsets")
+    __slots__ = ("name", "urdf", "fingertips", "tip_offsets", "mjcf", "archive", "description", "palm", "rest", "approach_axis")
+    class RestEntry(_message.Message):
+        __slots__ = ("key", "value")
+        KEY_FIELD_NUMBER: _ClassVar[int]
+        VALUE_FIELD_NUMBER: _ClassVar[int]
+        key: str
+        value: float
+        def __init__(self, key: _Optional[str] = ..., value: _Optional[float] = ...) -> None: ...
     NAME_FIELD_NUMBER: _ClassVar[int]
     URDF_FIELD_NUMBER: _ClassVar[int]
     FINGERTIPS_FIELD_NUMBER: _ClassVar[int]
     TIP_OFFSETS_FIELD_NUMBER: _ClassVar[int]
+    MJCF_FIELD_NUMBER: _ClassVar[int]
+    ARCHIVE_FIELD_NUMBER: _ClassVar[int]
+    DESCRIPTION_FIELD_NUMBER: _ClassVar[int]
+    PALM_FIELD_NUMBER: _ClassVar[int]
+    REST_FIELD_NUMBER: _ClassVar[int]
+    APPROACH_AXIS_FIELD_NUMBER: _ClassVar[int]
     name: str
     urdf: str
     fingertips: _containers.RepeatedScalarFieldContainer[str]
     tip_offsets: Array
-    def __init__(self, name: _Optional[str] = ..., urdf: _Optional[str] = ..., fingertips: _Optional[_Iterable[str]] = ..., tip_offsets: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
+    mjcf: str
+    archive: bytes
+    description: str
+    palm: str
+    rest: _containers.ScalarMap[str, float]
+    approach_axis: _containers.RepeatedScalarFieldContainer[float]
+    def __init__(self, name: _Optional[str] = ..., urdf: _Optional[str] = ..., fingertips: _Optional[_Iterable[str]] = ..., tip_offsets: _Optional[_Union[Array, _Mapping]] = ..., mjcf: _Optional[str] = ..., archive: _Optional[bytes] = ..., description: _Optional[str] = ..., palm: _Optional[str] = ..., rest: _Optional[_Mapping[str, float]] = ..., approach_axis: _Optional[_Iterable[float]] = ...) -> None: ...
