@@ -116,7 +116,7 @@ def verify(
         collisions: measure penetration and self-collision with fcl (False: skip, reported as 0).
     """
     region = cloud.region_distance if cloud.mask is not None else None
-    found = surface_contacts(hand, pose.tensors(), cloud, region, jacobian=False)
+    found = surface_contacts(hand, pose.tensors(), cloud, region, jacobian=False, guards=False)
     samples = found.points
     if mesh is not None:
         import trimesh
