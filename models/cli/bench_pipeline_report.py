@@ -45,6 +45,15 @@ def identical(a: dict[str, Any], b: dict[str, Any]) -> bool:
                                                                                    strict=True))  # fmt: skip
 
 
+def largest_difference(a: dict[str, Any], b: dict[str, Any]) -> float:
+    """The largest |Δ| between two records' poses (palm position m, quaternion, joints rad); inf if they differ in
+    shape."""
+    if len(a["answers"]) != len(b["answers"]):
+        return float("inf")
+    return max((float(np.max(np.abs(np.subtract(x, y)))) for x, y in zip(a["answers"], b["answers"], strict=True)),
+               default=0.0)  # fmt: skip
+
+
 def print_report(specs: list[dict[str, Any]], records: dict[str, list[dict[str, Any]]],
                  load: tuple[float, float, float]) -> None:  # fmt: skip
     """Print one table row per (hand, checkout), and with two checkouts the ratios and the identical answers."""
@@ -81,9 +90,13 @@ def print_report(specs: list[dict[str, Any]], records: dict[str, list[dict[str, 
         for hand in hands:
             a, b = stats[hand, "current"], stats[hand, "reference"]
             idx = [i for i, s in enumerate(specs) if s["hand"] == hand]
-            same = sum(identical(records["current"][i], records["reference"][i]) for i in idx)
+            cur, ref = records["current"], records["reference"]
+            same = sum(identical(cur[i], ref[i]) for i in idx)
+            verdicts = sum(cur[i]["success"] == ref[i]["success"] for i in idx)
+            gap = max(largest_difference(cur[i], ref[i]) for i in idx)
             console.print(f"{hand}: reference / current  p50 ×{b['p50'] / a['p50']:.2f}, "
                           f"p90 ×{b['p90'] / a['p90']:.2f}, "
                           f"mean ×{b['mean'] / a['mean']:.2f}; verified/s {a['verified_per_s']:.2f} vs "
-                          f"{b['verified_per_s']:.2f}; identical answers {same}/{len(idx)}; audit best "
+                          f"{b['verified_per_s']:.2f}; identical answers {same}/{len(idx)} (same verdicts "
+                          f"{verdicts}/{len(idx)}, largest pose difference {gap:.1e}); audit best "
                           f"{100 * a['audit_best']:.0f} % vs {100 * b['audit_best']:.0f} %")  # fmt: skip

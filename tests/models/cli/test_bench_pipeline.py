@@ -66,3 +66,10 @@ def test_worker_times_a_real_request() -> None:
     assert rec["linearise_calls"] >= 1 and rec["solve_calls"] >= 1
     assert 0 < rec["contacts"] <= rec["linearise"] < rec["wall"]
     assert np.isfinite(rec["answers"][0]).all() and len(rec["answers"][0]) == 7 + get_hand("panda_gripper").dof
+
+
+def test_largest_difference() -> None:
+    from models.cli.bench_pipeline_report import largest_difference
+
+    assert largest_difference(_record(0.1, [True]), _record(0.2, [True], answer=3e-7)) == pytest.approx(3e-7)
+    assert largest_difference(_record(0.1, [True]), _record(0.2, [True, False])) == float("inf")
