@@ -126,11 +126,6 @@ def _object_guards(
     for planes, bounds in parts:
         near = np.flatnonzero(np.all((local > bounds[0] - OBJECT_GUARD_MARGIN)
                                      & (local < bounds[1] + OBJECT_GUARD_MARGIN), axis=1))  # fmt: skip
-        if len(near) and len(planes) > 2 * PRUNE_FACES:
-            # a few spread faces bound the max from below: a point at least the margin outside them is outside
-            # the part by that much, so it is no guard whatever the other faces say (the hulls have 300-4 800)
-            sub = _spread_faces(planes)
-            near = near[np.max(local[near] @ sub[:, :3].T - sub[:, 3][None], axis=1) < OBJECT_GUARD_MARGIN]
         if not len(near):
             continue
         excess = local[near] @ planes[:, :3].T - planes[:, 3][None]  # (k, f) > 0 outside a face
@@ -144,27 +139,6 @@ def _object_guards(
     n_world = normal[order] @ R.T
     foot = pts[order] - best[order, None] * n_world
     return best[order], -n_world, foot
-
-
-PRUNE_FACES = 32
-"""Faces of a convex part, spread over its normals, whose bound prunes the object points far outside it."""
-_SPREAD: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-
-
-def _spread_faces(planes: np.ndarray) -> np.ndarray:
-    """``PRUNE_FACES`` of a part's half-spaces (f, 4) with normals spread by farthest-point sampling (f', 4); kept
-    per part (with the part, so its id stays its own)."""
-    hit = _SPREAD.get(id(planes))
-    if hit is not None and hit[0] is planes:
-        return hit[1]
-    normals = planes[:, :3]
-    pick = [0]
-    gap = np.full(len(planes), np.inf)
-    for _ in range(PRUNE_FACES - 1):
-        gap = np.minimum(gap, np.linalg.norm(normals - normals[pick[-1]], axis=1))
-        pick.append(int(np.argmax(gap)))
-    _SPREAD[id(planes)] = (planes, planes[pick])
-    return planes[pick]
 
 
 def _ball(field: ObjectField, centre: np.ndarray, radius: float) -> np.ndarray:

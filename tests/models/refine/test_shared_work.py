@@ -80,28 +80,3 @@ def test_cell_members_are_each_cells_samples(box):
         np.testing.assert_array_equal(mine, np.arange(cells.start[c], cells.start[c] + cells.count[c]))
     # the samples sorted by cell hold every sample exactly once
     assert sorted(map(tuple, np.round(cells.points, 12))) == sorted(map(tuple, np.round(pts, 12)))
-
-
-def test_pruned_object_guards_are_the_full_ones(box, monkeypatch):
-    """The spread faces only drop object points that no face set could make guards: same rows as all faces."""
-    from models.refine import contact
-    from models.robots import get_hand
-
-    hand = get_hand("leap")
-    _, pts, nrm = box
-    cloud = PointCloudField(pts, nrm)
-    rows = 0
-    for seed in range(4):
-        pose = _near_pose(hand, cloud, seed)
-        with torch.no_grad():
-            T = hand.tree.body_poses(*pose.tensors())[0, torch.as_tensor(hand.fingertip_body_index)].numpy()
-        for i in range(hand.num_fingertips):
-            centre, radius = T[i, :3, 3], 0.05
-            pruned = contact._object_guards(cloud, hand.fingertip_parts[i], T[i], centre, radius)
-            monkeypatch.setattr(contact, "PRUNE_FACES", 10**6)  # 2 × this many faces: never pruned
-            full = contact._object_guards(cloud, hand.fingertip_parts[i], T[i], centre, radius)
-            monkeypatch.setattr(contact, "PRUNE_FACES", 32)
-            for a, b in zip(pruned, full, strict=True):
-                np.testing.assert_array_equal(a, b)
-            rows += len(full[0])
-    assert rows > 0  # some object points were guards
