@@ -91,8 +91,10 @@ def run(args: argparse.Namespace) -> int:
     try:
         from tqdm import tqdm
 
-        for w in workers.values():  # warm-up, not recorded: imports, the hand's caches, the objects
-            w.ask(dict(specs[0], audit=False))
+        first = {s["hand"]: s for s in reversed(specs)}  # each hand's first request
+        for w in workers.values():  # warm-up, not recorded: imports, each hand's caches, the objects
+            for spec in first.values():
+                w.ask(dict(spec, audit=False))
 
         for i, spec in enumerate(tqdm(specs, desc="requests")):
             order = list(workers) if i % 2 == 0 else list(reversed(workers))  # A B, then B A
