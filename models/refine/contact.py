@@ -70,6 +70,8 @@ class SurfaceContacts:
             samples nearest the object (Φ, ∇Φ), and object points near a fingertip measured against the convex
             parts of its body (`_object_guards`) — a sharp object edge poking into a flat finger face between
             samples (1.8 mm deep where the samples read 0.45 mm, LEAP on the example box).
+        projected: (m, 3) the contacts projected onto the object, from the samples' own distances.
+        body_poses: (1, nb, 4, 4) the hand's body poses at this pose (the linearisation's spheres reuse them).
     """
 
     sample: np.ndarray
@@ -84,9 +86,14 @@ class SurfaceContacts:
     clear: np.ndarray
     clear_grad: np.ndarray
     row_jac: np.ndarray | None
+    projected: np.ndarray | None = None
+    body_poses: torch.Tensor | None = None
 
     def object_points(self, field: ObjectField) -> np.ndarray:
-        """(m, 3) the contacts projected onto the object's surface."""
+        """(m, 3) the contacts projected onto the object's surface (measured with the samples when they were:
+        ``projected``; the field is asked again only without them)."""
+        if self.projected is not None:
+            return self.projected
         phi, grad, _ = field.signed_distance(self.points)
         return np.asarray(self.points - phi[:, None] * grad)
 
@@ -144,7 +151,7 @@ def _ball(field: ObjectField, centre: np.ndarray, radius: float) -> np.ndarray:
 
 def surface_contacts(
     hand: object, pose: tuple[torch.Tensor, torch.Tensor, torch.Tensor], field: ObjectField,
-    tip_field: TipField | None = None, jacobian: bool = True, margin: float = GUARD_MARGIN,
+    tip_field: TipField | None = None, jacobian: bool = True, margin: float = GUARD_MARGIN, guards: bool = True,
 ) -> SurfaceContacts:  # fmt: skip
     """Measure the fingertips' real surfaces against the object at ``pose`` (batch-of-one tensors).
 
@@ -155,6 +162,8 @@ def surface_contacts(
         tip_field: Φ^R for a region mask (the contact is the pad sample nearest the region).
         jacobian: also return the Jacobians (refinement); verification and sampling do without.
         margin: guards farther than this from the object are left out of the rows.
+        guards: also measure the guards (refinement); without them (verification: only the contacts) just the
+            pads are measured — the same contacts, without the other samples' distances or the object points.
     """
     surf = hand.contact_surface  # type: ignore[attr-defined]
     standoff = max(GUARD_STANDOFF, float(getattr(field, "resolution", 0.0)))
@@ -167,7 +176,7 @@ def surface_contacts(
     # cull: the bodies whose bounding sphere is far from the object only need their pads measured
     centres = np.stack([world[surf.fingertip == i].mean(0) for i in range(m)])
     centre_phi = field.signed_distance(centres)[0]
-    near_body = centre_phi < surf.bound_radius * 2.0 + margin
+    near_body = (centre_phi < surf.bound_radius * 2.0 + margin) & guards
     measure = np.flatnonzero(surf.pad | near_body[surf.fingertip])
     phi_all, grad_all, _ = field.signed_distance(world[measure])
     score = phi_all if tip_field is None else tip_field(world[measure])[0]
@@ -191,7 +200,9 @@ def surface_contacts(
     at = np.searchsorted(measure, nearest)  # ``measure`` is sorted (np.flatnonzero)
     points = world[sample]
     gap = phi_all[at]
-    point_gap = phi_all[np.searchsorted(measure, sample)] - standoff
+    at_sample = np.searchsorted(measure, sample)
+    point_gap = phi_all[at_sample] - standoff
+    projected = points - phi_all[at_sample, None] * grad_all[at_sample]
     if tip_field is None:
         phi, grad = gap - standoff, grad_all[at].copy()
     else:
@@ -205,23 +216,17 @@ def surface_contacts(
         np.full(len(e[2]), tip_body[i]) for i, e in zip(np.flatnonzero(near_body), extra, strict=True)
     ])  # fmt: skip
     jac = gap_jac = row_jac = None
-    if jacobian:
+    if jacobian:  # one point Jacobian for the samples and the guards' feet (its per-body terms once)
         wanted = np.concatenate([sample, nearest, guard_sample])
+        at_points = torch.as_tensor(np.concatenate([world[wanted], feet]), dtype=T_all.dtype)[None]
+        bodies = np.concatenate([surf.body[wanted], foot_body])
         with torch.no_grad():
-            _, _, j_t = hand.surface_samples(*pose, index=wanted, body_poses=T_all)  # type: ignore[attr-defined]
-            assert j_t is not None
-            full = j_t[0].numpy()
-            if len(feet):
-                foot_t = torch.as_tensor(feet, dtype=T_all.dtype)[None]
-                foot_jac = hand.tree.point_jacobian(T_all, foot_body, foot_t, pose[0])[0].numpy()  # type: ignore[attr-defined]
-            else:
-                foot_jac = np.zeros((0, 3, full.shape[-1]))
-        jac, gap_jac = full[:m], full[m : 2 * m]
-        row_jac = np.concatenate([full[2 * m :], foot_jac])
+            full = hand.tree.point_jacobian(T_all, bodies, at_points, pose[0])[0].numpy()  # type: ignore[attr-defined]
+        jac, gap_jac, row_jac = full[:m], full[m : 2 * m], full[2 * m :]
     return SurfaceContacts(
         sample=sample, points=points, jac=jac, nearest=nearest, gap_jac=gap_jac, phi=np.asarray(phi, dtype=np.float64),
         grad=np.asarray(grad, dtype=np.float64), gap=np.asarray(gap, dtype=np.float64),
         point_gap=np.asarray(point_gap, dtype=np.float64),
         clear=np.asarray(clear, dtype=np.float64), clear_grad=np.asarray(clear_grad, dtype=np.float64),
-        row_jac=row_jac,
+        row_jac=row_jac, projected=np.asarray(projected, dtype=np.float64), body_poses=T_all,
     )  # fmt: skip

@@ -30,14 +30,17 @@ WINDING_CELLS = 8
 
 @dataclass(frozen=True)
 class _Cells:
-    """Samples grouped in grid cells, padded: centre (C, 3), radius (C,), moment (C, 3) = Σ a_j n_j, points
-    (C, S, 3) and weighted normals a_j n_j (C, S, 3) (zeros pad the short cells)."""
+    """Samples grouped in grid cells: centre (C, 3), radius (C,), moment (C, 3) = Σ a_j n_j, and the samples
+    sorted by cell — points (N, 3), weighted normals a_j n_j (N, 3) — with each cell's first index ``start`` (C,)
+    and ``count`` (C,)."""
 
     centre: np.ndarray
     radius: np.ndarray
     moment: np.ndarray
     points: np.ndarray
     weighted: np.ndarray
+    start: np.ndarray
+    count: np.ndarray
 
     @classmethod
     def build(cls, points: np.ndarray, weighted: np.ndarray) -> _Cells:
@@ -47,20 +50,22 @@ class _Cells:
         _, cell = np.unique(key, axis=0, return_inverse=True)
         cell = cell.reshape(-1)
         count = np.bincount(cell)
-        C, S = len(count), int(count.max())
         order = np.argsort(cell, kind="stable")
-        slot = np.arange(len(points)) - np.repeat(np.cumsum(count) - count, count)
-        pts, wts = np.zeros((C, S, 3)), np.zeros((C, S, 3))
-        pts[cell[order], slot] = points[order]
-        wts[cell[order], slot] = weighted[order]
         area = np.linalg.norm(weighted, axis=1)
         centre = np.stack([np.bincount(cell, area * points[:, k]) for k in range(3)], 1) / np.bincount(cell, area)[
             :, None
         ]
-        radius = np.zeros(C)
+        radius = np.zeros(len(count))
         np.maximum.at(radius, cell, np.linalg.norm(points - centre[cell], axis=1))
         moment = np.stack([np.bincount(cell, weighted[:, k]) for k in range(3)], 1)
-        return cls(centre, radius, moment, pts, wts)
+        return cls(centre, radius, moment, points[order], weighted[order], np.cumsum(count) - count, count)
+
+    def members(self, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """For cell indices (P,), the sorted-sample indices of every member (T,) and which entry each is of (T,)."""
+        counts = self.count[cells]
+        owner = np.repeat(np.arange(len(cells)), counts)
+        first = np.cumsum(counts) - counts  # where each entry's run starts in the output
+        return self.start[cells][owner] + np.arange(len(owner)) - first[owner], owner
 
 
 class PointCloudField:
@@ -142,11 +147,12 @@ class PointCloudField:
         out = np.einsum("mca,ca->mc", diff, cells.moment) / np.maximum(dist, 1e-12) ** 3
         out = np.where(far, out, 0.0).sum(axis=1)
         qi, ci = np.nonzero(~far)
-        if len(qi):
-            d = cells.points[ci] - x[qi, None]  # (P, S, 3)
-            r = np.maximum(np.linalg.norm(d, axis=2), 0.5 * self.disc_radius)
-            near = (np.einsum("psa,psa->ps", d, cells.weighted[ci]) / r**3).sum(axis=1)
-            np.add.at(out, qi, near)
+        if len(qi):  # the near cells' samples one by one (unpadded: a cell holds 1-55 samples, 23 on average)
+            j, pair = cells.members(ci)
+            row = qi[pair]
+            d = cells.points[j] - x[row]  # (T, 3)
+            r = np.maximum(np.linalg.norm(d, axis=1), 0.5 * self.disc_radius)
+            out += np.bincount(row, np.einsum("ta,ta->t", d, cells.weighted[j]) / r**3, minlength=len(x))
         return out / (4.0 * np.pi)
 
     def winding_number_exact(self, x: np.ndarray, chunk: int = 512) -> np.ndarray:

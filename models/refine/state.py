@@ -116,6 +116,25 @@ def body_spheres(hand: Hand) -> np.ndarray:
     return np.flatnonzero(np.asarray(hand.sphere_fingertip) < 0)
 
 
+def sphere_kinematics(
+    hand: Hand, pose: tuple[torch.Tensor, torch.Tensor, torch.Tensor], body_poses: torch.Tensor | None,
+) -> tuple[torch.Tensor, torch.Tensor]:  # fmt: skip
+    """Collision-sphere centres (1, S, 3) and Jacobians (1, S, 3, n), as `Hand.spheres` computes them, from body
+    poses (1, nb, 4, 4) the contact model already has (the forward kinematics once an iterate, not twice)."""
+    if body_poses is None:
+        return hand.spheres(*pose)
+    cache = hand.__dict__.setdefault("_sphere_kinematics", {})
+    key = (body_poses.dtype, body_poses.device)
+    if key not in cache:
+        bodies = np.asarray([hand.tree.body_names.index(link) for link in hand.sphere_links], dtype=np.int64)
+        local = torch.as_tensor(hand.sphere_centres, dtype=body_poses.dtype, device=body_poses.device)
+        cache[key] = (bodies, torch.as_tensor(bodies, device=body_poses.device), local)
+    bodies, index, local = cache[key]
+    Tb = body_poses[:, index]
+    pts = (Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]
+    return pts, hand.tree.point_jacobian(body_poses, bodies, pts, pose[0])
+
+
 def linearise(
     hand: Hand,
     pose: HandPose,
@@ -139,7 +158,7 @@ def linearise(
     contacts = surface_contacts(hand, tensors, field, tip_field)
     assert contacts.jac is not None and contacts.gap_jac is not None and contacts.row_jac is not None
     with torch.no_grad():
-        sph_t, sph_jac_t = hand.spheres(*tensors)
+        sph_t, sph_jac_t = sphere_kinematics(hand, tensors, contacts.body_poses)
     sph, sph_jac = sph_t[0].numpy(), sph_jac_t[0].numpy()
     radius = np.asarray(hand.sphere_radii, dtype=np.float64)
     guard = body_spheres(hand)

@@ -1,0 +1,156 @@
+"""`mani bench pipeline`: one request through `run_pipeline`, per stage, per hand, and beside a reference checkout.
+
+Each request (a built-in hand, an object, a task, ``--proposals`` proposals, one thread) runs in a worker process;
+the time of every stage is recorded — prepare (field, mass), network, initialisation, refinement (split into the
+linearisation, of which the contact model on the real surfaces and its object-point guards, and the SCP solve),
+verification — with the iterations, the verified proposals and, with ``--audit N``, the outside audit
+(`models.audit`) of the first N requests' proposals of each hand. The table gives p50/p90 latency and verified
+grasps per second (one core, requests one after the other).
+
+``--compare REF`` runs the same requests through a second checkout (``git worktree add /tmp/ref main``) in its own
+worker process (``PYTHONPATH=REF``, same interpreter), interleaved request by request (A B A B: both see the same
+machine load), and prints both, the ratios, and how many answers are identical (same success, joints and palm
+within 1e-9). Both workers run this file as a script, so the reference needs no copy of it.
+
+Objects: ``third_party`` (the audit's meshes that installed packages ship, `models.audit.third_party_objects`;
+there are 18, so ``--seeds`` repeats each with other samples and contacts), ``procedural`` (`models.objects`), or
+``box`` (``examples/data/box.npz``, no mesh: the README protocol).
+
+Example:
+    mani bench pipeline --hand leap,allegro --set third_party --seeds 3 --audit 6 --compare /tmp/ref-23
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+EXIT_OK = 0
+ROOT = Path(__file__).resolve().parents[2]
+STAGES = ("prepare", "network", "initialisation", "refinement", "verification")
+PARTS = ("linearise", "contacts", "guards", "solve")
+"""Refinement parts timed by wrapping the functions of these names (contacts, guards ⊂ linearise)."""
+
+
+def register(subparsers: Any) -> None:
+    """Add ``pipeline`` to the ``mani bench`` sub-commands."""
+    p = subparsers.add_parser("pipeline", help="one request per stage, p50/p90, verified grasps/s (vs a reference)",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_arguments(p)
+    p.set_defaults(func=run)
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The command's options (shared with `main`)."""
+    p.add_argument("--hand", default="leap,allegro", help="hand names, comma separated, or 'all'")
+    p.add_argument("--set", default="third_party", choices=("third_party", "procedural", "box"))
+    p.add_argument("--objects", type=int, default=18, help="objects of the set (third_party: at most 18)")
+    p.add_argument("--seeds", type=int, default=3, help="requests per object (seeds 0..N-1)")
+    p.add_argument("--task", default="lift", choices=("lift", "closure"))
+    p.add_argument("--geometry", default="mesh", choices=("mesh", "points"), help="send the mesh or points only")
+    p.add_argument("--proposals", type=int, default=1)
+    p.add_argument("--method", default="random_contacts")
+    p.add_argument("--points", type=int, default=2048, help="surface points sent (third_party)")
+    p.add_argument("--audit", type=int, default=0, help="audit the proposals of the first N requests per hand")
+    p.add_argument("--compare", default=None, help="a reference checkout's root, run side by side")
+    p.add_argument("--json", default=None, help="also write every request's record here")
+
+
+def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
+    """The request specs, hand-major (a worker rebuilds each request from its spec)."""
+    from models.robots import list_hands
+
+    hands = list(list_hands()) if args.hand == "all" else [h for h in args.hand.split(",") if h]
+    count = 1 if args.set == "box" else args.objects
+    out = []
+    for hand in hands:
+        n = 0
+        for obj in range(count):
+            for seed in range(args.seeds):
+                out.append({"hand": hand, "set": args.set, "object": obj, "seed": seed, "task": args.task,
+                            "geometry": args.geometry, "proposals": args.proposals, "method": args.method,
+                            "points": args.points, "audit": n < args.audit and args.set != "box",
+                            "box": str(ROOT / "examples/data/box.npz")})
+                n += 1
+    return out
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run every request in the worker(s), interleaved, and print the tables."""
+    specs = requests(args)
+    trees = {"current": str(ROOT)}
+    if args.compare:
+        trees["reference"] = str(Path(args.compare).resolve())
+    workers = {name: _Worker(tree) for name, tree in trees.items()}
+    records: dict[str, list[dict[str, Any]]] = {name: [] for name in trees}
+    try:
+        from tqdm import tqdm
+
+        first = {s["hand"]: s for s in reversed(specs)}  # each hand's first request
+        for w in workers.values():  # warm-up, not recorded: imports, each hand's caches, the objects
+            for spec in first.values():
+                w.ask(dict(spec, audit=False))
+
+        for i, spec in enumerate(tqdm(specs, desc="requests")):
+            order = list(workers) if i % 2 == 0 else list(reversed(workers))  # A B, then B A
+            for name in order:
+                records[name].append(workers[name].ask(spec))
+    finally:
+        for w in workers.values():
+            w.close()
+    if args.json:
+        Path(args.json).write_text(json.dumps({"specs": specs, "records": records}))
+    from lab.bench_pipeline_report import print_report
+
+    print_report(specs, records, load=os.getloadavg())
+    return EXIT_OK
+
+
+class _Worker:
+    """A worker process running this file against one checkout (``PYTHONPATH=tree``), one request per line."""
+
+    def __init__(self, tree: str) -> None:
+        env = dict(os.environ, PYTHONPATH=tree, OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
+        self.proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker"], env=env,
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=tree)
+
+    def ask(self, spec: dict[str, Any]) -> dict[str, Any]:
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.proc.stdin.write(json.dumps(spec) + "\n")
+        self.proc.stdin.flush()
+        line = self.proc.stdout.readline()
+        if not line:
+            raise RuntimeError(f"bench worker exited ({self.proc.wait()})")
+        return dict(json.loads(line))
+
+    def close(self) -> None:
+        if self.proc.stdin is not None:
+            self.proc.stdin.close()
+        self.proc.wait(timeout=60)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command without the ``mani`` entry point (``python -m lab.bench_pipeline ...``)."""
+    p = argparse.ArgumentParser(prog="mani bench pipeline", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    add_arguments(p)
+    return run(p.parse_args(argv))
+
+
+if __name__ == "__main__":
+    if sys.argv[1:] == ["--worker"]:  # run as a script: import ``models`` from PYTHONPATH, never this directory
+        import importlib.util
+
+        here = Path(__file__).resolve().parent
+        sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != here]
+        spec = importlib.util.spec_from_file_location("bench_pipeline_worker", here / "bench_pipeline_worker.py")
+        assert spec is not None and spec.loader is not None
+        worker = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(worker)
+        raise SystemExit(worker.serve())
+    raise SystemExit(main())
