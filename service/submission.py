@@ -1,8 +1,9 @@
-"""Submitting synthesis work: one dependency that holds what every submit route needs.
+"""Submitting synthesis work, the same for every front end: one `Submitter` per call.
 
-`POST /v1/synthesize`, `POST /v1/jobs` and `POST /v1/batches` all refuse early when the queue is full, read and
-validate their body, check the hands, submit on behalf of the caller and count what they submitted. `Submitter`
-does those steps once, so a route states only what differs (its kind, its deadline, what it answers).
+`POST /v1/synthesize`, `POST /v1/jobs`, `POST /v1/batches` and their gRPC twins all refuse early when the queue
+is full, validate their body once, check the hands, submit on behalf of the caller, keep the scene for the viewer
+and count what they submitted. `Submitter` does those steps once; a front end states only how it reads its body
+(`read_and_submit` / `read_and_submit_batch` for HTTP, `service.grpc.submit` for gRPC), its kind and its deadline.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import Annotated
 
 from fastapi import Depends, Request
 
-from clients.schemas import BatchCreate, FieldError, SynthesisRequest
+from clients.schemas import BatchCreate, BatchItem, BatchPublic, FieldError, JobState, SynthesisRequest
 from service.deps import CallerDep, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
 from service.errors import InvalidInput, QueueFullError
 from service.metrics import Metrics
@@ -30,41 +31,35 @@ log = logging.getLogger("service.submission")
 
 @dataclass
 class Submitter:
-    """The caller's way into the queue for one HTTP request."""
+    """The caller's way into the queue for one call (HTTP request or gRPC call)."""
 
-    request: Request
     queue: JobQueue
     robots: RobotCatalog
     metrics: Metrics
     settings: Settings
+    scenes: SceneStore
     request_id: str
     caller: Caller
+    transport: str = "http"
 
     async def admit(self, count: int = 1) -> None:
         """429 `QueueFull` before reading a body the queue has no room for (`submit` still decides, atomically)."""
         if not await self.queue.room(count):
             raise QueueFullError("the queue is full; retry later", retry_after=1.0)
 
-    async def one(self, kind: str, *, deadline_from_timeout: bool) -> tuple[SynthesisRequest, str]:
-        """Read, validate and submit one request; its job's deadline is ``options.timeout`` from now when
-        ``deadline_from_timeout``. Returns the request and the job's id."""
-        await self.admit()
-        body = await read_model(self.request, SynthesisRequest, self.settings.max_body_bytes)
+    async def submit(self, body: SynthesisRequest, kind: str, deadline: float | None) -> str:
+        """Check the hand, submit one validated request (its job's deadline: ``deadline``, Unix s); its job id."""
         await self.robots.check(body, self.caller.tenant)
-        deadline = time.time() + body.options.timeout if deadline_from_timeout else None
         tenant = self.caller.tenant
         (job_id,) = await self.queue.submit([body], deadline=deadline, request_id=self.request_id, owner=tenant)
-        self.request.state.job_id = job_id
-        scenes: SceneStore = self.request.app.state.scenes
-        scenes.put(job_id, body)
+        self.scenes.put(job_id, body)
         self.metrics.jobs_submitted.labels(kind=kind).inc()
-        log.info("job submitted", extra={"job_id": job_id, "kind": kind, "request_id": self.request_id})
-        return body, job_id
+        log.info("job submitted", extra={"job_id": job_id, "kind": kind, "request_id": self.request_id,
+                                         "transport": self.transport})  # fmt: skip
+        return job_id
 
-    async def batch(self) -> tuple[BatchCreate, str]:
-        """Read, validate and submit a batch, all or none. Returns the batch and its id."""
-        await self.admit()
-        body = await read_model(self.request, BatchCreate, self.settings.max_body_bytes)
+    async def submit_batch(self, body: BatchCreate) -> str:
+        """Check the batch's limits and hands, submit it all or none; its id."""
         count, limit, capacity = len(body.requests), self.settings.max_batch_size, self.queue.capacity
         if count > limit:
             raise InvalidInput(f"requests: {count} requests, at most {limit} per batch")
@@ -80,16 +75,47 @@ class Submitter:
         batch_id = await self.queue.create_batch(body.requests, request_id=self.request_id, owner=tenant)
         self.metrics.batch_size.observe(count)
         self.metrics.jobs_submitted.labels(kind="batch").inc(count)
-        log.info("batch submitted", extra={"batch_id": batch_id, "jobs": len(body.requests),
-                                           "request_id": self.request_id})  # fmt: skip
-        return body, batch_id
+        log.info("batch submitted", extra={"batch_id": batch_id, "jobs": count, "request_id": self.request_id,
+                                           "transport": self.transport})  # fmt: skip
+        return batch_id
+
+
+    async def first_page(self, batch_id: str, size: int = 100) -> BatchPublic:
+        """A just-submitted batch as its answer shows it: every job queued, the first ``size`` job ids."""
+        job_ids = await self.queue.batch_job_ids(batch_id, owner=self.caller.tenant)
+        limit = min(size, len(job_ids))
+        items = [BatchItem(index=i, job_id=j, state=JobState.QUEUED) for i, j in enumerate(job_ids[:limit])]
+        return BatchPublic(
+            id=batch_id, total=len(job_ids), counts={JobState.QUEUED: len(job_ids)}, done=False, items=items,
+            offset=0, limit=limit, created_at=time.time(),
+        )  # fmt: skip
+
+
+async def read_and_submit(
+    request: Request, submitter: Submitter, kind: str, *, deadline_from_timeout: bool
+) -> tuple[SynthesisRequest, str]:
+    """HTTP: admit, read and validate the body, submit (the job's deadline ``options.timeout`` from now when
+    ``deadline_from_timeout``). Returns the request and the job's id."""
+    await submitter.admit()
+    body = await read_model(request, SynthesisRequest, submitter.settings.max_body_bytes)
+    deadline = time.time() + body.options.timeout if deadline_from_timeout else None
+    job_id = await submitter.submit(body, kind, deadline)
+    request.state.job_id = job_id
+    return body, job_id
+
+
+async def read_and_submit_batch(request: Request, submitter: Submitter) -> tuple[BatchCreate, str]:
+    """HTTP: admit, read and validate a batch, submit it all or none. Returns the batch and its id."""
+    await submitter.admit()
+    body = await read_model(request, BatchCreate, submitter.settings.max_body_bytes)
+    return body, await submitter.submit_batch(body)
 
 
 async def get_submitter(
     request: Request, queue: QueueDep, robots: RobotsDep, metrics: MetricsDep, settings: SettingsDep,
     request_id: RequestIdDep, caller: CallerDep,
 ) -> Submitter:  # fmt: skip
-    return Submitter(request, queue, robots, metrics, settings, request_id, caller)
+    return Submitter(queue, robots, metrics, settings, request.app.state.scenes, request_id, caller)
 
 
 SubmitterDep = Annotated[Submitter, Depends(get_submitter)]

@@ -127,19 +127,7 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
     @unary
     async def SubmitBatch(self, request: pb.BatchCreate, context: Any, caller: Caller) -> pb.BatchPublic:
         batch_id = await self.submission.batch(request, caller, context)
-        job_ids = await self.submission.queue.batch_job_ids(batch_id, owner=caller.tenant)
-        limit = min(100, len(job_ids))
-        items = [BatchItem(index=i, job_id=j, state=JobState.QUEUED) for i, j in enumerate(job_ids[:limit])]
-        batch = BatchPublic(
-            id=batch_id,
-            total=len(job_ids),
-            counts={JobState.QUEUED: len(job_ids)},
-            done=False,
-            items=items,
-            offset=0,
-            limit=limit,
-            created_at=time.time(),
-        )
+        batch = await self.submission.submitter(caller, context).first_page(batch_id)
         return to_proto(batch, pb.BatchPublic)
 
     @unary

@@ -10,19 +10,18 @@ submitted over HTTP.
 from __future__ import annotations
 
 import asyncio
-import logging
 from typing import Any, TypeVar
 
 import grpc
 from google.protobuf.message import Message
 
-from clients.schemas import BatchCreate, FieldError, SynthesisRequest, WireModel
-from service.errors import InvalidInput, QueueFullError, Unavailable
+from clients.schemas import BatchCreate, SynthesisRequest, WireModel
+from service.errors import Unavailable
 from service.grpc.convert import from_proto
 from service.middleware import request_id_from
 from service.security import Caller
+from service.submission import Submitter
 
-log = logging.getLogger("service.grpc")
 ModelT = TypeVar("ModelT", bound=WireModel)
 
 
@@ -46,16 +45,17 @@ class Submission:
             raise Unavailable("the service is not accepting work (starting or shutting down)")
         return queue
 
-    async def admit(self, count: int = 1) -> None:
-        """RESOURCE_EXHAUSTED before validating a message the queue has no room for."""
-        if not await self.queue.room(count):
-            raise QueueFullError("the queue is full; retry later", retry_after=1.0)
-
     async def validate(self, message: Message, model: type[ModelT]) -> ModelT:
         """The contract's validation of ``message``; a message larger than ``parse_offload_bytes`` off the loop."""
         if message.ByteSize() > self.state.settings.parse_offload_bytes:
             return await asyncio.to_thread(from_proto, message, model)
         return from_proto(message, model)
+
+    def submitter(self, caller: Caller, context: grpc.aio.ServicerContext) -> Submitter:
+        """The HTTP routes' `Submitter`, over this call's caller and request id."""
+        state = self.state
+        return Submitter(self.queue, state.robots, state.metrics, state.settings, state.scenes,
+                         request_id(context), caller, transport="grpc")  # fmt: skip
 
     async def one(
         self,
@@ -67,35 +67,13 @@ class Submission:
         deadline: float | None = None,
     ) -> tuple[SynthesisRequest, str]:
         """Validate and submit one request (its job's deadline: ``deadline``, Unix s). Returns it and its job id."""
-        await self.admit()
+        submitter = self.submitter(caller, context)
+        await submitter.admit()
         body = await self.validate(message, SynthesisRequest)
-        await self.state.robots.check(body, caller.tenant)
-        rid = request_id(context)
-        (job_id,) = await self.queue.submit([body], deadline=deadline, request_id=rid, owner=caller.tenant)
-        self.state.scenes.put(job_id, body)
-        self.state.metrics.jobs_submitted.labels(kind=kind).inc()
-        log.info("job submitted", extra={"job_id": job_id, "kind": kind, "request_id": rid, "transport": "grpc"})
-        return body, job_id
+        return body, await submitter.submit(body, kind, deadline)
 
     async def batch(self, message: Message, caller: Caller, context: grpc.aio.ServicerContext) -> str:
         """Validate and submit a batch, all or none (the HTTP route's limits). Returns the batch id."""
-        await self.admit()
-        body = await self.validate(message, BatchCreate)
-        settings, capacity = self.state.settings, self.queue.capacity
-        count = len(body.requests)
-        if count > settings.max_batch_size:
-            raise InvalidInput(f"requests: {count} requests, at most {settings.max_batch_size} per batch")
-        if capacity is not None and count > capacity:
-            raise InvalidInput(
-                f"requests: {count} requests can never fit: the queue holds at most {capacity} jobs"
-                " (MANI_MAX_QUEUE); split the batch",
-                detail=[FieldError(field="requests", problem=f"more than the queue's capacity of {capacity}")],
-            )
-        for index, item in enumerate(body.requests):
-            await self.state.robots.check(item, caller.tenant, field=f"requests.{index}.robot.name")
-        rid = request_id(context)
-        batch_id: str = await self.queue.create_batch(body.requests, request_id=rid, owner=caller.tenant)
-        self.state.metrics.batch_size.observe(count)
-        self.state.metrics.jobs_submitted.labels(kind="batch").inc(count)
-        log.info("batch submitted", extra={"batch_id": batch_id, "jobs": count, "request_id": rid, "transport": "grpc"})
-        return batch_id
+        submitter = self.submitter(caller, context)
+        await submitter.admit()
+        return await submitter.submit_batch(await self.validate(message, BatchCreate))

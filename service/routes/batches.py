@@ -13,7 +13,7 @@ from clients.schemas import BatchItem, BatchPublic, JobPublic, JobState
 from service.deps import Authorized, CallerDep, QueueDep, SettingsDep
 from service.negotiation import body_openapi, respond
 from service.responses import ERRORS, READ_ERRORS
-from service.submission import SubmitterDep
+from service.submission import SubmitterDep, read_and_submit_batch
 
 router = APIRouter(prefix="/v1/batches", tags=["batches"], dependencies=[Authorized])
 log = logging.getLogger("service.batches")
@@ -28,21 +28,8 @@ log = logging.getLogger("service.batches")
 )
 async def create_batch(request: Request, submitter: SubmitterDep) -> Response:
     """All or none are enqueued (owned by the caller); 202 with the batch and its first page of job ids."""
-    _, batch_id = await submitter.batch()
-    queue, caller = submitter.queue, submitter.caller
-    job_ids = await queue.batch_job_ids(batch_id, owner=caller.tenant)
-    limit = min(100, len(job_ids))
-    items = [BatchItem(index=i, job_id=j, state=JobState.QUEUED) for i, j in enumerate(job_ids[:limit])]
-    batch = BatchPublic(
-        id=batch_id,
-        total=len(job_ids),
-        counts={JobState.QUEUED: len(job_ids)},
-        done=False,
-        items=items,
-        offset=0,
-        limit=limit,
-        created_at=time.time(),
-    )
+    _, batch_id = await read_and_submit_batch(request, submitter)
+    batch = await submitter.first_page(batch_id)
     url = str(request.url_for("get_batch", batch_id=batch_id))
     return respond(request, batch, status=202, headers={"Location": url})
 

@@ -14,7 +14,7 @@ from service.deps import Authorized, QueueDep
 from service.errors import Unavailable
 from service.negotiation import body_openapi, respond
 from service.responses import ERRORS
-from service.submission import SubmitterDep
+from service.submission import SubmitterDep, read_and_submit
 
 router = APIRouter(prefix="/v1", tags=["synthesis"], dependencies=[Authorized])
 log = logging.getLogger("service.synthesis")
@@ -46,7 +46,7 @@ def job_created(request: Request, job_id: str, job: JobPublic | None = None) -> 
 async def synthesize(request: Request, submitter: SubmitterDep) -> Response:
     """Enqueue, wait up to ``options.timeout`` (capped by the server's ``sync_wait_max``): 200 with the result
     when it finishes in time, else 202 with the job's URL. The job's deadline is ``options.timeout`` from now."""
-    body, job_id = await submitter.one("sync", deadline_from_timeout=True)
+    body, job_id = await read_and_submit(request, submitter, "sync", deadline_from_timeout=True)
     queue, metrics = submitter.queue, submitter.metrics
     wait = min(body.options.timeout, submitter.settings.sync_wait_max)
     job = await wait_for(request, queue, job_id, wait)
@@ -85,5 +85,5 @@ async def wait_for(request: Request, queue: QueueDep, job_id: str, timeout: floa
 )
 async def create_job(request: Request, submitter: SubmitterDep) -> Response:
     """202 with the job's URL at once (no deadline: an asynchronous caller comes back for it)."""
-    _, job_id = await submitter.one("async", deadline_from_timeout=False)
+    _, job_id = await read_and_submit(request, submitter, "async", deadline_from_timeout=False)
     return job_created(request, job_id)

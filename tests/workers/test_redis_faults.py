@@ -36,7 +36,9 @@ def client(url: str, **options: object) -> RedisQueue:
     return queue
 
 
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["sigterm", "kill-9"])
+@pytest.mark.parametrize(
+    "sig", [signal.SIGTERM, pytest.param(signal.SIGKILL, marks=pytest.mark.slow)], ids=["sigterm", "kill-9"]
+)  # the same recovery path; kill -9 in the slow run
 def test_jobs_running_through_a_redis_restart_finish(tmp_path: Path, sig: int) -> None:
     """Redis (AOF) goes away while a batch runs and comes back: the worker writes the results it could not
     write while Redis was down; nothing stays "running" and nothing runs twice."""
