@@ -186,6 +186,8 @@ def to_result(
                 else hand_mesh(hand, p.palm_position, p.palm_quaternion, p.joint_values),
                 history=history,
                 contact_motions=None if p.contact_motions is None else np.asarray(p.contact_motions, np.float64),
+                network_sample=p.network_sample,
+                network_forces=None if p.network_forces is None else np.asarray(p.network_forces, np.float64),
             )
         )
     options = request.options

@@ -77,6 +77,13 @@ class Proposal(WireModel):
     contact_motions: Rows3 | None = Field(
         None, description="Deformables: the post-contact motion of each contact (m): grasp it and move it so."
     )
+    network_sample: int | None = Field(
+        None, ge=0, description="Which of the network's latent samples proposed these contacts."
+    )
+    network_forces: Rows3 | None = Field(
+        None, description="The network's force prediction at each of its contacts (its normalised units), beside the "
+        "refined `forces`.",
+    )
 
 
 class SynthesisResult(WireModel):
@@ -85,8 +92,10 @@ class SynthesisResult(WireModel):
     hand: str
     model_version: str
     proposals: list[Proposal]
-    heatmap: PerPoint | None = None
-    force_map: Points | None = None
+    heatmap: PerPoint | None = Field(
+        None, description="The network's contact heatmap (return_heatmap): the sample the best proposal came from."
+    )
+    force_map: Points | None = Field(None, description="The network's force map of the same sample (return_force_map).")
     timings: dict[str, float] = Field(default_factory=dict, description="Seconds per stage.")
 
     @property

@@ -5,7 +5,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -140,11 +140,19 @@ def network_inputs(batch: Sequence[Prepared]) -> list[Any]:
     return rows
 
 
-ContactSet = tuple[np.ndarray, np.ndarray, np.ndarray | None, str]
+class ContactSet(NamedTuple):
+    """One proposal's contacts before the hand is placed on them."""
+
+    points: np.ndarray  # (H, 3)
+    normals: np.ndarray  # (H, 3)
+    heat: np.ndarray | None  # (N,) the predicted heatmap the contacts came from, when from the network
+    source: str  # given | random | network | random_fallback
+    forces: np.ndarray | None = None  # (H, 3) the network's force/motion prediction at the contacts
+    sample: int | None = None  # which of the network's K samples
 
 
 def contact_sets(prep: Prepared, net_out: Any | None) -> list[ContactSet]:
-    """One (contacts (H, 3), normals (H, 3), predicted heatmap or None, source) per proposal.
+    """One `ContactSet` per proposal.
 
     ``source`` says where the contacts came from: "given", "random", "network", or "random_fallback" when the
     network's heatmap had no point above the selection threshold (the answer then says so).
@@ -156,13 +164,13 @@ def contact_sets(prep: Prepared, net_out: Any | None) -> list[ContactSet]:
 
     def random_set(source: str = "random") -> ContactSet:
         sub = allowed[spread_contacts(cloud.points[allowed], min(m, len(allowed)), rng)]
-        return cloud.points[sub], cloud.normals[sub], None, source
+        return ContactSet(cloud.points[sub], cloud.normals[sub], None, source)
 
     if inp.method == "contacts":
         assert inp.contacts is not None
         pts = np.asarray(inp.contacts, dtype=np.float64)
         idx = cloud.nearest_index(pts)
-        return [(cloud.points[idx], cloud.normals[idx], None, "given")] * inp.num_proposals
+        return [ContactSet(cloud.points[idx], cloud.normals[idx], None, "given")] * inp.num_proposals
     if inp.method == "random_contacts" or net_out is None:
         return [random_set() for _ in range(inp.num_proposals)]
     from models.network.selection import select_contacts
@@ -174,5 +182,7 @@ def contact_sets(prep: Prepared, net_out: Any | None) -> list[ContactSet]:
         if len(sel) == 0:  # nothing above threshold: fall back to random contacts in the region
             sets.append(random_set("random_fallback"))
             continue
-        sets.append((sel.points, cloud.normals[sel.indices], np.asarray(heat, dtype=np.float64), "network"))
+        heat64 = np.asarray(heat, dtype=np.float64)
+        forces = np.asarray(sel.forces, dtype=np.float64)
+        sets.append(ContactSet(sel.points, cloud.normals[sel.indices], heat64, "network", forces, k))
     return sets

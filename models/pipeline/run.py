@@ -30,7 +30,7 @@ from models.pipeline.deformable import (
     network_input,
     prepare_deformable,
 )
-from models.pipeline.prepare import Prepared, contact_sets, network_inputs, prepare
+from models.pipeline.prepare import ContactSet, Prepared, contact_sets, network_inputs, prepare
 from models.pipeline.types import (
     Cancelled,
     InvalidInput,
@@ -139,6 +139,7 @@ def _finish(
     t0 = time.perf_counter()
     starts: list[HandPose] = []
     sources: list[str] = []
+    chosen: list[ContactSet | None] = []  # the contact set each start came from (None: no contact search)
     if inp.initial_pose is not None:  # the caller's start (a planner's carried grasp): refined as given
         starts.append(inp.initial_pose)
         sources.append("initial_pose")
@@ -151,7 +152,7 @@ def _finish(
         rest = rest_geometry(hand)
         sets = contact_sets(prep, net_out)
         seen: dict[bytes, int] = {}
-        for k, (points, normals, heat, source) in enumerate(sets):
+        for k, (points, normals, heat, source, _, _) in enumerate(sets):
             # K proposals with the same contacts (identical latent samples, or given contacts) would refine the
             # same start K times: the n-th repeat starts from the n-th best finger assignment instead.
             key = np.round(np.asarray(points, dtype=np.float64), 6).tobytes()
@@ -160,6 +161,7 @@ def _finish(
             cand = initialise(hand, prep.cloud, points, normals, predicted=heat, rest=rest, top_k=repeat + 1)
             starts.append(cand[min(repeat, len(cand) - 1)].pose)
             sources.append(source)
+            chosen.append(sets[k])
             report("initialisation", (k + 1) / len(sets))
     timings["initialisation"] = time.perf_counter() - t0
     _check(should_cancel)
@@ -196,15 +198,20 @@ def _finish(
     timings["refinement"] = time.perf_counter() - t0
     _check(should_cancel)
     seconds: dict[str, float] = {}
+    chosen += [None] * (len(starts) - len(chosen))
     for k, (start, res, source) in enumerate(zip(starts, results, sources, strict=True)):
-        proposals.append(_proposal(prep, res.pose if res is not None else start, res, seconds, source))
+        proposal = _proposal(prep, res.pose if res is not None else start, res, seconds, source)
+        if (picked := chosen[k]) is not None:
+            proposal.network_forces, proposal.network_sample = picked.forces, picked.sample
+        proposals.append(proposal)
         report("verification", (k + 1) / len(starts))
         _check(should_cancel)
     timings["verification"] = seconds.get("verification", 0.0)
     proposals.sort(key=lambda p: not p.quality.success)
     heat = force = None
-    if net_out is not None:
-        heat, force = net_out.heatmaps[0].astype(np.float64), net_out.force_maps[0].astype(np.float64)
+    if net_out is not None:  # the maps of the sample the best proposal came from (the first when none did)
+        best = next((p.network_sample for p in proposals if p.network_sample is not None), 0)
+        heat, force = net_out.heatmaps[best].astype(np.float64), net_out.force_maps[best].astype(np.float64)
     return SynthesisOutput(hand=hand.name, proposals=proposals, heatmap=heat, force_map=force,
                            timings=timings)
 

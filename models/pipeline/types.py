@@ -160,6 +160,8 @@ class ProposalOutput:
     contact_source: str = "given"  # given | random | network | random_fallback | direct_grasp | initial_pose
     history: list[IterationOutput] | None = None
     contact_motions: np.ndarray | None = None  # (H, 3) post-contact motion per contact (deformables), m
+    network_forces: np.ndarray | None = None  # (H, 3) the network's force prediction at its contacts (model units)
+    network_sample: int | None = None  # which of the network's K latent samples the contacts came from
 
 
 @dataclass

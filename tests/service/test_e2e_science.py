@@ -125,6 +125,10 @@ def test_the_shipped_network_and_refinement_through_the_api(base: str) -> None:
     result = SynthesisResult.model_validate(response.json())
     assert result.model_version != "none" and result.heatmap is not None and len(result.heatmap) == len(data["points"])
     assert {p.contact_source for p in result.proposals} <= {"network", "random_fallback"}
+    for proposal in result.proposals:  # the network's own forces and sample travel with its contacts
+        if proposal.contact_source == "network":
+            assert proposal.network_sample is not None and proposal.network_forces is not None
+            assert proposal.network_forces.shape == proposal.contact_points.shape
     assert {"network", "refinement", "verification"} <= result.timings.keys()
     for proposal in result.proposals:
         if proposal.quality.success:

@@ -142,3 +142,24 @@ def test_masked_refinement_ends_on_allowed_points(box, gripper):
     allowed = pts[mask]
     for p in best.contact_points:
         assert np.min(np.linalg.norm(allowed - p, axis=1)) < 5e-3
+
+
+def test_network_proposals_keep_the_networks_forces_and_sample(box, gripper):
+    """The network's force prediction at its contacts and which latent sample they came from reach the answer,
+    and the returned heatmap is the one the best proposal's contacts were selected on."""
+
+    class Distinct(_FakePredictor):
+        def predict(self, batch, num_samples, seed):  # type: ignore[no-untyped-def]
+            outs = super().predict(batch, num_samples, seed)
+            for o in outs:
+                o.force_maps = np.stack([np.full((o.heatmaps.shape[1], 3), float(k + 1)) for k in range(num_samples)])
+                o.heatmaps = o.heatmaps * (1.0 - 0.1 * np.arange(num_samples)[:, None])  # K distinguishable maps
+            return outs
+
+    out = run_pipeline(_inp(box, gripper, method="network", refine=False, num_proposals=3), Distinct())
+    samples = sorted(p.network_sample for p in out.proposals if p.contact_source == "network")
+    assert samples == [0, 1, 2]
+    for p in out.proposals:
+        assert p.network_forces is not None and np.all(p.network_forces == p.network_sample + 1)
+    best = out.proposals[0].network_sample
+    assert out.force_map is not None and np.all(out.force_map == best + 1)

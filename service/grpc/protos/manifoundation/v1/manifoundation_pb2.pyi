@@ -227,7 +227,7 @@ class HandMesh(_message.Message):
     def __init__(self, vertices: _Optional[_Union[Array, _Mapping]] = ..., faces: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class Proposal(_message.Message):
-    __slots__ = ("contact_points", "contact_normals", "forces", "fingertips", "palm_position", "palm_quaternion", "joint_names", "joint_values", "quality", "contact_source", "hand_spheres", "hand_mesh", "history", "contact_motions")
+    __slots__ = ("contact_points", "contact_normals", "forces", "fingertips", "palm_position", "palm_quaternion", "joint_names", "joint_values", "quality", "contact_source", "hand_spheres", "hand_mesh", "history", "contact_motions", "network_sample", "network_forces")
     CONTACT_POINTS_FIELD_NUMBER: _ClassVar[int]
     CONTACT_NORMALS_FIELD_NUMBER: _ClassVar[int]
     FORCES_FIELD_NUMBER: _ClassVar[int]
@@ -242,6 +242,8 @@ class Proposal(_message.Message):
     HAND_MESH_FIELD_NUMBER: _ClassVar[int]
     HISTORY_FIELD_NUMBER: _ClassVar[int]
     CONTACT_MOTIONS_FIELD_NUMBER: _ClassVar[int]
+    NETWORK_SAMPLE_FIELD_NUMBER: _ClassVar[int]
+    NETWORK_FORCES_FIELD_NUMBER: _ClassVar[int]
     contact_points: Array
     contact_normals: Array
     forces: Array
@@ -256,7 +258,9 @@ class Proposal(_message.Message):
     hand_mesh: HandMesh
     history: _containers.RepeatedCompositeFieldContainer[IterationRecord]
     contact_motions: Array
-    def __init__(self, contact_points: _Optional[_Union[Array, _Mapping]] = ..., contact_normals: _Optional[_Union[Array, _Mapping]] = ..., forces: _Optional[_Union[Array, _Mapping]] = ..., fingertips: _Optional[_Iterable[str]] = ..., palm_position: _Optional[_Iterable[float]] = ..., palm_quaternion: _Optional[_Iterable[float]] = ..., joint_names: _Optional[_Iterable[str]] = ..., joint_values: _Optional[_Iterable[float]] = ..., quality: _Optional[_Union[Quality, _Mapping]] = ..., contact_source: _Optional[str] = ..., hand_spheres: _Optional[_Union[Array, _Mapping]] = ..., hand_mesh: _Optional[_Union[HandMesh, _Mapping]] = ..., history: _Optional[_Iterable[_Union[IterationRecord, _Mapping]]] = ..., contact_motions: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
+    network_sample: int
+    network_forces: Array
+    def __init__(self, contact_points: _Optional[_Union[Array, _Mapping]] = ..., contact_normals: _Optional[_Union[Array, _Mapping]] = ..., forces: _Optional[_Union[Array, _Mapping]] = ..., fingertips: _Optional[_Iterable[str]] = ..., palm_position: _Optional[_Iterable[float]] = ..., palm_quaternion: _Optional[_Iterable[float]] = ..., joint_names: _Optional[_Iterable[str]] = ..., joint_values: _Optional[_Iterable[float]] = ..., quality: _Optional[_Union[Quality, _Mapping]] = ..., contact_source: _Optional[str] = ..., hand_spheres: _Optional[_Union[Array, _Mapping]] = ..., hand_mesh: _Optional[_Union[HandMesh, _Mapping]] = ..., history: _Optional[_Iterable[_Union[IterationRecord, _Mapping]]] = ..., contact_motions: _Optional[_Union[Array, _Mapping]] = ..., network_sample: _Optional[int] = ..., network_forces: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class SynthesisResult(_message.Message):
     __slots__ = ("hand", "model_version", "proposals", "heatmap", "force_map", "timings")
