@@ -33,7 +33,7 @@ def make_request(method: str, **extra: object) -> SynthesisRequest:
 CONTACTS = {"points": 0.03 * np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])}
 
 
-@pytest.mark.parametrize("backend", ["embedded", "redis"])
+@pytest.mark.parametrize("backend", ["embedded", pytest.param("redis", marks=pytest.mark.slow)])
 def test_round_trip_with_the_models_pipeline(backend: str, request: pytest.FixtureRequest) -> None:
     async def main() -> None:
         settings = {"pipeline": MODELS, "pipeline_options": OPTIONS, "weights_dir": NO_WEIGHTS}

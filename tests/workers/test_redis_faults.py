@@ -84,6 +84,7 @@ def test_poison_job_fails_no_batch_mate(tmp_path: Path) -> None:
     run(main())
 
 
+@pytest.mark.slow  # the API's twin (tests/service/test_faults.py: a hung Redis gives 503) runs in the default suite
 def test_a_hung_redis_answers_unavailable_within_the_timeout(tmp_path: Path) -> None:
     """SIGSTOPped Redis (the port open, nothing answering): every call fails with QueueUnavailable within
     OP_ROUNDS × redis_timeout, and the queue works again once Redis resumes."""
