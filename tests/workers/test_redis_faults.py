@@ -64,6 +64,7 @@ def test_jobs_running_through_a_redis_restart_finish(tmp_path: Path, sig: int) -
     run(main())
 
 
+@pytest.mark.slow  # the embedded twin (tests/workers/test_embedded.py) holds the same rule in the default suite
 def test_poison_job_fails_no_batch_mate(tmp_path: Path) -> None:
     """A job that kills its worker in a micro-batch of 4: only it is dead-lettered; its batch-mates are
     re-delivered one at a time, run alone and succeed."""
