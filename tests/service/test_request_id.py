@@ -56,7 +56,7 @@ class Served:
             time.sleep(0.05)
 
 
-@pytest.fixture(params=["embedded", "redis"])
+@pytest.fixture(params=["embedded", pytest.param("redis", marks=pytest.mark.slow)])
 def backend(request: pytest.FixtureRequest) -> pytest.FixtureRequest:
     return request
 

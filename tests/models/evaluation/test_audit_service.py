@@ -13,7 +13,10 @@ def objects():
     return found
 
 
-@pytest.mark.parametrize(("hand", "name", "task"), [("leap", "block", "lift"), ("allegro", "egg", "closure")])
+@pytest.mark.parametrize(
+    ("hand", "name", "task"),
+    [pytest.param("leap", "block", "lift", marks=pytest.mark.slow), ("allegro", "egg", "closure")],
+)  # every hand, task and object: the slow run below
 def test_no_claimed_success_fails_the_audit(objects, hand, name, task):
     rows = audit_service(hand, objects[name], task, proposals=2)
     false = [r for r in rows if r.claimed and not r.audited]
