@@ -181,6 +181,7 @@ def _wait_up(url: str) -> None:
             time.sleep(0.05)
 
 
+@pytest.mark.slow  # restarts while jobs run are in the default suite (test_redis_faults.py)
 def test_redis_restart_while_idle(own_redis: tuple[str, list[subprocess.Popen[bytes]]]) -> None:
     url, procs = own_redis
 
