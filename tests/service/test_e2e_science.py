@@ -95,9 +95,7 @@ def test_the_quickstart_grasp_touches_the_box_with_the_real_fingertips(base: str
     if any(shutil.which(name) for name in ("chromium", "chromium-browser", "google-chrome")):
         from .browser import dump_dom
 
-        assert "hand (collision meshes)" in dump_dom(f"{base}/view/{job_id}", budget_ms=4000)
-        png = screenshot(f"{base}/view/{job_id}", f"viewer_{HAND}_box.png", budget_ms=4000)
-        assert png.stat().st_size > 10_000
+        assert "hand (collision meshes)" in dump_dom(f"{base}/view/{job_id}", budget_ms=4000)  # (picture: above)
 
 
 def test_the_shipped_network_and_refinement_through_the_api(base: str) -> None:
