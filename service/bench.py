@@ -150,7 +150,8 @@ async def _level(url: str, headers: dict[str, str], body: bytes, clients: int, t
     }
 
 
-def _start_service(args: argparse.Namespace) -> tuple[subprocess.Popen[bytes], str]:
+def _start_service(args: argparse.Namespace, grpc_port: int | None = None) -> tuple[subprocess.Popen[bytes], str]:
+    """A fresh `mani serve` on free loopback ports: HTTP only, or also gRPC on ``grpc_port``."""
     port = _free_port()
     env = dict(os.environ, MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING")
     env.pop("MANI_REDIS_URL", None)
@@ -169,7 +170,7 @@ def _start_service(args: argparse.Namespace) -> tuple[subprocess.Popen[bytes], s
         str(port),
         "--workers",
         str(args.workers),
-        "--no-grpc",  # the HTTP service alone (a second instance would race for the gRPC port)
+        *(["--grpc-port", str(grpc_port)] if grpc_port else ["--no-grpc"]),  # no race for the default gRPC port
     ]
     proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     return proc, f"http://127.0.0.1:{port}"

@@ -11,13 +11,14 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
-import os
 import statistics
 import subprocess
 import sys
 import time
 from pathlib import Path
 from typing import Any
+
+from service.bench import _pct
 
 EXAMPLE = """examples:
   python -m service.grpc.bench --pipeline workers.testing:StagedPipeline --pipeline-options '{"stage_seconds": 0.01}'
@@ -49,14 +50,6 @@ def arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--pipeline-options", metavar="JSON", default='{"stage_seconds": 0.005}')
     parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
     parser.set_defaults(func=run)
-
-
-def _pct(values: list[float], q: float) -> float:
-    ordered = sorted(values)
-    pos = (len(ordered) - 1) * q
-    low = int(pos)
-    high = min(low + 1, len(ordered) - 1)
-    return ordered[low] + (ordered[high] - ordered[low]) * (pos - low)
 
 
 def _summary(transport: str, clients: int, wall: float, latencies: list[float], added: list[float]) -> dict[str, Any]:
@@ -126,33 +119,12 @@ async def _grpc(target: str, message: Any, clients: int, total: int) -> dict[str
 
 
 def _start(args: argparse.Namespace) -> tuple[subprocess.Popen[bytes], str, str]:
-    from service.bench import _free_port
+    """`mani bench service`'s fresh service, with gRPC on a free port of its own."""
+    from service.bench import _free_port, _start_service
 
-    http, grpc_port = _free_port(), _free_port()
-    env = dict(
-        os.environ,
-        MANI_RATE_LIMIT_PER_S="0",
-        MANI_LOG_LEVEL="WARNING",
-        MANI_PIPELINE=args.pipeline,
-        MANI_PIPELINE_OPTIONS=args.pipeline_options,
-    )
-    env.pop("MANI_REDIS_URL", None)
-    cmd = [
-        sys.executable,
-        "-m",
-        "clients.cli.main",
-        "serve",
-        "--host",
-        "127.0.0.1",
-        "--port",
-        str(http),
-        "--grpc-port",
-        str(grpc_port),
-        "--workers",
-        str(args.workers),
-    ]
-    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    return proc, f"http://127.0.0.1:{http}", f"127.0.0.1:{grpc_port}"
+    grpc_port = _free_port()
+    proc, url = _start_service(args, grpc_port=grpc_port)
+    return proc, url, f"127.0.0.1:{grpc_port}"
 
 
 def run(args: argparse.Namespace) -> int:
