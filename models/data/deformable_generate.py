@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from models.data.runs import run_jobs, write_manifest
 from models.deformable.body import DeformableBody
 from models.deformable.materials import MATERIALS
 from models.deformable.shapes import KINDS, make_body
@@ -142,21 +143,12 @@ def generate(cfg: DeformableDataConfig, out_dir: str | Path, workers: int = 1,
         rate = made / max(time.perf_counter() - t0, 1e-9)
         manifest["totals"] = _totals(manifest)
         manifest["last_rate_examples_per_s"] = rate
-        tmp = out / (MANIFEST + ".tmp")
-        tmp.write_text(json.dumps(manifest, indent=1))
-        os.replace(tmp, path)
+        write_manifest(path, manifest)
         bar.update(1)
         bar.set_postfix(examples=manifest["totals"]["examples"], ex_per_s=f"{rate:.2f}")
 
-    if workers <= 1:
-        for job in jobs:
-            record(_run_star(job))
-    else:
-        import multiprocessing as mp
-
-        with mp.get_context("spawn").Pool(workers) as pool:
-            for r in pool.imap_unordered(_run_star, jobs):
-                record(r)
+    for r in run_jobs(_run_star, jobs, workers):
+        record(r)
     bar.close()
     manifest["totals"] = _totals(manifest)
     return manifest

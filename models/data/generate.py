@@ -26,6 +26,8 @@ from typing import Any
 
 import numpy as np
 
+from models.data.runs import run_jobs, write_manifest
+
 TRAIN_HANDS = ("allegro", "leap", "panda_gripper", "kinova3f")
 HELD_OUT_HANDS = ("shadow", "barrett")
 SIZE_RANGE = (0.05, 0.40)  # m, paper: scaled to 0.05-0.4
@@ -253,21 +255,12 @@ def generate(cfg: DataConfig, out_dir: str | Path, workers: int = 1, progress: b
         rate = done_examples / max(time.perf_counter() - t0, 1e-9)
         manifest["totals"] = _totals(manifest)
         manifest["last_rate_examples_per_s"] = rate
-        tmp = out / (MANIFEST + ".tmp")
-        tmp.write_text(json.dumps(manifest, indent=1))
-        os.replace(tmp, out / MANIFEST)
+        write_manifest(out / MANIFEST, manifest)
         bar.update(1)
         bar.set_postfix(examples=manifest["totals"]["examples"], ex_per_s=f"{rate:.2f}")
 
-    if workers <= 1:
-        for job in jobs:
-            record(_run_shard_star(job))
-    else:
-        import multiprocessing as mp
-
-        with mp.get_context("spawn").Pool(workers) as pool:
-            for r in pool.imap_unordered(_run_shard_star, jobs):
-                record(r)
+    for r in run_jobs(_run_shard_star, jobs, workers):
+        record(r)
     bar.close()
     manifest["totals"] = _totals(manifest)
     return manifest
