@@ -98,7 +98,7 @@ def main() -> int:
         from lab.plan import load_predictor
 
         predictor = load_predictor(None)
-    plan = plan_manipulation(inp, predictor, progress=lambda stage, f: None)
+    plan = plan_manipulation(inp, predictor)
     for line in summary_lines(plan):
         print(line)
     for step in plan.steps:

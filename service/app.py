@@ -12,14 +12,14 @@ from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
 from pydantic.json_schema import models_json_schema
 
-from clients.schemas import BatchCreate, ErrorBody, RobotRegister, SynthesisRequest
+from clients.schemas import BatchCreate, ErrorBody, PlanRequest, RobotRegister, SynthesisRequest
 from service import errors, logs
 from service.bodies import BodyPool
 from service.dashboard import History
 from service.metrics import Metrics
 from service.middleware import RequestContext
 from service.robots import RobotCatalog
-from service.routes import batches, health, jobs, pages, robots, synthesis
+from service.routes import batches, health, jobs, pages, plans, robots, synthesis
 from service.scenes import SceneStore
 from service.security import RateLimiter
 from service.settings import Settings
@@ -94,6 +94,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
     for router in (
         health.router,
         synthesis.router,
+        plans.router,
         jobs.router,
         batches.router,
         robots.router,
@@ -112,7 +113,7 @@ def _openapi(app: FastAPI) -> dict[str, Any]:
         return app.openapi_schema
     schema = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
     _, defs = models_json_schema(
-        [(m, "validation") for m in (SynthesisRequest, BatchCreate, RobotRegister)],
+        [(m, "validation") for m in (SynthesisRequest, BatchCreate, RobotRegister, PlanRequest)],
         ref_template="#/components/schemas/{model}",
     )
     components = schema.setdefault("components", {}).setdefault("schemas", {})

@@ -5,6 +5,8 @@ Defined here, in the contract, so that the SDK reads the shapes the service send
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import Field
 
 from clients.schemas.common import WireModel
@@ -72,11 +74,26 @@ class DashboardPublic(WireModel):
     dead_letters: list[DeadLetter] = Field(default_factory=list)
 
 
+class SceneObstacle(WireModel):
+    """One obstacle of a plan's scene as the viewer draws it, world frame (m): a triangle mesh (boxes and meshes),
+    or points (point clouds, and meshes too large to draw)."""
+
+    name: str
+    kind: Literal["box", "mesh", "points"]
+    vertices: list[list[float]]
+    faces: list[list[int]] | None = None
+
+
 class ScenePublic(WireModel):
-    """Answer of ``GET /v1/jobs/{id}/scene``: the job (with result) and the object to draw it on."""
+    """Answer of ``GET /v1/jobs/{id}/scene``: the job (with result) and the object to draw it on; for a plan
+    job also the scene's obstacles and support plane (the object's points are then in its own frame: the plan's
+    poses place them)."""
 
     job: JobPublic
     points: list[list[float]] | None = Field(None, description="Subsampled object points (≤ 4096), m.")
     normals: list[list[float]] | None = None
     region_mask: list[int] | None = None
     heatmap: list[float] | None = Field(None, description="Contact heatmap at those points (return_heatmap).")
+    obstacles: list[SceneObstacle] | None = Field(None, description="A plan's obstacles, world frame.")
+    support_height: float | None = Field(None, description="A plan's support plane z = height, m.")
+    waypoints: list[list[float]] | None = Field(None, description="A plan's requested waypoint positions, m.")

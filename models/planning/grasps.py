@@ -21,7 +21,6 @@ with the object placed at ``poses[k]`` (world frame). For each step:
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -30,11 +29,9 @@ from models.pipeline import ProposalOutput, SynthesisInput, TaskInput, run_pipel
 from models.pipeline.run import CancelCheck
 from models.planning.poses import Pose
 from models.planning.scene import CollisionScene
-from models.planning.types import GraspChange, PlanInput, PlanStep
+from models.planning.types import GraspChange, PlanInput, PlanStep, Progress
 from models.refine.state import HandPose
 from models.robots.hand import Hand
-
-Progress = Callable[[str, float], None]
 
 
 def step_input(inp: PlanInput, a: Pose, b: Pose, seed: int) -> SynthesisInput:
@@ -132,10 +129,11 @@ def synthesise_along(
         a predictor. Cancelled: ``should_cancel()`` returned true.
     """
     opt = inp.options
-    report = progress or (lambda stage, fraction: None)
+    report = progress or (lambda stage, completed, total: None)
     steps: list[PlanStep] = []
     held: ProposalOutput | None = None
     total = len(poses) - 1
+    report("contacts", 0, total)
     for k in range(total):
         a, b = poses[k], poses[k + 1]
         if opt.deadline is not None and time.monotonic() >= opt.deadline:
@@ -174,5 +172,5 @@ def synthesise_along(
         step.seconds, step.calls = time.perf_counter() - t0, calls
         held = step.proposal if step.success else None
         steps.append(step)
-        report("contacts", (k + 1) / total)
+        report("contacts", k + 1, total)
     return steps
