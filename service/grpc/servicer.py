@@ -27,6 +27,7 @@ from clients.schemas import (
     FieldError,
     JobPublic,
     JobState,
+    PlanRequest,
     RobotRegister,
 )
 from service.errors import Conflict, InvalidInput, PayloadTooLarge, Unavailable
@@ -177,6 +178,12 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
                     yield to_proto(item, pb.BatchItem)
             if waiting:
                 await asyncio.sleep(self.state.settings.sse_interval)
+
+    @unary
+    async def SubmitPlan(self, request: pb.PlanRequest, context: Any, caller: Caller) -> pb.JobCreated:
+        """Enqueue a plan at once (no queue deadline; ``options.timeout`` bounds its compute)."""
+        _, job_id = await self.submission.one(request, caller, context, kind="plan", model=PlanRequest)
+        return pb.JobCreated(id=job_id, state=JobState.QUEUED.value)
 
     @unary
     async def ListRobots(self, request: pb.ListRobotsRequest, context: Any, caller: Caller) -> pb.RobotList:

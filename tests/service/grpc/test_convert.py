@@ -16,6 +16,8 @@ from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from ..helpers import request_body
 
 TASKS = {"DeltaPoseTask", "PointMotionTask", "TargetPointsTask", "WrenchTask", "ForceClosureTask", "JointMotionTask"}
+OBSTACLES = {"BoxObstacleIn", "MeshObstacleIn", "PointCloudObstacleIn"}
+UNIONS = TASKS | OBSTACLES  # members of a discriminated union: their `kind` is the proto's oneof
 
 
 def _models(root: type[BaseModel], seen: dict[str, type[BaseModel]]) -> dict[str, type[BaseModel]]:
@@ -33,14 +35,15 @@ def _models(root: type[BaseModel], seen: dict[str, type[BaseModel]]) -> dict[str
     return seen
 
 
-ROOTS = (SynthesisRequest, SynthesisResult, JobPublic, BatchPublic, RobotRegister, schemas.RobotPublic)
+ROOTS = (SynthesisRequest, SynthesisResult, JobPublic, BatchPublic, RobotRegister, schemas.RobotPublic,
+         schemas.PlanRequest, schemas.PlanResult)  # fmt: skip
 MODELS = {name: m for root in ROOTS for name, m in _models(root, {}).items()}
 
 
 @pytest.mark.parametrize("name", sorted(MODELS))
 def test_every_contract_field_has_a_proto_field(name: str) -> None:
     message = getattr(pb, name).DESCRIPTOR
-    wanted = set(MODELS[name].model_fields) - ({"kind"} if name in TASKS else set())
+    wanted = set(MODELS[name].model_fields) - ({"kind"} if name in UNIONS else set())
     assert wanted <= set(message.fields_by_name), f"{name}: the proto lacks {wanted - set(message.fields_by_name)}"
     assert set(message.fields_by_name) <= set(MODELS[name].model_fields), f"{name}: the proto has extra fields"
 
@@ -48,6 +51,32 @@ def test_every_contract_field_has_a_proto_field(name: str) -> None:
 def test_task_union_has_every_kind() -> None:
     kinds = {m.model_fields["kind"].default for m in MODELS.values() if m.__name__ in TASKS}
     assert set(pb.TaskIn.DESCRIPTOR.fields_by_name) == kinds
+
+
+def test_obstacle_union_has_every_kind() -> None:
+    kinds = {m.model_fields["kind"].default for m in MODELS.values() if m.__name__ in OBSTACLES}
+    assert set(pb.ObstacleIn.DESCRIPTOR.fields_by_name) == kinds
+
+
+def test_plan_request_round_trip_keeps_every_value() -> None:
+    points = np.random.default_rng(0).normal(size=(64, 3)) * 0.03
+    plan = schemas.PlanRequest.model_validate({
+        "object": {"points": points, "properties": {"friction": 0.7}},
+        "start": {"position": [0, 0, 0.1]},
+        "waypoints": [{"position": [0.1, 0, 0.2], "quaternion": [0, 0, 0, 2]}, {"position": [0.2, 0, 0.1]}],
+        "scene": {"support_plane": {"height": 0.0}, "obstacles": [
+            {"kind": "box", "name": "wall", "size": [0.02, 0.4, 0.3], "pose": {"position": [0.05, 0, 0.15]}},
+            {"kind": "points", "points": points[:5], "resolution": 0.02},
+            {"kind": "mesh", "vertices": points[:4], "faces": [[0, 1, 2], [0, 2, 3]]},
+        ]},
+        "robot": {"name": "test_gripper"},
+        "options": {"seed": 3, "repair": "report", "contacts": False, "time_limit": 2.5},
+    })  # fmt: skip
+    message = to_proto(plan, pb.PlanRequest)
+    assert [o.WhichOneof("kind") for o in message.scene.obstacles] == ["box", "points", "mesh"]
+    back = from_proto(pb.PlanRequest.FromString(message.SerializeToString()), schemas.PlanRequest)
+    assert back.model_dump_json() == plan.model_dump_json()  # (0, 0, 0, 2) was normalised once, on input
+    np.testing.assert_array_equal(back.waypoints[0].quaternion, [0, 0, 0, 1])
 
 
 def test_request_round_trip_keeps_every_value() -> None:

@@ -75,6 +75,11 @@ class ManiFoundationStub:
                 request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchRef.SerializeToString,
                 response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchItem.FromString,
                 _registered_method=True)
+        self.SubmitPlan = channel.unary_unary(
+                '/manifoundation.v1.ManiFoundation/SubmitPlan',
+                request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.PlanRequest.SerializeToString,
+                response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.FromString,
+                _registered_method=True)
         self.ListRobots = channel.unary_unary(
                 '/manifoundation.v1.ManiFoundation/ListRobots',
                 request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.ListRobotsRequest.SerializeToString,
@@ -145,6 +150,14 @@ class ManiFoundationServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def SubmitPlan(self, request, context):
+        """Plan a manipulation (trajectory + contacts per step) as a job; follow it with GetJob / WatchJob (its answer
+        in JobPublic.plan). A separate RPC, not a kind of SubmitJob: its request is its own typed message.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
     def ListRobots(self, request, context):
         """Missing associated documentation comment in .proto file."""
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
@@ -199,6 +212,11 @@ def add_ManiFoundationServicer_to_server(servicer, server):
                     servicer.WatchBatch,
                     request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchRef.FromString,
                     response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchItem.SerializeToString,
+            ),
+            'SubmitPlan': grpc.unary_unary_rpc_method_handler(
+                    servicer.SubmitPlan,
+                    request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.PlanRequest.FromString,
+                    response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.SerializeToString,
             ),
             'ListRobots': grpc.unary_unary_rpc_method_handler(
                     servicer.ListRobots,
@@ -428,6 +446,33 @@ class ManiFoundation:
             '/manifoundation.v1.ManiFoundation/WatchBatch',
             service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchRef.SerializeToString,
             service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchItem.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def SubmitPlan(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/manifoundation.v1.ManiFoundation/SubmitPlan',
+            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.PlanRequest.SerializeToString,
+            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.FromString,
             options,
             channel_credentials,
             insecure,
