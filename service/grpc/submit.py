@@ -1,4 +1,4 @@
-"""Submitting work (a synthesis, a batch, a plan) from a gRPC call: the steps of `service.submission.Submitter`, for a proto message.
+"""Submitting work (a synthesis, a batch, a plan) from a gRPC call: `service.submission.Submitter`'s steps.
 
 Admission before validation (RESOURCE_EXHAUSTED when the queue has no room), validation once by the contract
 (`convert.from_proto`; a large message off the event loop, like a large HTTP body), the hand check, submission on
