@@ -15,7 +15,8 @@ Public names:
   `AsyncBatch`.
 - inputs: `object_from_points`, `object_from_mesh`, `object_from_file`, `save_object`, `delta_pose`,
   `target_points`, `force_closure`, `wrench`, `make_request`, `robot_registration`; hands: `hand_registration`
-  (an archive, folder or URDF/MJCF file, cut at a ``palm``), `zip_folder`.
+  (an archive, folder or URDF/MJCF file, cut at a ``palm``), `zip_folder`; plans (``client.plan``,
+  ``client.submit_plan``): `make_plan`, `box_obstacle`, `as_pose`.
 - outputs: `result_to_dict`, `result_to_json`, `load_result`, `result_figure`.
 - errors: `ManiError` › `RequestError` › (`ValidationError`, `Unauthorized`, `NotFound`, `RateLimited`,
   `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed`.
@@ -41,6 +42,7 @@ from clients.sdk.errors import (
 from clients.sdk.hands import hand_registration, zip_folder
 from clients.sdk.objects import object_from_file, object_from_mesh, object_from_points, save_object
 from clients.sdk.outputs import load_result, result_figure, result_to_dict, result_to_json
+from clients.sdk.plans import as_pose, box_obstacle, make_plan
 from clients.sdk.requests import make_request, robot_registration
 from clients.sdk.retry import RetryPolicy
 from clients.sdk.tasks import delta_pose, force_closure, target_points, wrench
@@ -63,10 +65,13 @@ __all__ = [
     "Unauthorized",
     "Unreachable",
     "ValidationError",
+    "as_pose",
+    "box_obstacle",
     "delta_pose",
     "force_closure",
     "hand_registration",
     "load_result",
+    "make_plan",
     "make_request",
     "object_from_file",
     "object_from_mesh",

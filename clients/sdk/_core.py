@@ -28,6 +28,7 @@ from clients.schemas import (
     JobList,
     JobPublic,
     JobState,
+    PlanRequest,
     ReadyPublic,
     RobotList,
     RobotPreview,
@@ -241,6 +242,9 @@ class BaseClient:
 
     def _call_submit(self, request: SynthesisRequest) -> Call[JobCreated]:
         return self._model_call("POST", "/v1/jobs", JobCreated, body=request)
+
+    def _call_submit_plan(self, request: PlanRequest) -> Call[JobCreated]:
+        return self._model_call("POST", "/v1/plans", JobCreated, body=request)
 
     def _call_job(self, job_id: str) -> Call[JobPublic]:
         return self._model_call("GET", f"/v1/jobs/{job_id}", JobPublic)

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import pydantic
 
-from clients.schemas import BatchItem, BatchPublic, JobPublic, JobState, SynthesisResult
+from clients.schemas import BatchItem, BatchPublic, JobPublic, JobState, PlanResult, SynthesisResult
 from clients.sdk.errors import JobFailed, ServerError
 
 # SSE event types that carry a job (``progress`` while it runs, ``end`` with the final job).
@@ -85,6 +85,13 @@ def job_result(job: JobPublic) -> SynthesisResult:
     """The result of a finished job, or `JobFailed` when it has none."""
     if job.state is JobState.SUCCEEDED and job.result is not None:
         return job.result
+    raise JobFailed.from_job(job)
+
+
+def plan_result(job: JobPublic) -> PlanResult:
+    """The plan of a finished plan job, or `JobFailed` when it has none."""
+    if job.state is JobState.SUCCEEDED and job.plan is not None:
+        return job.plan
     raise JobFailed.from_job(job)
 
 

@@ -22,7 +22,6 @@ import grpc
 from clients.schemas import (
     MAX_BATCH_SIZE,
     BatchItem,
-    BatchPublic,
     ErrorBody,
     FieldError,
     JobPublic,
@@ -30,6 +29,7 @@ from clients.schemas import (
     PlanRequest,
     RobotRegister,
 )
+from service.batch_pages import batch_page
 from service.errors import Conflict, InvalidInput, PayloadTooLarge, Unavailable
 from service.grpc.calls import GrpcMetrics, streaming, unary
 from service.grpc.convert import to_proto
@@ -134,32 +134,12 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
     @unary
     async def GetBatch(self, request: pb.GetBatchRequest, context: Any, caller: Caller) -> pb.BatchPublic:
         queue, settings = self.submission.queue, self.state.settings
-        job_ids = await queue.batch_job_ids(request.id, owner=caller.scope)
         offset, limit = request.offset, request.limit if request.HasField("limit") else 100
         if offset < 0 or not 1 <= limit <= MAX_BATCH_SIZE:
             field = "offset" if offset < 0 else "limit"
             problem = "must be ≥ 0" if offset < 0 else f"must be 1..{MAX_BATCH_SIZE}"
             raise InvalidInput(f"{field}: {problem}", detail=[FieldError(field=field, problem=problem)])
-        limit = min(limit, settings.batch_page_max)
-        states = await asyncio.gather(*(queue.get(j, with_result=False) for j in job_ids))
-        page = await asyncio.gather(*(queue.get(j) for j in job_ids[offset : offset + limit]))
-        counts: dict[JobState, int] = {}
-        for job in states:
-            counts[job.state] = counts.get(job.state, 0) + 1
-        items = [
-            BatchItem(index=offset + i, job_id=j.id, state=j.state, result=j.result, error=j.error)
-            for i, j in enumerate(page)
-        ]
-        batch = BatchPublic(
-            id=request.id,
-            total=len(job_ids),
-            counts=counts,
-            done=all(j.state.terminal for j in states),
-            items=items,
-            offset=offset,
-            limit=limit,
-            created_at=min((j.created_at for j in states), default=time.time()),
-        )
+        batch = await batch_page(queue, request.id, caller.scope, offset, min(limit, settings.batch_page_max))
         return to_proto(batch, pb.BatchPublic)
 
     @streaming
