@@ -11,11 +11,15 @@ from typing import Any
 from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
 from pydantic.json_schema import models_json_schema
+from starlette.routing import Route
 
 from clients.schemas import BatchCreate, ErrorBody, PlanRequest, RobotRegister, SynthesisRequest
 from service import errors, logs
 from service.bodies import BodyPool
 from service.dashboard import History
+from service.mcp.endpoint import PATH as MCP_PATH
+from service.mcp.endpoint import McpEndpoint, McpHost
+from service.mcp.objects import ObjectStore
 from service.metrics import Metrics
 from service.middleware import RequestContext
 from service.robots import RobotCatalog
@@ -56,6 +60,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
         app.state.robots = RobotCatalog(the_queue, settings.robots_cache_s)
         app.state.history = history
         app.state.shutting_down = False  # an app started again after a shutdown serves again
+        app.state.mcp = McpHost(app.state)  # started by the first /mcp request
         sampler = asyncio.create_task(history.run(), name="dashboard-sampler")
         app.state.grpc = None
         if grpc and settings.grpc_port:
@@ -67,6 +72,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
             yield
         finally:
             app.state.shutting_down = True
+            await app.state.mcp.close()
             if app.state.grpc is not None:
                 await app.state.grpc.stop()
             sampler.cancel()
@@ -88,6 +94,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
     app.state.limiter = RateLimiter(settings.rate_limit_per_s, settings.rate_limit_burst)
     app.state.auth_failures = RateLimiter(settings.auth_failures_per_s, settings.auth_failures_burst)
     app.state.scenes = SceneStore()
+    app.state.objects = ObjectStore(settings.object_ttl_s, settings.max_objects, settings.max_object_store_bytes)
     app.state.bodies = BodyPool(settings.parse_offload_bytes, settings.large_body_slots, settings.body_timeout)
     app.state.shutting_down = False
     errors.install(app)
@@ -102,6 +109,8 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
         pages.pages,
     ):
         app.include_router(router)
+    if settings.mcp:
+        app.router.routes.append(Route(MCP_PATH, McpEndpoint(app.state), methods=["GET", "POST", "DELETE"]))
     app.add_middleware(RequestContext, metrics=metrics, state=app.state)
     app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]
     return app
