@@ -69,7 +69,7 @@ class ObjectStore:
         size = object_bytes(obj)
         if len(objects) >= self.max_objects:
             raise Conflict(
-                f"object_id: {len(objects)} objects stored, at most {self.max_objects} per key (MANI_MAX_OBJECTS);"
+                f"object: {len(objects)} objects stored, at most {self.max_objects} per key (MANI_MAX_OBJECTS);"
                 " delete one or wait for one to expire",
                 detail=[FieldError(field="object", problem=f"at most {self.max_objects} objects per key")],
             )

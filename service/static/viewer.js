@@ -1,7 +1,8 @@
 "use strict";
 // Draws one job's result: the object's points coloured by the contact heatmap, the contacts, the force arrows,
 // and the hand at its solved pose (palm frame from palm_position + palm_quaternion, a link from the palm to
-// each fingertip at its contact, fingertip spheres); with the proposal's quality figures.
+// each fingertip at its contact, fingertip spheres); with the proposal's quality figures. A plan job is played
+// step by step by plan_viewer.js.
 const pathParts = window.location.pathname.split("/"); // /view/{id} or /v1/jobs/{id}/view
 const jobId = decodeURIComponent(pathParts[1] === "view" ? pathParts[2] : pathParts[3]);
 document.getElementById("job-id").textContent = jobId;
@@ -151,6 +152,13 @@ async function load() {
     const job = scene.job;
     document.getElementById("status").textContent = job.state + (job.state === "running" ? " · " + job.progress.stage : "");
     document.getElementById("status").className = "state-" + job.state;
+    if (job.kind === "plan") {
+      const p = job.progress;
+      if (job.state === "running" && p.total) document.getElementById("status").textContent += " " + p.completed + "/" + p.total;
+      if (job.plan) showPlan(scene); else rows("quality", job.error ? [["error", job.error.type + ": " + job.error.error]] : []);
+      if (!["succeeded", "failed", "cancelled", "expired"].includes(job.state)) setTimeout(load, 1000);
+      return;
+    }
     const select = document.getElementById("proposal");
     const n = job.result ? job.result.proposals.length : 0;
     select.replaceChildren(...Array.from({ length: n }, (_, i) => new Option("proposal " + (i + 1), String(i))));

@@ -180,7 +180,7 @@ async def _poll_events(queue: JobQueue, job_id: str, interval: float) -> AsyncIt
     last: tuple[object, ...] | None = None
     while True:
         job = await queue.get(job_id, with_result=False)
-        key = (job.state, job.progress.stage, job.progress.iteration)
+        key = (job.state, job.progress.stage, job.progress.iteration, job.progress.completed)
         if key != last:
             last = key
             yield job
