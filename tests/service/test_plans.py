@@ -67,8 +67,9 @@ def test_a_wall_is_gone_around_over_grpc(science: Science) -> None:
     from scipy.spatial.transform import Rotation
 
     request = PlanRequest.model_validate({
-        "object": box_object(256), "start": {"position": [-0.1, 0.0, 0.05]}, "waypoints": [{"position": [0.1, 0.0, 0.05]}],
-        "scene": {"obstacles": [WALL], "support_plane": {"height": 0.0}}, "robot": {"name": HAND},
+        "object": box_object(256), "start": {"position": [-0.1, 0.0, 0.05]},
+        "waypoints": [{"position": [0.1, 0.0, 0.05]}], "robot": {"name": HAND},
+        "scene": {"obstacles": [WALL], "support_plane": {"height": 0.0}},
         "options": {"contacts": False, "seed": 2, "time_limit": 5.0, "translation_step": 0.01},
     })  # fmt: skip
     created = science.stub.SubmitPlan(to_proto(request, pb.PlanRequest), metadata=science.metadata())
@@ -92,8 +93,9 @@ def test_errors_name_the_field_and_another_key_sees_nothing(science: Science) ->
     """A waypoint inside the wall with repair "report": the job ends InfeasibleWaypoint (422) naming waypoints.0,
     over HTTP and over gRPC; a zero quaternion and 65 waypoints are refused at submission (422 naming the field);
     the other key's reads of the job answer 404."""
-    body = {"object": box_object(128), "start": {"position": [-0.1, 0, 0.05]}, "waypoints": [{"position": [0, 0, 0.1]}],
-            "scene": {"obstacles": [WALL]}, "robot": {"name": HAND}, "options": {"repair": "report", "contacts": False}}  # fmt: skip
+    body = {"object": box_object(128), "start": {"position": [-0.1, 0, 0.05]},
+            "waypoints": [{"position": [0, 0, 0.1]}], "scene": {"obstacles": [WALL]}, "robot": {"name": HAND},
+            "options": {"repair": "report", "contacts": False}}  # fmt: skip
     created = httpx.post(f"{science.base}/v1/plans", json=body, headers=science.auth())
     assert created.status_code == 202, created.text
     job = _terminal(science, created.json()["id"])
