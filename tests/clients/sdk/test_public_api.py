@@ -17,6 +17,8 @@ DOCUMENTED = {
     # inputs
     "object_from_points", "object_from_mesh", "object_from_file", "save_object", "delta_pose", "target_points",
     "force_closure", "wrench", "make_request", "robot_registration", "hand_registration", "zip_folder",
+    # plans (Client.plan / submit_plan)
+    "make_plan", "box_obstacle", "as_pose",
     # outputs
     "result_to_dict", "result_to_json", "load_result", "result_figure",
     # errors
