@@ -45,7 +45,8 @@ def as_pose(value: PoseLike, field: str = "pose") -> PoseIn:
 def box_obstacle(size: Sequence[float], position: Sequence[float], quaternion: Sequence[float] | None = None,
                  *, name: str | None = None) -> BoxObstacleIn:  # fmt: skip
     """A solid box of full extents ``size`` (m) centred at ``position`` (rotated by ``quaternion``, w x y z)."""
-    pose = as_pose([*position, *(quaternion or (1.0, 0.0, 0.0, 0.0))], "pose")
+    rotation = (1.0, 0.0, 0.0, 0.0) if quaternion is None else quaternion
+    pose = as_pose([*position, *rotation], "pose")
     return checked(BoxObstacleIn, "scene.obstacles", size=np.asarray(size, dtype=np.float64), pose=pose, name=name)
 
 
