@@ -62,8 +62,8 @@ async def session(client: Any, hand: str) -> int:
     }))  # fmt: skip
     while job.get("state") not in ("succeeded", "failed", "cancelled", "expired"):
         job = dict((await client.call_tool("get_job", {"job_id": job["job_id"], "wait_s": 30})).structured_content)
-        progress = job.get("progress", {})
-        print(f"get_job: {job.get('state')} {progress.get('stage')} {progress.get('completed')}/{progress.get('total')}")
+        p = job.get("progress", {})
+        print(f"get_job: {job.get('state')} {p.get('stage')} {p.get('completed')}/{p.get('total')}")
     summary = job.get("plan", {})
     print(f"plan: success {summary.get('success')}, {summary.get('poses')} poses, repairs {summary.get('repairs')}, "
           f"grasps {summary.get('grasps')}, re-grasps at {summary.get('regrasps')} "
