@@ -24,7 +24,7 @@ function planeTrace(height, positions) {
   const xs = col(positions, 0), ys = col(positions, 1), m = 0.15;
   const x0 = Math.min(...xs) - m, x1 = Math.max(...xs) + m, y0 = Math.min(...ys) - m, y1 = Math.max(...ys) + m;
   return { type: "mesh3d", name: "support plane", x: [x0, x1, x1, x0], y: [y0, y0, y1, y1], z: [height, height, height, height],
-    i: [0, 0], j: [1, 2], k: [2, 3], color: "#d2b48c", opacity: 0.3, hoverinfo: "skip" };
+    i: [0, 0], j: [1, 2], k: [2, 3], color: "#d2b48c", opacity: 0.3, hoverinfo: "skip", showlegend: true };
 }
 
 function placedPoints(points, position, quaternion) {

@@ -123,3 +123,23 @@ def test_the_sdk_raises_the_typed_job_error(science: Science) -> None:
                     obstacles=[box_obstacle([0.02, 0.4, 0.3], [0, 0, 0.15], name="wall")], repair="report")  # fmt: skip
     error = caught.value.error
     assert error is not None and error.type == "InfeasibleWaypoint" and error.detail[0].field == "waypoints.0"
+
+
+@pytest.mark.slow
+def test_the_viewer_plays_the_plan(science: Science) -> None:
+    """The job's page in headless Chromium: the plan's table, the slider over its poses, the scene's obstacles."""
+    from .browser import chromium, dump_dom
+
+    chromium()
+    body = {"object": box_object(128), "start": {"position": [-0.1, 0, 0.05]},
+            "waypoints": [{"position": [0.1, 0, 0.05]}], "robot": {"name": HAND},
+            "scene": {"obstacles": [WALL], "support_plane": {"height": 0.0}}, "options": {"contacts": False, "seed": 2}}
+    job_id = httpx.post(f"{science.base}/v1/plans", json=body, headers=science.auth()).json()["id"]
+    job = _terminal(science, job_id)
+    assert job.plan is not None
+    dom = dump_dom(f"{science.base}/view/{job_id}#key={KEY}")
+    assert f"pose 0 of {len(job.plan.positions) - 1}" in dom and "could not load" not in dom
+    import re
+
+    legend = re.findall(r'class="legendtext"[^>]*>([^<]*)<', dom)
+    assert "main-svg" in dom and {"wall", "support plane", "path"} <= set(legend), legend
