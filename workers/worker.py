@@ -360,6 +360,7 @@ class RedisWorker:
             error.type if error else "", pack(timings or {}),
             pack(progress.model_dump(mode="python")) if progress else "",
             int(s.result_ttl * 1000), int(max(s.record_ttl, s.result_ttl) * 1000), job_id, "1" if owner else "0",
+            pack([d.model_dump(mode="python") for d in error.detail]) if error and error.detail else "",
         ]  # fmt: skip
         if not self._finish(keys=keys, args=args):
             log.warning("result discarded: the job was re-delivered to another worker")

@@ -34,6 +34,7 @@ from clients.schemas import (
     DeadLetter,
     ErrorBody,
     ErrorType,
+    FieldError,
     JobKind,
     JobProgress,
     JobPublic,
@@ -81,7 +82,10 @@ def _f(value: bytes | None) -> float | None:
 def job_from_hash(job_id: str, h: dict[bytes, bytes], result: bytes | None, has_result: bool) -> JobPublic:
     """A `JobPublic` from a job's record hash (and its result bytes, when fetched)."""
     state = JobState(h[b"state"].decode())
-    error = ErrorBody(error=h[b"error"].decode(), type=h[b"error_type"].decode()) if b"error" in h else None
+    detail = [FieldError.model_validate(d) for d in unpack(h[b"error_detail"])] if h.get(b"error_detail") else None
+    error = None
+    if b"error" in h:
+        error = ErrorBody(error=h[b"error"].decode(), type=h[b"error_type"].decode(), detail=detail)
     progress = JobProgress.model_validate(unpack(h[b"progress"])) if h.get(b"progress") else JobProgress()
     if state is JobState.SUCCEEDED and not has_result:
         state, error = JobState.EXPIRED, result_expired_error()

@@ -143,7 +143,7 @@ return {'run', d, redis.call('HGET', KEYS[1], 'created_at'), deadline or ''}
 # KEYS: stream, job, result, counts, done-channel.
 # ARGV: group, worker, entry, state, now, result ('' = none), error, error_type, timings, progress, result_ttl
 #       (used when the record does not carry the submitter's),
-#       record_ttl, job id, require_owner ('1'/'0').
+#       record_ttl, job id, require_owner ('1'/'0'), error detail (msgpack list of {field, problem}; '' = none).
 FINISH = """
 if ARGV[14] == '1' then
   local p = redis.call('XPENDING', KEYS[1], ARGV[1], ARGV[3], ARGV[3], 1)
@@ -155,6 +155,7 @@ if st == 'queued' or st == 'running' then
   if ARGV[6] ~= '' then redis.call('SET', KEYS[3], ARGV[6], 'PX', ttl) end
   redis.call('HSET', KEYS[2], 'state', ARGV[4], 'finished_at', ARGV[5], 'timings', ARGV[9], 'progress', ARGV[10])
   if ARGV[7] ~= '' then redis.call('HSET', KEYS[2], 'error', ARGV[7], 'error_type', ARGV[8]) end
+  if ARGV[15] and ARGV[15] ~= '' then redis.call('HSET', KEYS[2], 'error_detail', ARGV[15]) end
   redis.call('PEXPIRE', KEYS[2], math.max(tonumber(ARGV[12]), tonumber(ttl)))
   redis.call('HINCRBY', KEYS[4], ARGV[4], 1)
 end
