@@ -74,6 +74,7 @@ def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = Non
         seed=options.seed,
         deadline=None if deadline is None else time.monotonic() + (deadline - time.time()),
         return_history=options.return_history,
+        simulate_rollout=options.simulate_rollout,
         hand_key=hand.name,
     )
 
@@ -188,6 +189,8 @@ def to_result(
                 contact_motions=None if p.contact_motions is None else np.asarray(p.contact_motions, np.float64),
                 network_sample=p.network_sample,
                 network_forces=None if p.network_forces is None else np.asarray(p.network_forces, np.float64),
+                rollout_points=None if p.rollout_points is None else np.asarray(p.rollout_points, np.float64),
+                shape_error=None if p.shape_error is None else _finite(p.shape_error),
             )
         )
     options = request.options

@@ -41,6 +41,12 @@ class SynthesisOptions(WireModel):
         description="Return each proposal's posed hand collision meshes (`hand_mesh`, for viewers; about "
         "100-400 kB a proposal).",
     )
+    simulate_rollout: bool = Field(
+        False,
+        description="Deformables: apply each proposal's contacts and motions in the simulator (MuJoCo, on a body "
+        "rebuilt from the points, resting on a table under its lowest point) and judge success by the paper's "
+        "shape metric against the target; returns `rollout_points`. About 0.5-2 s a proposal.",
+    )
 
 
 class ContactsIn(WireModel):

@@ -77,6 +77,14 @@ class Proposal(WireModel):
     contact_motions: Rows3 | None = Field(
         None, description="Deformables: the post-contact motion of each contact (m): grasp it and move it so."
     )
+    rollout_points: Rows3 | None = Field(
+        None, description="Deformables with `options.simulate_rollout`: where the object's points end after the "
+        "simulated manipulation (N, 3), m, in the request's order.",
+    )
+    shape_error: float | None = Field(
+        None, ge=0, description="Deformables with `options.simulate_rollout`: mean distance between the rollout "
+        "and the target over the most-moving points, in the paper's 2 m normalised cube.",
+    )
     network_sample: int | None = Field(
         None, ge=0, description="Which of the network's latent samples proposed these contacts."
     )

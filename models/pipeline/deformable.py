@@ -5,7 +5,8 @@ Methods: "network" (the heatmap's NMS contacts and the motion map there), "rando
 the task's motion at them), "contacts" (the given points, with the task's motion at them). With a hand, each
 proposal names the fingertip at each contact from the rigid fit of the hand's fingertips onto the contacts
 (`models.refine.initialise`, the pose is that fit's, not refined); ``quality.success`` is False with reason
-``deformable_open_loop``: the service does not simulate the rollout (`mani eval deformable` does).
+``deformable_open_loop`` unless the request asks for ``simulate_rollout``: then each answer is applied in the
+simulator and judged by the shape metric (`models.pipeline.deformable_rollout`).
 Unordered targets (``target_points`` with ``correspondence="unknown"``) get their per-point motion by coherent
 point drift and optimal transport (`models.deformable.registration`).
 """
@@ -133,6 +134,12 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
             contact_source=s.source, contact_motions=s.motions,
         ))  # fmt: skip
     timings["initialisation"] = time.perf_counter() - t0
+    if inp.simulate_rollout:
+        from models.pipeline.deformable_rollout import judge_by_rollout
+
+        t0 = time.perf_counter()
+        proposals = judge_by_rollout(inp.material, p.points, p.normals, p.motion, inp.properties, proposals)
+        timings["rollout"] = time.perf_counter() - t0
     heat = force = None
     if net_out is not None:
         heat = np.asarray(net_out.heatmaps[0], dtype=np.float64)

@@ -114,6 +114,7 @@ class SynthesisInput:
     seed: int = 0
     deadline: float | None = None
     return_history: bool = False
+    simulate_rollout: bool = False  # deformables: simulate each answer and judge it by the shape metric
     hand_key: str | None = None
     initial_pose: HandPose | None = None
 
@@ -162,6 +163,8 @@ class ProposalOutput:
     contact_motions: np.ndarray | None = None  # (H, 3) post-contact motion per contact (deformables), m
     network_forces: np.ndarray | None = None  # (H, 3) the network's force prediction at its contacts (model units)
     network_sample: int | None = None  # which of the network's K latent samples the contacts came from
+    rollout_points: np.ndarray | None = None  # (N, 3) deformables: the points after the simulated manipulation
+    shape_error: float | None = None  # deformables: rollout vs target, most-moving points, normalised 2 m cube
 
 
 @dataclass
