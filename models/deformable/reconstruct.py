@@ -10,7 +10,8 @@ simulation mesh. Per material:
   graph from one end to the other, binned into stations) and rebuilt as the same square rod of tetrahedra the
   generator makes (`models.deformable.rope.rod`), its thickness the cloud's.
 - **Plasticine**: the volume inside the oriented cloud (generalised winding number ≥ ½) is filled with lattice
-  tetrahedra (`models.deformable.plasticine.tetrahedralise`), refined until it holds enough cubes.
+  tetrahedra (`models.deformable.plasticine.tetrahedralise`, the cubes whose centre is inside, so that the body's
+  volume is about the cloud's), refined until it holds enough cubes.
 
 For rope and plasticine the caller's points are not the mesh's vertices: each point is embedded in its nearest
 tetrahedron by barycentric (affine) weights, and its rollout position is the same weights over the moved
@@ -93,7 +94,7 @@ def body_from_cloud(material: str, points: np.ndarray, normals: np.ndarray,
         return EmbeddedCloud(body, corners, weights, offset)
     if material != "plasticine":
         raise InvalidInput(f"object.material: {material!r} is not deformable")
-    # the lattice lies inside the surface: it is built and embedded where the cloud is, then set on the table
+    # built and embedded where the cloud is, then set on the table by its own lowest vertex
     body = _plasticine(p, np.asarray(normals, dtype=np.float64), properties)
     corners, weights = _embed(body, p)
     offset = np.array([0.0, 0.0, TABLE_CLEARANCE - float(np.min(body.vertices[:, 2]))])
@@ -169,7 +170,7 @@ def _plasticine(points: np.ndarray, normals: np.ndarray, properties: dict[str, f
 
     for cells in range(PLASTICINE_CELLS[0], PLASTICINE_CELLS[1] + 1, 2):
         try:
-            unit, tets = tetrahedralise(inside, cells)
+            unit, tets = tetrahedralise(inside, cells, keep="centres")
         except ValueError:
             continue
         if len(tets) >= MIN_TETS:
