@@ -172,6 +172,8 @@ def _grasp_traces(fig: Any, p: Proposal, size: float, force_scale: float | None)
                 name="force heads",
             )
         )
+    if p.palm_position is None or p.palm_quaternion is None:
+        return  # contacts without a robot: no hand to draw
     palm, rot = p.palm_position, _rotation(p.palm_quaternion)
     for axis, colour in enumerate(("#e41a1c", "#4daf4a", "#377eb8")):
         end = palm + rot[:, axis] * 0.4 * size

@@ -64,6 +64,7 @@ function traces(scene, proposal) {
     text: proposal.fingertips, textposition: "top center", marker: { size: 7, color: "#d62728" } });
   const fmax = Math.max(...f.map((v) => Math.hypot(...v)), 0);
   if (fmax > 0) out.push(...arrows(c, f, 0.35 * size / fmax, "forces", "#1f77b4", size));
+  if (!proposal.palm_position) return out;  // contacts without a robot: no hand to draw
   // The hand: palm frame, palm→fingertip links, fingertip spheres at the contacts.
   const palm = proposal.palm_position, R = rotation(proposal.palm_quaternion), a = 0.4 * size;
   ["#e41a1c", "#4daf4a", "#377eb8"].forEach((colour, k) => {
@@ -150,9 +151,10 @@ function draw(scene, index) {
       ["self-collision (m)", fmt(q.self_collision_depth)], ["Ferrari–Canny ε", fmt(q.epsilon)],
       ["verified on", q.geometry || "-"], ["failed criteria", (q.failures || []).join(", ") || "-"],
       ...(proposal.shape_error == null ? [] : [["shape error (2 m cube)", fmt(proposal.shape_error)]])]);
-    rows("hand", [["hand", result.hand], ["palm position", proposal.palm_position.map(fmt).join(", ")],
+    rows("hand", proposal.palm_position ? [["hand", result.hand],
+      ["palm position", proposal.palm_position.map(fmt).join(", ")],
       ["palm quaternion", proposal.palm_quaternion.map(fmt).join(", ")],
-      ...proposal.joint_names.map((n, i) => [n, fmt(proposal.joint_values[i])])]);
+      ...proposal.joint_names.map((n, i) => [n, fmt(proposal.joint_values[i])])] : [["hand", "none (contacts for any gripper)"]]);
   } else {
     rows("quality", [["proposals", "none"], ...(job.error ? [["error", job.error.type + ": " + job.error.error]] : [])]);
     rows("hand", []);

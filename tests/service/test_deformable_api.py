@@ -103,7 +103,7 @@ def test_direct_grasp_on_a_deformable_is_a_422_naming_the_method(base: str) -> N
     assert "method" in response.text
 
 
-def test_cloth_fold_with_given_contacts_reaches_its_target_in_simulation(base: str) -> None:
+def test_cloth_fold_without_a_robot_is_contacts_and_motions_that_reach_the_target(base: str) -> None:
     from models.deformable.cloth import make_cloth
     from models.deformable.procedures import cloth_fold
 
@@ -114,13 +114,24 @@ def test_cloth_fold_with_given_contacts_reaches_its_target_in_simulation(base: s
         "object": {"points": cloth.points.tolist(), "normals": cloth.normals.tolist(), "material": "cloth",
                    "properties": cloth.properties},
         "task": {"kind": "point_motion", "motion": (target - cloth.points).tolist()},
-        "robot": {"name": "panda_gripper"},
         "contacts": {"points": cloth.points[fold.contacts].tolist()},
-        "options": {"method": "contacts", "timeout": 60},
+        "options": {"method": "contacts", "timeout": 60, "simulate_rollout": True},
     }  # fmt: skip
     response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=120)
     assert response.status_code == 200, response.text[:2000]
-    [proposal] = SynthesisResult.model_validate(response.json()).proposals
+    result = SynthesisResult.model_validate(response.json())
+    [proposal] = result.proposals
+    assert result.hand is None and proposal.palm_position is None and proposal.fingertips == []
     assert proposal.contact_source == "given" and proposal.contact_motions is not None
     rollout = simulate(cloth, proposal.contact_points, proposal.contact_motions).cloud
     assert shape_score("cloth", cloth.points, target, rollout).success
+    assert proposal.rollout_points is not None and proposal.quality.success
+    assert shape_score("cloth", cloth.points, target, proposal.rollout_points).success
+
+
+def test_a_rigid_request_without_a_robot_is_a_422_naming_the_robot(base: str) -> None:
+    rope = make_rope(seed=5, length=0.5)
+    body = {"object": {"points": rope.points.tolist()}, "task": {"kind": "force_closure"}}
+    response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=30)
+    assert response.status_code == 422, response.text[:500]
+    assert "robot: required" in response.text
