@@ -202,6 +202,7 @@ def to_result(
         model_version=model_version,
         proposals=proposals,
         heatmap=output.heatmap if options.return_heatmap and output.heatmap is not None else None,
+        heatmaps=output.heatmaps if options.return_all_heatmaps and output.heatmaps is not None else None,
         force_map=output.force_map if options.return_force_map and output.force_map is not None else None,
         timings={k: float(v) for k, v in output.timings.items()},
     )

@@ -36,6 +36,10 @@ class SynthesisOptions(WireModel):
     return_heatmap: bool = False
     return_force_map: bool = False
     return_history: bool = False
+    return_all_heatmaps: bool = Field(
+        False, description="Return every latent sample's heatmap (`heatmaps`, K × N; each proposal names its "
+        "`network_sample`), not only the best proposal's.",
+    )
     return_hand_mesh: bool = Field(
         False,
         description="Return each proposal's posed hand collision meshes (`hand_mesh`, for viewers; about "

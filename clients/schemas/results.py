@@ -114,6 +114,9 @@ class SynthesisResult(WireModel):
         None, description="The network's contact heatmap (return_heatmap): the sample the best proposal came from."
     )
     force_map: Points | None = Field(None, description="The network's force map of the same sample (return_force_map).")
+    heatmaps: Annotated[np.ndarray, spec("K", "N")] | None = Field(
+        None, description="Every latent sample's heatmap (return_all_heatmaps), row k for `network_sample` k."
+    )
     timings: dict[str, float] = Field(default_factory=dict, description="Seconds per stage.")
 
     @property

@@ -150,7 +150,9 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
         heat = np.asarray(net_out.heatmaps[0], dtype=np.float64)
         force = np.asarray(net_out.force_maps[0], dtype=np.float64)
     name = None if inp.handless else str(getattr(hand, "name", "hand"))
-    return SynthesisOutput(hand=name, proposals=proposals, heatmap=heat, force_map=force, timings=timings)
+    every = None if net_out is None else np.asarray(net_out.heatmaps, dtype=np.float64)
+    return SynthesisOutput(hand=name, proposals=proposals, heatmap=heat, force_map=force, heatmaps=every,
+                           timings=timings)  # fmt: skip
 
 
 def _contacts_only(s: DeformableContacts, normals: np.ndarray) -> ProposalOutput:

@@ -186,6 +186,7 @@ class SynthesisOutput:
     hand: str | None  # None for a deformable's contacts without a robot
     proposals: list[ProposalOutput]
     heatmap: np.ndarray | None = None
+    heatmaps: np.ndarray | None = None  # (K, N) every latent sample's heatmap
     force_map: np.ndarray | None = None
     timings: dict[str, float] = field(default_factory=dict)
 
