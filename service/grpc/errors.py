@@ -20,9 +20,9 @@ import grpc
 from google.protobuf import any_pb2, duration_pb2
 from google.rpc import code_pb2, error_details_pb2, status_pb2
 
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.schemas import ErrorBody, ErrorType
 from service import errors as http_errors
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 
 DOMAIN = "manifoundation.v1"
 DETAILS_KEY = "grpc-status-details-bin"

@@ -19,6 +19,9 @@ from typing import Any
 
 import grpc
 
+from clients.protos.convert import to_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
+from clients.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from clients.schemas import (
     MAX_BATCH_SIZE,
     BatchItem,
@@ -31,10 +34,7 @@ from clients.schemas import (
 )
 from service.errors import Conflict, InvalidInput, PayloadTooLarge, Unavailable
 from service.grpc.calls import GrpcMetrics, streaming, unary
-from service.grpc.convert import to_proto
 from service.grpc.errors import JobFailed
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from service.grpc.submit import Submission
 from service.security import Caller
 
