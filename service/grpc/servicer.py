@@ -33,7 +33,7 @@ from clients.schemas import (
     RobotRegister,
 )
 from service.errors import Conflict, InvalidInput, PayloadTooLarge, Unavailable
-from service.grpc.calls import GrpcMetrics, streaming, unary
+from service.grpc.calls import GrpcMetrics, send_initial_metadata, streaming, unary
 from service.grpc.errors import JobFailed
 from service.grpc.submit import Submission
 from service.security import Caller
@@ -68,7 +68,7 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
         call_deadline = _call_deadline(context)
         deadline = min(time.time() + max(0.0, timeout), call_deadline or float("inf"))
         _, job_id = await self.submission.one(request, caller, context, kind="sync", deadline=deadline)
-        await context.send_initial_metadata((("x-job-id", job_id),))
+        await send_initial_metadata(self.state, context, ("x-job-id", job_id))
         try:
             job = await self._wait(job_id, deadline)
         except asyncio.CancelledError:
