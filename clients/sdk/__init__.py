@@ -19,7 +19,8 @@ Public names:
 - outputs: `result_to_dict`, `result_to_json`, `load_result`, `result_figure`.
 - errors: `ManiError` › `RequestError` › (`ValidationError`, `Unauthorized`, `NotFound`, `RateLimited`,
   `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed`; `IncompatibleService` (another major version of the
-  contract); the warning `ContractWarning` (a newer minor version: docs/compatibility.md).
+  contract); `MissingExtra` (an optional part not installed); the warning `ContractWarning` (a newer minor version:
+  docs/compatibility.md).
 - gRPC: `GrpcClient` and its `GrpcJob` in ``clients.sdk.grpc_client`` (the ``[grpc]`` extra), the same calls,
   results and errors over the service's gRPC port.
 
@@ -34,6 +35,7 @@ from clients.sdk.errors import (
     IncompatibleService,
     JobFailed,
     ManiError,
+    MissingExtra,
     NotFound,
     RateLimited,
     RequestError,
@@ -61,6 +63,7 @@ __all__ = [
     "Job",
     "JobFailed",
     "ManiError",
+    "MissingExtra",
     "NotFound",
     "RateLimited",
     "RequestError",

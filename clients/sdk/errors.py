@@ -12,7 +12,8 @@
     ├── Unreachable               no answer at all: connection refused, DNS, connection reset
     ├── TimeoutError              waited longer than the caller allowed (also a builtin ``TimeoutError``)
     ├── JobFailed                 a job ended failed, cancelled or expired; ``job`` and ``error`` say why
-    └── IncompatibleService       the service speaks another major version of the contract
+    ├── IncompatibleService       the service speaks another major version of the contract
+    └── MissingExtra              an optional part ([grpc], [view], [mesh]) is not installed (an ImportError)
 
     ContractWarning (a UserWarning): the service's contract is a newer minor version than this SDK's
 """
@@ -155,6 +156,14 @@ class IncompatibleService(ManiError):
             f"another major version cannot be read safely; install the manifoundation-client that matches the "
             f"service (docs/compatibility.md)"
         )
+
+
+class MissingExtra(ManiError, ImportError):
+    """A call needs an optional part of the client distribution that is not installed; ``extra`` names it."""
+
+    def __init__(self, message: str, *, extra: str) -> None:
+        super().__init__(message)
+        self.extra = extra
 
 
 class ContractWarning(UserWarning):

@@ -25,8 +25,13 @@ import time
 from collections.abc import Callable, Iterator
 from typing import Any, TypeVar
 
-import grpc
-from google.protobuf.message import Message
+from clients.sdk.extras import missing_extra
+
+try:
+    import grpc
+    from google.protobuf.message import Message
+except ModuleNotFoundError as exc:  # the [grpc] extra is not installed
+    raise missing_extra(exc, "grpc", "GrpcClient") from exc
 
 from clients.protos import metadata as keys
 from clients.protos.convert import from_proto, to_proto

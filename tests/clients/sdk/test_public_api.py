@@ -21,7 +21,8 @@ DOCUMENTED = {
     "result_to_dict", "result_to_json", "load_result", "result_figure",
     # errors
     "ManiError", "RequestError", "ValidationError", "Unauthorized", "NotFound", "RateLimited", "ServerError",
-    "Unreachable", "TimeoutError", "JobFailed", "IncompatibleService", "ContractWarning",
+    "Unreachable", "TimeoutError", "JobFailed", "IncompatibleService", "MissingExtra",
+    "ContractWarning",
 }  # fmt: skip
 
 
