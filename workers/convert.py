@@ -74,6 +74,9 @@ def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = Non
         seed=options.seed,
         deadline=None if deadline is None else time.monotonic() + (deadline - time.time()),
         return_history=options.return_history,
+        simulate_rollout=options.simulate_rollout,
+        handless=request.robot is None,
+        num_contacts=options.num_contacts,
         hand_key=hand.name,
     )
 
@@ -166,28 +169,31 @@ def to_result(
         if request.options.return_history and p.history is not None:
             history = [IterationRecord(residual=_finite(h.residual), tip_distance=_finite(h.tip_distance),
                                        step=_finite(h.step)) for h in p.history]  # fmt: skip
+        posed = None if p.palm_position is None else p.pose()
         proposals.append(
             Proposal(
                 contact_points=np.asarray(p.contact_points, dtype=np.float64).reshape(-1, 3),
                 contact_normals=np.asarray(p.contact_normals, dtype=np.float64).reshape(-1, 3),
                 forces=np.asarray(p.forces, dtype=np.float64).reshape(-1, 3),
                 fingertips=list(p.fingertips),
-                palm_position=np.asarray(p.palm_position, dtype=np.float64),
-                palm_quaternion=np.asarray(p.palm_quaternion, dtype=np.float64),
+                palm_position=None if posed is None else posed.palm_pos.astype(np.float64),
+                palm_quaternion=None if posed is None else posed.palm_quat.astype(np.float64),
                 joint_names=list(p.joint_names),
-                joint_values=np.asarray(p.joint_values, dtype=np.float64),
+                joint_values=np.zeros(0) if posed is None else posed.q.astype(np.float64),
                 quality=quality,
                 contact_source=p.contact_source,
                 hand_spheres=None
-                if hand is None
-                else hand_spheres(hand, p.palm_position, p.palm_quaternion, p.joint_values),
+                if hand is None or posed is None
+                else hand_spheres(hand, posed.palm_pos, posed.palm_quat, posed.q),
                 hand_mesh=None
-                if hand is None or not request.options.return_hand_mesh
-                else hand_mesh(hand, p.palm_position, p.palm_quaternion, p.joint_values),
+                if hand is None or posed is None or not request.options.return_hand_mesh
+                else hand_mesh(hand, posed.palm_pos, posed.palm_quat, posed.q),
                 history=history,
                 contact_motions=None if p.contact_motions is None else np.asarray(p.contact_motions, np.float64),
                 network_sample=p.network_sample,
                 network_forces=None if p.network_forces is None else np.asarray(p.network_forces, np.float64),
+                rollout_points=None if p.rollout_points is None else np.asarray(p.rollout_points, np.float64),
+                shape_error=None if p.shape_error is None else _finite(p.shape_error),
             )
         )
     options = request.options

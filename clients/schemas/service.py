@@ -83,3 +83,6 @@ class ScenePublic(WireModel):
     normals: list[list[float]] | None = None
     region_mask: list[int] | None = None
     heatmap: list[float] | None = Field(None, description="Contact heatmap at those points (return_heatmap).")
+    target_points: list[list[float]] | None = Field(
+        None, description="Per-point tasks: where those points should go (or the unordered target cloud), m."
+    )

@@ -195,7 +195,7 @@ class RedisQueue(JobQueue):
                 payload,
                 "" if deadline is None else repr(deadline),
                 batch_id or "",
-                request.robot.name or "",
+                "" if request.robot is None else request.robot.name or "",
             ]
         async with self._guard():
             answer = int(await self._submit(keys=[self.keys.stream, self.keys.recent], args=args))
