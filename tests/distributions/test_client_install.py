@@ -53,10 +53,20 @@ def run(cmd: list[str], *, timeout: float, **kwargs: Any) -> subprocess.Complete
 
 @pytest.fixture(scope="module")
 def wheels(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """Both distributions built into one folder."""
+    """Both distributions built into one folder. setuptools writes the server's metadata into the checkout
+    (``manifoundation.egg-info``), where it would stand for the installed one on ``sys.path``: the checkout gets
+    back what it had."""
     out = tmp_path_factory.mktemp("dist")
-    for project in (ROOT / "distributions" / "client", ROOT):
-        run([sys.executable, "-m", "build", "--outdir", str(out), str(project)], timeout=600)
+    egg_info, kept = ROOT / "manifoundation.egg-info", tmp_path_factory.mktemp("kept") / "egg-info"
+    if egg_info.exists():
+        shutil.copytree(egg_info, kept)
+    try:
+        for project in (ROOT / "distributions" / "client", ROOT):
+            run([sys.executable, "-m", "build", "--outdir", str(out), str(project)], timeout=600)
+    finally:
+        shutil.rmtree(egg_info, ignore_errors=True)
+        if kept.exists():
+            shutil.copytree(kept, egg_info)
     return out
 
 
