@@ -214,8 +214,11 @@ def _deformable_rows(table: Any, result: SynthesisResult) -> Any:
 def run(args: argparse.Namespace) -> int:
     """Run ``mani synthesize``."""
     from clients.sdk import result_figure, result_to_dict, result_to_json
+    from clients.sdk.extras import require
     from clients.sdk.tracking import job_result
 
+    if args.view is not None:
+        require("plotly", "view", "--view")  # before the job runs, not after
     request = build_request(args)
     with common.client_factory(args) as client:
         job = client.submit(request)

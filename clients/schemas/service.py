@@ -18,7 +18,10 @@ class HealthPublic(WireModel):
 
     status: str = "ok"
     backend: str
-    version: str
+    version: str = Field(..., description="The service's own version (its distribution's).")
+    contract_version: str | None = Field(
+        None, description="The wire contract's MAJOR.MINOR (docs/compatibility.md); None: older than the handshake."
+    )
 
 
 class JobList(WireModel):

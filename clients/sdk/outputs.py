@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from clients.schemas import ObjectIn, Proposal, SynthesisResult
+from clients.sdk.extras import require
 
 
 def result_to_dict(result: SynthesisResult) -> dict[str, Any]:
@@ -87,7 +88,7 @@ def result_figure(
     Returns:
         ``plotly.graph_objects.Figure``; ``fig.write_html("grasp.html")`` or ``fig.show()``.
     """
-    import plotly.graph_objects as go
+    go = require("plotly.graph_objects", "view", "result_figure")
 
     chosen = result.best if proposal is None else result.proposals[proposal]
     fig = go.Figure()
@@ -135,7 +136,7 @@ def _deformable_traces(fig: Any, p: Proposal) -> None:
 
 
 def _grasp_traces(fig: Any, p: Proposal, size: float, force_scale: float | None) -> None:
-    import plotly.graph_objects as go
+    go = require("plotly.graph_objects", "view", "result_figure")
 
     c, f = p.contact_points, p.forces
     fig.add_trace(

@@ -9,9 +9,9 @@ import pytest
 from pydantic import BaseModel, ValidationError
 
 from clients import schemas
+from clients.protos.convert import from_proto, to_data, to_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.schemas import BatchPublic, JobPublic, RobotRegister, SynthesisRequest, SynthesisResult
-from service.grpc.convert import from_proto, to_data, to_proto
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 
 from ..helpers import request_body
 
