@@ -96,6 +96,6 @@ def test_a_proto_only_client_gets_a_grasp_the_outside_check_accepts(target: str,
     # and the check can fail: the same hand 1 cm to the side no longer touches at its contacts
     p = claimed[0]
     moved = AuditedGrasp(np.array(p["contacts"]), np.array(p["forces"]), p["fingertips"],
-                         np.array(p["palm"]) + [0.01, 0.0, 0.0], np.array(p["quaternion"]), p["joints"],
+                         np.array(p["palm"]) + np.array([0.01, 0.0, 0.0]), np.array(p["quaternion"]), p["joints"],
                          np.array(p["values"]))  # fmt: skip
     assert not audit_grasp(HAND, moved, obj.mesh, points, normals, mu=0.8, target_wrench=wrench).passed
