@@ -17,6 +17,9 @@ $(STAMP): pyproject.toml distributions/client/pyproject.toml
 	# the client distribution from its folder in the same command: the server requires manifoundation-client
 	# (same version), which no package index has to provide.
 	$(BIN)/python -m pip install -q -e distributions/client -e '.[dev]'
+	# A venv made before the split had `mani` from the server distribution: replacing that one removes the script
+	# the client just wrote, so the client (which owns `mani` now) is written once more, without its dependencies.
+	test -x $(BIN)/mani || $(BIN)/python -m pip install -q --no-deps --force-reinstall -e distributions/client
 	# test data: third-party hands (pyproject's `third-party-hands`); only their description files are read,
 	# so their own dependencies (numba, pinocchio, ...) are not installed.
 	$(BIN)/python -m pip install -q --no-deps 'robosuite>=1.5,<1.6' 'orca-sim>=0.1,<0.2' 'robot-properties-fingers>=2,<3'
