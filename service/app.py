@@ -27,6 +27,7 @@ from service.routes import batches, health, jobs, pages, plans, robots, synthesi
 from service.scenes import SceneStore
 from service.security import RateLimiter
 from service.settings import Settings
+from service.versions import SERVICE_VERSION, Versions
 from workers.queue import JobQueue
 
 log = logging.getLogger("service.app")
@@ -84,7 +85,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
 
     app = FastAPI(
         title="ManiFoundation Service",
-        version=health.VERSION,
+        version=SERVICE_VERSION,
         description=API_DESCRIPTION,
         lifespan=lifespan,
         docs_url=None,  # served by `pages.docs` from the installed Swagger UI bundle: no CDN
@@ -97,6 +98,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
     app.state.objects = ObjectStore(settings.object_ttl_s, settings.max_objects, settings.max_object_store_bytes)
     app.state.bodies = BodyPool(settings.parse_offload_bytes, settings.large_body_slots, settings.body_timeout)
     app.state.shutting_down = False
+    app.state.versions = Versions()  # reported on every answer (service/versions.py)
     errors.install(app)
     for router in (
         health.router,

@@ -44,7 +44,7 @@ class RobotCatalog:
 
     async def check(self, request: JobRequest, owner: str | None = None, field: str = "robot.name") -> None:
         """404 when the request names a hand ``owner`` cannot use. Skipped while no worker has published hands."""
-        name = request.robot.name
+        name = None if request.robot is None else request.robot.name
         if name is None or not await self.all(owner):
             return
         if await self.find(name, owner) is None:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from clients.schemas import JobPublic, JobRequest, PlanRequest, SceneObstacle, ScenePublic
+from clients.schemas.tasks import PointMotionTask, TargetPointsTask
 from service.plan_scenes import scene_view
 
 MAX_VIEW_POINTS = 4096
@@ -26,6 +27,7 @@ class _Scene:
     points: np.ndarray
     normals: np.ndarray | None
     region_mask: np.ndarray | None
+    targets: np.ndarray | None  # where the points should go (per-point tasks), float32
     obstacles: list[SceneObstacle] | None = None
     support_height: float | None = None
     waypoints: list[list[float]] | None = None
@@ -48,6 +50,7 @@ class SceneStore:
             points=obj.points[index].astype(np.float32),
             normals=None if obj.normals is None else obj.normals[index].astype(np.float32),
             region_mask=None if obj.region_mask is None else obj.region_mask[index],
+            targets=_targets(request, index),
         )
         if isinstance(request, PlanRequest):
             scene.obstacles, scene.support_height, scene.waypoints = scene_view(request)
@@ -69,9 +72,26 @@ class SceneStore:
             normals=None if scene.normals is None else scene.normals.round(4).tolist(),
             region_mask=None if scene.region_mask is None else scene.region_mask.astype(int).tolist(),
             heatmap=heatmap,
+            target_points=None if scene.targets is None else scene.targets.round(5).tolist(),
             obstacles=scene.obstacles,
             support_height=scene.support_height,
             waypoints=scene.waypoints,
         )
+
+
+def _targets(request: JobRequest, index: np.ndarray) -> np.ndarray | None:
+    """The target the viewer draws for a per-point task: the points plus their motion, or the target cloud."""
+    if isinstance(request, PlanRequest):
+        return None
+    task = request.task
+    if isinstance(task, PointMotionTask):
+        return (request.object.points[index] + task.motion[index]).astype(np.float32)
+    if isinstance(task, TargetPointsTask):
+        if task.correspondence == "index":
+            return task.targets[index].astype(np.float32)
+        m = len(task.targets)
+        keep = np.arange(m) if m <= MAX_VIEW_POINTS else np.linspace(0, m - 1, MAX_VIEW_POINTS).astype(np.int64)
+        return task.targets[keep].astype(np.float32)
+    return None
 
 

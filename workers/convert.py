@@ -74,6 +74,9 @@ def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = Non
         seed=options.seed,
         deadline=None if deadline is None else time.monotonic() + (deadline - time.time()),
         return_history=options.return_history,
+        simulate_rollout=options.simulate_rollout,
+        handless=request.robot is None,
+        num_contacts=options.num_contacts,
         hand_key=hand.name,
     )
 
@@ -165,24 +168,30 @@ def to_proposal(p: ProposalOutput, hand: Hand | None = None, *, history: bool = 
     if history and p.history is not None:
         records = [IterationRecord(residual=_finite(h.residual), tip_distance=_finite(h.tip_distance),
                                    step=_finite(h.step)) for h in p.history]  # fmt: skip
+    posed = None if p.palm_position is None else p.pose()  # no hand pose: a hand-free deformable's answer
+    spheres = posed_mesh = None
+    if hand is not None and posed is not None:
+        spheres = hand_spheres(hand, posed.palm_pos, posed.palm_quat, posed.q)
+        posed_mesh = hand_mesh(hand, posed.palm_pos, posed.palm_quat, posed.q) if mesh else None
     return Proposal(
         contact_points=np.asarray(p.contact_points, dtype=np.float64).reshape(-1, 3),
         contact_normals=np.asarray(p.contact_normals, dtype=np.float64).reshape(-1, 3),
         forces=np.asarray(p.forces, dtype=np.float64).reshape(-1, 3),
         fingertips=list(p.fingertips),
-        palm_position=np.asarray(p.palm_position, dtype=np.float64),
-        palm_quaternion=np.asarray(p.palm_quaternion, dtype=np.float64),
+        palm_position=None if posed is None else posed.palm_pos.astype(np.float64),
+        palm_quaternion=None if posed is None else posed.palm_quat.astype(np.float64),
         joint_names=list(p.joint_names),
-        joint_values=np.asarray(p.joint_values, dtype=np.float64),
+        joint_values=np.zeros(0) if posed is None else posed.q.astype(np.float64),
         quality=quality,
         contact_source=p.contact_source,
-        hand_spheres=None if hand is None else hand_spheres(hand, p.palm_position, p.palm_quaternion, p.joint_values),
-        hand_mesh=None if hand is None or not mesh else hand_mesh(hand, p.palm_position, p.palm_quaternion,
-                                                                   p.joint_values),
+        hand_spheres=spheres,
+        hand_mesh=posed_mesh,
         history=records,
         contact_motions=None if p.contact_motions is None else np.asarray(p.contact_motions, np.float64),
         network_sample=p.network_sample,
         network_forces=None if p.network_forces is None else np.asarray(p.network_forces, np.float64),
+        rollout_points=None if p.rollout_points is None else np.asarray(p.rollout_points, np.float64),
+        shape_error=None if p.shape_error is None else _finite(p.shape_error),
     )
 
 
@@ -203,6 +212,7 @@ def to_result(
         model_version=model_version,
         proposals=proposals,
         heatmap=output.heatmap if options.return_heatmap and output.heatmap is not None else None,
+        heatmaps=output.heatmaps if options.return_all_heatmaps and output.heatmaps is not None else None,
         force_map=output.force_map if options.return_force_map and output.force_map is not None else None,
         timings={k: float(v) for k, v in output.timings.items()},
     )

@@ -146,8 +146,13 @@ class ModelsPipeline:
             self._hands.popitem(last=False)
         return hand
 
-    def _hand(self, robot: RobotIn, registered: RobotRegister | None) -> Any:
+    def _hand(self, robot: RobotIn | None, registered: RobotRegister | None) -> Any:
         """The hand a request's ``robot`` names (``registered``: the user's registration it names, if any)."""
+        if robot is None:  # a deformable's contacts for any gripper: the network sees the hand of its data
+            from models.data.deformable_dataset import DEFAULT_HAND
+            from models.robots import get_hand
+
+            return self._builtin.get(DEFAULT_HAND) or get_hand(DEFAULT_HAND)
         if robot.urdf is not None:
             return self._user_hand("inline", robot.urdf, robot.fingertips or [], robot.tip_offsets)
         if robot.name in self._builtin:

@@ -121,7 +121,7 @@ class StagedPipeline:
             t0 = time.perf_counter()
             time.sleep(self.stage_seconds)
             timings[stage.value] = timings.get(stage.value, 0.0) + time.perf_counter() - t0
-        hand = job.request.robot.name or "inline"
+        hand = "none" if job.request.robot is None else job.request.robot.name or "inline"
         if job.robot is not None:
             root = ET.fromstring(job.robot.urdf or job.robot.mjcf or "<robot/>")
             timings["robot_dof"] = float(sum(j.get("type") in ("revolute", "prismatic") for j in root.iter("joint")))

@@ -20,7 +20,10 @@ class HealthPublic(WireModel):
 
     status: str = "ok"
     backend: str
-    version: str
+    version: str = Field(..., description="The service's own version (its distribution's).")
+    contract_version: str | None = Field(
+        None, description="The wire contract's MAJOR.MINOR (docs/compatibility.md); None: older than the handshake."
+    )
 
 
 class JobList(WireModel):
@@ -94,6 +97,9 @@ class ScenePublic(WireModel):
     normals: list[list[float]] | None = None
     region_mask: list[int] | None = None
     heatmap: list[float] | None = Field(None, description="Contact heatmap at those points (return_heatmap).")
+    target_points: list[list[float]] | None = Field(
+        None, description="Per-point tasks: where those points should go (or the unordered target cloud), m."
+    )
     obstacles: list[SceneObstacle] | None = Field(None, description="A plan's obstacles, world frame.")
     support_height: float | None = Field(None, description="A plan's support plane z = height, m.")
     waypoints: list[list[float]] | None = Field(None, description="A plan's requested waypoint positions, m.")

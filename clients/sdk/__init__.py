@@ -19,7 +19,11 @@ Public names:
   ``client.submit_plan``): `make_plan`, `box_obstacle`, `as_pose`.
 - outputs: `result_to_dict`, `result_to_json`, `load_result`, `result_figure`.
 - errors: `ManiError` › `RequestError` › (`ValidationError`, `Unauthorized`, `NotFound`, `RateLimited`,
-  `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed`.
+  `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed`; `IncompatibleService` (another major version of the
+  contract); `MissingExtra` (an optional part not installed); the warning `ContractWarning` (a newer minor version:
+  docs/compatibility.md).
+- gRPC: `GrpcClient` and its `GrpcJob` in ``clients.sdk.grpc_client`` (the ``[grpc]`` extra), the same calls,
+  results and errors over the service's gRPC port.
 
 The wire models (`SynthesisRequest`, `SynthesisResult`, `JobPublic`, ...) live in `clients.schemas`. The SDK
 never imports torch or server code.
@@ -28,8 +32,11 @@ never imports torch or server code.
 from clients.sdk.async_client import AsyncBatch, AsyncClient, AsyncJob
 from clients.sdk.client import Batch, Client, Job
 from clients.sdk.errors import (
+    ContractWarning,
+    IncompatibleService,
     JobFailed,
     ManiError,
+    MissingExtra,
     NotFound,
     RateLimited,
     RequestError,
@@ -53,9 +60,12 @@ __all__ = [
     "AsyncJob",
     "Batch",
     "Client",
+    "ContractWarning",
+    "IncompatibleService",
     "Job",
     "JobFailed",
     "ManiError",
+    "MissingExtra",
     "NotFound",
     "RateLimited",
     "RequestError",

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import pydantic
 
 from clients.schemas import BatchItem, BatchPublic, JobPublic, JobState, PlanResult, SynthesisResult
+from clients.schemas.common import ANSWER_CONTEXT
 from clients.sdk.errors import JobFailed, ServerError
 
 # SSE event types that carry a job (``progress`` while it runs, ``end`` with the final job).
@@ -105,6 +106,6 @@ def item_result(item: BatchItem) -> SynthesisResult:
 def parse_event(data: str) -> JobPublic:
     """One SSE ``data`` payload: a `JobPublic` in JSON."""
     try:
-        return JobPublic.model_validate_json(data)
+        return JobPublic.model_validate_json(data, context=ANSWER_CONTEXT)
     except pydantic.ValidationError as exc:
         raise ServerError(f"unreadable job event: {exc}", type="ProtocolError") from exc

@@ -70,7 +70,7 @@ def carried(p: ProposalOutput, a: Pose, b: Pose) -> HandPose:
 def hand_hits(scene: CollisionScene, hand: Hand, p: ProposalOutput, a: Pose, b: Pose) -> list[str]:
     """What the proposal's hand meets at the step's start (its own pose) and end (carried to ``b``)."""
     at_b = carried(p, a, b)
-    hits = scene.hand_hits(hand, palm(p), p.joint_values)
+    hits = scene.hand_hits(hand, palm(p), p.pose().q)
     hits += [h for h in scene.hand_hits(hand, Pose(at_b.palm_pos, at_b.palm_quat), at_b.q) if h not in hits]
     return hits
 

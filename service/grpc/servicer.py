@@ -19,6 +19,9 @@ from typing import Any
 
 import grpc
 
+from clients.protos.convert import to_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
+from clients.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from clients.schemas import (
     MAX_BATCH_SIZE,
     BatchItem,
@@ -31,11 +34,8 @@ from clients.schemas import (
 )
 from service.batch_pages import batch_page
 from service.errors import Conflict, InvalidInput, PayloadTooLarge, Unavailable
-from service.grpc.calls import GrpcMetrics, streaming, unary
-from service.grpc.convert import to_proto
+from service.grpc.calls import GrpcMetrics, send_initial_metadata, streaming, unary
 from service.grpc.errors import JobFailed
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from service.grpc.submit import Submission
 from service.security import Caller
 
@@ -69,7 +69,7 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
         call_deadline = _call_deadline(context)
         deadline = min(time.time() + max(0.0, timeout), call_deadline or float("inf"))
         _, job_id = await self.submission.one(request, caller, context, kind="sync", deadline=deadline)
-        await context.send_initial_metadata((("x-job-id", job_id),))
+        await send_initial_metadata(self.state, context, ("x-job-id", job_id))
         try:
             job = await self._wait(job_id, deadline)
         except asyncio.CancelledError:

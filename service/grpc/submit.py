@@ -15,9 +15,9 @@ from typing import Any, TypeVar
 import grpc
 from google.protobuf.message import Message
 
+from clients.protos.convert import from_proto
 from clients.schemas import BatchCreate, SynthesisRequest, WireModel
 from service.errors import Unavailable
-from service.grpc.convert import from_proto
 from service.middleware import request_id_from
 from service.security import Caller
 from service.submission import RequestT, Submitter

@@ -14,8 +14,8 @@ import httpx
 import numpy as np
 import pytest
 
+from clients.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from service.app import create_app
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from service.settings import Settings
 
 from .server import free_port, serving

@@ -10,10 +10,10 @@ import httpx
 import numpy as np
 import pytest
 
+from clients.protos.convert import from_proto, to_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.schemas import JobPublic, PlanRequest
 from clients.sdk import Client, JobFailed, box_obstacle, make_plan
-from service.grpc.convert import from_proto, to_proto
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 
 from .science import HAND, KEY, OTHER, Science, box_object
 

@@ -100,8 +100,9 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
                 raise QueueFull(f"queue holds {len(self._pending)} jobs (max {self.settings.max_queue})", 1.0)
             ids = []
             for request, payload in zip(requests, payloads, strict=True):
+                hand = request.robot.name if request.robot else None
                 kind = kind_of(request)
-                job = JobRecord(new_id(), payload, request.robot.name, deadline, batch_id, request_id, owner, kind)
+                job = JobRecord(new_id(), payload, hand, deadline, batch_id, request_id, owner, kind)
                 self._jobs[job.id] = job
                 self._pending.append(job.id)
                 ids.append(job.id)

@@ -202,7 +202,7 @@ class RedisQueue(JobQueue):
                 payload,
                 "" if deadline is None else repr(deadline),
                 batch_id or "",
-                request.robot.name or "",
+                "" if request.robot is None else request.robot.name or "",
                 "" if kind_of(request) is JobKind.SYNTHESIS else kind_of(request).value,
             ]
         async with self._guard():

@@ -23,7 +23,8 @@ DOCUMENTED = {
     "result_to_dict", "result_to_json", "load_result", "result_figure",
     # errors
     "ManiError", "RequestError", "ValidationError", "Unauthorized", "NotFound", "RateLimited", "ServerError",
-    "Unreachable", "TimeoutError", "JobFailed",
+    "Unreachable", "TimeoutError", "JobFailed", "IncompatibleService", "MissingExtra",
+    "ContractWarning",
 }  # fmt: skip
 
 
@@ -51,7 +52,7 @@ def _top_level_modules_after(code: str) -> set[str]:
 
 def test_sdk_and_cli_import_no_server_or_science_code() -> None:
     loaded = _top_level_modules_after("import clients.sdk, clients.cli.main")
-    forbidden = {"torch", "fastapi", "service", "workers", "models", "uvicorn", "plotly", "trimesh"}
+    forbidden = {"torch", "fastapi", "service", "workers", "models", "uvicorn", "plotly", "trimesh", "grpc"}
     assert not loaded & forbidden, f"loaded {sorted(loaded & forbidden)}"
 
 

@@ -9,9 +9,9 @@ import pytest
 from pydantic import BaseModel, ValidationError
 
 from clients import schemas
+from clients.protos.convert import from_proto, to_data, to_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.schemas import BatchPublic, JobPublic, RobotRegister, SynthesisRequest, SynthesisResult
-from service.grpc.convert import from_proto, to_data, to_proto
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 
 from ..helpers import request_body
 
@@ -139,3 +139,18 @@ def test_result_and_job_to_proto() -> None:
     assert back.result is not None and np.array_equal(back.result.proposals[0].forces, rows)
     assert back.result.proposals[0].quality == quality
     assert to_data(pb.BatchPublic(counts={"queued": 2}))["counts"] == {"queued": 2}
+
+
+def test_contacts_without_a_robot_come_back_without_a_hand() -> None:
+    rows = np.arange(6.0).reshape(2, 3)
+    quality = schemas.Quality(success=False, converged=False, reason="deformable_open_loop", iterations=0,
+                              wrench_residual=0, max_tip_distance=0, penetration_depth=0,
+                              self_collision_depth=0)  # fmt: skip
+    proposal = schemas.Proposal(contact_points=rows, contact_normals=rows, forces=rows, quality=quality,
+                                contact_motions=rows, rollout_points=rows, shape_error=0.1)  # fmt: skip
+    message = to_proto(SynthesisResult(model_version="m", proposals=[proposal]), pb.SynthesisResult)
+    back = from_proto(pb.SynthesisResult.FromString(message.SerializeToString()), SynthesisResult, answer=True)
+    [got] = back.proposals
+    assert back.hand is None and got.palm_position is None and got.palm_quaternion is None
+    assert got.fingertips == [] and len(got.joint_values) == 0 and got.shape_error == 0.1
+    assert got.rollout_points is not None and np.array_equal(got.rollout_points, rows)

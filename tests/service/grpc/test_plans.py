@@ -6,9 +6,9 @@ from __future__ import annotations
 import grpc
 import pytest
 
+from clients.protos.convert import from_proto, to_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.schemas import JobPublic, PlanRequest
-from service.grpc.convert import from_proto, to_proto
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 
 from ..helpers import sphere
 from .conftest import HAND, OTHER, Service

@@ -9,9 +9,9 @@ import httpx
 import numpy as np
 import pytest
 
+from clients.protos.convert import from_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.schemas import JobPublic, SynthesisResult
-from service.grpc.convert import from_proto
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 
 from .conftest import HAND, KEY, OTHER, Service, metrics_text, request, wait_terminal
 

@@ -139,7 +139,7 @@ class RobotIn(_message.Message):
     def __init__(self, name: _Optional[str] = ..., urdf: _Optional[str] = ..., fingertips: _Optional[_Iterable[str]] = ..., tip_offsets: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class SynthesisOptions(_message.Message):
-    __slots__ = ("method", "num_proposals", "refine", "max_iterations", "seed", "timeout", "return_heatmap", "return_force_map", "return_history", "return_hand_mesh")
+    __slots__ = ("method", "num_proposals", "refine", "max_iterations", "seed", "timeout", "return_heatmap", "return_force_map", "return_history", "return_hand_mesh", "simulate_rollout", "num_contacts", "return_all_heatmaps")
     METHOD_FIELD_NUMBER: _ClassVar[int]
     NUM_PROPOSALS_FIELD_NUMBER: _ClassVar[int]
     REFINE_FIELD_NUMBER: _ClassVar[int]
@@ -150,6 +150,9 @@ class SynthesisOptions(_message.Message):
     RETURN_FORCE_MAP_FIELD_NUMBER: _ClassVar[int]
     RETURN_HISTORY_FIELD_NUMBER: _ClassVar[int]
     RETURN_HAND_MESH_FIELD_NUMBER: _ClassVar[int]
+    SIMULATE_ROLLOUT_FIELD_NUMBER: _ClassVar[int]
+    NUM_CONTACTS_FIELD_NUMBER: _ClassVar[int]
+    RETURN_ALL_HEATMAPS_FIELD_NUMBER: _ClassVar[int]
     method: str
     num_proposals: int
     refine: bool
@@ -160,7 +163,10 @@ class SynthesisOptions(_message.Message):
     return_force_map: bool
     return_history: bool
     return_hand_mesh: bool
-    def __init__(self, method: _Optional[str] = ..., num_proposals: _Optional[int] = ..., refine: _Optional[bool] = ..., max_iterations: _Optional[int] = ..., seed: _Optional[int] = ..., timeout: _Optional[float] = ..., return_heatmap: _Optional[bool] = ..., return_force_map: _Optional[bool] = ..., return_history: _Optional[bool] = ..., return_hand_mesh: _Optional[bool] = ...) -> None: ...
+    simulate_rollout: bool
+    num_contacts: int
+    return_all_heatmaps: bool
+    def __init__(self, method: _Optional[str] = ..., num_proposals: _Optional[int] = ..., refine: _Optional[bool] = ..., max_iterations: _Optional[int] = ..., seed: _Optional[int] = ..., timeout: _Optional[float] = ..., return_heatmap: _Optional[bool] = ..., return_force_map: _Optional[bool] = ..., return_history: _Optional[bool] = ..., return_hand_mesh: _Optional[bool] = ..., simulate_rollout: _Optional[bool] = ..., num_contacts: _Optional[int] = ..., return_all_heatmaps: _Optional[bool] = ...) -> None: ...
 
 class ContactsIn(_message.Message):
     __slots__ = ("points",)
@@ -227,7 +233,7 @@ class HandMesh(_message.Message):
     def __init__(self, vertices: _Optional[_Union[Array, _Mapping]] = ..., faces: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class Proposal(_message.Message):
-    __slots__ = ("contact_points", "contact_normals", "forces", "fingertips", "palm_position", "palm_quaternion", "joint_names", "joint_values", "quality", "contact_source", "hand_spheres", "hand_mesh", "history", "contact_motions", "network_sample", "network_forces")
+    __slots__ = ("contact_points", "contact_normals", "forces", "fingertips", "palm_position", "palm_quaternion", "joint_names", "joint_values", "quality", "contact_source", "hand_spheres", "hand_mesh", "history", "contact_motions", "network_sample", "network_forces", "rollout_points", "shape_error")
     CONTACT_POINTS_FIELD_NUMBER: _ClassVar[int]
     CONTACT_NORMALS_FIELD_NUMBER: _ClassVar[int]
     FORCES_FIELD_NUMBER: _ClassVar[int]
@@ -244,6 +250,8 @@ class Proposal(_message.Message):
     CONTACT_MOTIONS_FIELD_NUMBER: _ClassVar[int]
     NETWORK_SAMPLE_FIELD_NUMBER: _ClassVar[int]
     NETWORK_FORCES_FIELD_NUMBER: _ClassVar[int]
+    ROLLOUT_POINTS_FIELD_NUMBER: _ClassVar[int]
+    SHAPE_ERROR_FIELD_NUMBER: _ClassVar[int]
     contact_points: Array
     contact_normals: Array
     forces: Array
@@ -260,10 +268,12 @@ class Proposal(_message.Message):
     contact_motions: Array
     network_sample: int
     network_forces: Array
-    def __init__(self, contact_points: _Optional[_Union[Array, _Mapping]] = ..., contact_normals: _Optional[_Union[Array, _Mapping]] = ..., forces: _Optional[_Union[Array, _Mapping]] = ..., fingertips: _Optional[_Iterable[str]] = ..., palm_position: _Optional[_Iterable[float]] = ..., palm_quaternion: _Optional[_Iterable[float]] = ..., joint_names: _Optional[_Iterable[str]] = ..., joint_values: _Optional[_Iterable[float]] = ..., quality: _Optional[_Union[Quality, _Mapping]] = ..., contact_source: _Optional[str] = ..., hand_spheres: _Optional[_Union[Array, _Mapping]] = ..., hand_mesh: _Optional[_Union[HandMesh, _Mapping]] = ..., history: _Optional[_Iterable[_Union[IterationRecord, _Mapping]]] = ..., contact_motions: _Optional[_Union[Array, _Mapping]] = ..., network_sample: _Optional[int] = ..., network_forces: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
+    rollout_points: Array
+    shape_error: float
+    def __init__(self, contact_points: _Optional[_Union[Array, _Mapping]] = ..., contact_normals: _Optional[_Union[Array, _Mapping]] = ..., forces: _Optional[_Union[Array, _Mapping]] = ..., fingertips: _Optional[_Iterable[str]] = ..., palm_position: _Optional[_Iterable[float]] = ..., palm_quaternion: _Optional[_Iterable[float]] = ..., joint_names: _Optional[_Iterable[str]] = ..., joint_values: _Optional[_Iterable[float]] = ..., quality: _Optional[_Union[Quality, _Mapping]] = ..., contact_source: _Optional[str] = ..., hand_spheres: _Optional[_Union[Array, _Mapping]] = ..., hand_mesh: _Optional[_Union[HandMesh, _Mapping]] = ..., history: _Optional[_Iterable[_Union[IterationRecord, _Mapping]]] = ..., contact_motions: _Optional[_Union[Array, _Mapping]] = ..., network_sample: _Optional[int] = ..., network_forces: _Optional[_Union[Array, _Mapping]] = ..., rollout_points: _Optional[_Union[Array, _Mapping]] = ..., shape_error: _Optional[float] = ...) -> None: ...
 
 class SynthesisResult(_message.Message):
-    __slots__ = ("hand", "model_version", "proposals", "heatmap", "force_map", "timings")
+    __slots__ = ("hand", "model_version", "proposals", "heatmap", "force_map", "timings", "heatmaps")
     class TimingsEntry(_message.Message):
         __slots__ = ("key", "value")
         KEY_FIELD_NUMBER: _ClassVar[int]
@@ -277,13 +287,15 @@ class SynthesisResult(_message.Message):
     HEATMAP_FIELD_NUMBER: _ClassVar[int]
     FORCE_MAP_FIELD_NUMBER: _ClassVar[int]
     TIMINGS_FIELD_NUMBER: _ClassVar[int]
+    HEATMAPS_FIELD_NUMBER: _ClassVar[int]
     hand: str
     model_version: str
     proposals: _containers.RepeatedCompositeFieldContainer[Proposal]
     heatmap: Array
     force_map: Array
     timings: _containers.ScalarMap[str, float]
-    def __init__(self, hand: _Optional[str] = ..., model_version: _Optional[str] = ..., proposals: _Optional[_Iterable[_Union[Proposal, _Mapping]]] = ..., heatmap: _Optional[_Union[Array, _Mapping]] = ..., force_map: _Optional[_Union[Array, _Mapping]] = ..., timings: _Optional[_Mapping[str, float]] = ...) -> None: ...
+    heatmaps: Array
+    def __init__(self, hand: _Optional[str] = ..., model_version: _Optional[str] = ..., proposals: _Optional[_Iterable[_Union[Proposal, _Mapping]]] = ..., heatmap: _Optional[_Union[Array, _Mapping]] = ..., force_map: _Optional[_Union[Array, _Mapping]] = ..., timings: _Optional[_Mapping[str, float]] = ..., heatmaps: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class FieldError(_message.Message):
     __slots__ = ("field", "problem")
