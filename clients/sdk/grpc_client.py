@@ -38,14 +38,16 @@ from clients.protos.convert import from_proto, to_proto
 from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from clients.schemas import ContactsIn, JobPublic, JobState, RobotPublic, SynthesisRequest, SynthesisResult
+from clients.schemas.plans import PlanRequest, PlanResult
 from clients.sdk.compat import VersionCheck
 from clients.sdk.errors import TimeoutError
 from clients.sdk.grpc_errors import RETRYABLE, error_from, pairs, retry_after, sent_by_service
 from clients.sdk.objects import ObjectLike
+from clients.sdk.plans import PoseLike, make_plan
 from clients.sdk.requests import RobotLike, make_request
 from clients.sdk.retry import DEFAULT_RETRY, RetryPolicy
 from clients.sdk.tasks import TaskLike
-from clients.sdk.tracking import job_result
+from clients.sdk.tracking import job_result, plan_result
 
 ReplyT = TypeVar("ReplyT", bound=Message)
 DEFAULT_TARGET = "127.0.0.1:50051"
@@ -145,6 +147,41 @@ class GrpcClient:
         request = make_request(object, task, robot, contacts=contacts, **options)
         reply = self._unary(self._stub.SubmitJob, to_proto(request, pb.SynthesisRequest), idempotent=False)
         return GrpcJob(self, reply.id)
+
+    def submit_plan(
+        self,
+        object: ObjectLike | PlanRequest,
+        start: PoseLike | None = None,
+        waypoints: list[PoseLike] | None = None,
+        robot: RobotLike = "allegro",
+        **fields: Any,
+    ) -> GrpcJob:
+        """Queue a manipulation plan (``SubmitPlan``) and return at once with its `GrpcJob` (``job.plan_result()``
+        waits for it). Arguments as `clients.sdk.make_plan` (or one whole `PlanRequest`)."""
+        request = make_plan(object, start, waypoints or [], robot, **fields)
+        reply = self._unary(self._stub.SubmitPlan, to_proto(request, pb.PlanRequest), idempotent=False)
+        return GrpcJob(self, reply.id)
+
+    def plan(
+        self,
+        object: ObjectLike | PlanRequest,
+        start: PoseLike | None = None,
+        waypoints: list[PoseLike] | None = None,
+        robot: RobotLike = "allegro",
+        *,
+        wait: float | None = None,
+        **fields: Any,
+    ) -> PlanResult:
+        """Plan a manipulation and wait for it (as `Client.plan`: the dense trajectory, the repaired waypoints
+        and a verified contact answer per step).
+
+        Raises:
+            ValidationError: invalid input; JobFailed: e.g. ``InfeasibleWaypoint`` / ``NoPathFound``;
+                TimeoutError: not finished within ``wait`` (default: the plan's ``options.timeout`` + 60 s).
+        """
+        request = make_plan(object, start, waypoints or [], robot, **fields)
+        job = self.submit_plan(request)
+        return job.plan_result(request.options.timeout + 60.0 if wait is None else wait)
 
     def job(self, job_id: str) -> GrpcJob:
         """A handle on an existing job (submitted over either transport)."""
@@ -265,9 +302,19 @@ class GrpcJob:
             TimeoutError: still running after ``timeout`` seconds (None: wait for ever).
             JobFailed: it failed, was cancelled or expired.
         """
+        return job_result(self.finished(timeout, answer=lambda job: job.result))
+
+    def plan_result(self, timeout: float | None = None) -> PlanResult:
+        """Wait until a plan job finishes and return its plan (raises as `wait`)."""
+        return plan_result(self.finished(timeout, answer=lambda job: job.plan))
+
+    def finished(self, timeout: float | None = None, answer: Callable[[JobPublic], object] | None = None) -> JobPublic:
+        """The job once it has ended, following its stream (``answer``: what a succeeded job must carry, else
+        it is read once more)."""
         last: JobPublic | None = None
         for job in self.events(timeout):
             last = job
-        if last is None or not last.state.terminal or (last.state is JobState.SUCCEEDED and last.result is None):
-            last = self.status()  # the stream ended early, or its final job came without the result
-        return job_result(last)
+        missing = last is not None and last.state is JobState.SUCCEEDED and answer is not None and answer(last) is None
+        if last is None or not last.state.terminal or missing:
+            last = self.status()  # the stream ended early, or its final job came without the answer
+        return last

@@ -154,3 +154,20 @@ def test_a_newer_minor_version_warns_once(service: Service, client: GrpcClient) 
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             client.robots()
+
+
+def test_plan_through_the_grpc_client(client: GrpcClient) -> None:
+    from clients.schemas import PlanRequest
+    from tests.service.helpers import sphere
+
+    points, normals = sphere(128)
+    request = PlanRequest.model_validate({
+        "object": {"points": points, "normals": normals}, "start": {"position": [0, 0, 0.1]},
+        "waypoints": [{"position": [0.05, 0, 0.1]}, {"position": [0.1, 0, 0.1]}], "robot": {"name": HAND},
+    })  # fmt: skip
+    plan = client.plan(request, wait=30)
+    assert plan.positions.shape == (3, 3) and plan.waypoint_indices == [1, 2]
+    job = client.submit_plan(request)
+    assert client.get(job.id).kind == "plan" and job.plan_result(30).waypoint_indices == [1, 2]
+    with pytest.raises(JobFailed):  # a plan job carries no synthesis result
+        job.wait(30)
