@@ -37,17 +37,17 @@ from clients.protos import metadata as keys
 from clients.protos.convert import from_proto, to_proto
 from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
-from clients.schemas import ContactsIn, JobPublic, JobState, RobotPublic, SynthesisRequest, SynthesisResult
+from clients.schemas import ContactsIn, JobPublic, RobotPublic, SynthesisRequest, SynthesisResult
 from clients.schemas.plans import PlanRequest, PlanResult
 from clients.sdk.compat import VersionCheck
 from clients.sdk.errors import TimeoutError
 from clients.sdk.grpc_errors import RETRYABLE, error_from, pairs, retry_after, sent_by_service
+from clients.sdk.grpc_job import GrpcJob
 from clients.sdk.objects import ObjectLike
 from clients.sdk.plans import PoseLike, make_plan
 from clients.sdk.requests import RobotLike, make_request
 from clients.sdk.retry import DEFAULT_RETRY, RetryPolicy
 from clients.sdk.tasks import TaskLike
-from clients.sdk.tracking import job_result, plan_result
 
 ReplyT = TypeVar("ReplyT", bound=Message)
 DEFAULT_TARGET = "127.0.0.1:50051"
@@ -271,50 +271,3 @@ class GrpcClient:
         """The version handshake on a failed call (its initial metadata, else its trailers)."""
         found = {**pairs(exc.trailing_metadata()), **pairs(exc.initial_metadata())}
         self.versions.see(found.get)
-
-
-class GrpcJob:
-    """A queued synthesis over gRPC: the calls of `clients.sdk.Job` (status, cancel, wait, events)."""
-
-    def __init__(self, client: GrpcClient, job_id: str) -> None:
-        self.client = client
-        self.id = job_id
-
-    def __repr__(self) -> str:
-        return f"GrpcJob({self.id!r})"
-
-    def status(self) -> JobPublic:
-        """The job now (with its result or error when finished)."""
-        return self.client.get(self.id)
-
-    def cancel(self) -> JobPublic:
-        """Ask the service to cancel the job."""
-        return self.client.cancel(self.id)
-
-    def events(self, timeout: float | None = None) -> Iterator[JobPublic]:
-        """The job's progress as it happens (`GrpcClient.watch`), ending with its final state."""
-        return self.client.watch(self.id, timeout=timeout)
-
-    def wait(self, timeout: float | None = None) -> SynthesisResult:
-        """Wait until the job finishes (following its stream) and return its result.
-
-        Raises:
-            TimeoutError: still running after ``timeout`` seconds (None: wait for ever).
-            JobFailed: it failed, was cancelled or expired.
-        """
-        return job_result(self.finished(timeout, answer=lambda job: job.result))
-
-    def plan_result(self, timeout: float | None = None) -> PlanResult:
-        """Wait until a plan job finishes and return its plan (raises as `wait`)."""
-        return plan_result(self.finished(timeout, answer=lambda job: job.plan))
-
-    def finished(self, timeout: float | None = None, answer: Callable[[JobPublic], object] | None = None) -> JobPublic:
-        """The job once it has ended, following its stream (``answer``: what a succeeded job must carry, else
-        it is read once more)."""
-        last: JobPublic | None = None
-        for job in self.events(timeout):
-            last = job
-        missing = last is not None and last.state is JobState.SUCCEEDED and answer is not None and answer(last) is None
-        if last is None or not last.state.terminal or missing:
-            last = self.status()  # the stream ended early, or its final job came without the answer
-        return last
