@@ -3,20 +3,29 @@
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 from clients.schemas import JobPublic, JobState, SynthesisResult
 from clients.schemas.plans import PlanResult
 from clients.sdk.tracking import job_result, plan_result
 
-if TYPE_CHECKING:
-    from clients.sdk.grpc_client import GrpcClient
+
+class JobCalls(Protocol):
+    """What a job needs of its client (`GrpcClient` has these)."""
+
+    def get(self, job_id: str, *, with_result: bool = True) -> JobPublic: ...
+
+    def cancel(self, job_id: str) -> JobPublic: ...
+
+    def watch(
+        self, job_id: str, *, timeout: float | None = None, cancel_on_disconnect: bool = False
+    ) -> Iterator[JobPublic]: ...
 
 
 class GrpcJob:
     """A queued synthesis over gRPC: the calls of `clients.sdk.Job` (status, cancel, wait, events)."""
 
-    def __init__(self, client: GrpcClient, job_id: str) -> None:
+    def __init__(self, client: JobCalls, job_id: str) -> None:
         self.client = client
         self.id = job_id
 
