@@ -60,11 +60,13 @@ class EmbeddedCloud:
     def cloud(self, vertices: np.ndarray) -> np.ndarray:
         """(N, 3) the caller's points, in the caller's frame, carried by the body's moved ``vertices`` (V, 3)."""
         v = np.asarray(vertices, dtype=np.float64)
-        return np.einsum("nk,nkd->nd", self.weights, v[self.corners]) - self.offset
+        carried: np.ndarray = np.einsum("nk,nkd->nd", self.weights, v[self.corners]) - self.offset
+        return carried
 
     def to_simulator(self, points: np.ndarray) -> np.ndarray:
         """(M, 3) caller-frame points in the simulator's frame."""
-        return np.asarray(points, dtype=np.float64) + self.offset
+        shifted: np.ndarray = np.asarray(points, dtype=np.float64) + self.offset
+        return shifted
 
 
 def body_from_cloud(material: str, points: np.ndarray, normals: np.ndarray,
