@@ -25,6 +25,7 @@ def add_network_parser(eval_subparsers: Any) -> None:
     p.add_argument("--budgets", default="100,10", help="refinement iteration budgets, comma-separated")
     p.add_argument("--samples", type=int, default=8, help="K for the diversity and heatmap figures")
     p.add_argument("--no-audit", action="store_true", help="skip the outside audit of claimed successes")
+    p.add_argument("--no-random", action="store_true", help="skip the random-contacts rows (e.g. run separately)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", default=None, help="write all figures to this JSON file")
     p.add_argument("--no-progress", action="store_true")
@@ -35,13 +36,14 @@ def _run(args: argparse.Namespace) -> int:
     import dataclasses
     import json
     import time
+    from collections import Counter
 
     import numpy as np
     import torch
 
     from models.evaluation.properties import evaluate_properties
     from models.evaluation.protocol import evaluate
-    from models.evaluation.testset import load_cases
+    from models.evaluation.testset import load_cases, motion_kind
     from models.network import ContactPredictor
     from models.robots import get_hand
 
@@ -64,24 +66,27 @@ def _run(args: argparse.Namespace) -> int:
         for budget in budgets:
             run(f"network ({w})", "network", predictor, budget)
         props[w] = dataclasses.asdict(evaluate_properties(cases, hand, predictor, k=args.samples, seed=args.seed))
-    for budget in budgets:
+    for budget in [] if args.no_random else budgets:
         run("random contacts", "random_contacts", None, budget)
     n = len(cases)
-    print(f"{args.hand}, {args.split} ({n} rigid cases of {len({c.object_id for c in cases})} unseen objects, "
-          f"{args.proposals} proposals, seed {args.seed}); success: best proposal verified / confirmed by the audit")
+    kinds = ", ".join(f"{v} {k}" for k, v in sorted(Counter(motion_kind(c) for c in cases).items()))
+    print(f"{args.hand}, {args.split}: {n} rigid cases ({kinds}) of {len({c.object_id for c in cases})} objects, "
+          f"{args.proposals} proposals, seed {args.seed}; success: best proposal verified / confirmed by the audit")
     print("\n| contacts + refinement | budget | success (verification) | success (audit) | median iterations "
           "| fallback cases |\n|---|--:|--:|--:|--:|--:|")  # fmt: skip
     for r in sorted(runs, key=lambda r: (-r["budget"], r["name"])):
         audit = "–" if args.no_audit else f"{r['audited'] / n:.0%} ({r['audited']})"
         print(f"| {r['name']} | {r['budget']} | {r['successes'] / n:.0%} ({r['successes']}/{n}) | {audit} | "
               f"{float(np.median(r['iterations'])) if r['iterations'] else 0:.0f} | {r['fallbacks']} |")  # fmt: skip
-    print(f"\n| weights | flat heatmaps (samples) | top point in a valid region | distinct sets of K = {args.samples} "
+    print(f"\n| weights | flat heatmaps (samples) | top point in a valid region (unmasked cases) "
+          f"| distinct sets of K = {args.samples} "
           "| contacts inside the mask | inference p50 (batch 1, K = 1) |\n|---|--:|--:|--:|--:|--:|")  # fmt: skip
     for w, p in props.items():
-        print(f"| {w} | {p['empty_selections']:.0%} | {p['top_in_region']:.0%} | {p['mean_modes']:.2f} | "
-              f"{p['mask_compliance']:.0%} ({p['mask_cases']} masked cases) | {p['inference_ms_p50']:.0f} ms |")
+        print(f"| {w} | {p['empty_selections']:.0%} | {p['top_in_region']:.0%} ({p['top_cases']}) | "
+              f"{p['mean_modes']:.2f} | {p['mask_compliance']:.0%} ({p['mask_cases']} masked cases) | "
+              f"{p['inference_ms_p50']:.0f} ms |")
     if args.json:
         with open(args.json, "w") as fh:
             json.dump({"runs": runs, "properties": props, "args": vars(args) | {"func": None},
-                       "cases": n, "seconds": time.perf_counter() - t0}, fh, indent=1)  # fmt: skip
+                       "cases": n, "motions": kinds, "seconds": time.perf_counter() - t0}, fh, indent=1)  # fmt: skip
     return 0

@@ -5,8 +5,9 @@
   we report the mean number of distinct sets per case.
 - Mask compliance: fraction of selected contacts (all samples, cases with a partial mask) inside the mask.
 - Flat heatmaps: fraction of samples whose selection is empty (the pipeline then falls back to random contacts).
-- Top point: fraction of samples whose highest allowed point lies in the case's valid region (any grasp that can
-  produce the motion, `models.evaluation.testset`); inference: p50 of one batch-1, K = 1 prediction.
+- Top point: fraction of samples whose highest point lies in the case's valid region (any grasp that can produce
+  the motion, `models.evaluation.testset`), on cases without a region mask (a partial mask is drawn around the
+  label's contacts, so inside it almost any point is near one); inference: p50 of one batch-1, K = 1 prediction.
 - Property sensitivity: the same case with friction 0.2 and 1.0; mean |Δ heatmap| and the fraction of cases
   whose selected contact sets differ.
 """
@@ -68,7 +69,8 @@ class PropertyReport:
     empty_selections: float  # fraction of samples with no contact above threshold
     friction_heat_delta: float  # mean |heat(μ=0.2) − heat(μ=1.0)|
     friction_changes_contacts: float  # fraction of cases whose contact set changes
-    top_in_region: float = 0.0  # fraction of samples whose top allowed point is in a valid contact region
+    top_in_region: float = 0.0  # unmasked cases: fraction of samples whose top point is in a valid contact region
+    top_cases: int = 0  # unmasked cases with a valid region
     inference_ms_p50: float = 0.0  # one prediction, batch 1, K = 1
 
 
@@ -81,9 +83,8 @@ def evaluate_properties(cases: list[TestCase], hand: Hand, predictor: Any, k: in
         t0 = time.perf_counter()
         predictor.predict([_inputs(case, hand)], num_samples=1, seed=seed + i)
         times.append(time.perf_counter() - t0)
-        if case.valid_region is not None:
-            allowed = np.where(case.mask, out.heatmaps, -np.inf)  # (K, N)
-            tops += int(case.valid_region[allowed.argmax(axis=1)].sum())
+        if case.valid_region is not None and case.mask.all():  # a partial mask lies around the label's contacts
+            tops += int(case.valid_region[out.heatmaps.argmax(axis=1)].sum())
             top_total += k
         scale = float(np.ptp(case.points, axis=0).max())
         sets = [_select(case, out.heatmaps[j], out.force_maps[j], hand) for j in range(k)]
@@ -114,5 +115,6 @@ def evaluate_properties(cases: list[TestCase], hand: Hand, predictor: Any, k: in
         friction_heat_delta=float(np.mean(deltas)) if deltas else 0.0,
         friction_changes_contacts=changed / n,
         top_in_region=tops / top_total if top_total else 0.0,
+        top_cases=top_total // k,
         inference_ms_p50=1e3 * float(np.median(times)) if times else 0.0,
     )

@@ -117,3 +117,16 @@ def _valid_region(path: Path, z: Any, e: int, points: np.ndarray, normals: np.nd
         ok = np.isfinite(c[:, 0])
         region |= kernel(points, normals, c[ok], sets.normals[e, g][ok], scale).max(axis=1) >= 0.5
     return region
+
+
+def motion_kind(case: TestCase) -> str:
+    """``lift``, ``press``, ``push`` (translation-led: up, down, sideways) or ``rotation`` (the rotation moves the
+    farthest point more than the translation does); ``joint`` for articulated cases."""
+    if case.articulated or case.delta_x is None or case.delta_theta is None:
+        return "joint"
+    reach = float(np.linalg.norm(case.points - case.points.mean(axis=0), axis=1).max())
+    shift = float(np.linalg.norm(case.delta_x))
+    if float(np.linalg.norm(case.delta_theta)) * reach > shift:
+        return "rotation"
+    up = float(case.delta_x[2]) / max(shift, 1e-12)
+    return "lift" if up > 0.7 else "press" if up < -0.7 else "push"
