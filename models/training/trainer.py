@@ -213,7 +213,8 @@ def _card(
         trained=True,
         training_data={
             **summary,
-            "generator": "models.data (hierarchical grasp sampling, see models/data/__init__.py)",
+            "generator": "models.data (hierarchical grasp sampling, see models/data/__init__.py; labels: each "
+            "example's grasp set, models/data/grasp_sets.py)",
             "data_dirs": list(cfg.data),
             "training": {
                 "epochs": epoch,
