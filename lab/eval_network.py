@@ -78,11 +78,12 @@ def _run(args: argparse.Namespace) -> int:
         audit = "–" if args.no_audit else f"{r['audited'] / n:.0%} ({r['audited']})"
         print(f"| {r['name']} | {r['budget']} | {r['successes'] / n:.0%} ({r['successes']}/{n}) | {audit} | "
               f"{float(np.median(r['iterations'])) if r['iterations'] else 0:.0f} | {r['fallbacks']} |")  # fmt: skip
-    print(f"\n| weights | flat heatmaps (samples) | top point in a valid region (unmasked cases) "
+    print(f"\n| weights | flat heatmaps (samples; unmasked cases) | top point in a valid region (unmasked cases) "
           f"| distinct sets of K = {args.samples} "
           "| contacts inside the mask | inference p50 (batch 1, K = 1) |\n|---|--:|--:|--:|--:|--:|")  # fmt: skip
     for w, p in props.items():
-        print(f"| {w} | {p['empty_selections']:.0%} | {p['top_in_region']:.0%} ({p['top_cases']}) | "
+        print(f"| {w} | {p['empty_selections']:.0%}; {p['empty_unmasked']:.0%} | "
+              f"{p['top_in_region']:.0%} ({p['top_cases']}) | "
               f"{p['mean_modes']:.2f} | {p['mask_compliance']:.0%} ({p['mask_cases']} masked cases) | "
               f"{p['inference_ms_p50']:.0f} ms |")
     if args.json:

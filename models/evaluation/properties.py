@@ -71,13 +71,14 @@ class PropertyReport:
     friction_changes_contacts: float  # fraction of cases whose contact set changes
     top_in_region: float = 0.0  # unmasked cases: fraction of samples whose top point is in a valid contact region
     top_cases: int = 0  # unmasked cases with a valid region
+    empty_unmasked: float = 0.0  # flat (empty selection) share of the samples of cases without a region mask
     inference_ms_p50: float = 0.0  # one prediction, batch 1, K = 1
 
 
 def evaluate_properties(cases: list[TestCase], hand: Hand, predictor: Any, k: int = 8, seed: int = 0) -> PropertyReport:
     """The three checks of the module docstring on ``cases`` with ``hand``."""
     modes, inside, total, empty, mask_cases = [], 0, 0, 0, 0
-    deltas, changed, tops, top_total, times = [], 0, 0, 0, []
+    deltas, changed, tops, top_total, times, empty_full, full_cases = [], 0, 0, 0, [], 0, 0
     for i, case in enumerate(cases):
         out = predictor.predict([_inputs(case, hand)], num_samples=k, seed=seed + i)[0]
         t0 = time.perf_counter()
@@ -89,6 +90,9 @@ def evaluate_properties(cases: list[TestCase], hand: Hand, predictor: Any, k: in
         scale = float(np.ptp(case.points, axis=0).max())
         sets = [_select(case, out.heatmaps[j], out.force_maps[j], hand) for j in range(k)]
         empty += sum(len(s) == 0 for s in sets)
+        if case.mask.all():
+            empty_full += sum(len(s) == 0 for s in sets)
+            full_cases += 1
         distinct: list[np.ndarray] = []
         for s in sets:
             if len(s) and not any(_same(s, t, case.points, MODE_RADIUS * scale) for t in distinct):
@@ -116,5 +120,6 @@ def evaluate_properties(cases: list[TestCase], hand: Hand, predictor: Any, k: in
         friction_changes_contacts=changed / n,
         top_in_region=tops / top_total if top_total else 0.0,
         top_cases=top_total // k,
+        empty_unmasked=empty_full / max(full_cases * k, 1),
         inference_ms_p50=1e3 * float(np.median(times)) if times else 0.0,
     )
