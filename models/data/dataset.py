@@ -221,9 +221,12 @@ def make_batch(
     rng: np.random.Generator | None = None,
     prepared: PreparedObjects | None = None,
     max_set: int = 8,
+    mask_dropout: float = 0.0,
 ) -> Batch:
-    """Normalised tensors of examples ``idx``; ``rng`` turns on random-rotation augmentation and a random valid
-    grasp as the CVAE target; ``prepared`` gives the network's point subsets and hierarchies."""
+    """Normalised tensors of examples ``idx``; ``rng`` turns on random-rotation augmentation, a random valid
+    grasp as the CVAE target and, with probability ``mask_dropout``, an all-ones mask in place of a partial one
+    (a partial mask is drawn around the label's contacts: a shortcut the network otherwise learns alone);
+    ``prepared`` gives the network's point subsets and hierarchies."""
     keys = ("xyz", "normals", "motion", "mask", "heat", "force", "hand", "s", "set_heat", "set_force", "valid")
     rows: dict[str, list[Any]] = {k: [] for k in keys}
     for i in idx:
@@ -245,7 +248,8 @@ def make_batch(
         rows["xyz"].append(nz.points(pts[take]))
         rows["normals"].append(nrm[take])
         rows["motion"].append(nz.vectors(mot[take]))
-        rows["mask"].append(ex.mask[i][take].astype(np.float64))
+        drop = rng is not None and mask_dropout > 0.0 and rng.random() < mask_dropout
+        rows["mask"].append(np.ones(len(pts[take])) if drop else ex.mask[i][take].astype(np.float64))
         rows["heat"].append(heat_pad[pick])
         rows["force"].append(force_pad[pick])
         rows["set_heat"].append(heat_pad)

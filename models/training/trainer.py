@@ -89,6 +89,8 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
     out.mkdir(parents=True, exist_ok=True)
     train_ex, val_ex = _load(cfg)
     model = create_model(cfg.network, seed=cfg.seed).to(device)
+    if cfg.init_from is not None and not resume:
+        model.load_state_dict(load_checkpoint(cfg.init_from, cfg.network)[0].state_dict())
     train_prep, val_prep = prepare(train_ex, model, cfg), prepare(val_ex, model, cfg)
     hand_scale = model.config.hand_scale_m
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
@@ -129,7 +131,8 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             if cfg.max_minutes is not None and time.perf_counter() - t_start > cfg.max_minutes * 60:
                 break  # time budget spent: validate and save what we have
             idx = perm[step * cfg.batch_size : (step + 1) * cfg.batch_size]
-            b = make_batch(train_ex, idx, hand_scale, rng if cfg.augment else None, train_prep).to(device)
+            b = make_batch(train_ex, idx, hand_scale, rng if cfg.augment else None, train_prep,
+                           mask_dropout=cfg.mask_dropout).to(device)  # fmt: skip
             terms = batch_loss(model, b, cfg, gen, device)
             frac = (epoch - 1 + step / steps_per_epoch) / cfg.epochs
             if cfg.max_minutes is not None:  # a time budget: decay by whichever runs out first
