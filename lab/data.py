@@ -11,7 +11,7 @@ def register(subparsers: Any) -> None:
     p = subparsers.add_parser("data", help="generate training data")
     sub = p.add_subparsers(dest="data_command", required=True)
     g = sub.add_parser("generate", help="generate (or resume) a sharded data set")
-    g.add_argument("--out", default="data/v3", help="output directory (shards + manifest.json)")
+    g.add_argument("--out", default="data/v4", help="output directory (shards + manifest.json)")
     g.add_argument("--objects", type=int, default=400, help="number of objects")
     g.add_argument("--seed", type=int, default=0)
     g.add_argument("--workers", type=int, default=2, help="worker processes")

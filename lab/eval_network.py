@@ -1,7 +1,10 @@
-"""`mani eval network`: the Table I protocol and the network property checks (see models/evaluation).
+"""`mani eval network`: the network against random contacts, both refined, on unseen objects and motions.
 
-The ``eval`` parser is owned by `lab.evaluate`; it calls :func:`add_network_parser` with its
-sub-parsers.
+One command prints the issue's table (`models/evaluation`): per weights and iteration budget, success by the
+verification and by the outside audit, median refinement iterations and fallback cases, for network +
+refinement and random contacts + refinement on the same cases, seeds and hand; then the network's own figures
+(flat heatmaps, top point in a valid contact region, distinct contact sets of K = 8, region mask, inference
+p50). The ``eval`` parser is owned by `lab.evaluate`; it calls :func:`add_network_parser` with its sub-parsers.
 """
 
 from __future__ import annotations
@@ -12,17 +15,17 @@ from typing import Any
 
 def add_network_parser(eval_subparsers: Any) -> None:
     """Add ``network`` under ``mani eval``."""
-    p = eval_subparsers.add_parser("network", help="network + pipeline success (paper Table I) and properties")
-    p.add_argument("--weights", default="models/weights/cpu", help="checkpoint directory")
-    p.add_argument("--data", default="data/v3", help="generated data directory (test splits)")
-    p.add_argument("--splits", default="test_so,test_uo")
-    p.add_argument("--hands", default="leap,barrett", help="hands to evaluate (shadow/barrett are held out)")
-    p.add_argument("--methods", default="network,network_no_refine,random_contacts,direct_grasp")
-    p.add_argument("--cases", type=int, default=20, help="cases per split")
-    p.add_argument("--proposals", type=int, default=4, help="K proposals per case (network / random)")
-    p.add_argument("--max-iterations", type=int, default=100)
-    p.add_argument("--property-cases", type=int, default=10, help="cases for the property checks (0: skip)")
-    p.add_argument("--rigid-only", action="store_true", help="leave articulated cases out")
+    p = eval_subparsers.add_parser("network", help="network + refinement vs random contacts + refinement")
+    p.add_argument("--weights", default="models/weights/cpu", help="checkpoint directories, comma-separated")
+    p.add_argument("--data", default="data/v4", help="generated data directory (its test split)")
+    p.add_argument("--split", default="test_uo", help="test_uo: unseen objects and motions; test_so: seen objects")
+    p.add_argument("--hand", default="allegro")
+    p.add_argument("--cases", type=int, default=20, help="rigid cases labelled with the hand's grasps")
+    p.add_argument("--proposals", type=int, default=4, help="proposals per case (network samples / random sets)")
+    p.add_argument("--budgets", default="100,10", help="refinement iteration budgets, comma-separated")
+    p.add_argument("--samples", type=int, default=8, help="K for the diversity and heatmap figures")
+    p.add_argument("--no-audit", action="store_true", help="skip the outside audit of claimed successes")
+    p.add_argument("--no-random", action="store_true", help="skip the random-contacts rows (e.g. run separately)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", default=None, help="write all figures to this JSON file")
     p.add_argument("--no-progress", action="store_true")
@@ -33,51 +36,58 @@ def _run(args: argparse.Namespace) -> int:
     import dataclasses
     import json
     import time
+    from collections import Counter
 
+    import numpy as np
     import torch
 
     from models.evaluation.properties import evaluate_properties
-    from models.evaluation.protocol import evaluate, table
-    from models.evaluation.testset import load_cases
+    from models.evaluation.protocol import evaluate
+    from models.evaluation.testset import load_cases, motion_kind
     from models.network import ContactPredictor
     from models.robots import get_hand
 
     torch.set_num_threads(1)
-    predictor = ContactPredictor.from_checkpoint(args.weights)
-    methods = tuple(args.methods.split(","))
-    rows = []
-    props: dict[str, Any] = {}
     t0 = time.perf_counter()
-    for split in args.splits.split(","):
-        cases = load_cases(args.data, split, args.cases, args.seed, articulated=False if args.rigid_only else None)
-        for name in args.hands.split(","):
-            hand = get_hand(name)
-            rows += evaluate(
-                cases,
-                hand,
-                methods,
-                predictor,
-                args.proposals,
-                args.seed,
-                args.max_iterations,
-                progress=not args.no_progress,
-            )
-            if args.property_cases:
-                rep = evaluate_properties(cases[: args.property_cases], hand, predictor, seed=args.seed)
-                props[f"{name}/{split}"] = dataclasses.asdict(rep)
-    print(table(rows))
-    for key, rep in props.items():
-        print(key, json.dumps(rep))
+    hand = get_hand(args.hand)
+    cases = load_cases(args.data, args.split, args.cases, args.seed, articulated=False, label_hand=args.hand)
+    budgets = [int(b) for b in args.budgets.split(",")]
+    weights = args.weights.split(",")
+    runs: list[dict[str, Any]] = []
+
+    def run(name: str, method: str, predictor: Any, budget: int) -> None:
+        r = evaluate(cases, hand, (method,), predictor, args.proposals, args.seed, budget,
+                     progress=not args.no_progress, audit=not args.no_audit)[0]  # fmt: skip
+        runs.append({"name": name, "budget": budget, **dataclasses.asdict(r)})
+
+    props = {}
+    for w in weights:
+        predictor = ContactPredictor.from_checkpoint(w)
+        for budget in budgets:
+            run(f"network ({w})", "network", predictor, budget)
+        props[w] = dataclasses.asdict(evaluate_properties(cases, hand, predictor, k=args.samples, seed=args.seed))
+    for budget in [] if args.no_random else budgets:
+        run("random contacts", "random_contacts", None, budget)
+    n = len(cases)
+    kinds = ", ".join(f"{v} {k}" for k, v in sorted(Counter(motion_kind(c) for c in cases).items()))
+    print(f"{args.hand}, {args.split}: {n} rigid cases ({kinds}) of {len({c.object_id for c in cases})} objects, "
+          f"{args.proposals} proposals, seed {args.seed}; success: best proposal verified / confirmed by the audit")
+    print("\n| contacts + refinement | budget | success (verification) | success (audit) | median iterations "
+          "| fallback cases |\n|---|--:|--:|--:|--:|--:|")  # fmt: skip
+    for r in sorted(runs, key=lambda r: (-r["budget"], r["name"])):
+        audit = "–" if args.no_audit else f"{r['audited'] / n:.0%} ({r['audited']})"
+        print(f"| {r['name']} | {r['budget']} | {r['successes'] / n:.0%} ({r['successes']}/{n}) | {audit} | "
+              f"{float(np.median(r['iterations'])) if r['iterations'] else 0:.0f} | {r['fallbacks']} |")  # fmt: skip
+    print(f"\n| weights | flat heatmaps (samples; unmasked cases) | top point in a valid region (unmasked cases) "
+          f"| distinct sets of K = {args.samples} "
+          "| contacts inside the mask | inference p50 (batch 1, K = 1) |\n|---|--:|--:|--:|--:|--:|")  # fmt: skip
+    for w, p in props.items():
+        print(f"| {w} | {p['empty_selections']:.0%}; {p['empty_unmasked']:.0%} | "
+              f"{p['top_in_region']:.0%} ({p['top_cases']}) | "
+              f"{p['mean_modes']:.2f} | {p['mask_compliance']:.0%} ({p['mask_cases']} masked cases) | "
+              f"{p['inference_ms_p50']:.0f} ms |")
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump(
-                {
-                    "table": [dataclasses.asdict(r) | {"rate": r.rate} for r in rows],
-                    "properties": props,
-                    "args": vars(args) | {"func": None},
-                    "seconds": time.perf_counter() - t0,
-                },
-                fh,
-                indent=1,
-            )
+            json.dump({"runs": runs, "properties": props, "args": vars(args) | {"func": None},
+                       "cases": n, "motions": kinds, "seconds": time.perf_counter() - t0}, fh, indent=1)  # fmt: skip
     return 0

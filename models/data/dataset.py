@@ -4,11 +4,18 @@ Every example is normalised exactly as `models.network.inference` normalises a r
 longest side s): positions (x − c)/s, motions and force maps / s, hand cloud / ``hand_scale_m``. Optional
 augmentation rotates an example (points, normals, motion, force map) by a random rotation before normalising;
 physics is rotation-invariant and the hand cloud stays in its palm frame.
+
+Rigid and articulated examples also carry their grasp sets (`models.data.grasp_sets`, computed once per shard
+and cached beside it as ``shard-*.sets.npz``): a batch holds the heatmap and force map of every valid grasp of
+each example, and its CVAE target is one of them, drawn anew each time (the example's own without ``rng``).
+With :class:`models.data.prepare.PreparedObjects` a batch uses the network's point subset and precomputed
+hierarchy of each object.
 """
 
 from __future__ import annotations
 
 import json
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -17,6 +24,10 @@ import numpy as np
 import torch
 from scipy.spatial.transform import Rotation
 
+from models.data.grasp_sets import GraspSets, shard_grasp_sets
+from models.data.labels import kernel
+from models.data.prepare import PreparedObjects
+from models.network.hierarchy import PointHierarchy, gather_hierarchy
 from models.network.model import ObjectTensors
 from models.network.normalize import Normalizer
 from models.network.properties import property_tensors
@@ -67,6 +78,20 @@ EXTRA_KEYS = (
     "delta_theta",
 )
 OBJECT_EXTRA = ("ids", "kinds", "scale", "centre", "mass", "inertia", "length", "split")
+SET_KEYS = ("set_contacts", "set_normals", "set_forces", "set_count")
+
+
+def cached_grasp_sets(shard: Path, z: Any) -> GraspSets:
+    """The shard's grasp sets, from ``shard-*.sets.npz`` beside it when that is newer, else computed and cached."""
+    side = shard.with_name(shard.name.removesuffix(".npz") + ".sets.npz")
+    if side.is_file() and side.stat().st_mtime >= shard.stat().st_mtime:
+        c = np.load(side)
+        return GraspSets(c["contacts"], c["normals"], c["forces"], c["count"])
+    sets = shard_grasp_sets({k: z[k] for k in z.files})
+    tmp = side.with_name(side.name + ".tmp.npz")
+    np.savez(tmp, contacts=sets.contacts, normals=sets.normals, forces=sets.forces, count=sets.count)
+    os.replace(tmp, side)
+    return sets
 
 
 def load_examples(
@@ -93,6 +118,9 @@ def load_examples(
                     for k in ("hand", "split", "friction", "motion", "heat", "force_map", "mask", *EXTRA_KEYS):
                         parts.setdefault(k, []).append(z[k][idx])
                     parts.setdefault("obj_index", []).append(z["obj_index"][idx] + offset)
+                    sets = cached_grasp_sets(f, z)
+                    for k, v in zip(SET_KEYS, (sets.contacts, sets.normals, sets.forces, sets.count), strict=True):
+                        parts.setdefault(k, []).append(v[idx])
             obj_parts.setdefault("points", []).append(z["object_points"].astype(np.float32))
             obj_parts.setdefault("normals", []).append(z["object_normals"].astype(np.float32))
             for k in OBJECT_EXTRA:
@@ -104,7 +132,7 @@ def load_examples(
     if limit is not None:
         cat = {k: v[:limit] for k, v in cat.items()}
     objs = {k: np.concatenate(v) for k, v in obj_parts.items()}
-    extra = {k: cat[k] for k in EXTRA_KEYS}
+    extra = {k: cat[k] for k in (*EXTRA_KEYS, *SET_KEYS)}
     for k in OBJECT_EXTRA:
         extra[f"object_{k}"] = objs[k]
     return Examples(
@@ -138,32 +166,95 @@ def hand_cloud(name: str, hand_scale_m: float) -> np.ndarray:
 
 @dataclass
 class Batch:
+    """Network tensors of a batch and its labels.
+
+    Attributes:
+        obj, hand (B, M_h, 6): the network's input; hierarchy: its precomputed sampling (None: the model's own).
+        heat (B, N), force (B, N, 3): the CVAE target (one valid grasp per example), normalised units.
+        set_heat (B, G, N), set_force (B, G, N, 3), set_valid (B, G): every valid grasp's maps (padding False).
+    """
+
     obj: ObjectTensors
-    hand: torch.Tensor  # (B, M_h, 6)
-    heat: torch.Tensor  # (B, N)
-    force: torch.Tensor  # (B, N, 3) normalised units
+    hand: torch.Tensor
+    heat: torch.Tensor
+    force: torch.Tensor
+    set_heat: torch.Tensor
+    set_force: torch.Tensor
+    set_valid: torch.Tensor
+    hierarchy: PointHierarchy | None = None
 
     def to(self, device: torch.device | str) -> Batch:
-        return Batch(self.obj.to(device), self.hand.to(device), self.heat.to(device), self.force.to(device))
+        h = self.hierarchy
+        if h is not None:
+            h = PointHierarchy(
+                [t.to(device) for t in h.xyz], [t.to(device) for t in h.groups], list(h.radii),
+                [t.to(device) for t in h.up_idx], [t.to(device) for t in h.up_weights],
+            )  # fmt: skip
+        return Batch(
+            self.obj.to(device), self.hand.to(device), self.heat.to(device), self.force.to(device),
+            self.set_heat.to(device), self.set_force.to(device), self.set_valid.to(device), h,
+        )  # fmt: skip
 
 
-def make_batch(ex: Examples, idx: np.ndarray, hand_scale_m: float, rng: np.random.Generator | None = None) -> Batch:
-    """Normalised tensors of examples ``idx``; ``rng`` turns on random-rotation augmentation."""
-    rows: dict[str, list[Any]] = {k: [] for k in ("xyz", "normals", "motion", "mask", "heat", "force", "hand", "s")}
+def example_sets(ex: Examples, i: int, take: np.ndarray | slice) -> tuple[np.ndarray, np.ndarray]:
+    """Heatmaps (G, N) and force maps (G, N, 3) of example ``i``'s valid grasps on its object's points ``take``
+    (its own labels alone when the examples carry no grasp sets, e.g. deformables)."""
+    if "set_count" not in ex.extra:
+        return ex.heat[i][take][None].astype(np.float64), ex.force_map[i][take][None].astype(np.float64)
+    o = ex.obj_index[i]
+    pts, nrm = ex.points[o][take].astype(np.float64), ex.normals[o][take].astype(np.float64)
+    scale = float(ex.extra["object_scale"][o])
+    heats, forces = [], []
+    for g in range(int(ex.extra["set_count"][i])):
+        c = ex.extra["set_contacts"][i, g]
+        ok = np.isfinite(c[:, 0])
+        k = kernel(pts, nrm, c[ok], ex.extra["set_normals"][i, g][ok], scale)
+        heats.append(k.max(axis=1))
+        forces.append(k @ ex.extra["set_forces"][i, g][ok])
+    return np.stack(heats), np.stack(forces)
+
+
+def make_batch(
+    ex: Examples,
+    idx: np.ndarray,
+    hand_scale_m: float,
+    rng: np.random.Generator | None = None,
+    prepared: PreparedObjects | None = None,
+    max_set: int = 8,
+    mask_dropout: float = 0.0,
+) -> Batch:
+    """Normalised tensors of examples ``idx``; ``rng`` turns on random-rotation augmentation, a random valid
+    grasp as the CVAE target and, with probability ``mask_dropout``, an all-ones mask in place of a partial one
+    (a partial mask is drawn around the label's contacts: a shortcut the network otherwise learns alone);
+    ``prepared`` gives the network's point subsets and hierarchies."""
+    keys = ("xyz", "normals", "motion", "mask", "heat", "force", "hand", "s", "set_heat", "set_force", "valid")
+    rows: dict[str, list[Any]] = {k: [] for k in keys}
     for i in idx:
         o = ex.obj_index[i]
+        take = prepared.subsets[o] if prepared is not None else slice(None)
         pts, nrm = ex.points[o].astype(np.float64), ex.normals[o].astype(np.float64)
-        mot, frc = ex.motion[i].astype(np.float64), ex.force_map[i].astype(np.float64)
+        set_heat, set_force = example_sets(ex, i, take)
+        mot = ex.motion[i].astype(np.float64)
+        rot = np.eye(3)
         if rng is not None:
             rot = Rotation.random(random_state=int(rng.integers(2**31))).as_matrix()
-            pts, nrm, mot, frc = pts @ rot.T, nrm @ rot.T, mot @ rot.T, frc @ rot.T
-        nz = Normalizer.fit(pts)
-        rows["xyz"].append(nz.points(pts))
-        rows["normals"].append(nrm)
-        rows["motion"].append(nz.vectors(mot))
-        rows["force"].append(nz.vectors(frc))
-        rows["mask"].append(ex.mask[i].astype(np.float64))
-        rows["heat"].append(ex.heat[i])
+        pts, nrm, mot = pts @ rot.T, nrm @ rot.T, mot @ rot.T
+        nz = Normalizer.fit(pts)  # on the whole cloud, as inference normalises a request
+        g_n = min(len(set_heat), max_set)
+        heat_pad = np.zeros((max_set, len(set_heat[0])))
+        force_pad = np.zeros((max_set, len(set_heat[0]), 3))
+        heat_pad[:g_n], force_pad[:g_n] = set_heat[:g_n], nz.vectors(set_force[:g_n] @ rot.T)
+        pick = int(rng.integers(g_n)) if rng is not None else 0
+        rows["xyz"].append(nz.points(pts[take]))
+        rows["normals"].append(nrm[take])
+        rows["motion"].append(nz.vectors(mot[take]))
+        drop = rng is not None and mask_dropout > 0.0 and rng.random() < mask_dropout
+        rows["mask"].append(np.ones(len(pts[take])) if drop else ex.mask[i][take].astype(np.float64))
+        rows["heat"].append(heat_pad[pick])
+        rows["force"].append(force_pad[pick])
+        rows["set_heat"].append(heat_pad)
+        rows["set_force"].append(force_pad)
+        rows["valid"].append(np.arange(max_set) < g_n)
         rows["hand"].append(hand_cloud(str(ex.hand[i]), hand_scale_m))
         rows["s"].append(nz.scale)
     if "properties" in ex.extra:  # every property channel the examples carry (deformables), NaN = absent
@@ -187,4 +278,8 @@ def make_batch(ex: Examples, idx: np.ndarray, hand_scale_m: float, rng: np.rando
         prop_mask=present,
         scale=torch.tensor(rows["s"], dtype=torch.float32),
     )
-    return Batch(obj, t("hand"), t("heat"), t("force"))
+    hierarchy = None
+    if prepared is not None:
+        hierarchy = gather_hierarchy(obj.xyz, [prepared.index[o] for o in ex.obj_index[idx]], prepared.levels)
+    valid = torch.as_tensor(np.stack(rows["valid"]))
+    return Batch(obj, t("hand"), t("heat"), t("force"), t("set_heat"), t("set_force"), valid, hierarchy)

@@ -4,12 +4,17 @@
   contact of one has a contact of the other within ``MODE_RADIUS`` × object size (and they have equally many);
   we report the mean number of distinct sets per case.
 - Mask compliance: fraction of selected contacts (all samples, cases with a partial mask) inside the mask.
+- Flat heatmaps: fraction of samples whose selection is empty (the pipeline then falls back to random contacts).
+- Top point: fraction of samples whose highest point lies in the case's valid region (any grasp that can produce
+  the motion, `models.evaluation.testset`), on cases without a region mask (a partial mask is drawn around the
+  label's contacts, so inside it almost any point is near one); inference: p50 of one batch-1, K = 1 prediction.
 - Property sensitivity: the same case with friction 0.2 and 1.0; mean |Δ heatmap| and the fraction of cases
   whose selected contact sets differ.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -64,17 +69,30 @@ class PropertyReport:
     empty_selections: float  # fraction of samples with no contact above threshold
     friction_heat_delta: float  # mean |heat(μ=0.2) − heat(μ=1.0)|
     friction_changes_contacts: float  # fraction of cases whose contact set changes
+    top_in_region: float = 0.0  # unmasked cases: fraction of samples whose top point is in a valid contact region
+    top_cases: int = 0  # unmasked cases with a valid region
+    empty_unmasked: float = 0.0  # flat (empty selection) share of the samples of cases without a region mask
+    inference_ms_p50: float = 0.0  # one prediction, batch 1, K = 1
 
 
 def evaluate_properties(cases: list[TestCase], hand: Hand, predictor: Any, k: int = 8, seed: int = 0) -> PropertyReport:
     """The three checks of the module docstring on ``cases`` with ``hand``."""
     modes, inside, total, empty, mask_cases = [], 0, 0, 0, 0
-    deltas, changed = [], 0
+    deltas, changed, tops, top_total, times, empty_full, full_cases = [], 0, 0, 0, [], 0, 0
     for i, case in enumerate(cases):
         out = predictor.predict([_inputs(case, hand)], num_samples=k, seed=seed + i)[0]
+        t0 = time.perf_counter()
+        predictor.predict([_inputs(case, hand)], num_samples=1, seed=seed + i)
+        times.append(time.perf_counter() - t0)
+        if case.valid_region is not None and case.mask.all():  # a partial mask lies around the label's contacts
+            tops += int(case.valid_region[out.heatmaps.argmax(axis=1)].sum())
+            top_total += k
         scale = float(np.ptp(case.points, axis=0).max())
         sets = [_select(case, out.heatmaps[j], out.force_maps[j], hand) for j in range(k)]
         empty += sum(len(s) == 0 for s in sets)
+        if case.mask.all():
+            empty_full += sum(len(s) == 0 for s in sets)
+            full_cases += 1
         distinct: list[np.ndarray] = []
         for s in sets:
             if len(s) and not any(_same(s, t, case.points, MODE_RADIUS * scale) for t in distinct):
@@ -100,4 +118,8 @@ def evaluate_properties(cases: list[TestCase], hand: Hand, predictor: Any, k: in
         empty_selections=empty / max(len(cases) * k, 1),
         friction_heat_delta=float(np.mean(deltas)) if deltas else 0.0,
         friction_changes_contacts=changed / n,
+        top_in_region=tops / top_total if top_total else 0.0,
+        top_cases=top_total // k,
+        empty_unmasked=empty_full / max(full_cases * k, 1),
+        inference_ms_p50=1e3 * float(np.median(times)) if times else 0.0,
     )

@@ -14,7 +14,11 @@ own contacts (every heatmap was flat, so the pipeline refined random contacts in
 "random_fallback"`): a network success is only a network result when that count is low.
 
 A case succeeds when its best proposal passes verification (wrench residual, tips within 5 mm, penetration and
-self-collision ≤ 1 mm). Articulated cases use the joint task (joint_motion with the case's joint).
+self-collision ≤ 1 mm). Articulated cases use the joint task (joint_motion with the case's joint). With
+``audit``, a rigid case's claimed success is re-checked by the outside audit (`models.audit`: its own kinematics,
+the links' meshes, the exact object mesh, its own cones and wrench; the target wrench [m Δx; I Δθ] from the case's
+stored motion and the mesh's mass properties); ``audited`` counts the claims it confirms. ``iterations`` holds
+the refinement iterations of every proposal.
 """
 
 from __future__ import annotations
@@ -43,6 +47,8 @@ class MethodResult:
     seconds: float = 0.0
     failures: dict[str, int] = field(default_factory=dict)
     fallbacks: int = 0  # network methods: cases where no proposal used the network's contacts
+    audited: int = 0  # claimed successes the outside audit confirms (when asked)
+    iterations: list[int] = field(default_factory=list)  # per proposal
 
     @property
     def rate(self) -> float:
@@ -89,8 +95,9 @@ def evaluate(
     seed: int = 0,
     max_iterations: int = 100,
     progress: bool = True,
+    audit: bool = False,
 ) -> list[MethodResult]:
-    """Run every method on every case; one `MethodResult` per method."""
+    """Run every method on every case; one `MethodResult` per method (``audit``: see the module docstring)."""
     from tqdm import tqdm
 
     from models.pipeline import run_pipeline
@@ -109,8 +116,11 @@ def evaluate(
             if m.startswith("network") and all(p.contact_source == "random_fallback" for p in out.proposals):
                 r.fallbacks += 1
             best = out.best
+            r.iterations += [p.quality.iterations for p in out.proposals]
             if best is not None and best.quality.success:
                 r.successes += 1
+                if audit and not case.articulated:
+                    r.audited += int(audit_case(case, hand.name, best))
             elif best is not None:
                 for f in best.quality.failures or [best.quality.reason]:
                     key = f.split(":")[0]
@@ -135,3 +145,21 @@ def table(rows: list[MethodResult]) -> str:
             cells.append(f"{r.rate:.1%} ({r.successes}/{r.cases}{fallback})" if r else "")
         lines.append(f"| {m} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
+
+
+def audit_case(case: TestCase, hand_name: str, proposal: Any) -> bool:
+    """Whether the outside audit confirms ``proposal`` for a rigid ``case`` (see the module docstring)."""
+    import trimesh
+
+    from models.audit import AuditedGrasp, audit_grasp
+
+    mesh = trimesh.Trimesh(case.mesh_vertices, case.mesh_faces, process=False)
+    assert case.delta_x is not None and case.delta_theta is not None
+    target = np.r_[mesh.mass * case.delta_x, np.asarray(mesh.moment_inertia) @ case.delta_theta]
+    p = proposal
+    grasp = AuditedGrasp(p.contact_points, p.forces, p.fingertips, p.palm_position, p.palm_quaternion,
+                         p.joint_names, p.joint_values)  # fmt: skip
+    soft = 0.005 if len(grasp.fingertips) == 2 else 0.0  # a parallel gripper's pads (models.evaluation.audit)
+    report = audit_grasp(hand_name, grasp, mesh, case.points, case.normals, mu=case.friction, target_wrench=target,
+                         soft_finger=soft, centre=np.asarray(mesh.center_mass))  # fmt: skip
+    return bool(report.passed)

@@ -1,5 +1,6 @@
 """Test cases from generated shards: the object (mesh regenerated from the manifest's seed), the motion,
-mask, friction and (articulated) joint of each ``test_so`` / ``test_uo`` example."""
+mask, friction and (articulated) joint of each ``test_so`` / ``test_uo`` example, with its valid contact region:
+the points where the heatmap of any grasp that can produce the motion is ≥ 0.5 (`models.data.grasp_sets`)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,9 @@ from typing import Any
 
 import numpy as np
 
+from models.data.dataset import cached_grasp_sets
 from models.data.generate import DataConfig, make_dataset_object
+from models.data.labels import kernel
 
 
 @dataclass
@@ -32,12 +35,21 @@ class TestCase:
     joint_axis: np.ndarray
     joint_origin: np.ndarray
     joint_amount: float
+    delta_x: np.ndarray | None = None  # (3,) rigid: the motion's translation (m) and rotation vector (rad)
+    delta_theta: np.ndarray | None = None
+    valid_region: np.ndarray | None = None  # (N,) bool: in the contact region of a grasp that can do the task
 
 
 def load_cases(
-    data_dir: str | Path, split: str, limit: int, seed: int = 0, articulated: bool | None = None
+    data_dir: str | Path,
+    split: str,
+    limit: int,
+    seed: int = 0,
+    articulated: bool | None = None,
+    label_hand: str | None = None,
 ) -> list[TestCase]:
-    """Up to ``limit`` cases of ``split``, one per object first (then more per object), seeded order."""
+    """Up to ``limit`` cases of ``split`` (labelled with ``label_hand``'s grasps, when given), one per object
+    first (then more per object), seeded order."""
     d = Path(data_dir)
     manifest = json.loads((d / "manifest.json").read_text())
     cfg_d: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in manifest["config"].items()}
@@ -50,6 +62,8 @@ def load_cases(
         for e in np.flatnonzero(z["split"] == split).tolist():
             if articulated is not None and bool(z["articulated"][e]) != articulated:
                 continue
+            if label_hand is not None and str(z["hand"][e]) != label_hand:
+                continue
             oi = int(z["obj_index"][e])
             rows.append((s["index"], int(e), s["index"] * cfg.objects_per_shard + oi, str(z["object_ids"][oi])))
     rng = np.random.default_rng(seed)
@@ -61,7 +75,8 @@ def load_cases(
     cases = []
     cache: dict[int, Any] = {}
     for shard, e, gi, oid in chosen:
-        z = np.load(d / f"shard-{shard:05d}.npz", allow_pickle=False)
+        path = d / f"shard-{shard:05d}.npz"
+        z = np.load(path, allow_pickle=False)
         if gi not in cache:
             cache[gi] = make_dataset_object(cfg, gi)
         obj = cache[gi]
@@ -84,6 +99,34 @@ def load_cases(
                 joint_axis=z["joint_axis"][e],
                 joint_origin=z["joint_origin"][e],
                 joint_amount=float(z["joint_amount"][e]),
+                delta_x=z["delta_x"][e].astype(np.float64),
+                delta_theta=z["delta_theta"][e].astype(np.float64),
+                valid_region=_valid_region(path, z, e, obj.points, obj.normals),
             )
         )
     return cases
+
+
+def _valid_region(path: Path, z: Any, e: int, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """(N,) bool: points where any valid grasp of example ``e`` has heat ≥ 0.5."""
+    sets = cached_grasp_sets(path, z)
+    scale = float(np.ptp(points, axis=0).max())
+    region = np.zeros(len(points), dtype=bool)
+    for g in range(int(sets.count[e])):
+        c = sets.contacts[e, g]
+        ok = np.isfinite(c[:, 0])
+        region |= kernel(points, normals, c[ok], sets.normals[e, g][ok], scale).max(axis=1) >= 0.5
+    return region
+
+
+def motion_kind(case: TestCase) -> str:
+    """``lift``, ``press``, ``push`` (translation-led: up, down, sideways) or ``rotation`` (the rotation moves the
+    farthest point more than the translation does); ``joint`` for articulated cases."""
+    if case.articulated or case.delta_x is None or case.delta_theta is None:
+        return "joint"
+    reach = float(np.linalg.norm(case.points - case.points.mean(axis=0), axis=1).max())
+    shift = float(np.linalg.norm(case.delta_x))
+    if float(np.linalg.norm(case.delta_theta)) * reach > shift:
+        return "rotation"
+    up = float(case.delta_x[2]) / max(shift, 1e-12)
+    return "lift" if up > 0.7 else "press" if up < -0.7 else "push"

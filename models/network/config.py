@@ -181,4 +181,20 @@ def cpu() -> NetworkConfig:
     )
 
 
+@register_config
+def cpu1k() -> NetworkConfig:
+    """``cpu`` on 1 024 points (levels 256/64/16), for training on two CPU cores.
+
+    Measured (batch 16, one thread, CPU time of forward + backward, 2026-12-01): ``cpu`` 1.63 s a step,
+    ``cpu1k`` 0.73 s; 1 024 points with ``cpu``'s 512/128/32 levels 1.67 s (the level-1 groups dominate).
+    The contact kernel is 5 % of the object's size wide, so 1 024 points still put ≥ 10 inside a contact.
+    """
+    return dataclasses.replace(
+        cpu(),
+        name="cpu1k",
+        num_points=1024,
+        levels=(LevelConfig(256, 0.1, 16), LevelConfig(64, 0.2, 32), LevelConfig(16, 0.4, 16)),
+    )
+
+
 __all__ = ["LevelConfig", "NetworkConfig", "get_config", "list_configs", "register_config"]

@@ -87,7 +87,7 @@ class Posterior(nn.Module):
         x = self.inp_act(self.inp(eo, eh.unsqueeze(1), heat.unsqueeze(-1), force))
         for i, sa in enumerate(self.sa):
             x = sa(h.xyz[i], x, h.xyz[i + 1], h.groups[i], h.radii[i])
-        mu, logvar = self.out(self.head(x.amax(dim=1))).chunk(2, dim=-1)
+        mu, logvar = self.out(self.head(x.max(dim=1).values)).chunk(2, dim=-1)
         return mu, logvar
 
 
@@ -123,6 +123,6 @@ class Decoder(nn.Module):
                 raise ValueError("this decoder is fed the heatmap")
             h = h + p[3](heat.unsqueeze(-1))
         local = self.local(self.first_act(h))
-        glob = local.amax(dim=2, keepdim=True)
+        glob = local.max(dim=2, keepdim=True).values
         out = self.head(self.head_act(self.head_first(local, glob)))
         return self.out(out)

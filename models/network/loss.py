@@ -3,6 +3,10 @@
 Optionally the heatmap MSE is weighted towards the contact regions: w_j = 1 + α·heat_gt_j, normalised by
 mean(w) (α = 0 is the paper's plain MSE). Contacts cover only a few per cent of the points, so with plain MSE a
 network that predicts a low, flat heatmap is already close to the optimum and learns the peaks slowly.
+
+:func:`set_heat_loss` is ours: a motion can usually be produced by several grasps (`models.data.grasp_sets`), and
+a heatmap decoded from a *prior* sample should be one of them, whichever. Each prior sample pays the (weighted)
+heat error of the valid grasp nearest it, so no sample is pulled towards the average of several.
 """
 
 from __future__ import annotations
@@ -52,3 +56,25 @@ def cvae_loss(
     force = F.mse_loss(out["force"], force_gt)
     kl = kl_to_standard_normal(out["mu"], out["logvar"])
     return {"loss": lc * heat + ls * force + lk * kl, "heat": heat, "force": force, "kl": kl}
+
+
+def weighted_heat_error(heat: torch.Tensor, target: torch.Tensor, alpha: float) -> torch.Tensor:
+    """Per-map weighted MSE over the last axis: mean_j w_j (h_j − t_j)² / mean_j w_j, w = 1 + α t (broadcasting)."""
+    w = 1.0 + alpha * target
+    return (w * (heat - target).square()).mean(dim=-1) / w.mean(dim=-1)
+
+
+def set_heat_loss(
+    prior_heat: torch.Tensor, set_heat: torch.Tensor, set_valid: torch.Tensor, alpha: float = 0.0
+) -> torch.Tensor:
+    """Mean over prior samples of the heat error to the nearest valid grasp.
+
+    Args:
+        prior_heat: (B, K, N) heatmaps decoded from prior samples z ~ N(0, I).
+        set_heat: (B, G, N) heatmaps of each example's valid grasps (padding rows arbitrary).
+        set_valid: (B, G) bool, which rows are valid grasps (at least one per example).
+        alpha: contact weighting of :func:`weighted_heat_error`.
+    """
+    err = weighted_heat_error(prior_heat.unsqueeze(2), set_heat.unsqueeze(1), alpha)  # (B, K, G)
+    err = err.masked_fill(~set_valid.unsqueeze(1), float("inf"))
+    return err.min(dim=2).values.mean()

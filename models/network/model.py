@@ -78,9 +78,13 @@ class ManiFoundationNet(nn.Module):
         """φ_h: hand clouds (B, M_h, 6) = (x / hand_scale_m, n) → ε^h (B, C_h)."""
         return self.hand_encoder(hand)
 
-    def encode(self, obj: ObjectTensors, eh: torch.Tensor) -> Encoded:
-        """φ_o over (x, n, m, r, Γ, log-scale) → the condition ε^oh (kept as ε^o and ε^h)."""
-        hierarchy = build_hierarchy(obj.xyz, self.config.levels)
+    def encode(self, obj: ObjectTensors, eh: torch.Tensor, hierarchy: PointHierarchy | None = None) -> Encoded:
+        """φ_o over (x, n, m, r, Γ, log-scale) → the condition ε^oh (kept as ε^o and ε^h).
+
+        ``hierarchy``: the clouds' precomputed sampling and grouping (training); None builds it here.
+        """
+        if hierarchy is None:
+            hierarchy = build_hierarchy(obj.xyz, self.config.levels)
         gamma = self.properties(obj.prop_values, obj.prop_mask)
         n = obj.xyz.shape[1]
         log_scale = torch.log(obj.scale / SCALE_REFERENCE_M).to(obj.xyz.dtype)
@@ -110,6 +114,8 @@ class ManiFoundationNet(nn.Module):
         heat_gt: torch.Tensor,
         force_gt: torch.Tensor,
         generator: torch.Generator | None = None,
+        hierarchy: PointHierarchy | None = None,
+        prior_z: torch.Tensor | None = None,
     ) -> dict[str, torch.Tensor]:
         """Training pass with the posterior.
 
@@ -119,16 +125,25 @@ class ManiFoundationNet(nn.Module):
             heat_gt: (B, N) ground-truth heatmap M_C'.
             force_gt: (B, N, 3) ground-truth force/motion map M_S' in normalised units.
             generator: for the reparameterisation noise.
+            hierarchy: precomputed sampling and grouping of ``obj.xyz`` (see hierarchy.gather_hierarchy).
+            prior_z: (B, K, latent) prior samples to decode as well, on the same encoding.
 
         Returns:
-            ``heat`` (B, N), ``force`` (B, N, 3), ``mu`` and ``logvar`` (B, latent).
+            ``heat`` (B, N), ``force`` (B, N, 3), ``mu`` and ``logvar`` (B, latent); with ``prior_z`` also
+            ``prior_heat`` (B, K, N) and ``prior_force`` (B, K, N, 3).
         """
-        enc = self.encode(obj, self.encode_hand(hand))
+        enc = self.encode(obj, self.encode_hand(hand), hierarchy)
         mu, logvar = self.posterior(enc.hierarchy, enc.eo, enc.eh, heat_gt, force_gt)
         eps = torch.randn(mu.shape, generator=generator, device=mu.device, dtype=mu.dtype)
         z = mu + eps * torch.exp(0.5 * logvar)
-        heat, force = self.decode(enc, z.unsqueeze(1))
-        return {"heat": heat[:, 0], "force": force[:, 0], "mu": mu, "logvar": logvar}
+        if prior_z is None:
+            heat, force = self.decode(enc, z.unsqueeze(1))
+            return {"heat": heat[:, 0], "force": force[:, 0], "mu": mu, "logvar": logvar}
+        heat, force = self.decode(enc, torch.cat([z.unsqueeze(1), prior_z], dim=1))
+        return {
+            "heat": heat[:, 0], "force": force[:, 0], "mu": mu, "logvar": logvar,
+            "prior_heat": heat[:, 1:], "prior_force": force[:, 1:],
+        }  # fmt: skip
 
 
 def count_parameters(model: nn.Module) -> int:

@@ -35,6 +35,11 @@ class TrainConfig:
     lambda_s: float | None = None
     lambda_kl: float | None = None
     heat_contact_weight: float = 0.0  # α: heat MSE weighted by 1 + α·heat_gt (0: the paper's plain MSE)
+    prior_samples: int = 0  # K prior samples per example for the grasp-set loss (0: Eq. 3 alone)
+    lambda_set: float = 1.0  # weight of the grasp-set loss (models.network.loss.set_heat_loss)
+    precompute: bool = True  # per-object point subsets and hierarchies computed once (models.data.prepare)
+    mask_dropout: float = 0.0  # probability that a training example's partial region mask is replaced by all ones
+    init_from: str | None = None  # start from this checkpoint directory's weights (same network configuration)
     # --- run ---
     out: str = "runs/cpu"
     device: str = "auto"  # auto: cuda when available, else cpu

@@ -4,7 +4,7 @@ CSV + PNG curves, a checkpoint every epoch, resume.
 Run directory layout (``cfg.out``)::
 
     config.json            the resolved TrainConfig
-    metrics.csv            epoch, split, loss, heat, force, kl, lr, seconds
+    metrics.csv            epoch, split, loss terms, validation figures (peak, hit, flat), lr, seconds
     curves.png             train/val loss curves
     last/                  checkpoint of the latest epoch (model.safetensors + model_card.json)
     best/                  checkpoint with the lowest validation loss
@@ -26,10 +26,14 @@ import numpy as np
 import torch
 
 from models.data.dataset import Examples, load_examples, make_batch
-from models.network import ManiFoundationNet, ModelCard, create_model, cvae_loss, load_checkpoint, save_checkpoint
+from models.network import ModelCard, create_model, load_checkpoint, save_checkpoint
 from models.training.config import TrainConfig
+from models.training.objective import batch_loss, prepare
+from models.training.validation import evaluate, plot_curves
 
-CSV_FIELDS = ("epoch", "split", "loss", "heat", "force", "kl", "peak", "hit", "lr", "seconds", "examples")
+CSV_FIELDS = (
+    "epoch", "split", "loss", "heat", "force", "kl", "set", "peak", "hit", "flat", "lr", "seconds", "examples",
+)  # fmt: skip
 
 
 def pick_device(name: str) -> torch.device:
@@ -75,79 +79,6 @@ def data_summary(train: Examples, val: Examples | None) -> dict[str, Any]:
     return out
 
 
-def _batch_loss(
-    model: ManiFoundationNet, b: Any, cfg: TrainConfig, gen: torch.Generator, device: torch.device
-) -> dict[str, torch.Tensor]:
-    """The loss terms of Eq. (3) on one batch (posterior z; the generator seeds z on the CPU)."""
-    res = model(b.obj, b.hand, b.heat, b.force, generator=gen if device.type == "cpu" else None)
-    return cvae_loss(
-        res,
-        b.heat,
-        b.force,
-        model.config,
-        lambda_c=cfg.lambda_c,
-        lambda_s=cfg.lambda_s,
-        lambda_kl=cfg.lambda_kl,
-        heat_contact_weight=cfg.heat_contact_weight,
-    )
-
-
-def evaluate(
-    model: ManiFoundationNet, ex: Examples, cfg: TrainConfig, device: torch.device, hand_scale: float
-) -> dict[str, float]:
-    """Validation figures over ``ex`` in one pass (no augmentation, fixed noise seeds).
-
-    Returns:
-        The mean Eq. (3) terms ``loss``, ``heat``, ``force``, ``kl`` (posterior z), and how usable the heatmaps
-        are at inference, decoded from one prior sample z ~ N(0, I) as the service does: ``peak``, the mean
-        over examples of the highest predicted heat, and ``hit``, the fraction of examples whose highest-heat
-        point lies in a ground-truth contact region (ground-truth heat ≥ 0.5).
-    """
-    model.eval()
-    gen = torch.Generator(device="cpu").manual_seed(cfg.seed)
-    prior_gen = torch.Generator(device="cpu").manual_seed(cfg.seed + 1)
-    sums: dict[str, float] = {"loss": 0.0, "heat": 0.0, "force": 0.0, "kl": 0.0, "peak": 0.0, "hit": 0.0}
-    n = 0
-    with torch.no_grad():
-        for start in range(0, len(ex), cfg.batch_size):
-            idx = np.arange(start, min(len(ex), start + cfg.batch_size))
-            b = make_batch(ex, idx, hand_scale).to(device)
-            terms = _batch_loss(model, b, cfg, gen, device)
-            for k in ("loss", "heat", "force", "kl"):
-                sums[k] += float(terms[k].detach()) * len(idx)
-            enc = model.encode(b.obj, model.encode_hand(b.hand))
-            z = torch.randn((len(idx), 1, model.config.latent_dim), generator=prior_gen).to(device)
-            heat = model.decode(enc, z)[0][:, 0]  # (B, N)
-            sums["peak"] += float(heat.max(dim=1).values.sum())
-            sums["hit"] += float((b.heat.gather(1, heat.argmax(dim=1, keepdim=True)) >= 0.5).sum())
-            n += len(idx)
-    return {k: v / max(n, 1) for k, v in sums.items()}
-
-
-def plot_curves(csv_path: Path, png_path: Path) -> None:
-    """Loss curves (train and val, total and terms) from metrics.csv."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    rows = list(csv.DictReader(csv_path.open()))
-    keys = ("loss", "heat", "force", "kl", "hit")
-    fig, axes = plt.subplots(1, len(keys), figsize=(20, 3.5))
-    for ax, key in zip(axes, keys, strict=True):
-        for split in ("train", "val"):
-            pts = [(int(r["epoch"]), float(r[key])) for r in rows if r["split"] == split and r.get(key)]
-            if pts:
-                ax.plot(*zip(*pts, strict=True), marker="o", label=split)
-        ax.set_title("val: top-heat point in a true contact region" if key == "hit" else key)
-        ax.set_xlabel("epoch")
-        ax.set_yscale("linear" if key == "hit" else "log")
-        ax.legend()
-    fig.tight_layout()
-    fig.savefig(png_path, dpi=80)
-    plt.close(fig)
-
-
 def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> TrainResult:
     """Train (or resume) a network as configured; see the module docstring for the outputs."""
     from tqdm import tqdm
@@ -158,6 +89,9 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
     out.mkdir(parents=True, exist_ok=True)
     train_ex, val_ex = _load(cfg)
     model = create_model(cfg.network, seed=cfg.seed).to(device)
+    if cfg.init_from is not None and not resume:
+        model.load_state_dict(load_checkpoint(cfg.init_from, cfg.network)[0].state_dict())
+    train_prep, val_prep = prepare(train_ex, model, cfg), prepare(val_ex, model, cfg)
     hand_scale = model.config.hand_scale_m
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     start_epoch, wall0, best, global_step = 0, 0.0, float("inf"), 0
@@ -183,21 +117,23 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
     for epoch in range(start_epoch + 1, cfg.epochs + 1):
         if cfg.reload_each_epoch and epoch > start_epoch + 1:
             train_ex, val_ex = _load(cfg)
+            train_prep, val_prep = prepare(train_ex, model, cfg), prepare(val_ex, model, cfg)
             summary = data_summary(train_ex, val_ex)
         # drop the last partial batch: BatchNorm cannot train on one example, and a tiny batch is a noisy step
         steps_per_epoch = max(1, len(train_ex) // cfg.batch_size)
         model.train()
         t0 = time.perf_counter()
         perm = rng.permutation(len(train_ex))
-        sums = {"loss": 0.0, "heat": 0.0, "force": 0.0, "kl": 0.0}
+        sums = dict.fromkeys(("loss", "heat", "force", "kl", "set"), 0.0)
         seen = 0
         bar = tqdm(range(steps_per_epoch), desc=f"epoch {epoch}/{cfg.epochs}", disable=not progress, leave=False)
         for step in bar:
             if cfg.max_minutes is not None and time.perf_counter() - t_start > cfg.max_minutes * 60:
                 break  # time budget spent: validate and save what we have
             idx = perm[step * cfg.batch_size : (step + 1) * cfg.batch_size]
-            b = make_batch(train_ex, idx, hand_scale, rng if cfg.augment else None).to(device)
-            terms = _batch_loss(model, b, cfg, gen, device)
+            b = make_batch(train_ex, idx, hand_scale, rng if cfg.augment else None, train_prep,
+                           mask_dropout=cfg.mask_dropout).to(device)  # fmt: skip
+            terms = batch_loss(model, b, cfg, gen, device)
             frac = (epoch - 1 + step / steps_per_epoch) / cfg.epochs
             if cfg.max_minutes is not None:  # a time budget: decay by whichever runs out first
                 frac = max(frac, (time.perf_counter() - t_start) / (cfg.max_minutes * 60))
@@ -210,7 +146,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             torch.nn.utils.clip_grad_norm_(model.parameters(), cfg.grad_clip)
             opt.step()
             for k in sums:
-                sums[k] += float(terms[k].detach()) * len(idx)
+                sums[k] += float(terms[k].detach()) * len(idx) if k in terms else 0.0
             seen += len(idx)
             bar.set_postfix(loss=f"{float(terms['loss'].detach()):.4f}", lr=f"{lr:.2e}")
         bar.close()
@@ -218,7 +154,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             break
         train_m = {k: v / seen for k, v in sums.items()}
         rows = [{"split": "train", **train_m, "examples": seen}]
-        val_m = evaluate(model, val_ex, cfg, device, hand_scale) if val_ex is not None else None
+        val_m = evaluate(model, val_ex, cfg, device, hand_scale, val_prep) if val_ex is not None else None
         if val_m is not None and val_ex is not None:
             rows.append({"split": "val", **val_m, "examples": len(val_ex)})
         secs = time.perf_counter() - t0
@@ -250,7 +186,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         msg = f"epoch {epoch}: train {train_m['loss']:.4f}"
         if val_m is not None:
             msg += f"  val {val_m['loss']:.4f} (heat {val_m['heat']:.4f}, force {val_m['force']:.4f}"
-            msg += f", peak {val_m.get('peak', 0.0):.2f}, hit {val_m.get('hit', 0.0):.2f})"
+            msg += f", peak {val_m['peak']:.2f}, hit {val_m['hit']:.2f}, flat {val_m['flat']:.2f})"
         print(msg + f"  [{secs:.0f} s]", flush=True)
         if cfg.max_minutes is not None and wall > cfg.max_minutes * 60:
             break
@@ -280,7 +216,8 @@ def _card(
         trained=True,
         training_data={
             **summary,
-            "generator": "models.data (hierarchical grasp sampling, see models/data/__init__.py)",
+            "generator": "models.data (hierarchical grasp sampling, see models/data/__init__.py; labels: each "
+            "example's grasp set, models/data/grasp_sets.py)",
             "data_dirs": list(cfg.data),
             "training": {
                 "epochs": epoch,

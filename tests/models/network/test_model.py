@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 import torch
 
@@ -15,7 +16,7 @@ from models.network import (
     get_config,
     list_configs,
 )
-from models.network.loss import kl_to_standard_normal
+from models.network.loss import kl_to_standard_normal, set_heat_loss
 from models.network.properties import PropertyEncoder, property_tensors
 
 
@@ -127,3 +128,33 @@ def test_untrained_heatmap_starts_at_the_prior() -> None:
         enc = model.encode(obj, model.encode_hand(torch.randn(1, 64, 6)))
         heat, _ = model.decode(enc, torch.zeros(1, 1, model.config.latent_dim))
     assert 0.2 * HEAT_PRIOR < float(heat.mean()) < 5.0 * HEAT_PRIOR
+
+
+def test_set_heat_loss_pays_the_nearest_valid_grasp() -> None:
+    grasps = torch.tensor([[[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, 0.0, 0.0, 1.0]]])  # (1, G=3, N=4)
+    valid = torch.tensor([[True, True, False]])
+    on_second = torch.tensor([[[0.0, 0.0, 1.0, 0.0]]])  # (1, K=1, N): exactly the second valid grasp
+    on_padding = torch.tensor([[[0.0, 0.0, 0.0, 1.0]]])  # the third row is padding: not a valid grasp
+    average = torch.tensor([[[0.5, 0.0, 0.5, 0.0]]])  # the blur of the two valid ones
+    assert set_heat_loss(on_second, grasps, valid).item() == 0.0
+    assert set_heat_loss(on_padding, grasps, valid).item() == pytest.approx(0.5)
+    assert set_heat_loss(average, grasps, valid).item() == pytest.approx(0.125)
+    both = torch.cat([on_second, average], dim=1)  # K = 2: the mean over samples
+    assert set_heat_loss(both, grasps, valid).item() == pytest.approx(0.0625)
+
+
+def test_forward_decodes_prior_samples_on_the_same_encoding() -> None:
+    model = create_model("cpu1k", seed=0).eval()
+    rng = np.random.default_rng(0)
+    n = model.config.num_points
+    xyz = torch.as_tensor(rng.uniform(-0.5, 0.5, (2, n, 3)), dtype=torch.float32)
+    obj = ObjectTensors(xyz, xyz / xyz.norm(dim=-1, keepdim=True), torch.zeros(2, n, 3), torch.ones(2, n),
+                        torch.zeros(2, 6), torch.zeros(2, 6, dtype=torch.bool), torch.full((2,), 0.1))  # fmt: skip
+    hand = torch.zeros(2, 16, 6)
+    z = torch.randn(2, 3, model.config.latent_dim, generator=torch.Generator().manual_seed(0))
+    with torch.no_grad():
+        out = model(obj, hand, torch.zeros(2, n), torch.zeros(2, n, 3), prior_z=z)
+        enc = model.encode(obj, model.encode_hand(hand))
+        heat, _ = model.decode(enc, z)
+    assert out["prior_heat"].shape == (2, 3, n) and out["prior_force"].shape == (2, 3, n, 3)
+    torch.testing.assert_close(out["prior_heat"], heat)

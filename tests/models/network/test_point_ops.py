@@ -76,3 +76,22 @@ def test_resample_round_trip() -> None:
         else:
             kept = r.indices
             np.testing.assert_allclose(back[kept], pts[kept], atol=1e-6)
+
+
+def test_precomputed_hierarchy_equals_the_built_one_under_rotation_and_scale() -> None:
+    from scipy.spatial.transform import Rotation
+
+    from models.network.config import get_config
+    from models.network.hierarchy import build_hierarchy, gather_hierarchy, index_hierarchy
+
+    levels = get_config("cpu1k").levels
+    raw = cloud(2, 1024, seed=3).numpy() * np.array([0.3, 0.1, 0.05], dtype=np.float32)  # an elongated cloud
+    index = [index_hierarchy(p, levels) for p in raw]  # once, on the metric cloud
+    rot = Rotation.random(random_state=0).as_matrix().astype(np.float32)
+    moved = torch.as_tensor((raw @ rot.T - raw.mean(axis=(0, 1))) / 0.3)  # rotated, shifted, scaled
+    built, gathered = build_hierarchy(moved, levels), gather_hierarchy(moved, index, levels)
+    for lv in range(len(levels)):
+        torch.testing.assert_close(gathered.xyz[lv + 1], built.xyz[lv + 1])
+        assert torch.equal(gathered.groups[lv], built.groups[lv])  # the radius applied to the moved cloud
+        assert torch.equal(gathered.up_idx[lv], built.up_idx[lv])
+        torch.testing.assert_close(gathered.up_weights[lv], built.up_weights[lv], atol=1e-5, rtol=1e-4)

@@ -1,0 +1,132 @@
+"""Every valid grasp of an example: the grasps of the same object and hand that can produce its motion.
+
+An example is one sampled grasp with random forces, and its target motion follows from their wrench. Most
+motions can be produced by several of the grasps sampled for the same (object, hand): a heatmap regressed onto
+the one that happened to make the example averages over them into a flat map (measured on the round-2 weights:
+peaks at 0.3-0.4, the top point in the example's own contact region in 23 % of validation examples). So each
+example carries the set of grasps that can produce its motion, with forces that do, and training rewards
+hitting any one of them (`models.network.loss.set_heat_loss`).
+
+A grasp g can produce an example's task when a linear programme is feasible: forces in 8-sided pyramids
+inscribed in the friction cones (μ of the example), each normal force ≤ 1 (the refinement's bound), giving the
+example's unit scaled wrench (rigid) or its joint-space effort (articulated, `models.refine.wrench`). The
+pyramid is inside the cone, so a feasible programme is a feasible grasp. The example's own grasp is always in
+its set (its forces are the label's). Grasps are those of the same shard, object and hand: the rows of the
+examples' contact tables.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linprog
+
+from models.refine.grasp import grasp_maps, tangents
+from models.refine.wrench import articulated_task
+
+PYRAMID_EDGES = 8
+MAX_SET = 8  # grasps kept per example (its own first, then the feasible ones by grasp index)
+
+
+def pyramid_edges(normals: np.ndarray, mu: float) -> np.ndarray:
+    """(m, E, 3) edges of the inscribed friction pyramids, each with unit normal part (pointing inwards)."""
+    t1, t2 = tangents(normals)
+    ang = np.linspace(0.0, 2 * np.pi, PYRAMID_EDGES, endpoint=False)
+    tang = np.cos(ang)[None, :, None] * t1[:, None] + np.sin(ang)[None, :, None] * t2[:, None]
+    return -normals[:, None, :] + mu * tang
+
+
+def feasible_forces(
+    contacts: np.ndarray, normals: np.ndarray, mu: float, rows: np.ndarray, target: np.ndarray, centre: np.ndarray,
+    length: float,
+) -> np.ndarray | None:  # fmt: skip
+    """Forces (m, 3) at ``contacts`` with ``rows @ Σ G_i f_i = target``, or None when the programme is infeasible.
+
+    Args:
+        contacts, normals: (m, 3) contact points and outward normals.
+        mu: friction coefficient.
+        rows: (r, 6) task rows on the scaled wrench (identity for a rigid motion, P^J for a joint).
+        target: (r,) the task's value.
+        centre, length: the object's centre of mass and characteristic length (the scaled wrench's).
+    """
+    m = len(contacts)
+    edges = pyramid_edges(normals, mu)  # (m, E, 3)
+    g = grasp_maps(contacts, centre, length)  # (m, 6, 3)
+    a_eq = rows @ np.einsum("mij,mej->ime", g, edges).reshape(6, m * PYRAMID_EDGES)
+    a_ub = np.kron(np.eye(m), np.ones((1, PYRAMID_EDGES)))
+    res = linprog(
+        np.ones(m * PYRAMID_EDGES), A_ub=a_ub, b_ub=np.ones(m), A_eq=a_eq, b_eq=target, bounds=(0, None),
+        method="highs",
+    )  # fmt: skip
+    if res.status != 0:
+        return None
+    lam = res.x.reshape(m, PYRAMID_EDGES)
+    return np.einsum("me,mej->mj", lam, edges)
+
+
+@dataclass
+class GraspSets:
+    """Per example, its valid grasps (own first), padded to :data:`MAX_SET` grasps of ``MAX_CONTACTS`` contacts.
+
+    Attributes:
+        contacts, normals, forces: (E, G, C, 3), NaN where padded.
+        count: (E,) valid grasps per example (≥ 1).
+    """
+
+    contacts: np.ndarray
+    normals: np.ndarray
+    forces: np.ndarray
+    count: np.ndarray
+
+
+def _task(z: dict[str, np.ndarray], e: int, centre: np.ndarray, length: float) -> tuple[np.ndarray, np.ndarray]:
+    """(rows, target) of example ``e``'s task on the scaled wrench."""
+    m = int(z["num_contacts"][e])
+    c, f = z["contacts"][e, :m], z["forces"][e, :m]
+    w = np.einsum("mij,mj->i", grasp_maps(c, centre, length), f)
+    if not bool(z["articulated"][e]):
+        return np.eye(6), w
+    task = articulated_task(str(z["joint_type"][e]), z["joint_axis"][e], z["joint_origin"][e], centre, length)
+    return task.projection, task.projection @ w
+
+
+def shard_grasp_sets(z: dict[str, np.ndarray]) -> GraspSets:
+    """The :class:`GraspSets` of every example of one shard (its arrays as written by `models.data.generate`)."""
+    n_ex = int(z["num_examples"])
+    c_max = z["contacts"].shape[1] if n_ex else 1
+    out = GraspSets(
+        np.full((n_ex, MAX_SET, c_max, 3), np.nan), np.full((n_ex, MAX_SET, c_max, 3), np.nan),
+        np.full((n_ex, MAX_SET, c_max, 3), np.nan), np.ones(n_ex, dtype=np.int64),
+    )  # fmt: skip
+    if n_ex == 0:
+        return out
+    groups: dict[tuple[int, str], list[int]] = {}
+    for e in range(n_ex):
+        groups.setdefault((int(z["obj_index"][e]), str(z["hand"][e])), []).append(e)
+    for (oi, _hand), members in groups.items():
+        centre, length = z["object_centre"][oi], float(z["object_length"][oi])
+        keys = {np.round(z["contacts"][e], 9).tobytes(): e for e in members}  # one example per distinct grasp
+        grasps = list(keys.values())
+        for e in members:
+            m_e = int(z["num_contacts"][e])
+            out.contacts[e, 0, :m_e] = z["contacts"][e, :m_e]
+            out.normals[e, 0, :m_e] = z["contact_normals"][e, :m_e]
+            out.forces[e, 0, :m_e] = z["forces"][e, :m_e]
+            rows, target = _task(z, e, centre, length)
+            own = np.round(z["contacts"][e], 9).tobytes()
+            k = 1
+            for gi in grasps:
+                if k == MAX_SET:
+                    break
+                if np.round(z["contacts"][gi], 9).tobytes() == own:
+                    continue
+                m = int(z["num_contacts"][gi])
+                c, n = z["contacts"][gi, :m], z["contact_normals"][gi, :m]
+                f = feasible_forces(c, n, float(z["friction"][e]), rows, target, centre, length)
+                if f is None:
+                    continue
+                out.contacts[e, k, :m], out.normals[e, k, :m], out.forces[e, k, :m] = c, n, f
+                k += 1
+            out.count[e] = k
+    return out

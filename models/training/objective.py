@@ -1,0 +1,45 @@
+"""One batch's training objective: Eq. (3) on the posterior sample, plus the grasp-set term on prior samples."""
+
+from __future__ import annotations
+
+import torch
+
+from models.data.dataset import Batch, Examples
+from models.data.prepare import PreparedObjects, prepare_objects
+from models.network import ManiFoundationNet, cvae_loss
+from models.network.loss import set_heat_loss
+from models.training.config import TrainConfig
+
+
+def batch_loss(
+    model: ManiFoundationNet, b: Batch, cfg: TrainConfig, gen: torch.Generator, device: torch.device
+) -> dict[str, torch.Tensor]:
+    """The loss terms of Eq. (3) on one batch (posterior z; the generator seeds z on the CPU), plus the grasp-set
+    term on ``cfg.prior_samples`` prior samples when asked."""
+    prior_z = None
+    if cfg.prior_samples > 0:
+        shape = (b.heat.shape[0], cfg.prior_samples, model.config.latent_dim)
+        prior_z = torch.randn(shape, generator=gen).to(device)
+    res = model(
+        b.obj, b.hand, b.heat, b.force, generator=gen if device.type == "cpu" else None, hierarchy=b.hierarchy,
+        prior_z=prior_z,
+    )  # fmt: skip
+    terms = cvae_loss(
+        res,
+        b.heat,
+        b.force,
+        model.config,
+        lambda_c=cfg.lambda_c,
+        lambda_s=cfg.lambda_s,
+        lambda_kl=cfg.lambda_kl,
+        heat_contact_weight=cfg.heat_contact_weight,
+    )
+    if prior_z is not None:
+        terms["set"] = set_heat_loss(res["prior_heat"], b.set_heat, b.set_valid, cfg.heat_contact_weight)
+        terms["loss"] = terms["loss"] + cfg.lambda_set * terms["set"]
+    return terms
+
+
+def prepare(ex: Examples | None, model: ManiFoundationNet, cfg: TrainConfig) -> PreparedObjects | None:
+    """The per-object subsets and hierarchies of ``ex`` for ``model`` (None: not asked for, or no examples)."""
+    return prepare_objects(ex.points, model.config) if ex is not None and cfg.precompute else None

@@ -1,0 +1,42 @@
+"""The shipped weights (models/weights/cpu) on an object they were not trained on: a heatmap that marks places,
+and contacts selected from it that lie on the object."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+from models.data.generate import object_split
+from models.network import ContactPredictor, NetworkInput, select_contacts
+from models.objects import make_object
+from models.robots import get_hand
+
+WEIGHTS = Path(__file__).resolve().parents[3] / "models" / "weights" / "cpu"
+
+
+def _held_out_object():  # type: ignore[no-untyped-def]
+    """The first procedural composite whose id the data sets' split puts among the test objects."""
+    for seed in range(100):
+        obj = make_object("composite", 0.12, seed, 2048)
+        if object_split(obj.id, 0.15) == "test":
+            return obj
+    raise AssertionError("no held-out object among 100 seeds")
+
+
+def test_shipped_heatmap_on_a_held_out_object_is_not_flat_and_its_contacts_lie_on_it() -> None:
+    predictor = ContactPredictor.from_checkpoint(WEIGHTS)
+    assert predictor.is_trained
+    obj, hand = _held_out_object(), get_hand("allegro")
+    motion = np.tile([0.02, 0.0, 0.01], (len(obj.points), 1))  # a push with a little lift
+    inp = NetworkInput(obj.points, obj.normals, motion, np.ones(len(obj.points), bool), {"friction": 0.6},
+                       hand.surface_points, hand.surface_normals, hand.name)  # fmt: skip
+    out = predictor.predict([inp], num_samples=4, seed=0)[0]
+    contrast = out.heatmaps.max(axis=1) - np.median(out.heatmaps, axis=1)
+    assert (contrast >= 0.1).all(), contrast  # the selection's flat-heatmap rule: none falls back to random
+    for k in range(4):
+        sel = select_contacts(obj.points, out.heatmaps[k], out.force_maps[k], None, hand.num_fingertips)
+        assert 1 <= len(sel) <= hand.num_fingertips
+        dist = np.abs(trimesh.proximity.signed_distance(obj.mesh, sel.points))
+        assert dist.max() < 1e-3
