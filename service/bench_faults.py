@@ -296,24 +296,24 @@ async def _posts(base: str, bodies: list[bytes], timeout: float) -> list[tuple[i
 
 
 async def large_bodies(args: argparse.Namespace) -> dict[str, Any]:
-    """``--bodies`` concurrent bodies of ``--body-mb`` MB; /healthz polled every 20 ms meanwhile."""
+    """``--bodies`` concurrent bodies of ``--body-mb`` MB; /healthz polled every 20 ms meanwhile by a process of
+    its own (this one is busy uploading), API RSS sampled every 20 ms."""
     import httpx
+
+    from service.bench_probes import health_probe
 
     data = _large_body(args.body_mb)
     proc, base = _serve(max_queue=10 * args.bodies, stage_seconds=0.0)
-    health: list[float] = []
     try:
-        async with httpx.AsyncClient(base_url=base, timeout=60) as http:
+        with health_probe(f"{base}/healthz") as health:
             posting = asyncio.ensure_future(_posts(base, [data] * args.bodies, args.budget))
             peak = 0.0
             while not posting.done():
-                t0 = time.perf_counter()
-                await http.get("/healthz")
-                health.append(time.perf_counter() - t0)
                 peak = max(peak, rss_mb(proc.pid).get("VmRSS", 0.0))
                 await asyncio.sleep(0.02)
             answers = posting.result()
-            after = rss_mb(proc.pid)
+        after = rss_mb(proc.pid)
+        async with httpx.AsyncClient(base_url=base, timeout=60) as http:
             queued = (await http.get("/dashboard/data")).json()["stats"]["depth"]
             end = time.monotonic() + args.budget
             while (await http.get("/dashboard/data")).json()["stats"]["depth"] and time.monotonic() < end:

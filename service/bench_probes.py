@@ -1,4 +1,5 @@
-"""Raw-socket probes for `mani bench faults`: many posts at once timed to their status line, and slow senders.
+"""Probes for `mani bench faults`: many posts at once timed to their status line, slow senders, and a /healthz
+prober in a process of its own.
 
 An HTTP client library in the same process as 100 concurrent requests measures mostly itself (connection pools,
 request objects, a body it must finish uploading before it reads the answer). These probes open their
@@ -10,7 +11,12 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
+import subprocess
+import sys
+import threading
 import time
+from collections.abc import Iterator
 
 
 def _head(path: str, size: int, expect: bool) -> bytes:
@@ -102,3 +108,43 @@ async def slow_headers(host: str, port: int, count: int, interval: float, durati
 
     closed = [t for t in await asyncio.gather(*(one() for _ in range(count))) if t is not None]
     return len(closed), closed
+
+
+@contextlib.contextmanager
+def health_probe(url: str, interval: float = 0.02) -> Iterator[list[float]]:
+    """``GET url`` every ``interval`` s from a process of its own (so that the load this process makes does not
+    delay the probe) while the block runs; the list it yields is filled with the latencies, s, at its end."""
+    proc = subprocess.Popen([sys.executable, "-m", "service.bench_probes", url, str(interval)],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE)  # fmt: skip
+    latencies: list[float] = []
+    try:
+        yield latencies
+    finally:
+        out, _ = proc.communicate(b"", timeout=60)
+        latencies.extend(json.loads(out or b"[]"))
+
+
+def _probe(url: str, interval: float) -> None:
+    """The probe process: poll until stdin closes, then print the latencies as JSON."""
+    import httpx
+
+    stop = threading.Event()
+
+    def wait_for_eof() -> None:
+        sys.stdin.read()
+        stop.set()
+
+    threading.Thread(target=wait_for_eof, daemon=True).start()
+    latencies = []
+    with httpx.Client(timeout=60) as http:
+        while not stop.is_set():
+            t0 = time.perf_counter()
+            with contextlib.suppress(httpx.HTTPError):
+                if http.get(url).status_code == 200:
+                    latencies.append(time.perf_counter() - t0)
+            stop.wait(interval)
+    print(json.dumps(latencies))
+
+
+if __name__ == "__main__":
+    _probe(sys.argv[1], float(sys.argv[2]))
