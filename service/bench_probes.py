@@ -17,6 +17,7 @@ import sys
 import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 
 def _head(path: str, size: int, expect: bool) -> bytes:
@@ -114,8 +115,10 @@ async def slow_headers(host: str, port: int, count: int, interval: float, durati
 def health_probe(url: str, interval: float = 0.02) -> Iterator[list[float]]:
     """``GET url`` every ``interval`` s from a process of its own (so that the load this process makes does not
     delay the probe) while the block runs; the list it yields is filled with the latencies, s, at its end."""
-    proc = subprocess.Popen([sys.executable, "-m", "service.bench_probes", url, str(interval)],
-                            stdin=subprocess.PIPE, stdout=subprocess.PIPE)  # fmt: skip
+    root = str(Path(__file__).resolve().parents[1])  # this code, whatever the service under test runs
+    code = f"import sys; sys.path.insert(0, {root!r}); from service.bench_probes import _probe; _probe(*sys.argv[1:])"
+    proc = subprocess.Popen([sys.executable, "-c", code, url, str(interval)], stdin=subprocess.PIPE,
+                            stdout=subprocess.PIPE)  # fmt: skip
     latencies: list[float] = []
     try:
         yield latencies
@@ -124,8 +127,8 @@ def health_probe(url: str, interval: float = 0.02) -> Iterator[list[float]]:
         latencies.extend(json.loads(out or b"[]"))
 
 
-def _probe(url: str, interval: float) -> None:
-    """The probe process: poll until stdin closes, then print the latencies as JSON."""
+def _probe(url: str, interval: str) -> None:
+    """The probe process: poll every ``interval`` s until stdin closes, then print the latencies as JSON."""
     import httpx
 
     stop = threading.Event()
@@ -142,9 +145,5 @@ def _probe(url: str, interval: float) -> None:
             with contextlib.suppress(httpx.HTTPError):
                 if http.get(url).status_code == 200:
                     latencies.append(time.perf_counter() - t0)
-            stop.wait(interval)
+            stop.wait(float(interval))
     print(json.dumps(latencies))
-
-
-if __name__ == "__main__":
-    _probe(sys.argv[1], float(sys.argv[2]))
