@@ -5,16 +5,19 @@ ENV PYTHONDONTWRITEBYTECODE=1 PYTHONUNBUFFERED=1 PIP_NO_CACHE_DIR=1
 WORKDIR /app
 
 COPY pyproject.toml README.md ./
+COPY distributions ./distributions
 COPY models ./models
 COPY workers ./workers
 COPY service ./service
 COPY clients ./clients
+COPY lab ./lab
 
-# torch pinned first. Point TORCH_INDEX_URL at a CPU wheel index for a small image (the default index
+# torch pinned first; the client distribution (which the server requires) from its folder, in the same command.
+# Point TORCH_INDEX_URL at a CPU wheel index for a small image (the default index
 # serves a multi-GB CUDA build).
 ARG TORCH_INDEX_URL=""
 RUN pip install ${TORCH_INDEX_URL:+--index-url "$TORCH_INDEX_URL"} torch==2.13.0 \
-    && pip install .
+    && pip install ./distributions/client .
 
 RUN useradd --create-home mani
 USER mani

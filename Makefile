@@ -1,5 +1,5 @@
 # The two set-up commands of the README. Both are idempotent: the venv is (re)installed only when
-# pyproject.toml changed since the last install.
+# pyproject.toml (or the client distribution's) changed since the last install.
 PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -9,12 +9,17 @@ PORT ?= 8000
 
 .PHONY: serve test test-slow lint install
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml distributions/client/pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	# torch first, pinned: the CPU wheel on disk (an unpinned torch pulls a CUDA build).
 	$(BIN)/python -m pip install -q torch==2.13.0
-	$(BIN)/python -m pip install -q -e '.[dev]'
+	# the client distribution from its folder in the same command: the server requires manifoundation-client
+	# (same version), which no package index has to provide.
+	$(BIN)/python -m pip install -q -e distributions/client -e '.[dev]'
+	# A venv made before the split had `mani` from the server distribution: replacing that one removes the script
+	# the client just wrote, so the client (which owns `mani` now) is written once more, without its dependencies.
+	test -x $(BIN)/mani || $(BIN)/python -m pip install -q --no-deps --force-reinstall -e distributions/client
 	# test data: third-party hands (pyproject's `third-party-hands`); only their description files are read,
 	# so their own dependencies (numba, pinocchio, ...) are not installed.
 	$(BIN)/python -m pip install -q --no-deps 'robosuite>=1.5,<1.6' 'orca-sim>=0.1,<0.2' 'robot-properties-fingers>=2,<3'

@@ -9,6 +9,7 @@ other examples need only the SDK.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +26,13 @@ OBJECTS = [
 ]
 MESH_FILES = [("blob.ply", "blob", 0.08, 5)]
 CLOUD_FILES = [("sphere_cloud.ply", "sphere", 0.06, 6)]
+# Deformable requests without a robot: (file name, material, shape kind, seed). The target is where the
+# project's own simulator takes the body under the data generator's procedure for that material.
+DEFORMABLE_REQUESTS = [
+    ("cloth_fold.json", "cloth", "towel", 1),
+    ("rope_drag.json", "rope", "rope", 2),
+    ("plasticine_press.json", "plasticine", "blob", 3),
+]
 
 TWO_FINGER_URDF = """<?xml version="1.0" encoding="utf-8"?>
 <!-- A minimal two-finger gripper for the "register a custom hand" example: a 60x30x20 mm palm box, two fingers
@@ -72,6 +80,24 @@ def _make(kind: str, size: float, seed: int):  # type: ignore[no-untyped-def]
     return make_object(kind, size, seed, NUM_POINTS)
 
 
+def _deformable_request(material: str, kind: str, seed: int) -> dict[str, object]:
+    """A request body: the body's cloud, the motion its procedure gives every point, simulated rollout asked."""
+    from models.deformable.procedures import cloth_fold, plasticine_push, rope_drag
+    from models.deformable.shapes import make_body
+    from models.deformable.simulate import simulate
+
+    body = make_body(material, kind, seed)
+    procedure = {"cloth": cloth_fold, "rope": rope_drag, "plasticine": plasticine_push}[material]
+    manipulation = procedure(body, np.random.default_rng(seed))
+    target = simulate(body, manipulation.contacts, manipulation.motions).cloud
+    return {
+        "object": {"points": body.points.round(5).tolist(), "normals": body.normals.round(4).tolist(),
+                   "material": material, "properties": body.properties},
+        "task": {"kind": "point_motion", "motion": (target - body.points).round(5).tolist()},
+        "options": {"num_proposals": 2, "seed": seed, "simulate_rollout": True, "timeout": 60},
+    }  # fmt: skip
+
+
 def main() -> None:
     DATA.mkdir(exist_ok=True)
     for name, kind, size, seed in OBJECTS:
@@ -93,6 +119,8 @@ def main() -> None:
         body = [" ".join(f"{v:.6f}" for v in row) for row in rows]
         (DATA / name).write_text("\n".join(header + body) + "\n")
     (DATA / "two_finger.urdf").write_text(TWO_FINGER_URDF)
+    for name, material, kind, seed in DEFORMABLE_REQUESTS:
+        (DATA / name).write_text(json.dumps(_deformable_request(material, kind, seed)))
     for path in sorted(DATA.iterdir()):
         print(f"{path.relative_to(DATA.parent)}  {path.stat().st_size / 1024:.0f} KiB")
 

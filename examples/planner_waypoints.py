@@ -1,5 +1,6 @@
 """Put the cup in the box: hand-written waypoints (the kind an LLM task planner proposes), one of them in
-collision, turned into a collision-free trajectory with a grasp at every step — locally, through the science API.
+collision, turned into a collision-free trajectory with a grasp at every step — locally with the science, or
+through the service (``--url``: ``POST /v1/plans`` with the SDK's ``Client.plan``).
 
 The scene: a table, a cup standing on it, a kettle-sized block in the way, and an open box. The planner says
 "lift the cup, carry it past the kettle, hold it above the box, lower it in"; its second waypoint puts the cup
@@ -10,8 +11,10 @@ checked against the scene.
 
     .venv/bin/python examples/planner_waypoints.py --hand allegro --html cup_in_box.html
     .venv/bin/python examples/planner_waypoints.py --write-plan out/   # then: mani plan out/plan.yaml
+    .venv/bin/python examples/planner_waypoints.py --url http://127.0.0.1:8000   # against `mani serve`
 
-(The same request over HTTP comes with ``POST /v1/plans``.)
+Through the service the answer is the same plan (the worker runs the same `plan_manipulation`); the job's page
+(``/view/<job id>``, printed) plays it: the scene, the cup along its path, the hand and contacts at every step.
 """
 
 from __future__ import annotations
@@ -75,6 +78,49 @@ def write_plan_file(inp, folder: Path) -> Path:  # inp: models.planning.PlanInpu
     return path
 
 
+def wire_request(inp):  # inp: models.planning.PlanInput -> clients.schemas.PlanRequest
+    """The same request in the wire contract's terms (what ``POST /v1/plans`` and the MCP tool take)."""
+    from clients.sdk import box_obstacle, make_plan, object_from_points
+
+    obj = object_from_points(inp.points, inp.normals, mesh={"vertices": inp.mesh_vertices, "faces": inp.mesh_faces},
+                             properties=dict(inp.properties))  # fmt: skip
+    obstacles = [box_obstacle(o.size, o.pose.position, o.pose.quaternion, name=o.name) for o in inp.obstacles]
+    opt = inp.options
+    return make_plan(
+        obj, [*inp.start.position, *inp.start.quaternion], [[*w.position, *w.quaternion] for w in inp.waypoints],
+        inp.hand.name, obstacles=obstacles, support_plane=inp.support.height, time_limit=opt.time_limit,
+        translation_step=opt.translation_step, rotation_step=opt.rotation_step, seed=opt.seed, method=opt.method,
+    )  # fmt: skip
+
+
+def through_the_service(inp, url: str, api_key: str | None) -> int:  # inp: models.planning.PlanInput
+    """Plan with ``POST /v1/plans`` (the SDK), following the job's stages; print what the local run prints."""
+    import time
+
+    from clients.sdk import Client
+
+    with Client(url, api_key) as client:
+        t0 = time.perf_counter()
+        job = client.submit_plan(wire_request(inp))
+        print(f"job {job.id}: {url}/view/{job.id}")
+        last = None
+        while not (status := job.status()).state.terminal:
+            p = status.progress
+            now = (p.stage.value, p.completed, p.total)
+            if now != last and p.total:
+                print(f"  {p.stage.value}: {p.completed}/{p.total}")
+                last = now
+            time.sleep(0.2)
+        plan = job.plan_result(5)
+    repaired = ", ".join(f"waypoints[{r.index}] moved {1000 * r.distance:.1f} mm out of {', '.join(r.obstacles)}"
+                         for r in plan.repairs) or "none"  # fmt: skip
+    print(f"trajectory: {len(plan.positions)} poses; repairs: {repaired}")
+    print(f"steps: {len(plan.steps)}, {sum(s.success for s in plan.steps)} verified and collision-free, "
+          f"{100 * plan.kept_share:.0f}% keep the grasp, re-grasps at {plan.regrasps or 'none'}")  # fmt: skip
+    print(f"{time.perf_counter() - t0:.1f} s through the service; plan {'succeeded' if plan.success else 'FAILED'}")
+    return 0 if plan.success else 1
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--hand", default="allegro")
@@ -82,6 +128,8 @@ def main() -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--html", type=Path, default=None, help="write a 3D view that plays the plan")
     parser.add_argument("--write-plan", type=Path, default=None, help="also write the request as a plan file here")
+    parser.add_argument("--url", default=None, help="plan through this service (POST /v1/plans) instead of locally")
+    parser.add_argument("--api-key", default=None, help="the service's API key, when it has keys")
     args = parser.parse_args()
 
     import torch
@@ -93,12 +141,14 @@ def main() -> int:
     inp = cup_in_box_request(args.hand, args.method, args.seed)
     if args.write_plan:
         print(f"plan file: {write_plan_file(inp, args.write_plan)}")
+    if args.url:
+        return through_the_service(inp, args.url, args.api_key)
     predictor = None
     if args.method == "network":
         from lab.plan import load_predictor
 
         predictor = load_predictor(None)
-    plan = plan_manipulation(inp, predictor, progress=lambda stage, f: None)
+    plan = plan_manipulation(inp, predictor)
     for line in summary_lines(plan):
         print(line)
     for step in plan.steps:

@@ -7,7 +7,10 @@ out of the science is a fault of the service (``InternalError``), never blamed o
     ScienceError                  InternalError
     ├── InvalidInput              ValidationError   the input cannot be processed (the message names the field)
     │   ├── InvalidPointCloud     ValidationError   points/normals/mask malformed or too few for a surface
-    │   └── HandLoadError         RobotInvalid      a robot description is malformed, unsafe or inconsistent
+    │   ├── HandLoadError         RobotInvalid      a robot description is malformed, unsafe or inconsistent
+    │   └── PlanningError         ValidationError   (models.planning) a plan that cannot be planned; of it:
+    │       ├── InfeasibleWaypoint  InfeasibleWaypoint  a start / waypoint in collision, not repaired
+    │       └── NoPathFound         NoPathFound         no collision-free motion for a segment in time
     ├── UnknownHand               UnknownHand       no hand of that name
     ├── ModelUnavailable          ModelUnavailable  method "network" without a loaded model
     ├── CheckpointError           ModelUnavailable  a checkpoint is missing, malformed or mismatched

@@ -11,18 +11,23 @@ from typing import Any
 from fastapi import FastAPI
 from fastapi.openapi.utils import get_openapi
 from pydantic.json_schema import models_json_schema
+from starlette.routing import Route
 
-from clients.schemas import BatchCreate, ErrorBody, RobotRegister, SynthesisRequest
+from clients.schemas import BatchCreate, ErrorBody, PlanRequest, RobotRegister, SynthesisRequest
 from service import errors, logs
 from service.bodies import BodyPool
 from service.dashboard import History
+from service.mcp.endpoint import PATH as MCP_PATH
+from service.mcp.endpoint import McpEndpoint, McpHost
+from service.mcp.objects import ObjectStore
 from service.metrics import Metrics
 from service.middleware import RequestContext
 from service.robots import RobotCatalog
-from service.routes import batches, health, jobs, pages, robots, synthesis
+from service.routes import batches, health, jobs, pages, plans, robots, synthesis
 from service.scenes import SceneStore
 from service.security import RateLimiter
 from service.settings import Settings
+from service.versions import SERVICE_VERSION, Versions
 from workers.queue import JobQueue
 
 log = logging.getLogger("service.app")
@@ -56,6 +61,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
         app.state.robots = RobotCatalog(the_queue, settings.robots_cache_s)
         app.state.history = history
         app.state.shutting_down = False  # an app started again after a shutdown serves again
+        app.state.mcp = McpHost(app.state)  # started by the first /mcp request
         sampler = asyncio.create_task(history.run(), name="dashboard-sampler")
         app.state.grpc = None
         if grpc and settings.grpc_port:
@@ -67,6 +73,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
             yield
         finally:
             app.state.shutting_down = True
+            await app.state.mcp.close()
             if app.state.grpc is not None:
                 await app.state.grpc.stop()
             sampler.cancel()
@@ -78,7 +85,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
 
     app = FastAPI(
         title="ManiFoundation Service",
-        version=health.VERSION,
+        version=SERVICE_VERSION,
         description=API_DESCRIPTION,
         lifespan=lifespan,
         docs_url=None,  # served by `pages.docs` from the installed Swagger UI bundle: no CDN
@@ -88,12 +95,15 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
     app.state.limiter = RateLimiter(settings.rate_limit_per_s, settings.rate_limit_burst)
     app.state.auth_failures = RateLimiter(settings.auth_failures_per_s, settings.auth_failures_burst)
     app.state.scenes = SceneStore()
+    app.state.objects = ObjectStore(settings.object_ttl_s, settings.max_objects, settings.max_object_store_bytes)
     app.state.bodies = BodyPool(settings.parse_offload_bytes, settings.large_body_slots, settings.body_timeout)
     app.state.shutting_down = False
+    app.state.versions = Versions()  # reported on every answer (service/versions.py)
     errors.install(app)
     for router in (
         health.router,
         synthesis.router,
+        plans.router,
         jobs.router,
         batches.router,
         robots.router,
@@ -101,6 +111,8 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
         pages.pages,
     ):
         app.include_router(router)
+    if settings.mcp:
+        app.router.routes.append(Route(MCP_PATH, McpEndpoint(app.state), methods=["GET", "POST", "DELETE"]))
     app.add_middleware(RequestContext, metrics=metrics, state=app.state)
     app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]
     return app
@@ -112,7 +124,7 @@ def _openapi(app: FastAPI) -> dict[str, Any]:
         return app.openapi_schema
     schema = get_openapi(title=app.title, version=app.version, description=app.description, routes=app.routes)
     _, defs = models_json_schema(
-        [(m, "validation") for m in (SynthesisRequest, BatchCreate, RobotRegister)],
+        [(m, "validation") for m in (SynthesisRequest, BatchCreate, RobotRegister, PlanRequest)],
         ref_template="#/components/schemas/{model}",
     )
     components = schema.setdefault("components", {}).setdefault("schemas", {})

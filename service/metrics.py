@@ -86,8 +86,9 @@ class Metrics:
         if job.finished_at is not None:
             self.job_duration.labels(state=job.state.value).observe(max(0.0, job.finished_at - job.created_at))
         timings = dict(job.timings)
-        if job.result is not None:
-            timings = {**job.result.timings, **timings}
+        answer = job.result or job.plan
+        if answer is not None:
+            timings = {**answer.timings, **timings}
         for stage, seconds in timings.items():
             if seconds >= 0:
                 self.stage_duration.labels(stage=stage).observe(seconds)

@@ -1,4 +1,5 @@
-"""One ASGI middleware around every request: request id, 503 while shutting down, metrics and an access log."""
+"""One ASGI middleware around every request: request id, the reported versions, 503 while shutting down, metrics and
+an access log."""
 
 from __future__ import annotations
 
@@ -14,6 +15,7 @@ from service.errors import Unavailable
 from service.logs import request_id_var
 from service.metrics import Metrics
 from service.negotiation import respond
+from service.versions import reported
 
 REQUEST_ID_HEADER = "x-request-id"
 _VALID_ID = re.compile(r"^[A-Za-z0-9._:\-]{1,128}$")
@@ -78,6 +80,7 @@ class RequestContext:
                 status = message["status"]
                 headers = list(message.get("headers", []))
                 headers.append((b"x-request-id", request_id.encode()))
+                headers.extend(reported(self.state).raw_headers())
                 message = {**message, "headers": headers}
                 observe()
             await send(message)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 
-from clients.schemas import FieldError, RobotPublic, SynthesisRequest
+from clients.schemas import FieldError, JobRequest, RobotPublic
 from service.errors import UnknownHand
 from workers.queue import JobQueue
 
@@ -42,9 +42,9 @@ class RobotCatalog:
             raise UnknownHand(f"unknown hand {name!r}", detail=[FieldError(field="name", problem="unknown hand")])
         return found
 
-    async def check(self, request: SynthesisRequest, owner: str | None = None, field: str = "robot.name") -> None:
+    async def check(self, request: JobRequest, owner: str | None = None, field: str = "robot.name") -> None:
         """404 when the request names a hand ``owner`` cannot use. Skipped while no worker has published hands."""
-        name = request.robot.name
+        name = None if request.robot is None else request.robot.name
         if name is None or not await self.all(owner):
             return
         if await self.find(name, owner) is None:

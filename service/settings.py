@@ -90,6 +90,15 @@ class Settings(BaseSettings):
     )
     large_body_slots: int = Field(2, ge=1, le=64, description="Large bodies read and decoded at once (the rest wait).")
 
+    # --- MCP tools at /mcp (service/mcp; `mani mcp` over stdio): objects uploaded by agents, per key
+    mcp: bool = Field(True, description="Serve the MCP tools at /mcp (streamable HTTP).")
+    object_ttl_s: float = Field(3600.0, gt=0, le=7 * 86400, description="An uploaded object lives this long after "
+                                "its last use, s.")  # fmt: skip
+    max_objects: int = Field(32, ge=1, le=10_000, description="Uploaded objects per key (409 beyond).")
+    max_object_store_bytes: int = Field(
+        64 * 1024 * 1024, ge=1024, description="Bytes of uploaded objects' arrays per key (409 beyond)."
+    )
+
     # --- observability
     log_level: str = Field("INFO", pattern=r"^(DEBUG|INFO|WARNING|ERROR|CRITICAL)$")
     log_format: Literal["json", "text"] = "json"

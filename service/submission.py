@@ -1,9 +1,10 @@
-"""Submitting synthesis work, the same for every front end: one `Submitter` per call.
+"""Submitting work, the same for every front end: one `Submitter` per call.
 
-`POST /v1/synthesize`, `POST /v1/jobs`, `POST /v1/batches` and their gRPC twins all refuse early when the queue
-is full, validate their body once, check the hands, submit on behalf of the caller, keep the scene for the viewer
-and count what they submitted. `Submitter` does those steps once; a front end states only how it reads its body
-(`read_and_submit` / `read_and_submit_batch` for HTTP, `service.grpc.submit` for gRPC), its kind and its deadline.
+`POST /v1/synthesize`, `POST /v1/jobs`, `POST /v1/batches`, `POST /v1/plans`, their gRPC twins and the MCP tools
+all refuse early when the queue is full, validate their body once, check the hands, submit on behalf of the
+caller, keep the scene for the viewer and count what they submitted. `Submitter` does those steps once; a front
+end states only how it reads its body (`read_and_submit` / `read_and_submit_batch` for HTTP, `service.grpc.submit`
+for gRPC, `service.mcp.backend` for MCP), its kind and its deadline.
 """
 
 from __future__ import annotations
@@ -11,11 +12,20 @@ from __future__ import annotations
 import logging
 import time
 from dataclasses import dataclass
-from typing import Annotated
+from typing import Annotated, TypeVar
 
 from fastapi import Depends, Request
 
-from clients.schemas import BatchCreate, BatchItem, BatchPublic, FieldError, JobState, SynthesisRequest
+from clients.schemas import (
+    BatchCreate,
+    BatchItem,
+    BatchPublic,
+    FieldError,
+    JobRequest,
+    JobState,
+    PlanRequest,
+    SynthesisRequest,
+)
 from service.deps import CallerDep, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
 from service.errors import InvalidInput, QueueFullError
 from service.metrics import Metrics
@@ -27,6 +37,7 @@ from service.settings import Settings
 from workers.queue import JobQueue
 
 log = logging.getLogger("service.submission")
+RequestT = TypeVar("RequestT", SynthesisRequest, PlanRequest)
 
 
 @dataclass
@@ -46,8 +57,9 @@ class Submitter:
         """429 `QueueFull` before reading a body the queue has no room for (`submit` still decides, atomically)."""
         await refuse_if_full(self.queue, count)
 
-    async def submit(self, body: SynthesisRequest, kind: str, deadline: float | None) -> str:
-        """Check the hand, submit one validated request (its job's deadline: ``deadline``, Unix s); its job id."""
+    async def submit(self, body: JobRequest, kind: str, deadline: float | None) -> str:
+        """Check the hand, submit one validated request (a synthesis or a plan; its job's deadline: ``deadline``,
+        Unix s); its job id. ``kind`` labels the submission in the metrics and logs ("sync", "async", "plan")."""
         await self.robots.check(body, self.caller.tenant)
         tenant = self.caller.tenant
         (job_id,) = await self.queue.submit([body], deadline=deadline, request_id=self.request_id, owner=tenant)
@@ -91,11 +103,13 @@ class Submitter:
 
 
 async def read_and_submit(
-    request: Request, submitter: Submitter, kind: str, *, deadline_from_timeout: bool
-) -> tuple[SynthesisRequest, str]:
-    """HTTP: read and validate the body, submit (the job's deadline ``options.timeout`` from now when
-    ``deadline_from_timeout``; the route's `Admitted` has refused a full queue). Returns the request and job id."""
-    body = await read_model(request, SynthesisRequest, submitter.settings.max_body_bytes)
+    request: Request, submitter: Submitter, kind: str, *, deadline_from_timeout: bool,
+    model: type[RequestT] = SynthesisRequest,  # type: ignore[assignment]
+) -> tuple[RequestT, str]:  # fmt: skip
+    """HTTP: read and validate the body as ``model``, submit (the job's deadline ``options.timeout`` from now
+    when ``deadline_from_timeout``; the route's `Admitted` has refused a full queue). Returns the request and the
+    job's id."""
+    body = await read_model(request, model, submitter.settings.max_body_bytes)
     deadline = time.time() + body.options.timeout if deadline_from_timeout else None
     job_id = await submitter.submit(body, kind, deadline)
     request.state.job_id = job_id

@@ -19,7 +19,8 @@ it is the outside check and shares no code with what it checks."""
 MAX_LINES = 300
 REASON = "Why one module:"
 GENERATED = ("_pb2.py", "_pb2_grpc.py")
-"""protoc's output (`service/grpc/protos`): regenerated, never edited, so no size rule (ruff and mypy skip it too)."""
+"""protoc's output (`clients/protos/manifoundation`): regenerated, never edited, so no size rule (ruff and mypy
+skip it too)."""
 
 
 def _modules() -> dict[str, Path]:

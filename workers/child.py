@@ -20,7 +20,7 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from clients.codec import pack, unpack
-from clients.schemas import JobProgress
+from clients.schemas import JobKind, JobProgress
 from workers.core import RawJob, WorkerCore
 from workers.logs import setup_logging
 from workers.pipeline import load_pipeline
@@ -119,7 +119,7 @@ def _run(core: WorkerCore, link: _Link, msg: dict[str, Any]) -> None:
         RawJob(
             id=j["id"], request=next(frames), deadline=j.get("deadline"),
             robot=next(frames) if j.get("robot") else None, request_id=j.get("request_id"),
-            queued_for=float(j.get("queued_for", 0.0)),
+            queued_for=float(j.get("queued_for", 0.0)), kind=JobKind(j.get("kind", JobKind.SYNTHESIS.value)),
         )
         for j in msg["jobs"]
     ]  # fmt: skip

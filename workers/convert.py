@@ -20,7 +20,7 @@ from clients.schemas import (
     SynthesisRequest,
     SynthesisResult,
 )
-from models.pipeline import JointInput, SynthesisInput, SynthesisOutput, TaskInput
+from models.pipeline import JointInput, ProposalOutput, SynthesisInput, SynthesisOutput, TaskInput
 
 if TYPE_CHECKING:
     from models.robots.hand import Hand
@@ -74,6 +74,9 @@ def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = Non
         seed=options.seed,
         deadline=None if deadline is None else time.monotonic() + (deadline - time.time()),
         return_history=options.return_history,
+        simulate_rollout=options.simulate_rollout,
+        handless=request.robot is None,
+        num_contacts=options.num_contacts,
         hand_key=hand.name,
     )
 
@@ -145,6 +148,53 @@ def _coarse_hull(vertices: np.ndarray) -> Any:
     return trimesh.convex.convex_hull(vertices[pick])
 
 
+def to_proposal(p: ProposalOutput, hand: Hand | None = None, *, history: bool = False, mesh: bool = False) -> Proposal:
+    """The wire proposal of one of the pipeline's proposals (a single request's, or a plan step's).
+
+    Args:
+        hand: when given, the hand's collision spheres at the proposal's pose (and with ``mesh``, its posed
+            collision meshes) travel with it, for viewers.
+        history: include the refinement's per-iteration record.
+    """
+    q = p.quality
+    quality = Quality(
+        success=bool(q.success), converged=bool(q.converged), reason=q.reason, iterations=int(q.iterations),
+        wrench_residual=_finite(q.wrench_residual), max_tip_distance=_finite(q.max_tip_distance),
+        penetration_depth=_finite(q.penetration_depth), self_collision_depth=_finite(q.self_collision_depth),
+        epsilon=None if q.epsilon is None or not np.isfinite(q.epsilon) else float(q.epsilon),
+        failures=list(q.failures), geometry=q.geometry,
+    )  # fmt: skip
+    records = None
+    if history and p.history is not None:
+        records = [IterationRecord(residual=_finite(h.residual), tip_distance=_finite(h.tip_distance),
+                                   step=_finite(h.step)) for h in p.history]  # fmt: skip
+    posed = None if p.palm_position is None else p.pose()  # no hand pose: a hand-free deformable's answer
+    spheres = posed_mesh = None
+    if hand is not None and posed is not None:
+        spheres = hand_spheres(hand, posed.palm_pos, posed.palm_quat, posed.q)
+        posed_mesh = hand_mesh(hand, posed.palm_pos, posed.palm_quat, posed.q) if mesh else None
+    return Proposal(
+        contact_points=np.asarray(p.contact_points, dtype=np.float64).reshape(-1, 3),
+        contact_normals=np.asarray(p.contact_normals, dtype=np.float64).reshape(-1, 3),
+        forces=np.asarray(p.forces, dtype=np.float64).reshape(-1, 3),
+        fingertips=list(p.fingertips),
+        palm_position=None if posed is None else posed.palm_pos.astype(np.float64),
+        palm_quaternion=None if posed is None else posed.palm_quat.astype(np.float64),
+        joint_names=list(p.joint_names),
+        joint_values=np.zeros(0) if posed is None else posed.q.astype(np.float64),
+        quality=quality,
+        contact_source=p.contact_source,
+        hand_spheres=spheres,
+        hand_mesh=posed_mesh,
+        history=records,
+        contact_motions=None if p.contact_motions is None else np.asarray(p.contact_motions, np.float64),
+        network_sample=p.network_sample,
+        network_forces=None if p.network_forces is None else np.asarray(p.network_forces, np.float64),
+        rollout_points=None if p.rollout_points is None else np.asarray(p.rollout_points, np.float64),
+        shape_error=None if p.shape_error is None else _finite(p.shape_error),
+    )
+
+
 def to_result(
     output: SynthesisOutput, request: SynthesisRequest, model_version: str, hand: Hand | None = None
 ) -> SynthesisResult:
@@ -152,50 +202,17 @@ def to_result(
 
     With ``hand``, each proposal carries the hand's collision spheres at its pose.
     """
-    proposals = []
-    for p in output.proposals:
-        q = p.quality
-        quality = Quality(
-            success=bool(q.success), converged=bool(q.converged), reason=q.reason, iterations=int(q.iterations),
-            wrench_residual=_finite(q.wrench_residual), max_tip_distance=_finite(q.max_tip_distance),
-            penetration_depth=_finite(q.penetration_depth), self_collision_depth=_finite(q.self_collision_depth),
-            epsilon=None if q.epsilon is None or not np.isfinite(q.epsilon) else float(q.epsilon),
-            failures=list(q.failures), geometry=q.geometry,
-        )  # fmt: skip
-        history = None
-        if request.options.return_history and p.history is not None:
-            history = [IterationRecord(residual=_finite(h.residual), tip_distance=_finite(h.tip_distance),
-                                       step=_finite(h.step)) for h in p.history]  # fmt: skip
-        proposals.append(
-            Proposal(
-                contact_points=np.asarray(p.contact_points, dtype=np.float64).reshape(-1, 3),
-                contact_normals=np.asarray(p.contact_normals, dtype=np.float64).reshape(-1, 3),
-                forces=np.asarray(p.forces, dtype=np.float64).reshape(-1, 3),
-                fingertips=list(p.fingertips),
-                palm_position=np.asarray(p.palm_position, dtype=np.float64),
-                palm_quaternion=np.asarray(p.palm_quaternion, dtype=np.float64),
-                joint_names=list(p.joint_names),
-                joint_values=np.asarray(p.joint_values, dtype=np.float64),
-                quality=quality,
-                contact_source=p.contact_source,
-                hand_spheres=None
-                if hand is None
-                else hand_spheres(hand, p.palm_position, p.palm_quaternion, p.joint_values),
-                hand_mesh=None
-                if hand is None or not request.options.return_hand_mesh
-                else hand_mesh(hand, p.palm_position, p.palm_quaternion, p.joint_values),
-                history=history,
-                contact_motions=None if p.contact_motions is None else np.asarray(p.contact_motions, np.float64),
-                network_sample=p.network_sample,
-                network_forces=None if p.network_forces is None else np.asarray(p.network_forces, np.float64),
-            )
-        )
     options = request.options
+    proposals = [
+        to_proposal(p, hand, history=options.return_history, mesh=options.return_hand_mesh)
+        for p in output.proposals
+    ]
     return SynthesisResult(
         hand=output.hand,
         model_version=model_version,
         proposals=proposals,
         heatmap=output.heatmap if options.return_heatmap and output.heatmap is not None else None,
+        heatmaps=output.heatmaps if options.return_all_heatmaps and output.heatmaps is not None else None,
         force_map=output.force_map if options.return_force_map and output.force_map is not None else None,
         timings={k: float(v) for k, v in output.timings.items()},
     )

@@ -5,7 +5,8 @@ pipe by `mani serve`) and the Redis worker (`workers.worker`, fed by a stream). 
 (the request still as the msgpack bytes the API encoded once) and gets `Finished` outcomes back (a result already
 encoded once, as the bytes the queue stores), so neither shell decodes, validates or encodes a request or a result
 itself. The one validation at the queue → worker boundary is `decode`'s; the result is built once by the pipeline
-and encoded once here.
+and encoded once here. A job's ``kind`` says what its bytes are: a `SynthesisRequest` (run in micro-batches) or a
+`PlanRequest` (run alone, after the batch's syntheses, through `Pipeline.plan`).
 
 Timings, one meaning on both backends (seconds): ``queue`` from submission to the start in a worker, ``run`` from
 that start to the outcome, ``total`` their sum; plus the pipeline's own per-stage figures (``network``,
@@ -24,8 +25,11 @@ from dataclasses import dataclass, field
 from clients.codec import pack, unpack
 from clients.schemas import (
     ErrorBody,
+    JobKind,
     JobProgress,
     JobState,
+    PlanRequest,
+    PlanResult,
     RobotPublic,
     RobotRegister,
     Stage,
@@ -34,9 +38,9 @@ from clients.schemas import (
     WorkerPublic,
 )
 from workers.logs import job_context
-from workers.pipeline import CancelFn, JobInput, Pipeline, error_from_exception
+from workers.pipeline import CancelFn, JobInput, Pipeline, PlanJob, error_from_exception
 from workers.queue.records import state_for_error
-from workers.runner import run_batch
+from workers.runner import run_batch, run_plan
 
 log = logging.getLogger("workers.core")
 
@@ -57,6 +61,7 @@ class RawJob:
     robot: bytes | None = None  # the registered robot (msgpack of `RobotRegister`) when the request names one
     request_id: str | None = None
     queued_for: float = 0.0  # seconds between submission and this delivery's start
+    kind: JobKind = JobKind.SYNTHESIS  # what ``request`` holds
 
 
 @dataclass
@@ -65,14 +70,14 @@ class Finished:
 
     id: str
     state: JobState
-    result: bytes | None = None  # msgpack of the `SynthesisResult`, encoded once
+    result: bytes | None = None  # msgpack of the `SynthesisResult` (a plan: `PlanResult`), encoded once
     error: ErrorBody | None = None
     timings: dict[str, float] = field(default_factory=dict)
 
 
 @dataclass
 class _Started:
-    job: JobInput
+    job: JobInput | PlanJob
     started: float
     queued_for: float
 
@@ -118,11 +123,16 @@ class WorkerCore:
                     continue
                 log.info("job started")
             started.append(_Started(job, t0, raw.queued_for))
-        outcomes = run_batch(self.pipeline, [s.job for s in started], throttled(sink), should_cancel)
+        syntheses = [s.job for s in started if isinstance(s.job, JobInput)]
+        outcomes: dict[str, SynthesisResult | PlanResult | ErrorBody] = {}
+        outcomes.update(run_batch(self.pipeline, syntheses, throttled(sink), should_cancel))
         for s in started:
+            if isinstance(s.job, PlanJob):
+                s.started = time.perf_counter()  # it waited for the batch's syntheses: that is not its run time
+                outcomes[s.job.id] = run_plan(self.pipeline, s.job, counted(sink), should_cancel)
             outcome = outcomes[s.job.id]
             run_s = time.perf_counter() - s.started
-            timings = dict(outcome.timings) if isinstance(outcome, SynthesisResult) else {}
+            timings = dict(outcome.timings) if isinstance(outcome, SynthesisResult | PlanResult) else {}
             timings.update(queue=s.queued_for, run=run_s, total=s.queued_for + run_s)
             with job_context(s.job.id, s.job.request_id):
                 finished[s.job.id] = _encoded(s.job.id, outcome, timings)
@@ -130,14 +140,24 @@ class WorkerCore:
         return [finished[raw.id] for raw in raw_jobs]
 
     @staticmethod
-    def _decode(raw: RawJob) -> JobInput:
+    def _decode(raw: RawJob) -> JobInput | PlanJob:
         """The one validation of a request on the worker side."""
-        request = SynthesisRequest.model_validate(unpack(raw.request))
         robot = RobotRegister.model_validate(unpack(raw.robot)) if raw.robot else None
+        if raw.kind is JobKind.PLAN:
+            plan = PlanRequest.model_validate(unpack(raw.request))
+            return PlanJob(id=raw.id, request=plan, deadline=raw.deadline, robot=robot, request_id=raw.request_id)
+        request = SynthesisRequest.model_validate(unpack(raw.request))
         return JobInput(id=raw.id, request=request, deadline=raw.deadline, robot=robot, request_id=raw.request_id)
 
 
-def _encoded(job_id: str, outcome: SynthesisResult | ErrorBody, timings: dict[str, float]) -> Finished:
+def runs_of(raw_jobs: list[RawJob]) -> list[list[RawJob]]:
+    """The micro-batches a transport's delivery is run as: its syntheses together, then each plan alone (a plan
+    takes seconds to minutes; the syntheses' outcomes are not held back for it)."""
+    syntheses = [raw for raw in raw_jobs if raw.kind is not JobKind.PLAN]
+    return ([syntheses] if syntheses else []) + [[raw] for raw in raw_jobs if raw.kind is JobKind.PLAN]
+
+
+def _encoded(job_id: str, outcome: SynthesisResult | PlanResult | ErrorBody, timings: dict[str, float]) -> Finished:
     if isinstance(outcome, ErrorBody):
         return Finished(job_id, state_for_error(outcome), error=outcome, timings=timings)
     result = pack(outcome.model_dump(mode="python", exclude_none=True))
@@ -157,5 +177,22 @@ def throttled(sink: ProgressSink, interval: float = PROGRESS_INTERVAL_S) -> Call
         last[job_id] = now
         p = JobProgress(stage=stage, fraction=min(max(fraction, 0.0), 1.0), iteration=iteration, max_iterations=maximum)
         sink(job_id, p)
+
+    return progress
+
+
+def counted(sink: ProgressSink, interval: float = PROGRESS_INTERVAL_S) -> Callable[[str, Stage, int, int], None]:
+    """A plan's ``progress(job_id, stage, completed, total)`` → ``sink``, throttled as `throttled`, except that
+    the first and the last report of a stage always pass (a stage change is never hidden)."""
+    last: dict[str, tuple[float, Stage]] = {}
+
+    def progress(job_id: str, stage: Stage, completed: int, total: int) -> None:
+        now = time.monotonic()
+        stamp, previous = last.get(job_id, (float("-inf"), None))
+        if stage is previous and completed < total and now - stamp < interval:
+            return
+        last[job_id] = (now, stage)
+        fraction = 1.0 if total <= 0 else min(max(completed / total, 0.0), 1.0)
+        sink(job_id, JobProgress(stage=stage, fraction=fraction, completed=completed, total=total))
 
     return progress

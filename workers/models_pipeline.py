@@ -6,11 +6,14 @@ Loaded once per worker process: the network from ``weights_dir`` (default ``mode
 is there (``model_loaded``), and the built-in hands (published as the robot catalogue). Without weights, jobs
 whose method needs the network ("network", or "auto" without contacts) fail with a `ModelUnavailable` error;
 "contacts", "direct_grasp" and "random_contacts" run end to end. Jobs run one at a time (per-job progress and
-cancellation); with ``batch_network=True`` the network-method jobs of a micro-batch share one network call.
+cancellation); with ``batch_network=True`` the network-method jobs of a micro-batch share one network call. A plan
+job runs `models.planning.plan_manipulation` (every step through the same synthesis pipeline and verification as
+a single request), its progress by stage: repair, planning (segments), contacts (steps).
 """
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import logging
 import time
@@ -18,8 +21,17 @@ from collections import OrderedDict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from clients.schemas import ErrorBody, ErrorType, RobotPublic, RobotRegister, Stage
-from workers.pipeline import CancelFn, JobInput, Outcome, ProgressFn, error_from_exception
+from clients.schemas import ErrorBody, ErrorType, RobotIn, RobotPublic, RobotRegister, Stage
+from workers.pipeline import (
+    CancelFn,
+    JobInput,
+    Outcome,
+    PlanJob,
+    PlanOutcome,
+    PlanProgressFn,
+    ProgressFn,
+    error_from_exception,
+)
 from workers.queue.records import cancelled_error
 
 if TYPE_CHECKING:
@@ -134,14 +146,19 @@ class ModelsPipeline:
             self._hands.popitem(last=False)
         return hand
 
-    def _hand(self, job: JobInput) -> Any:
-        robot = job.request.robot
+    def _hand(self, robot: RobotIn | None, registered: RobotRegister | None) -> Any:
+        """The hand a request's ``robot`` names (``registered``: the user's registration it names, if any)."""
+        if robot is None:  # a deformable's contacts for any gripper: the network sees the hand of its data
+            from models.data.deformable_dataset import DEFAULT_HAND
+            from models.robots import get_hand
+
+            return self._builtin.get(DEFAULT_HAND) or get_hand(DEFAULT_HAND)
         if robot.urdf is not None:
             return self._user_hand("inline", robot.urdf, robot.fingertips or [], robot.tip_offsets)
         if robot.name in self._builtin:
             return self._builtin[robot.name]
-        if job.robot is not None:
-            return self._registered(job.robot).hand
+        if registered is not None:
+            return self._registered(registered).hand
         from models.errors import UnknownHand
 
         raise UnknownHand(f"robot.name: unknown hand {robot.name!r}; built-in: {', '.join(self._builtin)}")
@@ -162,7 +179,7 @@ class ModelsPipeline:
                 f"{self.model_version} (trained on: {', '.join(card.materials)}); "
                 "use options.method 'contacts', 'random_contacts' or 'direct_grasp'"
             )
-        hand = self._hand(job)
+        hand = self._hand(job.request.robot, job.robot)
         return hand, to_input(job.request, hand, job.deadline)
 
     def run(self, jobs: list[JobInput], progress: ProgressFn, should_cancel: CancelFn) -> list[Outcome]:
@@ -217,6 +234,25 @@ class ModelsPipeline:
                 outcomes[i] = to_result(out, job.request, self.model_version or "none", hand)
         missing = ErrorBody.of(ErrorType.INTERNAL_ERROR, "the pipeline gave this job no outcome")
         return [o if o is not None else missing for o in outcomes]
+
+
+    def plan(self, job: PlanJob, progress: PlanProgressFn, should_cancel: CancelFn) -> PlanOutcome:
+        """Plan the manipulation; planner and pipeline errors are the job's (typed: the field they name)."""
+        from models.errors import ScienceError
+        from models.planning import plan_manipulation
+        from workers.plan_convert import to_plan_input, to_plan_result
+
+        def report(stage: str, completed: int, total: int) -> None:
+            with contextlib.suppress(ValueError):
+                progress(job.id, Stage(stage), completed, total)
+
+        try:
+            hand = self._hand(job.request.robot, job.robot)
+            inp = to_plan_input(job.request, hand, job.deadline)
+            out = plan_manipulation(inp, self.predictor, report, lambda: should_cancel(job.id))
+        except ScienceError as exc:
+            return error_from_exception(exc)
+        return to_plan_result(out, job.request, hand, self.model_version or "none")
 
 
 def _reporter(job: JobInput, progress: ProgressFn) -> Any:

@@ -8,9 +8,19 @@ import contextlib
 import logging
 import time
 
-from clients.schemas import ErrorBody, SynthesisResult
+from clients.schemas import ErrorBody, PlanResult, SynthesisResult
 from workers.logs import job_context
-from workers.pipeline import CancelFn, JobInput, Outcome, Pipeline, ProgressFn, error_from_exception
+from workers.pipeline import (
+    CancelFn,
+    JobInput,
+    Outcome,
+    Pipeline,
+    PlanJob,
+    PlanOutcome,
+    PlanProgressFn,
+    ProgressFn,
+    error_from_exception,
+)
 from workers.queue.records import cancelled_error, deadline_error
 
 log = logging.getLogger("workers.runner")
@@ -54,6 +64,26 @@ def run_batch(
         return outcomes
     outcomes.update({job.id: result for job, result in zip(live, results, strict=True)})
     return outcomes
+
+
+def run_plan(pipeline: Pipeline, job: PlanJob, progress: PlanProgressFn, should_cancel: CancelFn) -> PlanOutcome:
+    """The outcome of one plan job: dropped when cancelled or expired before it starts, a failure when the
+    pipeline raises (never raises itself)."""
+    with job_context(job.id, job.request_id):
+        if should_cancel(job.id):
+            log.info("job dropped before start", extra={"reason": "Cancelled"})
+            return cancelled_error()
+        if job.deadline is not None and job.deadline <= time.time():
+            log.info("job dropped before start", extra={"reason": "DeadlineExceeded"})
+            return deadline_error()
+        try:
+            outcome = pipeline.plan(job, progress, should_cancel)
+        except Exception as exc:  # a crashed plan fails its job, never the worker
+            log.exception("pipeline failed")
+            return error_from_exception(exc)
+    if not isinstance(outcome, PlanResult | ErrorBody):
+        return error_from_exception(RuntimeError(f"pipeline answered a {type(outcome).__name__} for a plan"))
+    return outcome
 
 
 def _context(jobs: list[JobInput]) -> contextlib.AbstractContextManager[None]:

@@ -1,10 +1,11 @@
 """`StagedPipeline`: a small, real, science-free pipeline for queue tests and benchmarks.
 
 It walks a job through the real stage sequence (network for the whole micro-batch at once, then per job:
-initialisation, refinement k/max, verification) sleeping ``stage_seconds`` per stage, honours cancellation
-between stages and deadlines, and answers a `SynthesisResult` with no proposals and ``model_version``
-"staged-test". It is NOT the science: it exists so the queue mechanics can be tested the way arq tests use a burst
-worker. Fault injection for tests: a request whose ``options.seed`` equals ``crash_seed`` kills its worker
+initialisation, refinement k/max, verification) sleeping ``stage_seconds`` per stage, honours cancellation between
+stages and deadlines, and answers a `SynthesisResult` with no proposals and ``model_version`` "staged-test"; a plan
+job walks repair, planning (one stage time per segment) and contacts, and answers the straight poses start →
+waypoints with no steps. It is NOT the science: it exists so the queue mechanics can be tested the way arq tests use
+a burst worker. Fault injection for tests: a request whose ``options.seed`` equals ``crash_seed`` kills its worker
 process (SIGKILL), one equal to ``fail_seed`` raises. A job given a registered robot reports its joint count as
 ``timings["robot_dof"]``, so tests can tell which registration (whose URDF) a job ran with.
 """
@@ -18,8 +19,8 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
-from clients.schemas import RobotPreview, RobotPublic, RobotRegister, Stage, SynthesisResult
-from workers.pipeline import CancelFn, JobInput, Outcome, ProgressFn
+from clients.schemas import PlanResult, RobotPreview, RobotPublic, RobotRegister, Stage, SynthesisResult
+from workers.pipeline import CancelFn, JobInput, Outcome, PlanJob, PlanOutcome, PlanProgressFn, ProgressFn
 from workers.queue.records import cancelled_error, deadline_error
 
 TEST_HAND = RobotPublic(
@@ -120,8 +121,34 @@ class StagedPipeline:
             t0 = time.perf_counter()
             time.sleep(self.stage_seconds)
             timings[stage.value] = timings.get(stage.value, 0.0) + time.perf_counter() - t0
-        hand = job.request.robot.name or "inline"
+        hand = "none" if job.request.robot is None else job.request.robot.name or "inline"
         if job.robot is not None:
             root = ET.fromstring(job.robot.urdf or job.robot.mjcf or "<robot/>")
             timings["robot_dof"] = float(sum(j.get("type") in ("revolute", "prismatic") for j in root.iter("joint")))
         return SynthesisResult(hand=hand, model_version=self.model_version or "", proposals=[], timings=timings)
+
+    def plan(self, job: PlanJob, progress: PlanProgressFn, should_cancel: CancelFn) -> PlanOutcome:
+        request = job.request
+        seed = request.options.seed
+        if self.crash_seed is not None and seed == self.crash_seed:
+            os.kill(os.getpid(), signal.SIGKILL)
+        if self.fail_seed is not None and seed == self.fail_seed:
+            raise RuntimeError(f"injected failure (seed {seed})")
+        segments = len(request.waypoints)
+        stages = [(Stage.REPAIR, 1, 1)] + [(Stage.PLANNING, k, segments) for k in range(1, segments + 1)]
+        stages.append((Stage.CONTACTS, 1, 1))
+        t0 = time.perf_counter()
+        for stage, completed, total in stages:
+            if should_cancel(job.id):
+                return cancelled_error()
+            if job.deadline is not None and time.time() > job.deadline:
+                return deadline_error("while it ran")
+            progress(job.id, stage, completed, total)
+            time.sleep(self.stage_seconds)
+        poses = [request.start, *request.waypoints]
+        return PlanResult(
+            success=True, positions=np.array([p.position for p in poses]),
+            quaternions=np.array([p.quaternion for p in poses]), waypoint_indices=list(range(1, len(poses))),
+            hand=request.robot.name or "inline", model_version=self.model_version,
+            timings={"planning": time.perf_counter() - t0},
+        )  # fmt: skip

@@ -38,11 +38,12 @@ from clients.schemas import (
     DeadLetter,
     ErrorBody,
     ErrorType,
+    JobKind,
     JobProgress,
     Stage,
     WorkerPublic,
 )
-from workers.core import PROGRESS_INTERVAL_S, RawJob, WorkerCore
+from workers.core import PROGRESS_INTERVAL_S, RawJob, WorkerCore, runs_of
 from workers.logs import job_context, setup_logging
 from workers.pipeline import load_pipeline
 from workers.queue.records import cancelled_error, deadline_error, new_id, scoped_robot
@@ -267,14 +268,15 @@ class RedisWorker:
         with self.lock:
             self.inflight.update({entry_of[j.id]: j.id for j in raw_jobs})
         try:
-            for done in self._core.run(raw_jobs, self._progress, self._should_cancel):
-                with job_context(done.id, request_of[done.id]):
-                    self._end_durably(entry_of[done.id], done.id, done.state.value, result=done.result or b"",
-                                      error=done.error, timings=done.timings)  # fmt: skip
-                    self.jobs_done += 1
-                with self.lock:
-                    self.inflight.pop(entry_of[done.id], None)
-                self.cancel_checked.pop(done.id, None)
+            for run in runs_of(raw_jobs):  # a plan alone: its batch-mates' outcomes are not held back for it
+                for done in self._core.run(run, self._progress, self._should_cancel):
+                    with job_context(done.id, request_of[done.id]):
+                        self._end_durably(entry_of[done.id], done.id, done.state.value, result=done.result or b"",
+                                          error=done.error, timings=done.timings)  # fmt: skip
+                        self.jobs_done += 1
+                    with self.lock:
+                        self.inflight.pop(entry_of[done.id], None)
+                    self.cancel_checked.pop(done.id, None)
         finally:  # whatever was not finished is given back: no heartbeat keeps it from re-delivery any more
             with self.lock:
                 for raw in raw_jobs:
@@ -319,7 +321,8 @@ class RedisWorker:
             deadline = float(rest[1]) if len(rest) > 1 and rest[1] else None
             log.info("job delivered", extra={"delivery": int(deliveries)})
             robot = self._registered_robot(job_id, fields)
-            return RawJob(job_id, fields[b"p"], deadline, robot, request_id, queued_for)
+            kind = JobKind(fields[b"t"].decode()) if fields.get(b"t") else JobKind.SYNTHESIS
+            return RawJob(job_id, fields[b"p"], deadline, robot, request_id, queued_for, kind)
         if verdict == "dead":
             h = self.r.hmget(self.keys.job(job_id), ["error", "error_type"])
             message = h[0].decode() if h[0] else "failed on every delivery"
@@ -357,6 +360,7 @@ class RedisWorker:
             error.type if error else "", pack(timings or {}),
             pack(progress.model_dump(mode="python")) if progress else "",
             int(s.result_ttl * 1000), int(max(s.record_ttl, s.result_ttl) * 1000), job_id, "1" if owner else "0",
+            pack([d.model_dump(mode="python") for d in error.detail]) if error and error.detail else "",
         ]  # fmt: skip
         if not self._finish(keys=keys, args=args):
             log.warning("result discarded: the job was re-delivered to another worker")

@@ -6,9 +6,12 @@ import argparse
 import json
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from clients.cli import common
+
+if TYPE_CHECKING:
+    from clients.schemas import SynthesisResult
 
 TASK_HELP = (
     "what to do: 'force_closure' (hold it; default), 'delta:TX,TY,TZ[,QW,QX,QY,QZ]' (move by a translation in m "
@@ -46,7 +49,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def add_request_args(parser: argparse.ArgumentParser) -> None:
     """The options that make a request from an object file (shared with ``mani batch submit``)."""
     req = parser.add_argument_group("request")
-    req.add_argument("--hand", default="leap", help="built-in or registered hand name (default %(default)s)")
+    req.add_argument("--hand", default="leap", help="built-in or registered hand name (default %(default)s); "
+                     "'none' for a deformable's contacts and motions for any gripper")
+    req.add_argument("--rollout", action="store_true",
+                     help="deformables: simulate the answer and judge it by the shape metric (simulate_rollout)")
     req.add_argument("--urdf", type=Path, help="an inline URDF hand instead of --hand (needs --fingertips)")
     req.add_argument("--fingertips", help="comma-separated fingertip links of the --urdf hand")
     req.add_argument("--task", default="force_closure", help=TASK_HELP)
@@ -106,7 +112,7 @@ def build_request(args: argparse.Namespace, path: Path | None = None) -> Any:
 
     if path.suffix.lower() == ".json":
         data = json.loads(path.read_text())
-        if isinstance(data, dict) and {"object", "task", "robot"} <= set(data):
+        if isinstance(data, dict) and {"object", "task"} <= set(data):
             import pydantic
 
             try:
@@ -117,7 +123,7 @@ def build_request(args: argparse.Namespace, path: Path | None = None) -> Any:
     if args.friction is not None:
         fields["properties"] = {"friction": args.friction}
     obj = object_from_file(path, args.points, seed=args.seed, **fields)
-    robot: Any = args.hand
+    robot: Any = None if args.hand == "none" else args.hand
     if args.urdf is not None:
         if not args.fingertips:
             raise ValueError("--urdf needs --fingertips (comma-separated link names)")
@@ -134,6 +140,7 @@ def build_request(args: argparse.Namespace, path: Path | None = None) -> Any:
         refine=not args.no_refine,
         return_heatmap=args.heatmap,
         return_hand_mesh=getattr(args, "view", None) is not None,  # --view draws the posed hand's meshes
+        simulate_rollout=args.rollout,
     )
 
 
@@ -166,11 +173,13 @@ def wait_with_progress(job: Any, timeout: float, show: bool) -> Any:
     raise AssertionError("unreachable")
 
 
-def result_table(result: Any) -> Any:
+def result_table(result: SynthesisResult) -> Any:
     """A rich table of the proposals' quality figures."""
     from rich.table import Table
 
-    table = Table(title=f"{result.hand} · model {result.model_version}")
+    table = Table(title=f"{result.hand or 'contacts for any gripper'} · model {result.model_version}")
+    if any(p.contact_motions is not None for p in result.proposals):
+        return _deformable_rows(table, result)
     for column in ("#", "ok", "reason", "iter", "residual", "tip mm", "pen. mm", "ε", "palm (m)"):
         table.add_column(column, justify="right" if column not in ("ok", "reason") else "left")
     for i, p in enumerate(result.proposals):
@@ -184,8 +193,20 @@ def result_table(result: Any) -> Any:
             f"{q.max_tip_distance * 1e3:.1f}",
             f"{q.penetration_depth * 1e3:.1f}",
             "-" if q.epsilon is None else f"{q.epsilon:.3f}",
-            ", ".join(f"{v:+.3f}" for v in p.palm_position),
+            "-" if p.palm_position is None else ", ".join(f"{v:+.3f}" for v in p.palm_position),
         )
+    return table
+
+
+def _deformable_rows(table: Any, result: SynthesisResult) -> Any:
+    """Contacts with post-contact motions: the contacts' source, the motions and the simulated verdict."""
+    for column in ("#", "ok", "reason", "contacts", "from", "largest motion (m)", "shape error"):
+        table.add_column(column, justify="left" if column in ("ok", "reason", "from") else "right")
+    for i, p in enumerate(result.proposals):
+        motion = 0.0 if p.contact_motions is None else float((p.contact_motions**2).sum(axis=1).max() ** 0.5)
+        table.add_row(str(i), "[green]yes[/]" if p.quality.success else "[red]no[/]", p.quality.reason,
+                      str(len(p.contact_points)), p.contact_source or "-", f"{motion:.3f}",
+                      "-" if p.shape_error is None else f"{p.shape_error:.3f}")  # fmt: skip
     return table
 
 
@@ -193,8 +214,11 @@ def result_table(result: Any) -> Any:
 def run(args: argparse.Namespace) -> int:
     """Run ``mani synthesize``."""
     from clients.sdk import result_figure, result_to_dict, result_to_json
+    from clients.sdk.extras import require
     from clients.sdk.tracking import job_result
 
+    if args.view is not None:
+        require("plotly", "view", "--view")  # before the job runs, not after
     request = build_request(args)
     with common.client_factory(args) as client:
         job = client.submit(request)

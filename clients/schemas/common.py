@@ -2,22 +2,36 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any
 
 import numpy as np
-from pydantic import AfterValidator, BaseModel, ConfigDict
+from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationInfo, model_validator
 
 from clients.arrays import spec
 
 MIN_POINTS = 64
 MAX_POINTS = 200_000
 SCHEMA_VERSION = "v1"
+IGNORE_UNKNOWN = "ignore_unknown_fields"
+"""Validation context key: ``model_validate(data, context={IGNORE_UNKNOWN: True})`` drops fields this contract does
+not know, at every level, instead of refusing them. The SDK reads answers so, since a newer minor version of the
+contract may add answer fields (docs/compatibility.md); the service never does: an unknown request field is an
+error naming it."""
+ANSWER_CONTEXT = {IGNORE_UNKNOWN: True}
+"""The validation context of answers read by a client."""
 
 
 class WireModel(BaseModel):
-    """Base of every wire schema: unknown fields are errors, arrays are numpy."""
+    """Base of every wire schema: unknown fields are errors (unless `IGNORE_UNKNOWN`), arrays are numpy."""
 
     model_config = ConfigDict(extra="forbid", arbitrary_types_allowed=True, frozen=False)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _drop_unknown_fields(cls, data: Any, info: ValidationInfo) -> Any:
+        if isinstance(data, dict) and info.context and info.context.get(IGNORE_UNKNOWN):
+            return {key: value for key, value in data.items() if key in cls.model_fields}
+        return data
 
 
 def _unit_quaternion(q: np.ndarray) -> np.ndarray:

@@ -48,6 +48,10 @@ class ErrorType(StrEnum):
     """422: the input breaks the contract; ``detail`` names each field and problem."""
     ROBOT_INVALID = "RobotInvalid"
     """422: a robot description the hardened loader refused (the message names the element)."""
+    INFEASIBLE_WAYPOINT = "InfeasibleWaypoint"
+    """422: a plan's start, or a waypoint it did not repair, puts the object in collision (``detail`` names it)."""
+    NO_PATH_FOUND = "NoPathFound"
+    """422: the planner found no collision-free motion for a plan's segment in time (``detail`` names its end)."""
     RATE_LIMITED = "RateLimited"
     """429: the key's request rate is over its limit (Retry-After)."""
     QUEUE_FULL = "QueueFull"
@@ -102,6 +106,8 @@ _STATUS: dict[ErrorType, int] = {
     ErrorType.UNSUPPORTED_MEDIA_TYPE: 415,
     ErrorType.VALIDATION_ERROR: 422,
     ErrorType.ROBOT_INVALID: 422,
+    ErrorType.INFEASIBLE_WAYPOINT: 422,
+    ErrorType.NO_PATH_FOUND: 422,
     ErrorType.RATE_LIMITED: 429,
     ErrorType.QUEUE_FULL: 429,
     ErrorType.INTERNAL_ERROR: 500,

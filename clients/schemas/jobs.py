@@ -6,26 +6,39 @@ from pydantic import Field
 
 from clients.schemas.common import WireModel
 from clients.schemas.errors import ErrorBody
+from clients.schemas.plans import PlanRequest, PlanResult
 from clients.schemas.requests import SynthesisRequest
 from clients.schemas.results import SynthesisResult
-from clients.schemas.states import JobState, Stage
+from clients.schemas.states import JobKind, JobState, Stage
 
 MAX_BATCH_SIZE = 1000
 
+JobRequest = SynthesisRequest | PlanRequest
+"""What a job is submitted with; its kind is `kind_of` it."""
+
+
+def kind_of(request: JobRequest) -> JobKind:
+    """The kind of job ``request`` makes."""
+    return JobKind.PLAN if isinstance(request, PlanRequest) else JobKind.SYNTHESIS
+
 
 class JobProgress(WireModel):
-    """Progress of a job: its stage, and the refinement iteration when refining."""
+    """Progress of a job: its stage, and the refinement iteration when refining; for a plan, how many of the
+    stage's items (waypoints checked, segments planned, steps synthesised) are done."""
 
     stage: Stage = Stage.QUEUED
     fraction: float = Field(0.0, ge=0, le=1)
     iteration: int | None = None
     max_iterations: int | None = None
+    completed: int | None = Field(None, ge=0, description="Plans: items of the stage done.")
+    total: int | None = Field(None, ge=0, description="Plans: items of the stage (waypoints, segments, steps).")
 
 
 class JobPublic(WireModel):
-    """A job as the API shows it."""
+    """A job as the API shows it: a synthesis job answers ``result``, a plan job ``plan``."""
 
     id: str
+    kind: JobKind = JobKind.SYNTHESIS
     state: JobState
     progress: JobProgress = Field(default_factory=JobProgress)
     created_at: float = Field(..., description="Unix time, seconds.")
@@ -37,6 +50,7 @@ class JobPublic(WireModel):
     batch_id: str | None = None
     timings: dict[str, float] = Field(default_factory=dict)
     result: SynthesisResult | None = None
+    plan: PlanResult | None = Field(None, description="A plan job's answer.")
     error: ErrorBody | None = None
 
 

@@ -1,4 +1,4 @@
-"""A manipulation plan (draft for ``POST /v1/plans``): the object, its start pose, sparse waypoints and the scene
+"""A manipulation plan (``POST /v1/plans``): the object, its start pose, sparse waypoints and the scene
 in; the dense collision-free trajectory, the repaired waypoints and a contact answer per step out.
 
 Frames: the object's points, normals and mesh are in the object's own frame; ``start`` and the ``waypoints`` place
@@ -130,7 +130,9 @@ class PlanOptions(WireModel):
     max_iterations: int = Field(100, ge=1, le=500)
     max_contact_shift: float = Field(0.01, gt=0, le=1.0, description="A grasp is kept while its contacts move "
                                      "at most this far on the object, m.")  # fmt: skip
-    timeout: float = Field(120.0, gt=0, le=MAX_TIMEOUT_S, description="Seconds the caller will wait.")
+    timeout: float = Field(120.0, gt=0, le=MAX_TIMEOUT_S, description="The plan's compute budget, s: steps not "
+                           "synthesised by then are answered failed.")  # fmt: skip
+    return_hand_mesh: bool = Field(False, description="Each step's hand as posed collision meshes (large).")
 
 
 class PlanRequest(WireModel):

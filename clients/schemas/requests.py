@@ -36,10 +36,24 @@ class SynthesisOptions(WireModel):
     return_heatmap: bool = False
     return_force_map: bool = False
     return_history: bool = False
+    return_all_heatmaps: bool = Field(
+        False, description="Return every latent sample's heatmap (`heatmaps`, K × N; each proposal names its "
+        "`network_sample`), not only the best proposal's.",
+    )
     return_hand_mesh: bool = Field(
         False,
         description="Return each proposal's posed hand collision meshes (`hand_mesh`, for viewers; about "
         "100-400 kB a proposal).",
+    )
+    num_contacts: int | None = Field(
+        None, ge=1, le=8, description="Deformables without a robot: contacts per proposal (default 2). With a "
+        "robot the contacts are its fingertips.",
+    )
+    simulate_rollout: bool = Field(
+        False,
+        description="Deformables: apply each proposal's contacts and motions in the simulator (MuJoCo, on a body "
+        "rebuilt from the points, resting on a table under its lowest point) and judge success by the paper's "
+        "shape metric against the target; returns `rollout_points`. About 0.5-2 s a proposal.",
     )
 
 
@@ -61,7 +75,10 @@ class SynthesisRequest(WireModel):
 
     object: ObjectIn
     task: TaskIn
-    robot: RobotIn
+    robot: RobotIn | None = Field(
+        None, description="The hand. Optional only for a deformable object with a per-point task (point_motion, "
+        "target_points): the answer is then contact points with their post-contact motions, for any gripper.",
+    )
     options: SynthesisOptions = Field(default_factory=SynthesisOptions)
     contacts: ContactsIn | None = None
 
@@ -77,4 +94,15 @@ class SynthesisRequest(WireModel):
             raise ValueError("task: joint_motion needs an articulated object")
         if self.options.method is Method.CONTACTS and self.contacts is None:
             raise ValueError("contacts: required with options.method 'contacts'")
+        if self.robot is None and not self.handless:
+            raise ValueError("robot: required, except for a deformable object (cloth, rope, plasticine) with a "
+                             "point_motion or target_points task")  # fmt: skip
+        if self.robot is not None and self.options.num_contacts is not None:
+            raise ValueError("options.num_contacts: only without a robot (with one, the contacts are its fingertips)")
         return self
+
+    @property
+    def handless(self) -> bool:
+        """A deformable's per-point task, which a request may send without a robot."""
+        deformable = self.object.material in (Material.CLOTH, Material.ROPE, Material.PLASTICINE)
+        return deformable and isinstance(self.task, PointMotionTask | TargetPointsTask)

@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Annotated
 
 import numpy as np
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from clients.arrays import spec
 from clients.schemas.common import PerPoint, Points, Quaternion, Rows3, Vec3, Vector, WireModel
@@ -56,11 +56,15 @@ class Proposal(WireModel):
     contact_points: Rows3
     contact_normals: Rows3
     forces: Rows3
-    fingertips: list[str] = Field(..., description="The fingertip link at each contact.")
-    palm_position: Vec3
-    palm_quaternion: Quaternion
-    joint_names: list[str]
-    joint_values: Vector
+    fingertips: list[str] = Field(
+        default_factory=list, description="The fingertip link at each contact (empty without a robot)."
+    )
+    palm_position: Vec3 | None = Field(None, description="The palm's position, m (None without a robot).")
+    palm_quaternion: Quaternion | None = Field(None, description="The palm's orientation (w, x, y, z).")
+    joint_names: list[str] = Field(default_factory=list)
+    joint_values: Vector = Field(
+        default_factory=lambda: np.zeros(0), description="Joint values in ``joint_names`` order (rad or m)."
+    )
     quality: Quality
     contact_source: str | None = Field(
         None,
@@ -77,6 +81,14 @@ class Proposal(WireModel):
     contact_motions: Rows3 | None = Field(
         None, description="Deformables: the post-contact motion of each contact (m): grasp it and move it so."
     )
+    rollout_points: Rows3 | None = Field(
+        None, description="Deformables with `options.simulate_rollout`: where the object's points end after the "
+        "simulated manipulation (N, 3), m, in the request's order.",
+    )
+    shape_error: float | None = Field(
+        None, ge=0, description="Deformables with `options.simulate_rollout`: mean distance between the rollout "
+        "and the target over the most-moving points, in the paper's 2 m normalised cube.",
+    )
     network_sample: int | None = Field(
         None, ge=0, description="Which of the network's latent samples proposed these contacts."
     )
@@ -85,17 +97,26 @@ class Proposal(WireModel):
         "refined `forces`.",
     )
 
+    @field_validator("palm_position", "palm_quaternion", mode="before")
+    @classmethod
+    def _empty_is_none(cls, value: object) -> object:
+        """An empty palm pose is no pose (gRPC sends an unset repeated field as an empty one)."""
+        return None if isinstance(value, list | tuple) and len(value) == 0 else value
+
 
 class SynthesisResult(WireModel):
     """The answer to one request."""
 
-    hand: str
+    hand: str | None = Field(None, description="The hand's name (None for a request without a robot).")
     model_version: str
     proposals: list[Proposal]
     heatmap: PerPoint | None = Field(
         None, description="The network's contact heatmap (return_heatmap): the sample the best proposal came from."
     )
     force_map: Points | None = Field(None, description="The network's force map of the same sample (return_force_map).")
+    heatmaps: Annotated[np.ndarray, spec("K", "N")] | None = Field(
+        None, description="Every latent sample's heatmap (return_all_heatmaps), row k for `network_sample` k."
+    )
     timings: dict[str, float] = Field(default_factory=dict, description="Seconds per stage.")
 
     @property

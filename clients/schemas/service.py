@@ -5,6 +5,8 @@ Defined here, in the contract, so that the SDK reads the shapes the service send
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import Field
 
 from clients.schemas.common import WireModel
@@ -18,7 +20,10 @@ class HealthPublic(WireModel):
 
     status: str = "ok"
     backend: str
-    version: str
+    version: str = Field(..., description="The service's own version (its distribution's).")
+    contract_version: str | None = Field(
+        None, description="The wire contract's MAJOR.MINOR (docs/compatibility.md); None: older than the handshake."
+    )
 
 
 class JobList(WireModel):
@@ -72,11 +77,29 @@ class DashboardPublic(WireModel):
     dead_letters: list[DeadLetter] = Field(default_factory=list)
 
 
+class SceneObstacle(WireModel):
+    """One obstacle of a plan's scene as the viewer draws it, world frame (m): a triangle mesh (boxes and meshes),
+    or points (point clouds, and meshes too large to draw)."""
+
+    name: str
+    kind: Literal["box", "mesh", "points"]
+    vertices: list[list[float]]
+    faces: list[list[int]] | None = None
+
+
 class ScenePublic(WireModel):
-    """Answer of ``GET /v1/jobs/{id}/scene``: the job (with result) and the object to draw it on."""
+    """Answer of ``GET /v1/jobs/{id}/scene``: the job (with result) and the object to draw it on; for a plan
+    job also the scene's obstacles and support plane (the object's points are then in its own frame: the plan's
+    poses place them)."""
 
     job: JobPublic
     points: list[list[float]] | None = Field(None, description="Subsampled object points (≤ 4096), m.")
     normals: list[list[float]] | None = None
     region_mask: list[int] | None = None
     heatmap: list[float] | None = Field(None, description="Contact heatmap at those points (return_heatmap).")
+    target_points: list[list[float]] | None = Field(
+        None, description="Per-point tasks: where those points should go (or the unordered target cloud), m."
+    )
+    obstacles: list[SceneObstacle] | None = Field(None, description="A plan's obstacles, world frame.")
+    support_height: float | None = Field(None, description="A plan's support plane z = height, m.")
+    waypoints: list[list[float]] | None = Field(None, description="A plan's requested waypoint positions, m.")

@@ -22,11 +22,22 @@ class JobState(StrEnum):
 
 
 class Stage(StrEnum):
-    """Pipeline stage of a running job."""
+    """Pipeline stage of a running job (a plan job: repair, planning, contacts)."""
 
     QUEUED = "queued"
     NETWORK = "network"
     INITIALISATION = "initialisation"
     REFINEMENT = "refinement"
     VERIFICATION = "verification"
+    REPAIR = "repair"
+    PLANNING = "planning"
+    CONTACTS = "contacts"
     DONE = "done"
+
+
+class JobKind(StrEnum):
+    """What a job computes: one synthesis (``POST /v1/jobs``, ``/v1/synthesize``, a batch's item) or a
+    manipulation plan (``POST /v1/plans``)."""
+
+    SYNTHESIS = "synthesis"
+    PLAN = "plan"

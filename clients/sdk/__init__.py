@@ -15,10 +15,15 @@ Public names:
   `AsyncBatch`.
 - inputs: `object_from_points`, `object_from_mesh`, `object_from_file`, `save_object`, `delta_pose`,
   `target_points`, `force_closure`, `wrench`, `make_request`, `robot_registration`; hands: `hand_registration`
-  (an archive, folder or URDF/MJCF file, cut at a ``palm``), `zip_folder`.
+  (an archive, folder or URDF/MJCF file, cut at a ``palm``), `zip_folder`; plans (``client.plan``,
+  ``client.submit_plan``): `make_plan`, `box_obstacle`, `as_pose`.
 - outputs: `result_to_dict`, `result_to_json`, `load_result`, `result_figure`.
 - errors: `ManiError` › `RequestError` › (`ValidationError`, `Unauthorized`, `NotFound`, `RateLimited`,
-  `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed`.
+  `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed`; `IncompatibleService` (another major version of the
+  contract); `MissingExtra` (an optional part not installed); the warning `ContractWarning` (a newer minor version:
+  docs/compatibility.md).
+- gRPC: `GrpcClient` and its `GrpcJob` in ``clients.sdk.grpc_client`` (the ``[grpc]`` extra), the same calls,
+  results and errors over the service's gRPC port.
 
 The wire models (`SynthesisRequest`, `SynthesisResult`, `JobPublic`, ...) live in `clients.schemas`. The SDK
 never imports torch or server code.
@@ -27,8 +32,11 @@ never imports torch or server code.
 from clients.sdk.async_client import AsyncBatch, AsyncClient, AsyncJob
 from clients.sdk.client import Batch, Client, Job
 from clients.sdk.errors import (
+    ContractWarning,
+    IncompatibleService,
     JobFailed,
     ManiError,
+    MissingExtra,
     NotFound,
     RateLimited,
     RequestError,
@@ -41,6 +49,7 @@ from clients.sdk.errors import (
 from clients.sdk.hands import hand_registration, zip_folder
 from clients.sdk.objects import object_from_file, object_from_mesh, object_from_points, save_object
 from clients.sdk.outputs import load_result, result_figure, result_to_dict, result_to_json
+from clients.sdk.plans import as_pose, box_obstacle, make_plan
 from clients.sdk.requests import make_request, robot_registration
 from clients.sdk.retry import RetryPolicy
 from clients.sdk.tasks import delta_pose, force_closure, target_points, wrench
@@ -51,9 +60,12 @@ __all__ = [
     "AsyncJob",
     "Batch",
     "Client",
+    "ContractWarning",
+    "IncompatibleService",
     "Job",
     "JobFailed",
     "ManiError",
+    "MissingExtra",
     "NotFound",
     "RateLimited",
     "RequestError",
@@ -63,10 +75,13 @@ __all__ = [
     "Unauthorized",
     "Unreachable",
     "ValidationError",
+    "as_pose",
+    "box_obstacle",
     "delta_pose",
     "force_closure",
     "hand_registration",
     "load_result",
+    "make_plan",
     "make_request",
     "object_from_file",
     "object_from_mesh",

@@ -28,6 +28,7 @@ from clients.schemas import (
     JobList,
     JobPublic,
     JobState,
+    PlanRequest,
     ReadyPublic,
     RobotList,
     RobotPreview,
@@ -36,6 +37,8 @@ from clients.schemas import (
     SynthesisRequest,
     SynthesisResult,
 )
+from clients.schemas.common import ANSWER_CONTEXT
+from clients.sdk.compat import VersionCheck
 from clients.sdk.errors import (
     JobFailed,
     ServerError,
@@ -117,6 +120,7 @@ class BaseClient:
         if api_key:
             self._headers["Authorization"] = f"Bearer {api_key}"
         self._rng = random.Random()
+        self.versions = VersionCheck(self.base_url)
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(base_url={self.base_url!r}, encoding={self.encoding!r})"
@@ -162,7 +166,8 @@ class BaseClient:
         """Validate a 2xx answer into ``model``; raise the matching `RequestError` for any other."""
         self.raise_for_status(response)
         try:
-            return model.model_validate(decode_body(response.content, response.headers.get("content-type")))
+            data = decode_body(response.content, response.headers.get("content-type"))
+            return model.model_validate(data, context=ANSWER_CONTEXT)
         except (DecodeError, pydantic.ValidationError) as exc:
             raise ServerError(
                 f"unreadable {model.__name__} from {response.request.url.path}: {exc}",
@@ -171,12 +176,16 @@ class BaseClient:
             ) from exc
 
     def raise_for_status(self, response: httpx.Response) -> None:
-        """Raise the SDK error for a non-2xx answer, built from its ``{error, type, detail}`` body."""
+        """Raise the SDK error for a non-2xx answer, built from its ``{error, type, detail}`` body, or
+        `IncompatibleService` for any answer of a service that speaks another major version of the contract."""
+        self.versions.see(response.headers.get)
         if response.is_success:
             return
         body: ErrorBody | None = None
         try:
-            body = ErrorBody.model_validate(decode_body(response.content, response.headers.get("content-type")))
+            body = ErrorBody.model_validate(
+                decode_body(response.content, response.headers.get("content-type")), context=ANSWER_CONTEXT
+            )
         except (DecodeError, pydantic.ValidationError):
             body = _fastapi_detail(response)
         retry_after = parse_retry_after(response.headers.get("retry-after"))
@@ -210,7 +219,9 @@ class BaseClient:
     def job_ended(self, job_id: str, response: httpx.Response) -> JobFailed:
         """`JobFailed` for a synchronous answer that carries a finished job's error (``X-Job-ID`` + error body)."""
         try:
-            body = ErrorBody.model_validate(decode_body(response.content, response.headers.get("content-type")))
+            body = ErrorBody.model_validate(
+                decode_body(response.content, response.headers.get("content-type")), context=ANSWER_CONTEXT
+            )
         except (DecodeError, pydantic.ValidationError):
             body = ErrorBody(error=_text(response)[:500] or f"HTTP {response.status_code}", type="JobFailed")
         state = _ERROR_STATES.get(body.type, JobState.FAILED)
@@ -241,6 +252,9 @@ class BaseClient:
 
     def _call_submit(self, request: SynthesisRequest) -> Call[JobCreated]:
         return self._model_call("POST", "/v1/jobs", JobCreated, body=request)
+
+    def _call_submit_plan(self, request: PlanRequest) -> Call[JobCreated]:
+        return self._model_call("POST", "/v1/plans", JobCreated, body=request)
 
     def _call_job(self, job_id: str) -> Call[JobPublic]:
         return self._model_call("GET", f"/v1/jobs/{job_id}", JobPublic)
@@ -319,7 +333,7 @@ class BaseClient:
             if response.status_code == 503:  # not ready is an answer, not an error, when it has the shape
                 try:
                     data = decode_body(response.content, response.headers.get("content-type"))
-                    return ReadyPublic.model_validate(data)
+                    return ReadyPublic.model_validate(data, context=ANSWER_CONTEXT)
                 except (DecodeError, pydantic.ValidationError):
                     pass
             return self.parse(response, ReadyPublic)

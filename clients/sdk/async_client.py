@@ -21,6 +21,8 @@ from clients.schemas import (
     HealthPublic,
     JobCreated,
     JobPublic,
+    PlanRequest,
+    PlanResult,
     ReadyPublic,
     RobotPreview,
     RobotPublic,
@@ -31,11 +33,12 @@ from clients.sdk._core import BaseClient, Call
 from clients.sdk.errors import TimeoutError
 from clients.sdk.hands import hand_registration
 from clients.sdk.objects import ObjectLike
+from clients.sdk.plans import PoseLike, make_plan
 from clients.sdk.requests import RobotLike, make_request, robot_registration
 from clients.sdk.retry import poll_delays
 from clients.sdk.sse import SSEDecoder
 from clients.sdk.tasks import TaskLike
-from clients.sdk.tracking import JOB_EVENT_TYPES, BatchTracker, item_result, job_result, parse_event
+from clients.sdk.tracking import JOB_EVENT_TYPES, BatchTracker, item_result, job_result, parse_event, plan_result
 
 T = TypeVar("T")
 
@@ -133,6 +136,33 @@ class AsyncClient(BaseClient):
         """Queue a synthesis and return at once with its `AsyncJob`."""
         request = make_request(object, task, robot, contacts=contacts, **options)
         return AsyncJob(self, (await self._run(self._call_submit(request))).id)
+
+    async def submit_plan(
+        self,
+        object: ObjectLike | PlanRequest,
+        start: PoseLike | None = None,
+        waypoints: list[PoseLike] | None = None,
+        robot: RobotLike = "allegro",
+        **fields: Any,
+    ) -> AsyncJob:
+        """Queue a manipulation plan and return at once with its `AsyncJob`; see `Client.submit_plan`."""
+        request = make_plan(object, start, waypoints or [], robot, **fields)
+        return AsyncJob(self, (await self._run(self._call_submit_plan(request))).id)
+
+    async def plan(
+        self,
+        object: ObjectLike | PlanRequest,
+        start: PoseLike | None = None,
+        waypoints: list[PoseLike] | None = None,
+        robot: RobotLike = "allegro",
+        *,
+        wait: float | None = None,
+        **fields: Any,
+    ) -> PlanResult:
+        """Plan a manipulation and wait for it; see `Client.plan`."""
+        request = make_plan(object, start, waypoints or [], robot, **fields)
+        job = AsyncJob(self, (await self._run(self._call_submit_plan(request))).id)
+        return await job.plan_result(request.options.timeout + 60.0 if wait is None else wait)
 
     def job(self, job_id: str) -> AsyncJob:
         """A handle on an existing job."""
@@ -233,11 +263,19 @@ class AsyncJob:
 
     async def wait(self, timeout: float | None = None) -> SynthesisResult:
         """Wait for the result; raises `TimeoutError` or `JobFailed`."""
+        return job_result(await self.finished(timeout))
+
+    async def plan_result(self, timeout: float | None = None) -> PlanResult:
+        """Wait for a plan job's plan; raises as `wait`."""
+        return plan_result(await self.finished(timeout))
+
+    async def finished(self, timeout: float | None = None) -> JobPublic:
+        """Poll until the job has ended; the job then (`TimeoutError` after ``timeout``)."""
         deadline = None if timeout is None else time.monotonic() + timeout
         for delay in poll_delays(cap=self.client.poll_interval):
             job = await self.status()
             if job.state.terminal:
-                return job_result(job)
+                return job
             if deadline is not None:
                 left = deadline - time.monotonic()
                 if left <= 0:

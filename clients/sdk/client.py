@@ -20,6 +20,8 @@ from clients.schemas import (
     HealthPublic,
     JobCreated,
     JobPublic,
+    PlanRequest,
+    PlanResult,
     ReadyPublic,
     RobotPreview,
     RobotPublic,
@@ -30,11 +32,12 @@ from clients.sdk._core import BaseClient, Call
 from clients.sdk.errors import TimeoutError
 from clients.sdk.hands import hand_registration
 from clients.sdk.objects import ObjectLike
+from clients.sdk.plans import PoseLike, make_plan
 from clients.sdk.requests import RobotLike, make_request, robot_registration
 from clients.sdk.retry import poll_delays
 from clients.sdk.sse import SSEDecoder
 from clients.sdk.tasks import TaskLike
-from clients.sdk.tracking import JOB_EVENT_TYPES, BatchTracker, item_result, job_result, parse_event
+from clients.sdk.tracking import JOB_EVENT_TYPES, BatchTracker, item_result, job_result, parse_event, plan_result
 
 T = TypeVar("T")
 
@@ -153,6 +156,44 @@ class Client(BaseClient):
         request = make_request(object, task, robot, contacts=contacts, **options)
         return Job(self, self._run(self._call_submit(request)).id)
 
+    def submit_plan(
+        self,
+        object: ObjectLike | PlanRequest,
+        start: PoseLike | None = None,
+        waypoints: list[PoseLike] | None = None,
+        robot: RobotLike = "allegro",
+        **fields: Any,
+    ) -> Job:
+        """Queue a manipulation plan (``POST /v1/plans``) and return at once with its `Job` (``job.plan_result()``
+        waits for it). Arguments as `clients.sdk.make_plan` (or one whole `PlanRequest`)."""
+        request = make_plan(object, start, waypoints or [], robot, **fields)
+        return Job(self, self._run(self._call_submit_plan(request)).id)
+
+    def plan(
+        self,
+        object: ObjectLike | PlanRequest,
+        start: PoseLike | None = None,
+        waypoints: list[PoseLike] | None = None,
+        robot: RobotLike = "allegro",
+        *,
+        wait: float | None = None,
+        **fields: Any,
+    ) -> PlanResult:
+        """Plan a manipulation and wait for it: the dense collision-free trajectory, the repaired waypoints and a
+        verified contact answer per step.
+
+        Args:
+            object, start, waypoints, robot, **fields: as `clients.sdk.make_plan` (or one whole `PlanRequest`).
+            wait: seconds to wait (default: the plan's ``options.timeout`` plus a minute in the queue).
+
+        Raises:
+            ValidationError: invalid input; JobFailed: e.g. ``InfeasibleWaypoint`` / ``NoPathFound`` (its
+                ``error.detail`` names the waypoint); TimeoutError: not finished within ``wait``.
+        """
+        request = make_plan(object, start, waypoints or [], robot, **fields)
+        job = Job(self, self._run(self._call_submit_plan(request)).id)
+        return job.plan_result(request.options.timeout + 60.0 if wait is None else wait)
+
     def job(self, job_id: str) -> Job:
         """A handle on an existing job."""
         return Job(self, job_id)
@@ -254,11 +295,19 @@ class Job:
             TimeoutError: still running after ``timeout`` seconds (None: wait for ever).
             JobFailed: it failed, was cancelled or expired.
         """
+        return job_result(self.finished(timeout))
+
+    def plan_result(self, timeout: float | None = None) -> PlanResult:
+        """Wait until a plan job finishes and return its plan (raises as `wait`)."""
+        return plan_result(self.finished(timeout))
+
+    def finished(self, timeout: float | None = None) -> JobPublic:
+        """Poll until the job has ended (whichever way); the job then. Raises `TimeoutError` after ``timeout``."""
         deadline = None if timeout is None else time.monotonic() + timeout
         for delay in poll_delays(cap=self.client.poll_interval):
             job = self.status()
             if job.state.terminal:
-                return job_result(job)
+                return job
             if deadline is not None:
                 left = deadline - time.monotonic()
                 if left <= 0:

@@ -11,7 +11,11 @@
     │   └── ServerError           5xx (503: shutting down or not ready), or an unreadable answer
     ├── Unreachable               no answer at all: connection refused, DNS, connection reset
     ├── TimeoutError              waited longer than the caller allowed (also a builtin ``TimeoutError``)
-    └── JobFailed                 a job ended failed, cancelled or expired; ``job`` and ``error`` say why
+    ├── JobFailed                 a job ended failed, cancelled or expired; ``job`` and ``error`` say why
+    ├── IncompatibleService       the service speaks another major version of the contract
+    └── MissingExtra              an optional part ([grpc], [view], [mesh]) is not installed (an ImportError)
+
+    ContractWarning (a UserWarning): the service's contract is a newer minor version than this SDK's
 """
 
 from __future__ import annotations
@@ -131,6 +135,39 @@ class JobFailed(ManiError):
     def from_job(cls, job: JobPublic) -> JobFailed:
         """The error for a job that ended without a result."""
         return cls(job.id, job.state, job.error, job)
+
+
+class IncompatibleService(ManiError):
+    """The service's contract version cannot be spoken by this SDK (another major version, or unreadable).
+
+    Attributes:
+        service_contract: the contract version the service reported.
+        client_contract: this SDK's contract version.
+        service_version: the service's own version, when it reported one.
+    """
+
+    def __init__(self, service_contract: str, client_contract: str, service_version: str | None, where: str) -> None:
+        self.service_contract = service_contract
+        self.client_contract = client_contract
+        self.service_version = service_version
+        server = f" (service {service_version})" if service_version else ""
+        super().__init__(
+            f"{where} speaks contract {service_contract!r}{server}, this client contract {client_contract}: "
+            f"another major version cannot be read safely; install the manifoundation-client that matches the "
+            f"service (docs/compatibility.md)"
+        )
+
+
+class MissingExtra(ManiError, ImportError):
+    """A call needs an optional part of the client distribution that is not installed; ``extra`` names it."""
+
+    def __init__(self, message: str, *, extra: str) -> None:
+        super().__init__(message)
+        self.extra = extra
+
+
+class ContractWarning(UserWarning):
+    """The service's contract is a newer minor version: its answers may carry what this SDK ignores."""
 
 
 _BY_TYPE: dict[ErrorType, type[RequestError]] = {

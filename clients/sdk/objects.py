@@ -15,6 +15,7 @@ import pydantic
 
 from clients.schemas import MeshIn, ObjectIn
 from clients.sdk.errors import checked, local_validation_error
+from clients.sdk.extras import require
 
 MESH_SUFFIXES = (".ply", ".obj", ".stl", ".off", ".glb")
 DEFAULT_NUM_POINTS = 2048
@@ -56,7 +57,7 @@ def object_from_mesh(
             `MAX_MESH_FACES` faces).
         **fields: other `ObjectIn` fields (``material``, ``properties``, ``region_mask``, ...).
     """
-    import trimesh
+    trimesh = require("trimesh", "mesh", "a mesh as an object")
 
     if not isinstance(mesh, trimesh.Trimesh) or len(mesh.faces) == 0:
         raise TypeError(f"expected a trimesh.Trimesh with faces, got {type(mesh).__name__}")
@@ -92,7 +93,7 @@ def object_from_file(
         return as_object(obj, **fields)
     if suffix not in MESH_SUFFIXES:
         raise ValueError(f"{path}: unsupported file type {suffix!r}; use .npz, .json or one of {MESH_SUFFIXES}")
-    import trimesh
+    trimesh = require("trimesh", "mesh", "a mesh as an object")
 
     loaded: Any = trimesh.load(str(path), process=suffix != ".ply")
     if isinstance(loaded, trimesh.Scene):

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from clients.schemas import ObjectIn, Proposal, SynthesisResult
+from clients.sdk.extras import require
 
 
 def result_to_dict(result: SynthesisResult) -> dict[str, Any]:
@@ -87,7 +88,7 @@ def result_figure(
     Returns:
         ``plotly.graph_objects.Figure``; ``fig.write_html("grasp.html")`` or ``fig.show()``.
     """
-    import plotly.graph_objects as go
+    go = require("plotly.graph_objects", "view", "result_figure")
 
     chosen = result.best if proposal is None else result.proposals[proposal]
     fig = go.Figure()
@@ -106,6 +107,7 @@ def result_figure(
         fig.add_trace(go.Scatter3d(x=pts[:, 0], y=pts[:, 1], z=pts[:, 2], mode="markers", marker=marker, name=name))
     if chosen is not None:
         _grasp_traces(fig, chosen, size, force_scale)
+        _deformable_traces(fig, chosen)
     index = result.proposals.index(chosen) if chosen is not None else 0
     quality = quality_text(chosen) if chosen is not None else "no proposal"
     heading = title or f"{result.hand}, proposal {index}<br><sup>{quality}</sup>"
@@ -118,8 +120,23 @@ def result_figure(
     return fig
 
 
-def _grasp_traces(fig: Any, p: Proposal, size: float, force_scale: float | None) -> None:
+def _deformable_traces(fig: Any, p: Proposal) -> None:
+    """A deformable answer's post-contact motions (to scale) and, when simulated, its rollout."""
     import plotly.graph_objects as go
+
+    if p.contact_motions is not None:
+        xs, ys, zs = _segments(p.contact_points, p.contact_points + p.contact_motions)
+        line = {"color": "#9467bd", "width": 6}
+        fig.add_trace(go.Scatter3d(x=xs, y=ys, z=zs, mode="lines", line=line, name="post-contact motions"))
+    if p.rollout_points is not None:
+        r = p.rollout_points
+        marker = {"size": 2, "color": "#ff7f0e"}
+        fig.add_trace(go.Scatter3d(x=r[:, 0], y=r[:, 1], z=r[:, 2], mode="markers", marker=marker,
+                                   name="rollout (simulated)"))  # fmt: skip
+
+
+def _grasp_traces(fig: Any, p: Proposal, size: float, force_scale: float | None) -> None:
+    go = require("plotly.graph_objects", "view", "result_figure")
 
     c, f = p.contact_points, p.forces
     fig.add_trace(
@@ -156,6 +173,8 @@ def _grasp_traces(fig: Any, p: Proposal, size: float, force_scale: float | None)
                 name="force heads",
             )
         )
+    if p.palm_position is None or p.palm_quaternion is None:
+        return  # contacts without a robot: no hand to draw
     palm, rot = p.palm_position, _rotation(p.palm_quaternion)
     for axis, colour in enumerate(("#e41a1c", "#4daf4a", "#377eb8")):
         end = palm + rot[:, axis] * 0.4 * size

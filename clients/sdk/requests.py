@@ -29,7 +29,7 @@ def as_robot(value: RobotLike) -> RobotIn:
 def make_request(
     object: ObjectLike | SynthesisRequest,
     task: TaskLike = "force_closure",
-    robot: RobotLike = "leap",
+    robot: RobotLike | None = "leap",
     *,
     contacts: ContactsIn | dict[str, Any] | None = None,
     **options: Any,
@@ -39,7 +39,8 @@ def make_request(
     Args:
         object: anything `as_object` takes: `ObjectIn`, (N, 3)/(N, 6) array, trimesh mesh, file path, dict.
         task: anything `as_task` takes (default: hold the object).
-        robot: a hand name, `RobotIn` or dict (default ``"leap"``).
+        robot: a hand name, `RobotIn` or dict (default ``"leap"``); None only for a deformable's per-point task
+            (contacts and motions for any gripper).
         contacts: given contacts (with ``method="contacts"`` or ``"auto"``).
         **options: `SynthesisOptions` fields: ``method``, ``num_proposals``, ``seed``, ``timeout``, ...
 
@@ -53,7 +54,7 @@ def make_request(
         "",
         object=as_object(object),
         task=as_task(task),
-        robot=as_robot(robot),
+        robot=None if robot is None else as_robot(robot),
         options=opts,
         contacts=contacts,
     )

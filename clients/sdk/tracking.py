@@ -6,7 +6,8 @@ from dataclasses import dataclass, field
 
 import pydantic
 
-from clients.schemas import BatchItem, BatchPublic, JobPublic, JobState, SynthesisResult
+from clients.schemas import BatchItem, BatchPublic, JobPublic, JobState, PlanResult, SynthesisResult
+from clients.schemas.common import ANSWER_CONTEXT
 from clients.sdk.errors import JobFailed, ServerError
 
 # SSE event types that carry a job (``progress`` while it runs, ``end`` with the final job).
@@ -88,6 +89,13 @@ def job_result(job: JobPublic) -> SynthesisResult:
     raise JobFailed.from_job(job)
 
 
+def plan_result(job: JobPublic) -> PlanResult:
+    """The plan of a finished plan job, or `JobFailed` when it has none."""
+    if job.state is JobState.SUCCEEDED and job.plan is not None:
+        return job.plan
+    raise JobFailed.from_job(job)
+
+
 def item_result(item: BatchItem) -> SynthesisResult:
     """The result of a finished batch item, or `JobFailed` when it has none."""
     if item.state is JobState.SUCCEEDED and item.result is not None:
@@ -98,6 +106,6 @@ def item_result(item: BatchItem) -> SynthesisResult:
 def parse_event(data: str) -> JobPublic:
     """One SSE ``data`` payload: a `JobPublic` in JSON."""
     try:
-        return JobPublic.model_validate_json(data)
+        return JobPublic.model_validate_json(data, context=ANSWER_CONTEXT)
     except pydantic.ValidationError as exc:
         raise ServerError(f"unreadable job event: {exc}", type="ProtocolError") from exc

@@ -17,6 +17,7 @@ import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeVar
 
 import mujoco
 import numpy as np
@@ -58,10 +59,12 @@ def primitive(kind: str, size: np.ndarray) -> trimesh.Trimesh:
         The watertight mesh.
     """
     s = np.asarray(size, dtype=np.float64)
+    mesh: trimesh.Trimesh  # trimesh.creation is untyped
     # built at unit radius, then scaled: trimesh merges vertices closer than 1e-8 and tessellations of
     # millimetre-sized shapes can lose their watertightness that way
     if kind == "box":
-        return trimesh.creation.box(extents=s[:3])
+        mesh = trimesh.creation.box(extents=s[:3])
+        return mesh
     if kind == "sphere":
         mesh = trimesh.creation.icosphere(subdivisions=SPHERE_SUBDIVISIONS, radius=1.0)
         mesh.apply_scale(float(s[0]))
@@ -177,7 +180,10 @@ def _dense_points(mesh: trimesh.Trimesh, spacing: float, seed: int) -> np.ndarra
     return np.concatenate([np.asarray(mesh.vertices), samples], axis=0)
 
 
-def _choose(collision: list, visual: list, prefer: str) -> tuple[str, list]:
+_Element = TypeVar("_Element")
+
+
+def _choose(collision: list[_Element], visual: list[_Element], prefer: str) -> tuple[str, list[_Element]]:
     """The preferred source where the link has it, else the other one."""
     if prefer not in ("auto", "collision", "visual"):
         raise ValueError(f"prefer must be 'auto', 'collision' or 'visual', not {prefer!r}")

@@ -54,7 +54,8 @@ class _Grid:
         self.zmax = float(tri[:, :, 2].max())
 
     def _cell(self, xy: np.ndarray) -> np.ndarray:
-        return np.clip(((xy - self.lo) / self.cell).astype(np.int64), 0, self.n - 1)
+        cell: np.ndarray = np.clip(((xy - self.lo) / self.cell).astype(np.int64), 0, self.n - 1)
+        return cell
 
     def crossings(self, points: np.ndarray) -> np.ndarray:
         """(N,) number of surface crossings of the +z ray from each (unrotated) point."""

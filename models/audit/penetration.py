@@ -69,11 +69,13 @@ def _world_box(bounds: np.ndarray, T: np.ndarray) -> np.ndarray:
 
 
 def _within(points: np.ndarray, box: np.ndarray, margin: float) -> np.ndarray:
-    return np.all((points >= box[0] - margin) & (points <= box[1] + margin), axis=1)
+    inside: np.ndarray = np.all((points >= box[0] - margin) & (points <= box[1] + margin), axis=1)
+    return inside
 
 
 def _to_local(points: np.ndarray, T: np.ndarray) -> np.ndarray:
-    return (points - T[:3, 3]) @ T[:3, :3]
+    local: np.ndarray = (points - T[:3, 3]) @ T[:3, :3]
+    return local
 
 
 def _depths(points: np.ndarray, tree: cKDTree, surface: trimesh.Trimesh, slack: float) -> tuple[np.ndarray, np.ndarray]:

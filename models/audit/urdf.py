@@ -28,7 +28,8 @@ def rpy_matrix(rpy: np.ndarray) -> np.ndarray:
     rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
     ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
     rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
-    return rz @ ry @ rx
+    rot: np.ndarray = rz @ ry @ rx
+    return rot
 
 
 def origin_matrix(element: ET.Element | None) -> np.ndarray:

@@ -93,7 +93,8 @@ def pyramid_edges(normal: np.ndarray, mu: float, sides: int = CLOSURE_SIDES) -> 
     n = np.asarray(normal, dtype=np.float64) / np.linalg.norm(normal)
     t1, t2 = tangent_basis(n)
     theta = 2 * np.pi * np.arange(sides) / sides
-    return -n + mu * (np.cos(theta)[:, None] * t1 + np.sin(theta)[:, None] * t2)
+    edges: np.ndarray = -n + mu * (np.cos(theta)[:, None] * t1 + np.sin(theta)[:, None] * t2)
+    return edges
 
 
 def primitive_wrenches(

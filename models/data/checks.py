@@ -12,11 +12,15 @@ Self-collision: the hand's self-collision sphere pairs may not overlap by more t
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
 import trimesh
 from scipy.spatial import cKDTree
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 PENETRATION_TOL = 1e-3  # m (DESIGN §5)
 HAND_SAMPLES_PER_BODY = 96
@@ -43,12 +47,14 @@ class ObjectField:
         """Φ (M,) point-to-plane, outward normal (M, 3), nearest cloud point (M, 3)."""
         _, idx = self.tree.query(np.asarray(x, dtype=np.float64))
         near, nrm = self.points[idx], self.normals[idx]
-        return np.einsum("ij,ij->i", x - near, nrm), nrm, near
+        phi: np.ndarray = np.einsum("ij,ij->i", x - near, nrm)
+        return phi, nrm, near
 
     def nearest(self, x: np.ndarray) -> np.ndarray:
         """Projection of x onto the local tangent plane of the nearest cloud point (≈ closest surface point)."""
         phi, nrm, _ = self.signed_distance(x)
-        return x - phi[:, None] * nrm
+        projected: np.ndarray = x - phi[:, None] * nrm
+        return projected
 
     def surface(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Nearest surface points (M, 3) (tangent-plane projection) and outward normals (M, 3)."""
@@ -63,7 +69,7 @@ class ObjectField:
 _HAND_SAMPLES: dict[str, list[tuple[str, np.ndarray]]] = {}
 
 
-def hand_samples(hand) -> list[tuple[str, np.ndarray]]:
+def hand_samples(hand: Hand) -> list[tuple[str, np.ndarray]]:
     """(body link, (S, 3) points in the link frame) for every collision mesh (cached per hand name)."""
     if hand.name not in _HAND_SAMPLES:
         out = []
@@ -76,7 +82,7 @@ def hand_samples(hand) -> list[tuple[str, np.ndarray]]:
 
 
 def penetration_depth(
-    hand,
+    hand: Hand,
     obj: ObjectField,
     palm_pos: torch.Tensor,
     palm_quat: torch.Tensor,
@@ -108,18 +114,19 @@ def penetration_depth(
     return depth
 
 
-def fingertip_bodies(hand) -> frozenset[str]:
+def fingertip_bodies(hand: Hand) -> frozenset[str]:
     """Names of the bodies that carry fingertips."""
     return frozenset(hand.tree.body_names[hand.tree.link_body[link][0]] for link in hand.fingertip_links)
 
 
-def self_overlap(hand, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor) -> np.ndarray:
+def self_overlap(hand: Hand, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor) -> np.ndarray:
     """Largest overlap (B,) ≥ 0 of the hand's self-collision sphere pairs (m)."""
     pairs = np.asarray(hand.self_collision_pairs, dtype=np.int64).reshape(-1, 2)
     if not len(pairs):
         return np.zeros(palm_pos.shape[0])
-    c, _ = hand.spheres(palm_pos, palm_quat, q, jacobian=False)
-    c = c.numpy()
+    centres, _ = hand.spheres(palm_pos, palm_quat, q, jacobian=False)
+    c = centres.numpy()
     r = np.asarray(hand.sphere_radii)
     dist = np.linalg.norm(c[:, pairs[:, 0]] - c[:, pairs[:, 1]], axis=-1)
-    return np.clip(r[pairs].sum(axis=1)[None] - dist, 0.0, None).max(axis=1)
+    overlap: np.ndarray = np.clip(r[pairs].sum(axis=1)[None] - dist, 0.0, None).max(axis=1)
+    return overlap

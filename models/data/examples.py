@@ -82,7 +82,8 @@ def sample_forces(normals: np.ndarray, mu: float, rng: np.random.Generator) -> n
     t1, t2 = tangents(normals)
     ang = rng.uniform(0, 2 * np.pi, size=m)
     mag = mu * a * np.sqrt(rng.uniform(0, 1, size=m))
-    return -a[:, None] * normals + mag[:, None] * (np.cos(ang)[:, None] * t1 + np.sin(ang)[:, None] * t2)
+    forces: np.ndarray = -a[:, None] * normals + mag[:, None] * (np.cos(ang)[:, None] * t1 + np.sin(ang)[:, None] * t2)
+    return forces
 
 
 def _joint(info: ObjectInfo, rng: np.random.Generator) -> tuple[str, np.ndarray, np.ndarray]:

@@ -22,11 +22,14 @@ import time
 from collections import Counter
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from models.data.runs import run_jobs, write_manifest
+
+if TYPE_CHECKING:
+    from models.objects import ProceduralObject
 
 TRAIN_HANDS = ("allegro", "leap", "panda_gripper", "kinova3f")
 HELD_OUT_HANDS = ("shadow", "barrett")
@@ -65,7 +68,7 @@ def object_split(object_id: str, test_fraction: float) -> str:
     return "test" if h < 1000 * test_fraction else "train"
 
 
-def make_dataset_object(cfg: DataConfig, i: int):
+def make_dataset_object(cfg: DataConfig, i: int) -> ProceduralObject:
     """Object ``i`` of the data set."""
     from models.objects import OBJECT_KINDS, make_object
 
@@ -217,7 +220,8 @@ def read_manifest(out_dir: str | Path) -> dict[str, Any]:
     """The manifest of a data directory (empty skeleton when absent)."""
     path = Path(out_dir) / MANIFEST
     if path.is_file():
-        return json.loads(path.read_text())
+        manifest: dict[str, Any] = json.loads(path.read_text())
+        return manifest
     return {"config": None, "shards": {}}
 
 

@@ -9,16 +9,20 @@ diagonal), which is what makes the per-finger solutions combinable afterwards.
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 DAMPING = 0.02  # λ (m) of δ = Jᵀ (J Jᵀ + λ² I)⁻¹ e
 MAX_JOINT_STEP = 0.25  # rad (or m) per iteration
 MAX_PALM_STEP = 0.01  # m / rad per iteration when the palm is free
 
 
-def finger_joint_sets(hand) -> list[np.ndarray]:
+def finger_joint_sets(hand: Hand) -> list[np.ndarray]:
     """For each fingertip, the indices (into q) of the joints that move it (at the rest pose)."""
     pos = torch.zeros(1, 3, dtype=torch.float64)
     quat = torch.tensor([[1.0, 0.0, 0.0, 0.0]], dtype=torch.float64)
@@ -56,7 +60,7 @@ def finger_groups(joint_sets: list[np.ndarray]) -> list[list[int]]:
 TIP_WEIGHT = 0.3  # weight of the contact point's rows; the pad-centre rows have weight 1
 
 
-def tip_points(hand) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def tip_points(hand: Hand) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Bodies (m,), contact points (m, 3) and pad centres (m, 3) in their body frames, and the pad radii (m,).
 
     The pad of a fingertip is the sphere that best fits its real surface near the tip point (`fit_pad`, on the
@@ -87,7 +91,7 @@ tilted by a few degrees dips its edge into the object), and the verification's c
 """m: a flat pad is modelled by the sphere of this radius tangent to it at the sample nearest the tip point."""
 
 
-def fit_pad(hand, fingertip: int, tip: np.ndarray) -> tuple[np.ndarray, float]:
+def fit_pad(hand: Hand, fingertip: int, tip: np.ndarray) -> tuple[np.ndarray, float]:
     """The sphere (centre (3,) body frame, radius) fitted (algebraic least squares) to fingertip ``fingertip``'s
     surface samples within ``PAD_FIT_RADIUS`` of the sample nearest its tip point. Where the surface there is flat
     (radius > ``PAD_FIT_MAX_RADIUS``) or no sphere fits (rms > ``PAD_FIT_MAX_RMS``): the sphere of radius
@@ -110,7 +114,7 @@ def fit_pad(hand, fingertip: int, tip: np.ndarray) -> tuple[np.ndarray, float]:
 
 
 def pad_spheres(
-    hand,
+    hand: Hand,
     palm_pos: torch.Tensor,
     palm_quat: torch.Tensor,
     q: torch.Tensor,
@@ -124,7 +128,7 @@ def pad_spheres(
 
 
 def _points_and_jacobian(
-    hand,
+    hand: Hand,
     palm_pos: torch.Tensor,
     palm_quat: torch.Tensor,
     q: torch.Tensor,
@@ -138,7 +142,7 @@ def _points_and_jacobian(
 
 
 def solve_ik(
-    hand,
+    hand: Hand,
     palm_pos: torch.Tensor,
     palm_quat: torch.Tensor,
     q: torch.Tensor,
@@ -206,7 +210,7 @@ def solve_ik(
 
 
 def separate(
-    hand,
+    hand: Hand,
     palm_pos: torch.Tensor,
     palm_quat: torch.Tensor,
     q: torch.Tensor,

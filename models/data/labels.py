@@ -29,7 +29,8 @@ def kernel(
     """k (N, H) of the module docstring."""
     d2 = np.square(points[:, None, :] - contacts[None, :, :]).sum(-1)
     gate = np.clip(normals @ contact_normals.T, 0.0, None)
-    return np.exp(-d2 / (2.0 * (HEAT_SIGMA * scale) ** 2)) * gate
+    k: np.ndarray = np.exp(-d2 / (2.0 * (HEAT_SIGMA * scale) ** 2)) * gate
+    return k
 
 
 def heat_and_force(
@@ -51,7 +52,7 @@ def region_mask(points: np.ndarray, contacts: np.ndarray, scale: float, rng: np.
         return np.ones(len(points), dtype=bool)
     r = rng.uniform(*MASK_RADIUS) * scale
     d = np.linalg.norm(points[:, None, :] - contacts[None, :, :], axis=-1).min(axis=1)
-    mask = d <= r
+    mask: np.ndarray = d <= r
     mask[np.argmin(np.linalg.norm(points[:, None, :] - contacts[None, :, :], axis=-1), axis=0)] = True
     return mask
 
@@ -74,7 +75,8 @@ def rigid_point_motion(
 ) -> np.ndarray:
     """Per-point displacement (N, 3) of the motion: rotate by Δθ about ``centre``, then translate by Δx."""
     rot = Rotation.from_rotvec(delta_theta).as_matrix()
-    return (points - centre) @ rot.T + centre + delta_x - points
+    motion: np.ndarray = (points - centre) @ rot.T + centre + delta_x - points
+    return motion
 
 
 def scale_motion(
@@ -97,4 +99,5 @@ def joint_point_motion(
     if joint_type == "prismatic":
         return np.broadcast_to(a * amount, points.shape).copy()
     rot = Rotation.from_rotvec(a * amount).as_matrix()
-    return (points - origin) @ rot.T + origin - points
+    motion: np.ndarray = (points - origin) @ rot.T + origin - points
+    return motion

@@ -17,17 +17,22 @@ The per-finger IK of `sampling.sample_grasps` then closes the fingertips onto th
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from models.data.checks import ObjectField
 from models.refine.initialise import opposition, rest_geometry
 
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
+
 APERTURE_SLACK = 0.03  # m: the fingers may open a little beyond the rest pose
 RAYS_PER_PALM = 8  # candidate surface points per wanted palm (most rays fail the width or cone test)
 
 
-def hand_opposition(hand) -> tuple[np.ndarray, np.ndarray, float]:
+def hand_opposition(hand: Hand) -> tuple[np.ndarray, np.ndarray, float]:
     """Thumb tip (3,), mean of the other tips (3,) at rest in the palm frame, and their distance (the aperture);
     `models.refine.initialise.opposition`."""
     thumb, others = opposition(rest_geometry(hand))
@@ -52,7 +57,7 @@ def antipodal_pairs(
 
 
 def sample_pinch_palms(
-    hand, obj: ObjectField, count: int, mu: float, rng: np.random.Generator
+    hand: Hand, obj: ObjectField, count: int, mu: float, rng: np.random.Generator
 ) -> tuple[np.ndarray, np.ndarray]:
     """Up to ``count`` pinching palm poses: positions (B, 3), quaternions (B, 4) wxyz (B = 0 when the object
     has no antipodal pair the hand spans)."""

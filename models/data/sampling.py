@@ -21,6 +21,7 @@ re-derive them.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
@@ -30,6 +31,9 @@ from scipy.spatial.transform import Rotation
 from models.data.checks import PENETRATION_TOL, ObjectField, penetration_depth, self_overlap
 from models.data.ik import finger_groups, finger_joint_sets, pad_spheres, separate, solve_ik
 from models.data.pinch import sample_pinch_palms
+
+if TYPE_CHECKING:
+    from models.robots.hand import Hand
 
 MAX_TILT = np.deg2rad(25.0)
 TIP_TOL = 4e-3  # m, pad sphere to surface, |Φ(c) − r| (DESIGN §5 allows 5 mm)
@@ -61,7 +65,7 @@ class Grasp:
     self_overlap: float
 
 
-def pad_directions(hand) -> np.ndarray:
+def pad_directions(hand: Hand) -> np.ndarray:
     """(m, 3) unit "pad" direction of each fingertip in its link frame: the outward normal of the fingertip
     body's collision mesh at the contact point (the side of the finger that should face the object)."""
     if hand.name in _PADS:
@@ -85,7 +89,7 @@ _PADS: dict[str, np.ndarray] = {}
 
 
 def pad_alignment(
-    hand,
+    hand: Hand,
     palm_pos: torch.Tensor,
     palm_quat: torch.Tensor,
     q: torch.Tensor,
@@ -95,7 +99,8 @@ def pad_alignment(
     poses = hand.link_poses(palm_pos, palm_quat, q)
     pads = pad_directions(hand)
     world = np.stack([poses[link][:, :3, :3].numpy() @ pads[i] for i, link in enumerate(hand.fingertip_links)], 1)
-    return np.einsum("bij,bij->bi", world, normals)
+    cosine: np.ndarray = np.einsum("bij,bij->bi", world, normals)
+    return cosine
 
 
 def _rotation_to(a: np.ndarray, b: np.ndarray) -> Rotation:
@@ -105,7 +110,7 @@ def _rotation_to(a: np.ndarray, b: np.ndarray) -> Rotation:
 
 
 def sample_palms(
-    hand,
+    hand: Hand,
     obj: ObjectField,
     size: float,
     count: int,
@@ -158,7 +163,7 @@ def _targets(obj: ObjectField, all_tips: np.ndarray, i: int, k: int, rng: np.ran
 
 
 def sample_grasps(
-    hand,
+    hand: Hand,
     obj: ObjectField,
     size: float,
     rng: np.random.Generator,
@@ -270,7 +275,7 @@ def sample_grasps(
 
 
 def _closure_rows(
-    hand, obj: ObjectField, pads: np.ndarray, radii: np.ndarray, rows: np.ndarray, mu: float
+    hand: Hand, obj: ObjectField, pads: np.ndarray, radii: np.ndarray, rows: np.ndarray, mu: float
 ) -> np.ndarray:
     """(R,) bool: rows (of ``rows``) whose pad contacts (R, m, 3) pass the verification's closure tests at ``mu``
     (`models.refine.verify`: forces with Gf = 0 under the closure normalisation, and Ferrari–Canny ε above
@@ -304,7 +309,7 @@ def _pad_contacts(obj: ObjectField, pads: np.ndarray, radii: np.ndarray) -> tupl
 
 
 def exact_checks(
-    hand,
+    hand: Hand,
     obj: ObjectField,
     palm_pos: np.ndarray,
     palm_quat: np.ndarray,

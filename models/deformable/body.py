@@ -52,7 +52,8 @@ class DeformableBody:
     @property
     def points(self) -> np.ndarray:
         """(N, 3) the object's point cloud (surface vertices)."""
-        return np.asarray(self.vertices)[self.surface]
+        points: np.ndarray = np.asarray(self.vertices)[self.surface]
+        return points
 
     @property
     def id(self) -> str:

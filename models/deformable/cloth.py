@@ -68,7 +68,8 @@ def _segment_distance(points: np.ndarray, outline: np.ndarray) -> np.ndarray:
     ab = b - a
     t = np.clip(np.einsum("pkj,kj->pk", points[:, None] - a[None], ab) / np.einsum("kj,kj->k", ab, ab), 0, 1)
     closest = a[None] + t[..., None] * ab[None]
-    return np.linalg.norm(points[:, None] - closest, axis=-1).min(axis=1)
+    distance: np.ndarray = np.linalg.norm(points[:, None] - closest, axis=-1).min(axis=1)
+    return distance
 
 
 def _resample(outline: np.ndarray, h: float) -> np.ndarray:

@@ -57,15 +57,25 @@ def _shape(kind: str, rng: np.random.Generator) -> Inside:
 PLASTICINE_KINDS = ("sphere", "box", "ellipsoid", "composite", "blob")
 
 
-def tetrahedralise(inside: Inside, cells: int) -> tuple[np.ndarray, np.ndarray]:
-    """Lattice tetrahedra of an implicit shape in [−0.5, 0.5]³: vertices (V, 3), tetrahedra (T, 4)."""
+def tetrahedralise(inside: Inside, cells: int, keep: str = "corners") -> tuple[np.ndarray, np.ndarray]:
+    """Lattice tetrahedra of an implicit shape in [−0.5, 0.5]³: vertices (V, 3), tetrahedra (T, 4).
+
+    ``keep`` "corners" keeps the cubes whose eight corners are inside (the body lies within the shape);
+    "centres" those whose centre is (the body's boundary lies within half a cell of the shape's, either side,
+    and its volume is about the shape's).
+    """
     h = 1.0 / cells
     ticks = np.arange(-0.5, 0.5 + h / 2, h)
     n = len(ticks)
-    ijk = np.stack(np.meshgrid(np.arange(n), np.arange(n), np.arange(n), indexing="ij"), axis=-1).reshape(-1, 3)
-    flag = inside(ticks[ijk]).reshape(n, n, n)
-    cubes = np.argwhere(np.all([flag[c[0]:n - 1 + c[0], c[1]:n - 1 + c[1], c[2]:n - 1 + c[2]]
-                                for c in CORNERS], axis=0))  # fmt: skip
+    if keep == "centres":
+        mid = ticks[:-1] + h / 2
+        grid = np.stack(np.meshgrid(mid, mid, mid, indexing="ij"), axis=-1).reshape(-1, 3)
+        cubes = np.argwhere(inside(grid).reshape(n - 1, n - 1, n - 1))
+    else:
+        ijk = np.stack(np.meshgrid(np.arange(n), np.arange(n), np.arange(n), indexing="ij"), axis=-1).reshape(-1, 3)
+        flag = inside(ticks[ijk]).reshape(n, n, n)
+        cubes = np.argwhere(np.all([flag[c[0]:n - 1 + c[0], c[1]:n - 1 + c[1], c[2]:n - 1 + c[2]]
+                                    for c in CORNERS], axis=0))  # fmt: skip
     if len(cubes) == 0:
         raise ValueError("shape holds no lattice cube; use more cells")
     corner_ids = np.ravel_multi_index((cubes[:, None, :] + CORNERS[None]).reshape(-1, 3).T, (n, n, n))

@@ -35,7 +35,8 @@ def _farthest(points: np.ndarray, k: int) -> np.ndarray:
 
 
 def _gauss(a: np.ndarray, b: np.ndarray, beta: float) -> np.ndarray:
-    return np.exp(-np.square(a[:, None] - b[None]).sum(-1) / (2.0 * beta**2))
+    kernel: np.ndarray = np.exp(-np.square(a[:, None] - b[None]).sum(-1) / (2.0 * beta**2))
+    return kernel
 
 
 def coherent_point_drift(source: np.ndarray, target: np.ndarray, beta: float = CPD_BETA,
@@ -59,7 +60,8 @@ def coherent_point_drift(source: np.ndarray, target: np.ndarray, beta: float = C
         moved = y + g @ w
         resid = pt1 @ np.square(x).sum(1) - 2.0 * np.sum(px * moved) + p1 @ np.square(moved).sum(1)
         sigma2 = max(float(resid) / (p1.sum() * dim), 1e-10)
-    return (y_all + _gauss(y_all, y, beta) @ w) * scale + centre
+    registered: np.ndarray = (y_all + _gauss(y_all, y, beta) @ w) * scale + centre
+    return registered
 
 
 def transport_motion(start: np.ndarray, target: np.ndarray, method: str = "cpd") -> np.ndarray:

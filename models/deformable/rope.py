@@ -32,7 +32,8 @@ def centre_line(length: float, rng: np.random.Generator, spacing: float = STATIO
         theta += rng.uniform(-CURL, CURL) / k * np.sin(k * np.pi * s + rng.uniform(0, 2 * np.pi))
     step = length / (stations - 1)
     xy = np.vstack([[0.0, 0.0], np.cumsum(step * np.column_stack([np.cos(theta[:-1]), np.sin(theta[:-1])]), axis=0)])
-    return xy - xy.mean(axis=0)
+    centred: np.ndarray = xy - xy.mean(axis=0)
+    return centred
 
 
 def rod(line: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

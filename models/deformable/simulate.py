@@ -59,14 +59,16 @@ class Rollout:
 def minimum_jerk(s: np.ndarray | float) -> np.ndarray:
     """σ(s) = 10s³ − 15s⁴ + 6s⁵ on s clipped to [0, 1]."""
     s = np.clip(np.asarray(s, dtype=np.float64), 0.0, 1.0)
-    return s**3 * (10 - 15 * s + 6 * s**2)
+    sigma: np.ndarray = s**3 * (10 - 15 * s + 6 * s**2)
+    return sigma
 
 
 def path_points(start: np.ndarray, motion: np.ndarray, s: float, lift: float) -> np.ndarray:
     """(H, 3) positions on the contacts' paths at phase ``s`` ∈ [0, 1] (see the module doc)."""
     sigma = float(minimum_jerk(s))
     rise = lift * np.linalg.norm(motion, axis=1, keepdims=True) * np.sin(np.pi * sigma)
-    return start + sigma * motion + rise * np.array([0.0, 0.0, 1.0])
+    points: np.ndarray = start + sigma * motion + rise * np.array([0.0, 0.0, 1.0])
+    return points
 
 
 def contact_vertices(body: DeformableBody, contacts: np.ndarray) -> np.ndarray:
@@ -77,7 +79,8 @@ def contact_vertices(body: DeformableBody, contacts: np.ndarray) -> np.ndarray:
             raise ValueError(f"contacts: indices outside 0..{len(body.surface) - 1}")
         return c.astype(np.int64)
     c = np.asarray(contacts, dtype=np.float64).reshape(-1, 3)
-    return cKDTree(body.points).query(c)[1].astype(np.int64)
+    nearest: np.ndarray = cKDTree(body.points).query(c)[1].astype(np.int64)
+    return nearest
 
 
 def simulate(body: DeformableBody, contacts: np.ndarray, motions: np.ndarray,

@@ -63,8 +63,9 @@ def audit_service(
     target = None if task == "closure" else np.r_[LIFT / np.linalg.norm(LIFT), np.zeros(3)]
     rows = []
     for rank, p in enumerate(out.proposals):
-        grasp = AuditedGrasp(p.contact_points, p.forces, p.fingertips, p.palm_position, p.palm_quaternion,
-                             p.joint_names, p.joint_values)  # fmt: skip
+        pose = p.pose()
+        grasp = AuditedGrasp(p.contact_points, p.forces, p.fingertips, pose.palm_pos, pose.palm_quat,
+                             p.joint_names, pose.q)  # fmt: skip
         soft = SOFT_FINGER if len(grasp.fingertips) == 2 else 0.0
         report = audit_grasp(hand_name, grasp, obj.mesh, points, normals, mu=mu, target_wrench=target,
                              closure=task == "closure", soft_finger=soft)  # fmt: skip

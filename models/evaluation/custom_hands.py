@@ -74,8 +74,9 @@ def grasp_and_audit(
     failures: list[str] = []
     best = (False, False)
     for rank, p in enumerate(out.proposals):
-        grasp = AuditedGrasp(p.contact_points, p.forces, p.fingertips, p.palm_position, p.palm_quaternion,
-                             p.joint_names, p.joint_values)  # fmt: skip
+        pose = p.pose()
+        grasp = AuditedGrasp(p.contact_points, p.forces, p.fingertips, pose.palm_pos, pose.palm_quat,
+                             p.joint_names, pose.q)  # fmt: skip
         soft = SOFT_FINGER if len(p.fingertips) == 2 else 0.0
         report = audit_grasp(checker, grasp, mesh, pts, nrm, mu=mu, closure=True, soft_finger=soft)
         ok = bool(p.quality.success)

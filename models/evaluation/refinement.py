@@ -258,7 +258,8 @@ def feasible_wrench(
         if needed <= max_normal_force:
             break
     assert best is not None
-    return best / np.linalg.norm(best)
+    unit: np.ndarray = best / np.linalg.norm(best)
+    return unit
 
 
 def perturb(

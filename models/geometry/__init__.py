@@ -1,12 +1,13 @@
 """Object geometry: KD-tree signed distance, mass properties, rigid fits, fcl verification of hand poses."""
 
+from models.errors import InvalidPointCloud
 from models.geometry.collision import (
     hand_field_penetration,
     hand_mesh_penetration,
     hand_object_penetration,
     hand_self_collision,
 )
-from models.geometry.object import DEFAULT_DENSITY, InvalidPointCloud, MassProperties, ObjectGeometry
+from models.geometry.object import DEFAULT_DENSITY, MassProperties, ObjectGeometry
 from models.geometry.rigid import RigidFit, fit_rigid_motion, rotation_vector
 
 __all__ = [

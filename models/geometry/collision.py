@@ -97,7 +97,8 @@ def _bodies(hand: Hand) -> list[_BodyGeom]:
             pts = np.vstack([np.asarray(mesh.vertices), samples])
             out.append(_BodyGeom(name, _bvh(mesh), pts, convex_parts(mesh)))
         cache["bodies"] = out
-    return cache["bodies"]
+    bodies: list[_BodyGeom] = cache["bodies"]
+    return bodies
 
 
 def _poses(hand: Hand, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
@@ -232,7 +233,8 @@ def _mesh_rank(mesh: trimesh.Trimesh) -> Callable[[np.ndarray], np.ndarray]:
     def rank(x: np.ndarray) -> np.ndarray:
         dist, idx = tree.query(x)
         side = np.einsum("ij,ij->i", x - verts[idx], vnorm[idx])
-        return np.where(side < 0, -dist, dist)
+        signed: np.ndarray = np.where(side < 0, -dist, dist)
+        return signed
 
     return rank
 
@@ -257,7 +259,8 @@ def self_collision_body_pairs(hand: Hand) -> list[tuple[int, int]]:
                     continue  # touching at rest by design (e.g. neighbouring knuckles)
                 pairs.append((i, j))
         cache["pairs"] = pairs
-    return cache["pairs"]
+    checked: list[tuple[int, int]] = cache["pairs"]
+    return checked
 
 
 def _pair_depth(a: _BodyGeom, b: _BodyGeom, poses: dict[str, np.ndarray]) -> float:

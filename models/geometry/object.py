@@ -137,4 +137,5 @@ def estimate_normals(points: np.ndarray, tree: cKDTree, mesh: trimesh.Trimesh | 
         for _ in range(3):  # flip points that disagree with most of their neighbours
             votes = np.einsum("nkj,nj->n", n[nb[:, 1:]], n)
             n = np.where((votes < 0)[:, None], -n, n)
-    return n / np.linalg.norm(n, axis=1, keepdims=True)
+    unit: np.ndarray = n / np.linalg.norm(n, axis=1, keepdims=True)
+    return unit

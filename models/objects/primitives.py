@@ -10,28 +10,32 @@ _SPHERE_SUBDIVISIONS = 4  # 2562 vertices: radial meshes keep edges to ~1/40 of 
 
 def box(rng: np.random.Generator) -> trimesh.Trimesh:
     """A box with aspect ratios in [0.3, 1]."""
-    return trimesh.creation.box(extents=rng.uniform(0.3, 1.0, size=3))
+    mesh: trimesh.Trimesh = trimesh.creation.box(extents=rng.uniform(0.3, 1.0, size=3))
+    return mesh
 
 
 def cylinder(rng: np.random.Generator) -> trimesh.Trimesh:
     """A cylinder with radius/height ratio in [0.15, 0.8]."""
-    return trimesh.creation.cylinder(radius=rng.uniform(0.15, 0.8) * 0.5, height=1.0, sections=48)
+    mesh: trimesh.Trimesh = trimesh.creation.cylinder(radius=rng.uniform(0.15, 0.8) * 0.5, height=1.0, sections=48)
+    return mesh
 
 
 def sphere(rng: np.random.Generator) -> trimesh.Trimesh:
     """A unit sphere (the seed only names it)."""
-    return trimesh.creation.icosphere(subdivisions=_SPHERE_SUBDIVISIONS, radius=0.5)
+    mesh: trimesh.Trimesh = trimesh.creation.icosphere(subdivisions=_SPHERE_SUBDIVISIONS, radius=0.5)
+    return mesh
 
 
 def capsule(rng: np.random.Generator) -> trimesh.Trimesh:
     """A capsule with radius/length ratio in [0.15, 0.45]."""
     radius = rng.uniform(0.15, 0.45) * 0.5
-    return trimesh.creation.capsule(height=1.0 - 2 * radius, radius=radius, count=[24, 24])
+    mesh: trimesh.Trimesh = trimesh.creation.capsule(height=1.0 - 2 * radius, radius=radius, count=[24, 24])
+    return mesh
 
 
 def ellipsoid(rng: np.random.Generator) -> trimesh.Trimesh:
     """An ellipsoid with semi-axis ratios in [0.35, 1]."""
-    mesh = trimesh.creation.icosphere(subdivisions=_SPHERE_SUBDIVISIONS, radius=1.0)
+    mesh: trimesh.Trimesh = trimesh.creation.icosphere(subdivisions=_SPHERE_SUBDIVISIONS, radius=1.0)
     mesh.apply_scale(rng.uniform(0.35, 1.0, size=3))
     return mesh
 
@@ -40,7 +44,8 @@ def convex(rng: np.random.Generator) -> trimesh.Trimesh:
     """Convex hull of 12-40 random points on a random ellipsoid."""
     d = rng.normal(size=(int(rng.integers(12, 41)), 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
-    return trimesh.convex.convex_hull(d * rng.uniform(0.4, 1.0, size=3))
+    hull: trimesh.Trimesh = trimesh.convex.convex_hull(d * rng.uniform(0.4, 1.0, size=3))
+    return hull
 
 
 def _halfspaces(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:

@@ -5,7 +5,8 @@ Methods: "network" (the heatmap's NMS contacts and the motion map there), "rando
 the task's motion at them), "contacts" (the given points, with the task's motion at them). With a hand, each
 proposal names the fingertip at each contact from the rigid fit of the hand's fingertips onto the contacts
 (`models.refine.initialise`, the pose is that fit's, not refined); ``quality.success`` is False with reason
-``deformable_open_loop``: the service does not simulate the rollout (`mani eval deformable` does).
+``deformable_open_loop`` unless the request asks for ``simulate_rollout``: then each answer is applied in the
+simulator and judged by the shape metric (`models.pipeline.deformable_rollout`).
 Unordered targets (``target_points`` with ``correspondence="unknown"``) get their per-point motion by coherent
 point drift and optimal transport (`models.deformable.registration`).
 """
@@ -21,11 +22,13 @@ import numpy as np
 from models.pipeline.types import InvalidInput, ProposalOutput, QualityOutput, SynthesisInput, SynthesisOutput
 
 if TYPE_CHECKING:
+    from models.deformable.answer import DeformableContacts
     from models.network.inference import NetworkInput, NetworkOutput
 
 DEFORMABLE_MATERIALS = ("cloth", "rope", "plasticine")
 DEFORMABLE_TASKS = ("point_motion", "target_points")
 DEFORMABLE_METHODS = ("network", "random_contacts", "contacts")
+HANDLESS_CONTACTS = 2  # contacts per proposal without a robot, unless the request says (two grasp points)
 
 
 @dataclass
@@ -103,7 +106,7 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
 
     inp, hand = p.inp, p.inp.hand
     t0 = time.perf_counter()
-    m = int(hand.num_fingertips)
+    m = (inp.num_contacts or HANDLESS_CONTACTS) if inp.handless else int(hand.num_fingertips)
     rng = np.random.default_rng(inp.seed)
     allowed = np.flatnonzero(p.mask) if p.mask is not None else np.arange(len(p.points))
     sets: list[DeformableContacts] = []
@@ -121,6 +124,9 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
     cloud = PointCloudField(p.points, p.normals, p.mask)
     proposals = []
     for s in sets:
+        if inp.handless:
+            proposals.append(_contacts_only(s, p.normals))
+            continue
         cand = initialise(hand, cloud, s.points, p.normals[s.indices])[0]
         tips = [hand.fingertip_links[j] for j in cand.assignment]
         quality = QualityOutput(success=False, converged=False, reason="deformable_open_loop", iterations=0,
@@ -133,9 +139,29 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
             contact_source=s.source, contact_motions=s.motions,
         ))  # fmt: skip
     timings["initialisation"] = time.perf_counter() - t0
+    if inp.simulate_rollout:
+        from models.pipeline.deformable_rollout import judge_by_rollout
+
+        t0 = time.perf_counter()
+        proposals = judge_by_rollout(inp.material, p.points, p.normals, p.motion, inp.properties, proposals)
+        timings["rollout"] = time.perf_counter() - t0
     heat = force = None
     if net_out is not None:
         heat = np.asarray(net_out.heatmaps[0], dtype=np.float64)
         force = np.asarray(net_out.force_maps[0], dtype=np.float64)
-    return SynthesisOutput(hand=getattr(hand, "name", "hand"), proposals=proposals, heatmap=heat, force_map=force,
+    name = None if inp.handless else str(getattr(hand, "name", "hand"))
+    every = None if net_out is None else np.asarray(net_out.heatmaps, dtype=np.float64)
+    return SynthesisOutput(hand=name, proposals=proposals, heatmap=heat, force_map=force, heatmaps=every,
                            timings=timings)  # fmt: skip
+
+
+def _contacts_only(s: DeformableContacts, normals: np.ndarray) -> ProposalOutput:
+    """A proposal without a robot: the contacts and their motions, for whatever gripper takes them."""
+    quality = QualityOutput(success=False, converged=False, reason="deformable_open_loop", iterations=0,
+                            wrench_residual=0.0, max_tip_distance=0.0, penetration_depth=0.0,
+                            self_collision_depth=0.0, epsilon=None, failures=["not_simulated"])  # fmt: skip
+    return ProposalOutput(
+        contact_points=s.points, contact_normals=normals[s.indices], forces=np.zeros_like(s.points), fingertips=[],
+        palm_position=None, palm_quaternion=None, joint_names=[], joint_values=None, quality=quality,
+        contact_source=s.source, contact_motions=s.motions,
+    )  # fmt: skip

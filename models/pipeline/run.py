@@ -212,8 +212,9 @@ def _finish(
     if net_out is not None:  # the maps of the sample the best proposal came from (the first when none did)
         best = next((p.network_sample for p in proposals if p.network_sample is not None), 0)
         heat, force = net_out.heatmaps[best].astype(np.float64), net_out.force_maps[best].astype(np.float64)
-    return SynthesisOutput(hand=hand.name, proposals=proposals, heatmap=heat, force_map=force,
-                           timings=timings)
+    every = None if net_out is None else np.asarray(net_out.heatmaps, dtype=np.float64)
+    return SynthesisOutput(hand=hand.name, proposals=proposals, heatmap=heat, force_map=force, heatmaps=every,
+                           timings=timings)  # fmt: skip
 
 
 def _expired(start: HandPose) -> Any:

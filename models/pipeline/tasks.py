@@ -87,10 +87,12 @@ def network_motion(
     if task.kind == "point_motion" and task.motion is not None:
         return np.asarray(task.motion, dtype=np.float64)
     if task.kind == "target_points" and task.targets is not None:
-        return np.asarray(task.targets, dtype=np.float64) - points
+        to_targets: np.ndarray = np.asarray(task.targets, dtype=np.float64) - points
+        return to_targets
     if task.kind == "delta_pose":
         rot, trans = _rigid_motion(task, points, centre)
-        return points @ rot.T + trans - points
+        rigid: np.ndarray = points @ rot.T + trans - points
+        return rigid
     if task.kind == "wrench" and task.wrench is not None:
         w = np.asarray(task.wrench, dtype=np.float64)
         dx = w[:3] / mass

@@ -114,6 +114,9 @@ class SynthesisInput:
     seed: int = 0
     deadline: float | None = None
     return_history: bool = False
+    simulate_rollout: bool = False  # deformables: simulate each answer and judge it by the shape metric
+    handless: bool = False  # deformables without a robot: ``hand`` is only the network's manipulator input
+    num_contacts: int | None = None  # contacts per proposal when handless (default 2)
     hand_key: str | None = None
     initial_pose: HandPose | None = None
 
@@ -151,26 +154,39 @@ class ProposalOutput:
     contact_points: np.ndarray
     contact_normals: np.ndarray
     forces: np.ndarray
-    fingertips: list[str]
-    palm_position: np.ndarray
-    palm_quaternion: np.ndarray
+    fingertips: list[str]  # empty without a robot (deformables)
+    palm_position: np.ndarray | None  # None without a robot
+    palm_quaternion: np.ndarray | None
     joint_names: list[str]
-    joint_values: np.ndarray
+    joint_values: np.ndarray | None
     quality: QualityOutput
     contact_source: str = "given"  # given | random | network | random_fallback | direct_grasp | initial_pose
     history: list[IterationOutput] | None = None
     contact_motions: np.ndarray | None = None  # (H, 3) post-contact motion per contact (deformables), m
     network_forces: np.ndarray | None = None  # (H, 3) the network's force prediction at its contacts (model units)
     network_sample: int | None = None  # which of the network's K latent samples the contacts came from
+    rollout_points: np.ndarray | None = None  # (N, 3) deformables: the points after the simulated manipulation
+    shape_error: float | None = None  # deformables: rollout vs target, most-moving points, normalised 2 m cube
+
+    def pose(self) -> HandPose:
+        """The hand's pose at this proposal.
+
+        Raises:
+            ValueError: a proposal without a robot (a deformable's contacts for any gripper) has none.
+        """
+        if self.palm_position is None or self.palm_quaternion is None or self.joint_values is None:
+            raise ValueError("this proposal has no hand pose (the request had no robot)")
+        return HandPose(self.palm_position, self.palm_quaternion, self.joint_values)
 
 
 @dataclass
 class SynthesisOutput:
     """Proposals (successful ones first), optional network maps, and seconds per stage."""
 
-    hand: str
+    hand: str | None  # None for a deformable's contacts without a robot
     proposals: list[ProposalOutput]
     heatmap: np.ndarray | None = None
+    heatmaps: np.ndarray | None = None  # (K, N) every latent sample's heatmap
     force_map: np.ndarray | None = None
     timings: dict[str, float] = field(default_factory=dict)
 

@@ -19,16 +19,16 @@ def pose_dict(pose: Pose) -> dict[str, list[float]]:
 
 def proposal_dict(p: ProposalOutput) -> dict[str, Any]:
     """One proposal with the wire's field names."""
-    q = p.quality
+    q, pose = p.quality, p.pose()
     return {
         "contact_points": p.contact_points.tolist(),
         "contact_normals": p.contact_normals.tolist(),
         "forces": p.forces.tolist(),
         "fingertips": list(p.fingertips),
-        "palm_position": p.palm_position.tolist(),
-        "palm_quaternion": p.palm_quaternion.tolist(),
+        "palm_position": pose.palm_pos.tolist(),
+        "palm_quaternion": pose.palm_quat.tolist(),
         "joint_names": list(p.joint_names),
-        "joint_values": p.joint_values.tolist(),
+        "joint_values": pose.q.tolist(),
         "contact_source": p.contact_source,
         "quality": {
             "success": q.success, "converged": q.converged, "reason": q.reason, "iterations": q.iterations,

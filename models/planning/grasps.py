@@ -21,7 +21,6 @@ with the object placed at ``poses[k]`` (world frame). For each step:
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import replace
 
 import numpy as np
@@ -30,11 +29,9 @@ from models.pipeline import ProposalOutput, SynthesisInput, TaskInput, run_pipel
 from models.pipeline.run import CancelCheck
 from models.planning.poses import Pose
 from models.planning.scene import CollisionScene
-from models.planning.types import GraspChange, PlanInput, PlanStep
+from models.planning.types import GraspChange, PlanInput, PlanStep, Progress
 from models.refine.state import HandPose
 from models.robots.hand import Hand
-
-Progress = Callable[[str, float], None]
 
 
 def step_input(inp: PlanInput, a: Pose, b: Pose, seed: int) -> SynthesisInput:
@@ -73,7 +70,7 @@ def carried(p: ProposalOutput, a: Pose, b: Pose) -> HandPose:
 def hand_hits(scene: CollisionScene, hand: Hand, p: ProposalOutput, a: Pose, b: Pose) -> list[str]:
     """What the proposal's hand meets at the step's start (its own pose) and end (carried to ``b``)."""
     at_b = carried(p, a, b)
-    hits = scene.hand_hits(hand, palm(p), p.joint_values)
+    hits = scene.hand_hits(hand, palm(p), p.pose().q)
     hits += [h for h in scene.hand_hits(hand, Pose(at_b.palm_pos, at_b.palm_quat), at_b.q) if h not in hits]
     return hits
 
@@ -132,10 +129,11 @@ def synthesise_along(
         a predictor. Cancelled: ``should_cancel()`` returned true.
     """
     opt = inp.options
-    report = progress or (lambda stage, fraction: None)
+    report = progress or (lambda stage, completed, total: None)
     steps: list[PlanStep] = []
     held: ProposalOutput | None = None
     total = len(poses) - 1
+    report("contacts", 0, total)
     for k in range(total):
         a, b = poses[k], poses[k + 1]
         if opt.deadline is not None and time.monotonic() >= opt.deadline:
@@ -174,5 +172,5 @@ def synthesise_along(
         step.seconds, step.calls = time.perf_counter() - t0, calls
         held = step.proposal if step.success else None
         steps.append(step)
-        report("contacts", (k + 1) / total)
+        report("contacts", k + 1, total)
     return steps

@@ -39,7 +39,10 @@ class BoxObstacle:
 
     def mesh(self) -> trimesh.Trimesh:
         """The box as a world-frame mesh (views, containment)."""
-        return trimesh.creation.box(extents=np.asarray(self.size, dtype=np.float64), transform=self.pose.matrix())
+        box: trimesh.Trimesh = trimesh.creation.box(
+            extents=np.asarray(self.size, dtype=np.float64), transform=self.pose.matrix()
+        )
+        return box
 
 
 @dataclass

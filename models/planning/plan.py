@@ -1,22 +1,20 @@
 """`plan_manipulation`: sparse object waypoints + a scene → a dense collision-free trajectory with the contact
 answer of every step (the science behind ``POST /v1/plans``).
 
-Stages reported to ``progress(stage, fraction)``: "planning" (per segment) and "contacts" (per step).
+Stages reported to ``progress(stage, completed, total)``: "repair" (the waypoints checked), "planning" (per
+segment) and "contacts" (per step).
 """
 
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 
 from models.pipeline.run import CancelCheck
 from models.planning.grasps import synthesise_along
 from models.planning.scene import CollisionScene
 from models.planning.trajectory import plan_trajectory
-from models.planning.types import PlanInput, PlanOutput
+from models.planning.types import PlanInput, PlanOutput, Progress
 from models.planning.validate import check_plan
-
-Progress = Callable[[str, float], None]
 
 
 def scene_of(inp: PlanInput) -> CollisionScene:
@@ -35,7 +33,7 @@ def plan_manipulation(
     Args:
         inp: the request in core form.
         predictor: the network (`models.network.ContactPredictor`); required for method "network".
-        progress: ``progress(stage, fraction)`` callback.
+        progress: ``progress(stage, completed, total)`` callback (see module doc).
         should_cancel: polled by every synthesis.
 
     Returns:

@@ -76,7 +76,8 @@ class Pose:
 
     def rotate(self, vectors: np.ndarray) -> np.ndarray:
         """Body directions (N, 3) (normals) in the world (N, 3)."""
-        return np.asarray(vectors, dtype=np.float64).reshape(-1, 3) @ quaternion_matrix(self.quaternion).T
+        world: np.ndarray = np.asarray(vectors, dtype=np.float64).reshape(-1, 3) @ quaternion_matrix(self.quaternion).T
+        return world
 
     def translation_to(self, other: Pose) -> float:
         """Distance (m) between the two positions."""

@@ -88,4 +88,5 @@ def _tilts(direction: np.ndarray, angle: float, count: int = 8) -> np.ndarray:
     v = np.cross(direction, u)
     phi = 2 * np.pi * np.arange(count) / count
     ring = np.cos(phi)[:, None] * u + np.sin(phi)[:, None] * v
-    return np.cos(angle) * direction + np.sin(angle) * ring
+    tilted: np.ndarray = np.cos(angle) * direction + np.sin(angle) * ring
+    return tilted

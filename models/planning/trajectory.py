@@ -5,7 +5,6 @@ dense pose once more."""
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,9 +14,7 @@ from models.planning.planner import SegmentPlanner, ompl_seed
 from models.planning.poses import Pose
 from models.planning.repair import nearest_free
 from models.planning.scene import CollisionScene
-from models.planning.types import InfeasibleWaypoint, NoPathFound, PlanOptions, SegmentReport, WaypointRepair
-
-Progress = Callable[[str, float], None]
+from models.planning.types import InfeasibleWaypoint, NoPathFound, PlanOptions, Progress, SegmentReport, WaypointRepair
 
 
 @dataclass
@@ -74,9 +71,11 @@ def plan_trajectory(
     Raises:
         InfeasibleWaypoint: see `repair_waypoints`. NoPathFound: a segment RRT-Connect could not connect in time.
     """
-    report = progress or (lambda stage, fraction: None)
+    report = progress or (lambda stage, completed, total: None)
     t0 = time.perf_counter()
+    report("repair", 0, len(waypoints))
     targets, repairs = repair_waypoints(scene, start, waypoints, options)
+    report("repair", len(waypoints), len(waypoints))
     timings = {"repair": time.perf_counter() - t0}
     ends = [start, *targets]
     names = ["start", *(f"waypoints[{i}]" for i in range(len(targets)))]
@@ -88,6 +87,7 @@ def plan_trajectory(
     t0 = time.perf_counter()
     poses, indices, segments = [start], [], []
     spent = 0.0
+    report("planning", 0, len(targets))
     for i in range(len(targets)):
         budget = (options.time_limit - spent) / (len(targets) - i)
         path = planner.plan(ends[i], ends[i + 1], max(budget, 1e-3), ompl_seed(options.seed, i))
@@ -99,7 +99,7 @@ def plan_trajectory(
         indices.append(len(poses) - 1)
         segments.append(SegmentReport(i, path.straight, path.planner_seconds, path.simplify_seconds,
                                       path.raw_states, len(path.poses), len(dense) - 1))  # fmt: skip
-        report("planning", (i + 1) / len(targets))
+        report("planning", i + 1, len(targets))
     timings["planning"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     for k, pose in enumerate(poses):

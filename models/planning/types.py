@@ -8,8 +8,9 @@ contacts, forces and hand pose with the object at that step's first pose.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 
@@ -20,6 +21,8 @@ from models.robots.hand import Hand
 
 REPAIR_MODES = ("nearest", "report")
 GraspChange = Literal["new", "kept", "regrasp", "failed"]
+Progress = Callable[[str, int, int], None]
+"""progress(stage, completed, total): "repair" (waypoints checked), "planning" (segments), "contacts" (steps)."""
 
 
 class PlanningError(InvalidInput):
@@ -40,6 +43,8 @@ class InfeasibleWaypoint(InvalidPlan):
         obstacles: names of the obstacles the object meets there (``"support_plane"`` for the plane).
     """
 
+    code: ClassVar[str] = "InfeasibleWaypoint"
+
     def __init__(self, field_name: str, obstacles: list[str], detail: str) -> None:
         super().__init__(f"{field_name}: {detail} (collides with {', '.join(obstacles) or 'the scene'})")
         self.field = field_name
@@ -51,12 +56,19 @@ class InfeasibleWaypoint(InvalidPlan):
 
 
 class NoPathFound(PlanningError):
-    """RRT-Connect found no collision-free motion between two consecutive waypoints within its time."""
+    """RRT-Connect found no collision-free motion between two consecutive waypoints within its time.
+
+    Attributes:
+        segment: the segment's index (it ends at ``waypoints[segment]``). field: ``"waypoints[segment]"``.
+    """
+
+    code: ClassVar[str] = "NoPathFound"
 
     def __init__(self, segment: int, source: str, target: str, seconds: float) -> None:
         super().__init__(f"waypoints: no collision-free path from {source} to {target} in {seconds:.2f} s "
                          f"(segment {segment}; raise options.time_limit or move the waypoints)")
         self.segment = segment
+        self.field = f"waypoints[{segment}]"
         self._args = (segment, source, target, seconds)
 
     def __reduce__(self) -> tuple[type, tuple[int, str, str, float]]:  # picklable across worker processes
@@ -254,6 +266,7 @@ __all__ = [
     "PlanOutput",
     "PlanStep",
     "PlanningError",
+    "Progress",
     "SegmentReport",
     "WaypointRepair",
 ]

@@ -26,7 +26,7 @@ def _mesh_trace(vertices: np.ndarray, faces: np.ndarray, colour: str, name: str,
 
 
 def _hulls(hand: Hand) -> dict[str, trimesh.Trimesh]:
-    cache = hand.__dict__.setdefault("_plan_view_hulls", {})
+    cache: dict[str, trimesh.Trimesh] = hand.__dict__.setdefault("_plan_view_hulls", {})
     if not cache:
         for body, mesh in hand.collision_meshes.items():
             if len(mesh.faces):
@@ -38,7 +38,10 @@ def hand_mesh(hand: Hand, step: PlanStep) -> tuple[np.ndarray, np.ndarray]:
     """The step's hand as one world mesh: vertices (V, 3), faces (F, 3) (the links' convex hulls, posed)."""
     assert step.proposal is not None
     p = step.proposal
-    row = lambda a: torch.as_tensor(np.asarray(a, dtype=np.float64))[None]  # noqa: E731
+
+    def row(a: np.ndarray | None) -> torch.Tensor:
+        return torch.as_tensor(np.asarray(a, dtype=np.float64))[None]
+
     with torch.no_grad():
         poses = hand.link_poses(row(p.palm_position), row(p.palm_quaternion), row(p.joint_values))
     verts, faces, offset = [], [], 0

@@ -7,11 +7,12 @@ Modules: `wrench` (Eq. 4-5, P^J), `grasp` (G_i, cones), `forces` (Eq. 6-8, nativ
 `baseline` (direct grasp), `verify` (docs/evaluation.md), `evaluation` (Table II protocol).
 """
 
+from models.errors import Cancelled
 from models.refine.closure import ferrari_canny
 from models.refine.field import PointCloudField
 from models.refine.forces import ForceSolution, solve_forces, solve_forces_cvxpy
 from models.refine.initialise import InitCandidate, initialise
-from models.refine.refine import Cancelled, RefineConfig, RefineResult, refine
+from models.refine.refine import RefineConfig, RefineResult, refine
 from models.refine.state import HandPose
 from models.refine.strategy import refine_from_start
 from models.refine.verify import Verification, verify

@@ -36,7 +36,7 @@ def primitive_wrenches(
         + mu_c * np.sin(angles)[None, :, None] * t2[:, None, :]
     )  # (m, edges, 3)
     g = grasp_maps(points, centre, length)  # (m, 6, 3)
-    prims = np.einsum("mij,mej->mei", g, dirs).reshape(-1, 6)
+    prims: np.ndarray = np.einsum("mij,mej->mei", g, dirs).reshape(-1, 6)
     if torsional > 0:
         normal_w = np.einsum("mij,mj->mi", g, -n)
         spin = np.concatenate([np.zeros_like(n), torsional / length * n], axis=1)

@@ -63,7 +63,8 @@ class ForceSolution:
 def wrench_matrix(task: WrenchTask, points: np.ndarray) -> np.ndarray:
     """(k, 3m) map from stacked forces to the projected scaled wrench, ``R [G_1 … G_m]``."""
     g = grasp_maps(points, task.centre, task.length)  # (m, 6, 3)
-    return task.projection @ np.concatenate(list(g), axis=1)
+    gmat: np.ndarray = task.projection @ np.concatenate(list(g), axis=1)
+    return gmat
 
 
 def solve_forces(
@@ -145,6 +146,12 @@ def solve_forces_cvxpy(
     """The same problem written plainly in CVXPY (reference for tests; ~10× slower)."""
     import cvxpy as cp
 
+    # cp.sum, cp.hstack and cp.sum_squares reach `cvxpy` by a star import of `cvxpy.atoms`, which exports
+    # nothing explicitly (mypy --strict sees no such attributes): the same functions, from where they are defined
+    from cvxpy.atoms.affine.hstack import hstack
+    from cvxpy.atoms.affine.sum import sum as cp_sum
+    from cvxpy.atoms.sum_squares import sum_squares
+
     m = len(points)
     gmat = wrench_matrix(task, points)
     f = cp.Variable(3 * m)
@@ -158,8 +165,8 @@ def solve_forces_cvxpy(
         cons.append(-normals[i] @ fi <= max_normal_force)
         cons.append(-normals[i] @ fi >= min_normal_force(task, m))
     if task.closure:
-        cons.append(cp.sum(cp.hstack(normal_force)) == 1)
-    prob = cp.Problem(cp.Minimize(cp.sum_squares(gmat @ f - task.target)), cons)
+        cons.append(cp_sum(hstack(normal_force)) == 1)
+    prob = cp.Problem(cp.Minimize(sum_squares(gmat @ f - task.target)), cons)
     prob.solve(solver=cp.CLARABEL)
     if f.value is None:
         return ForceSolution(np.zeros((m, 3)), -task.target.copy(), float("inf"), str(prob.status))

@@ -104,7 +104,8 @@ def wahba(
     h = (src_vecs * weights[:, None]).T @ dst_vecs
     u, _, vt = np.linalg.svd(h)
     d = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
-    return vt.T @ np.diag([1.0, 1.0, d]) @ u.T
+    rot: np.ndarray = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
+    return rot
 
 
 def approach_directions(contacts: np.ndarray, normals: np.ndarray) -> list[np.ndarray]:

@@ -100,14 +100,16 @@ class Linearisation:
 
     def penetration(self) -> np.ndarray:
         """Per-guard penetration into the object (≥ 0)."""
-        return np.maximum(0.0, -self.clear)
+        depth: np.ndarray = np.maximum(0.0, -self.clear)
+        return depth
 
     def self_overlap(self) -> np.ndarray:
         """Per-pair overlap of self-collision spheres (≥ 0)."""
         if not len(self.pair_idx):
             return np.zeros(0)
         r = self.sph_radius[self.pair_idx].sum(axis=1)
-        return np.maximum(0.0, r - self.pair_dist)
+        overlap: np.ndarray = np.maximum(0.0, r - self.pair_dist)
+        return overlap
 
 
 def body_spheres(hand: Hand) -> np.ndarray:

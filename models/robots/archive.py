@@ -27,7 +27,7 @@ import zipfile
 from dataclasses import dataclass, field
 from typing import IO
 
-from models.robots.description import HandLoadError
+from models.errors import HandLoadError
 
 MAX_ARCHIVE_BYTES = 16 * 1024 * 1024
 MAX_MEMBERS = 2000

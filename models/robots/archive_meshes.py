@@ -14,8 +14,8 @@ import logging
 import numpy as np
 import trimesh
 
+from models.errors import HandLoadError
 from models.robots.archive import MAX_MESH_FACES, MESH_SUFFIXES, HandArchive
-from models.robots.description import HandLoadError
 from models.robots.urdf import MeshLoader
 
 MAX_MESH_VERTICES = 500_000

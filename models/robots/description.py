@@ -90,12 +90,15 @@ def primitive_mesh(kind: str, size: np.ndarray) -> trimesh.Trimesh:
     ``size``: box (3,) full extents; sphere (1,) radius; cylinder/capsule (2,) radius, full length of the
     straight part.
     """
+    mesh: trimesh.Trimesh  # trimesh.creation is untyped
     if kind == "box":
-        return trimesh.creation.box(extents=size[:3])
-    if kind == "sphere":
-        return trimesh.creation.icosphere(subdivisions=2, radius=float(size[0]))
-    if kind == "cylinder":
-        return trimesh.creation.cylinder(radius=float(size[0]), height=float(size[1]), sections=24)
-    if kind == "capsule":
-        return trimesh.creation.capsule(radius=float(size[0]), height=float(size[1]), count=[16, 16])
-    raise HandLoadError(f"unknown primitive {kind!r}")
+        mesh = trimesh.creation.box(extents=size[:3])
+    elif kind == "sphere":
+        mesh = trimesh.creation.icosphere(subdivisions=2, radius=float(size[0]))
+    elif kind == "cylinder":
+        mesh = trimesh.creation.cylinder(radius=float(size[0]), height=float(size[1]), sections=24)
+    elif kind == "capsule":
+        mesh = trimesh.creation.capsule(radius=float(size[0]), height=float(size[1]), count=[16, 16])
+    else:
+        raise HandLoadError(f"unknown primitive {kind!r}")
+    return mesh

@@ -22,7 +22,8 @@ import numpy as np
 import torch
 import trimesh
 
-from models.robots.description import HandLoadError, RobotDescription
+from models.errors import HandLoadError
+from models.robots.description import RobotDescription
 from models.robots.kinematics import KinematicTree, quat_exp, quat_multiply
 from models.robots.pads import ContactSurface, build_contact_surface
 from models.robots.spheres import fit_spheres, sample_surface

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
-from models.robots.description import HandLoadError, JointSpec, RobotDescription
+from models.errors import HandLoadError
+from models.robots.description import JointSpec, RobotDescription
 
 FIXED, REVOLUTE, PRISMATIC = 0, 1, 2
 

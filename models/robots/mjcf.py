@@ -11,10 +11,16 @@ Only for trusted, packaged files: ``mujoco`` opens the meshes the MJCF names.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 import trimesh
 
-from models.robots.description import HandLoadError, JointSpec, RobotDescription, primitive_mesh
+from models.errors import HandLoadError
+from models.robots.description import JointSpec, RobotDescription, primitive_mesh
+
+if TYPE_CHECKING:
+    import mujoco  # untyped (no stubs): its objects read as Any
 
 COUPLING_RANGE = 2e-3
 
@@ -44,7 +50,7 @@ def parse_mjcf(path: str, name: str = "robot") -> RobotDescription:
     return description_from_model(mujoco.MjModel.from_xml_path(path), name)
 
 
-def description_from_model(m, name: str = "robot", *, body_frames: bool = False) -> RobotDescription:
+def description_from_model(m: mujoco.MjModel, name: str = "robot", *, body_frames: bool = False) -> RobotDescription:
     """The body tree of a compiled ``mujoco.MjModel`` as a description (root = world).
 
     Joint ``ref`` values are honoured (a joint at its ``ref`` leaves the body where the file puts it, so joint
@@ -133,7 +139,7 @@ def _at_ref(axis: np.ndarray, ref: float, hinge: bool) -> np.ndarray:
     return T
 
 
-def _geom_mesh(m, g: int) -> trimesh.Trimesh | None:
+def _geom_mesh(m: mujoco.MjModel, g: int) -> trimesh.Trimesh | None:
     import mujoco
 
     t, s = int(m.geom_type[g]), np.asarray(m.geom_size[g], dtype=np.float64)
@@ -154,7 +160,7 @@ def _geom_mesh(m, g: int) -> trimesh.Trimesh | None:
     return None
 
 
-def _couplings(m, joints: list[JointSpec]) -> list[str]:
+def _couplings(m: mujoco.MjModel, joints: list[JointSpec]) -> list[str]:
     """Tie coupled joints as mimic joints; returns one line per coupling, honoured or left free.
 
     Honoured: a fixed tendon over two joints with a range of at most ``COUPLING_RANGE`` (c0·a + c1·b ≈ 0 gives

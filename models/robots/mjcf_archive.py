@@ -21,14 +21,18 @@ from __future__ import annotations
 
 import posixpath
 import xml.etree.ElementTree as ET
+from typing import TYPE_CHECKING
 
 from defusedxml import DefusedXmlException
 from defusedxml.ElementTree import fromstring
 
+from models.errors import HandLoadError
 from models.robots.archive import HandArchive
 from models.robots.archive_meshes import ArchiveMeshes
-from models.robots.description import HandLoadError
 from models.robots.urdf import MAX_URDF_BYTES
+
+if TYPE_CHECKING:
+    import mujoco  # untyped (no stubs): its objects read as Any
 
 MAX_MJCF_BYTES = MAX_URDF_BYTES
 MAX_INCLUDE_DEPTH = 8
@@ -41,7 +45,7 @@ def _parse(data: bytes, what: str) -> ET.Element:
     if len(data) > MAX_MJCF_BYTES:
         raise HandLoadError(f"{what}: {len(data)} bytes, over the {MAX_MJCF_BYTES}-byte limit")
     try:
-        root = fromstring(data, forbid_dtd=True, forbid_entities=True, forbid_external=True)
+        root: ET.Element = fromstring(data, forbid_dtd=True, forbid_entities=True, forbid_external=True)
     except DefusedXmlException as e:
         raise HandLoadError(
             f"{what}: unsafe XML rejected ({type(e).__name__}): DTDs and entities are not allowed"
@@ -126,7 +130,7 @@ def sanitised_mjcf(archive: HandArchive, member: str, meshes: ArchiveMeshes) -> 
     return ET.tostring(root, encoding="unicode"), assets, notes
 
 
-def compile_mjcf(archive: HandArchive, member: str, meshes: ArchiveMeshes):
+def compile_mjcf(archive: HandArchive, member: str, meshes: ArchiveMeshes) -> tuple[mujoco.MjModel, list[str]]:
     """``mujoco.MjModel`` of the archive's MJCF ``member`` and the drop notes (see :func:`sanitised_mjcf`).
 
     Raises:

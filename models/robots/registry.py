@@ -42,8 +42,7 @@ from pathlib import Path
 import numpy as np
 import trimesh
 
-from models.errors import UnknownHand
-from models.robots.description import HandLoadError
+from models.errors import HandLoadError, UnknownHand
 from models.robots.hand import Hand
 from models.robots.meshcache import hull_loader
 from models.robots.mjcf import parse_mjcf

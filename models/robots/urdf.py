@@ -19,9 +19,9 @@ import trimesh
 from defusedxml import DefusedXmlException
 from defusedxml.ElementTree import fromstring
 
+from models.errors import HandLoadError
 from models.robots.description import (
     JOINT_TYPES,
-    HandLoadError,
     JointSpec,
     RobotDescription,
     primitive_mesh,

@@ -23,21 +23,25 @@ from __future__ import annotations
 import re
 import time
 from dataclasses import dataclass, field
-from typing import cast
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 import torch
 import trimesh
 
+from models.errors import HandLoadError
 from models.robots.archive import HandArchive, read_archive
 from models.robots.archive_meshes import ArchiveMeshes
-from models.robots.description import HandLoadError, RobotDescription
+from models.robots.description import RobotDescription
 from models.robots.hand import Hand
 from models.robots.kinematics import KinematicTree
 from models.robots.mjcf import description_from_model
 from models.robots.mjcf_archive import compile_mjcf
 from models.robots.pads import PAD_RADIUS
 from models.robots.urdf import parse_urdf
+
+if TYPE_CHECKING:
+    import mujoco  # untyped (no stubs): its objects read as Any
 
 MAX_FINGERTIPS = 8
 TIP_PULLBACK = 0.25
@@ -163,7 +167,7 @@ def _parse(
     return _cut(desc, palm, notes), "urdf", member, meshes, notes, palm, {}
 
 
-def _references(model) -> dict[str, float]:
+def _references(model: mujoco.MjModel) -> dict[str, float]:
     """Joint → its MJCF ``ref`` value (the pose the file draws; the default rest pose of an MJCF hand)."""
     import mujoco
 

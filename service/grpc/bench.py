@@ -106,7 +106,7 @@ async def _http(url: str, body: bytes, clients: int, total: int) -> dict[str, An
 async def _grpc(target: str, message: Any, clients: int, total: int) -> dict[str, Any]:
     import grpc
 
-    from service.grpc.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
+    from clients.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 
     async with grpc.aio.insecure_channel(target) as channel:
         stub = pb_grpc.ManiFoundationStub(channel)
@@ -130,10 +130,10 @@ def _start(args: argparse.Namespace) -> tuple[subprocess.Popen[bytes], str, str]
 def run(args: argparse.Namespace) -> int:
     """Run the benchmark; prints one row per level and transport (and writes JSON with ``--json``)."""
     from clients.codec import MSGPACK, dump_model
+    from clients.protos.convert import to_proto
+    from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
     from clients.schemas import SynthesisRequest
     from service.bench import _wait_ready, request_body
-    from service.grpc.convert import to_proto
-    from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 
     proc = None
     if args.url and args.grpc:

@@ -1,4 +1,6 @@
-"""What every RPC does around its own work: the caller's key and rate, metrics, and the error translation.
+"""What every RPC does around its own work: the caller's key and rate, metrics, the error translation, and the
+reported versions (``x-mani-contract-version``, ``x-mani-service-version``) in the initial metadata of every call
+(and in the trailers of a failed one).
 
 The same rules as HTTP (`service.deps.authorize`), on the app's own objects: the keys of `Settings`, the tenant of
 each key (`service.security.tenant_of`), one token bucket per key shared by both transports (a key's HTTP and
@@ -9,6 +11,7 @@ gRPC calls draw on the same bucket), and the same wrong-key limit per client add
 from __future__ import annotations
 
 import asyncio
+import contextvars
 import functools
 import time
 from collections.abc import AsyncIterator, Awaitable, Callable
@@ -22,8 +25,10 @@ from service.grpc.errors import abort, code_of, translate
 from service.metrics import LATENCY_BUCKETS, Metrics
 from service.security import Caller, RateLimiter, check_key, tenant_of
 from service.settings import Settings
+from service.versions import reported
 
 Reply = TypeVar("Reply")
+_initial_sent: contextvars.ContextVar[bool] = contextvars.ContextVar("grpc_initial_metadata_sent", default=False)
 
 
 class GrpcMetrics:
@@ -86,6 +91,19 @@ def authorize(state: Any, context: grpc.aio.ServicerContext) -> Caller:
     return caller
 
 
+async def send_initial_metadata(state: Any, context: grpc.aio.ServicerContext, *pairs: tuple[str, str]) -> None:
+    """Send the call's initial metadata now: the reported versions and ``pairs`` (once per call: an RPC that
+    sends its own, e.g. a job id, calls this instead of ``context.send_initial_metadata``)."""
+    await context.send_initial_metadata((*reported(state).metadata(), *pairs))
+    _initial_sent.set(True)
+
+
+async def _announce(state: Any, context: grpc.aio.ServicerContext) -> None:
+    """The versions in the initial metadata, unless the RPC already sent its own."""
+    if not _initial_sent.get():
+        await send_initial_metadata(state, context)
+
+
 Unary = Callable[[Any, Any, grpc.aio.ServicerContext, Caller], Awaitable[Reply]]
 Streaming = Callable[[Any, Any, grpc.aio.ServicerContext, Caller], AsyncIterator[Reply]]
 
@@ -96,14 +114,17 @@ def unary(handler: Unary[Reply]) -> Callable[[Any, Any, grpc.aio.ServicerContext
     @functools.wraps(handler)
     async def call(self: Any, request: Any, context: grpc.aio.ServicerContext) -> Reply:
         started, code = time.perf_counter(), grpc.StatusCode.OK
+        _initial_sent.set(False)
         try:
-            return await handler(self, request, context, authorize(self.state, context))
+            reply = await handler(self, request, context, authorize(self.state, context))
+            await _announce(self.state, context)
+            return reply
         except asyncio.CancelledError:  # the client cancelled, went away or its deadline passed
             code = grpc.StatusCode.CANCELLED
             raise
         except Exception as exc:
             code = code_of(translate(exc)[0])
-            await abort(context, exc)
+            await abort(context, exc, reported(self.state).metadata())
         finally:
             self.metrics.observe(handler.__name__, code, started)
 
@@ -116,15 +137,18 @@ def streaming(handler: Streaming[Reply]) -> Callable[[Any, Any, grpc.aio.Service
     @functools.wraps(handler)
     async def call(self: Any, request: Any, context: grpc.aio.ServicerContext) -> AsyncIterator[Reply]:
         started, code = time.perf_counter(), grpc.StatusCode.OK
+        _initial_sent.set(False)
         try:
             async for reply in handler(self, request, context, authorize(self.state, context)):
+                await _announce(self.state, context)
                 yield reply
+            await _announce(self.state, context)  # a stream that sent nothing
         except asyncio.CancelledError:  # the client cancelled, went away or its deadline passed
             code = grpc.StatusCode.CANCELLED
             raise
         except Exception as exc:
             code = code_of(translate(exc)[0])
-            await abort(context, exc)
+            await abort(context, exc, reported(self.state).metadata())
         finally:
             self.metrics.observe(handler.__name__, code, started)
 

@@ -6,7 +6,7 @@ grpcio-tools on a user's machine), and a reviewer sees the generated API change 
     python -m service.grpc.codegen            # rewrite the committed files in place
 
 The proto is compiled from the repository root (``-I .``) so the generated modules import each other by their
-package path (``service.grpc.protos.manifoundation.v1``) and need no rewriting.
+package path (``clients.protos.manifoundation.v1``) and need no rewriting.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-PROTOS = ("service/grpc/protos/manifoundation/v1/manifoundation.proto",)
+PROTOS = ("clients/protos/manifoundation/v1/manifoundation.proto",)
 GENERATED_SUFFIXES = ("_pb2.py", "_pb2.pyi", "_pb2_grpc.py")
 
 

@@ -20,13 +20,14 @@ import grpc
 from google.protobuf import any_pb2, duration_pb2
 from google.rpc import code_pb2, error_details_pb2, status_pb2
 
+from clients.protos import metadata as keys
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.schemas import ErrorBody, ErrorType
 from service import errors as http_errors
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 
-DOMAIN = "manifoundation.v1"
-DETAILS_KEY = "grpc-status-details-bin"
-ERROR_KEY = "mani-error-bin"
+DOMAIN = keys.DOMAIN
+DETAILS_KEY = keys.STATUS_DETAILS
+ERROR_KEY = keys.ERROR
 
 C = grpc.StatusCode
 GRPC_CODE: dict[ErrorType, grpc.StatusCode] = {
@@ -43,6 +44,8 @@ GRPC_CODE: dict[ErrorType, grpc.StatusCode] = {
     ErrorType.UNSUPPORTED_MEDIA_TYPE: C.INVALID_ARGUMENT,
     ErrorType.VALIDATION_ERROR: C.INVALID_ARGUMENT,
     ErrorType.ROBOT_INVALID: C.INVALID_ARGUMENT,
+    ErrorType.INFEASIBLE_WAYPOINT: C.INVALID_ARGUMENT,
+    ErrorType.NO_PATH_FOUND: C.INVALID_ARGUMENT,
     ErrorType.RATE_LIMITED: C.RESOURCE_EXHAUSTED,
     ErrorType.QUEUE_FULL: C.RESOURCE_EXHAUSTED,
     ErrorType.INTERNAL_ERROR: C.INTERNAL,
@@ -106,11 +109,14 @@ def trailers(error: ErrorBody, retry_after: float | None = None) -> tuple[tuple[
     return (DETAILS_KEY, status.SerializeToString()), (ERROR_KEY, body.SerializeToString())
 
 
-async def abort(context: grpc.aio.ServicerContext, exc: BaseException) -> NoReturn:
-    """End the call with the status ``exc`` translates to (raises, as `ServicerContext.abort` does)."""
+async def abort(
+    context: grpc.aio.ServicerContext, exc: BaseException, extra: tuple[tuple[str, str], ...] = ()
+) -> NoReturn:
+    """End the call with the status ``exc`` translates to (raises, as `ServicerContext.abort` does); ``extra``:
+    more trailing metadata (the reported versions)."""
     error, retry_after = translate(exc)
-    metadata = trailers(error, retry_after)
+    metadata = trailers(error, retry_after) + extra
     if isinstance(exc, JobFailed):
-        metadata += (("x-job-id", exc.job_id),)
+        metadata += ((keys.JOB_ID, exc.job_id),)
     await context.abort(code_of(error), error.error, trailing_metadata=metadata)
     raise AssertionError("unreachable: abort raises")  # pragma: no cover

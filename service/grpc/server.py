@@ -22,8 +22,8 @@ from grpc_health.v1 import health_pb2, health_pb2_grpc
 from grpc_health.v1._async import HealthServicer
 from grpc_reflection.v1alpha import reflection
 
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
+from clients.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from service.grpc.servicer import ManiFoundationService
 from service.settings import Settings
 

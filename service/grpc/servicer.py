@@ -19,22 +19,23 @@ from typing import Any
 
 import grpc
 
+from clients.protos.convert import to_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
+from clients.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from clients.schemas import (
     MAX_BATCH_SIZE,
     BatchItem,
-    BatchPublic,
     ErrorBody,
     FieldError,
     JobPublic,
     JobState,
+    PlanRequest,
     RobotRegister,
 )
+from service.batch_pages import batch_page
 from service.errors import Conflict, InvalidInput, PayloadTooLarge, Unavailable
-from service.grpc.calls import GrpcMetrics, streaming, unary
-from service.grpc.convert import to_proto
+from service.grpc.calls import GrpcMetrics, send_initial_metadata, streaming, unary
 from service.grpc.errors import JobFailed
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from service.grpc.submit import Submission
 from service.security import Caller
 
@@ -68,7 +69,7 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
         call_deadline = _call_deadline(context)
         deadline = min(time.time() + max(0.0, timeout), call_deadline or float("inf"))
         _, job_id = await self.submission.one(request, caller, context, kind="sync", deadline=deadline)
-        await context.send_initial_metadata((("x-job-id", job_id),))
+        await send_initial_metadata(self.state, context, ("x-job-id", job_id))
         try:
             job = await self._wait(job_id, deadline)
         except asyncio.CancelledError:
@@ -133,32 +134,12 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
     @unary
     async def GetBatch(self, request: pb.GetBatchRequest, context: Any, caller: Caller) -> pb.BatchPublic:
         queue, settings = self.submission.queue, self.state.settings
-        job_ids = await queue.batch_job_ids(request.id, owner=caller.scope)
         offset, limit = request.offset, request.limit if request.HasField("limit") else 100
         if offset < 0 or not 1 <= limit <= MAX_BATCH_SIZE:
             field = "offset" if offset < 0 else "limit"
             problem = "must be ≥ 0" if offset < 0 else f"must be 1..{MAX_BATCH_SIZE}"
             raise InvalidInput(f"{field}: {problem}", detail=[FieldError(field=field, problem=problem)])
-        limit = min(limit, settings.batch_page_max)
-        states = await asyncio.gather(*(queue.get(j, with_result=False) for j in job_ids))
-        page = await asyncio.gather(*(queue.get(j) for j in job_ids[offset : offset + limit]))
-        counts: dict[JobState, int] = {}
-        for job in states:
-            counts[job.state] = counts.get(job.state, 0) + 1
-        items = [
-            BatchItem(index=offset + i, job_id=j.id, state=j.state, result=j.result, error=j.error)
-            for i, j in enumerate(page)
-        ]
-        batch = BatchPublic(
-            id=request.id,
-            total=len(job_ids),
-            counts=counts,
-            done=all(j.state.terminal for j in states),
-            items=items,
-            offset=offset,
-            limit=limit,
-            created_at=min((j.created_at for j in states), default=time.time()),
-        )
+        batch = await batch_page(queue, request.id, caller.scope, offset, min(limit, settings.batch_page_max))
         return to_proto(batch, pb.BatchPublic)
 
     @streaming
@@ -177,6 +158,12 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
                     yield to_proto(item, pb.BatchItem)
             if waiting:
                 await asyncio.sleep(self.state.settings.sse_interval)
+
+    @unary
+    async def SubmitPlan(self, request: pb.PlanRequest, context: Any, caller: Caller) -> pb.JobCreated:
+        """Enqueue a plan at once (no queue deadline; ``options.timeout`` bounds its compute)."""
+        _, job_id = await self.submission.one(request, caller, context, kind="plan", model=PlanRequest)
+        return pb.JobCreated(id=job_id, state=JobState.QUEUED.value)
 
     @unary
     async def ListRobots(self, request: pb.ListRobotsRequest, context: Any, caller: Caller) -> pb.RobotList:

@@ -1,4 +1,4 @@
-"""Submitting synthesis work from a gRPC call: the steps of `service.submission.Submitter`, for a proto message.
+"""Submitting work (a synthesis, a batch, a plan) from a gRPC call: `service.submission.Submitter`'s steps.
 
 Admission before validation (RESOURCE_EXHAUSTED when the queue has no room), validation once by the contract
 (`convert.from_proto`; a large message off the event loop, like a large HTTP body), the hand check, submission on
@@ -15,12 +15,12 @@ from typing import Any, TypeVar
 import grpc
 from google.protobuf.message import Message
 
+from clients.protos.convert import from_proto
 from clients.schemas import BatchCreate, SynthesisRequest, WireModel
 from service.errors import Unavailable
-from service.grpc.convert import from_proto
 from service.middleware import request_id_from
 from service.security import Caller
-from service.submission import Submitter
+from service.submission import RequestT, Submitter
 
 ModelT = TypeVar("ModelT", bound=WireModel)
 
@@ -65,11 +65,13 @@ class Submission:
         *,
         kind: str,
         deadline: float | None = None,
-    ) -> tuple[SynthesisRequest, str]:
-        """Validate and submit one request (its job's deadline: ``deadline``, Unix s). Returns it and its job id."""
+        model: type[RequestT] = SynthesisRequest,  # type: ignore[assignment]
+    ) -> tuple[RequestT, str]:
+        """Validate ``message`` as ``model`` (a synthesis or a plan) and submit it (its job's deadline:
+        ``deadline``, Unix s). Returns it and its job id."""
         submitter = self.submitter(caller, context)
         await submitter.admit()
-        body = await self.validate(message, SynthesisRequest)
+        body = await self.validate(message, model)
         return body, await submitter.submit(body, kind, deadline)
 
     async def batch(self, message: Message, caller: Caller, context: grpc.aio.ServicerContext) -> str:

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import asyncio
 import logging
-import time
 
 from fastapi import APIRouter, Query, Request
 from starlette.responses import Response
 
-from clients.schemas import BatchItem, BatchPublic, JobPublic, JobState
+from clients.schemas import BatchPublic
+from service.batch_pages import batch_page
 from service.deps import Authorized, CallerDep, QueueDep, SettingsDep
 from service.negotiation import body_openapi, respond
 from service.responses import ERRORS, READ_ERRORS
@@ -49,26 +48,6 @@ async def get_batch(
     offset: int = Query(0, ge=0),
     limit: int = Query(100, ge=1, le=1000),
 ) -> Response:
-    job_ids = await queue.batch_job_ids(batch_id, owner=caller.scope)
-    limit = min(limit, settings.batch_page_max)
-    states = await asyncio.gather(*(queue.get(j, with_result=False) for j in job_ids))
-    page_ids = job_ids[offset : offset + limit]
-    page = await asyncio.gather(*(queue.get(j) for j in page_ids))
-    counts: dict[JobState, int] = {}
-    for job in states:
-        counts[job.state] = counts.get(job.state, 0) + 1
-    batch = BatchPublic(
-        id=batch_id,
-        total=len(job_ids),
-        counts=counts,
-        done=all(j.state.terminal for j in states),
-        items=[_item(offset + i, job) for i, job in enumerate(page)],
-        offset=offset,
-        limit=limit,
-        created_at=min((j.created_at for j in states), default=time.time()),
-    )
+    batch = await batch_page(queue, batch_id, caller.scope, offset, min(limit, settings.batch_page_max))
     return respond(request, batch)
 
-
-def _item(index: int, job: JobPublic) -> BatchItem:
-    return BatchItem(index=index, job_id=job.id, state=job.state, result=job.result, error=job.error)

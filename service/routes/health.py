@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from importlib.metadata import version as package_version
-
 from fastapi import APIRouter, Request
 from prometheus_client import CONTENT_TYPE_LATEST
 from starlette.responses import Response
@@ -12,16 +10,18 @@ from clients.schemas import HealthPublic, ReadyPublic
 from service.deps import Authorized, MetricsDep, QueueDep
 from service.negotiation import respond
 from service.responses import errors
+from service.versions import reported
 
 router = APIRouter(tags=["health"], dependencies=[Authorized])
-VERSION = package_version("manifoundation")
-"""The installed distribution's version (pyproject.toml is its one source)."""
 
 
 @router.get("/healthz", summary="Liveness", responses={200: {"model": HealthPublic}})
 async def healthz(request: Request) -> Response:
     queue = getattr(request.app.state, "queue", None)
-    return respond(request, HealthPublic(backend=getattr(queue, "backend", "none"), version=VERSION))
+    versions = reported(request.app.state)
+    backend = getattr(queue, "backend", "none")
+    body = HealthPublic(backend=backend, version=versions.service, contract_version=versions.contract)
+    return respond(request, body)
 
 
 @router.get(

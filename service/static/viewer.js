@@ -1,7 +1,8 @@
 "use strict";
 // Draws one job's result: the object's points coloured by the contact heatmap, the contacts, the force arrows,
 // and the hand at its solved pose (palm frame from palm_position + palm_quaternion, a link from the palm to
-// each fingertip at its contact, fingertip spheres); with the proposal's quality figures.
+// each fingertip at its contact, fingertip spheres); with the proposal's quality figures. A plan job is played
+// step by step by plan_viewer.js.
 const pathParts = window.location.pathname.split("/"); // /view/{id} or /v1/jobs/{id}/view
 const jobId = decodeURIComponent(pathParts[1] === "view" ? pathParts[2] : pathParts[3]);
 document.getElementById("job-id").textContent = jobId;
@@ -46,19 +47,25 @@ function traces(scene, proposal) {
       marker: { size: 2, color: colour, colorscale: scene.heatmap ? "YlOrRd" : "Greys",
                 showscale: !!scene.heatmap, colorbar: { title: "heat", len: 0.5 } } });
   }
+  if (scene.target_points) {
+    const t = scene.target_points;
+    out.push({ type: "scatter3d", mode: "markers", name: "target", x: col(t, 0), y: col(t, 1), z: col(t, 2),
+      marker: { size: 2, color: "#2ca02c", opacity: 0.6 } });
+  }
   if (!proposal) return out;
+  if (proposal.rollout_points) {
+    const r = thin(proposal.rollout_points, 4096);
+    out.push({ type: "scatter3d", mode: "markers", name: "rollout (simulated)", x: col(r, 0), y: col(r, 1),
+      z: col(r, 2), marker: { size: 2, color: "#ff7f0e", opacity: 0.8 } });
+  }
+  if (proposal.contact_motions) out.push(...arrows(proposal.contact_points, proposal.contact_motions, 1.0,
+    "post-contact motions", "#9467bd", size));
   const c = proposal.contact_points, f = proposal.forces;
   out.push({ type: "scatter3d", mode: "markers+text", name: "contacts", x: col(c, 0), y: col(c, 1), z: col(c, 2),
     text: proposal.fingertips, textposition: "top center", marker: { size: 7, color: "#d62728" } });
-  const fmax = Math.max(1e-9, ...f.map((v) => Math.hypot(...v)));
-  const scale = 0.35 * size / fmax;
-  const lx = [], ly = [], lz = [];
-  const tips = f.map((v, i) => c[i].map((ci, k) => ci + v[k] * scale));
-  c.forEach((p, i) => { lx.push(p[0], tips[i][0], null); ly.push(p[1], tips[i][1], null); lz.push(p[2], tips[i][2], null); });
-  out.push({ type: "scatter3d", mode: "lines", name: "forces", x: lx, y: ly, z: lz, line: { color: "#1f77b4", width: 6 } });
-  out.push({ type: "cone", name: "force heads", showscale: false, anchor: "tip", sizemode: "absolute", sizeref: 0.08 * size,
-    x: col(tips, 0), y: col(tips, 1), z: col(tips, 2), u: col(f, 0), v: col(f, 1), w: col(f, 2),
-    colorscale: [[0, "#1f77b4"], [1, "#1f77b4"]] });
+  const fmax = Math.max(...f.map((v) => Math.hypot(...v)), 0);
+  if (fmax > 0) out.push(...arrows(c, f, 0.35 * size / fmax, "forces", "#1f77b4", size));
+  if (!proposal.palm_position) return out;  // contacts without a robot: no hand to draw
   // The hand: palm frame, palm→fingertip links, fingertip spheres at the contacts.
   const palm = proposal.palm_position, R = rotation(proposal.palm_quaternion), a = 0.4 * size;
   ["#e41a1c", "#4daf4a", "#377eb8"].forEach((colour, k) => {
@@ -81,6 +88,25 @@ function traces(scene, proposal) {
   out.push({ type: "scatter3d", mode: "markers", name: "fingertips", x: col(c, 0), y: col(c, 1), z: col(c, 2),
     marker: { size: 12, color: "#ff7f0e", opacity: 0.35 } });
   return out;
+}
+
+// Every k-th row so that at most `limit` are drawn.
+function thin(rows, limit) {
+  const k = Math.max(1, Math.ceil(rows.length / limit));
+  return k === 1 ? rows : rows.filter((_, i) => i % k === 0);
+}
+
+// Lines from each start point along its vector (× scale) with a cone at the head.
+function arrows(starts, vectors, scale, name, colour, size) {
+  const heads = vectors.map((v, i) => starts[i].map((s, k) => s + v[k] * scale));
+  const lx = [], ly = [], lz = [];
+  starts.forEach((p, i) => { lx.push(p[0], heads[i][0], null); ly.push(p[1], heads[i][1], null); lz.push(p[2], heads[i][2], null); });
+  return [
+    { type: "scatter3d", mode: "lines", name, legendgroup: name, x: lx, y: ly, z: lz, line: { color: colour, width: 6 } },
+    { type: "cone", name: name + " heads", legendgroup: name, showlegend: false, showscale: false, anchor: "tip",
+      sizemode: "absolute", sizeref: 0.08 * size, x: col(heads, 0), y: col(heads, 1), z: col(heads, 2),
+      u: col(vectors, 0), v: col(vectors, 1), w: col(vectors, 2), colorscale: [[0, colour], [1, colour]] },
+  ];
 }
 
 // The hand's collision meshes at its solved pose (what the contacts were verified on), world metres.
@@ -124,10 +150,12 @@ function draw(scene, index) {
       ["iterations", q.iterations], ["wrench residual", fmt(q.wrench_residual)],
       ["max tip distance (m)", fmt(q.max_tip_distance)], ["penetration (m)", fmt(q.penetration_depth)],
       ["self-collision (m)", fmt(q.self_collision_depth)], ["Ferrari–Canny ε", fmt(q.epsilon)],
-      ["verified on", q.geometry || "-"], ["failed criteria", (q.failures || []).join(", ") || "-"]]);
-    rows("hand", [["hand", result.hand], ["palm position", proposal.palm_position.map(fmt).join(", ")],
+      ["verified on", q.geometry || "-"], ["failed criteria", (q.failures || []).join(", ") || "-"],
+      ...(proposal.shape_error == null ? [] : [["shape error (2 m cube)", fmt(proposal.shape_error)]])]);
+    rows("hand", proposal.palm_position ? [["hand", result.hand],
+      ["palm position", proposal.palm_position.map(fmt).join(", ")],
       ["palm quaternion", proposal.palm_quaternion.map(fmt).join(", ")],
-      ...proposal.joint_names.map((n, i) => [n, fmt(proposal.joint_values[i])])]);
+      ...proposal.joint_names.map((n, i) => [n, fmt(proposal.joint_values[i])])] : [["hand", "none (contacts for any gripper)"]]);
   } else {
     rows("quality", [["proposals", "none"], ...(job.error ? [["error", job.error.type + ": " + job.error.error]] : [])]);
     rows("hand", []);
@@ -151,6 +179,13 @@ async function load() {
     const job = scene.job;
     document.getElementById("status").textContent = job.state + (job.state === "running" ? " · " + job.progress.stage : "");
     document.getElementById("status").className = "state-" + job.state;
+    if (job.kind === "plan") {
+      const p = job.progress;
+      if (job.state === "running" && p.total) document.getElementById("status").textContent += " " + p.completed + "/" + p.total;
+      if (job.plan) showPlan(scene); else rows("quality", job.error ? [["error", job.error.type + ": " + job.error.error]] : []);
+      if (!["succeeded", "failed", "cancelled", "expired"].includes(job.state)) setTimeout(load, 1000);
+      return;
+    }
     const select = document.getElementById("proposal");
     const n = job.result ? job.result.proposals.length : 0;
     select.replaceChildren(...Array.from({ length: n }, (_, i) => new Option("proposal " + (i + 1), String(i))));

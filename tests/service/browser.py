@@ -33,7 +33,8 @@ def chromium() -> str:
 
 
 def _run(url: str, extra: list[str], budget_ms: int, timeout: float) -> subprocess.CompletedProcess[str]:
-    with tempfile.TemporaryDirectory(prefix="mani-chromium-") as profile:
+    # Chromium's helper processes may still write to the profile as it exits: a failed clean-up is not a failure
+    with tempfile.TemporaryDirectory(prefix="mani-chromium-", ignore_cleanup_errors=True) as profile:
         cmd = [chromium(), *FLAGS, f"--user-data-dir={profile}", f"--virtual-time-budget={budget_ms}", *extra, url]
         return subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, check=False)
 

@@ -116,13 +116,16 @@ def test_the_shipped_network_and_refinement_through_the_api(base: str) -> None:
         "task": {"kind": "delta_pose", "translation": [0.0, 0.0, 0.05], "rotation": [1.0, 0.0, 0.0, 0.0]},
         "robot": {"name": HAND},
         "options": {"method": "network", "num_proposals": 2, "timeout": 120, "return_hand_mesh": True,
-                    "return_heatmap": True},
+                    "return_heatmap": True, "return_all_heatmaps": True},
     }  # fmt: skip
     response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=180)
     assert response.status_code == 200, response.text[:2000]
     result = SynthesisResult.model_validate(response.json())
     assert result.model_version != "none" and result.heatmap is not None and len(result.heatmap) == len(data["points"])
     assert {p.contact_source for p in result.proposals} <= {"network", "random_fallback"}
+    assert result.heatmaps is not None and result.heatmaps.shape == (2, len(data["points"]))
+    best = next((p.network_sample for p in result.proposals if p.network_sample is not None), 0)
+    np.testing.assert_allclose(result.heatmaps[best], result.heatmap)  # the one map is its sample's row
     for proposal in result.proposals:  # the network's own forces and sample travel with its contacts
         if proposal.contact_source == "network":
             assert proposal.network_sample is not None and proposal.network_forces is not None

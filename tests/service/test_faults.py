@@ -118,6 +118,7 @@ def test_a_full_queue_is_refused_after_the_key_check() -> None:
             answer = client.post(path, json=body, headers=auth)
             assert answer.status_code == 429 and answer.json()["type"] == "QueueFull", answer.text
         assert client.post("/v1/batches", json={"requests": [body]}, headers=auth).status_code == 429
+        assert client.post("/v1/plans", json={}, headers=auth).status_code == 429  # refused before the body is read
 
 
 def test_a_slow_body_is_cut_off() -> None:

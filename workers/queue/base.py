@@ -13,11 +13,12 @@ Robots are namespaced: ``owner=None`` is the shared (single-tenant) namespace, b
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Sequence
 
 from clients.schemas import (
     DeadLetter,
     JobPublic,
+    JobRequest,
     QueueStats,
     RobotPublic,
     RobotRegister,
@@ -51,7 +52,7 @@ class QueueUnavailable(QueueError):
 
 
 class JobQueue(ABC):
-    """Submit, observe and cancel synthesis jobs; the service's only way to get work done."""
+    """Submit, observe and cancel jobs (syntheses and plans); the service's only way to get work done."""
 
     backend: str = "abstract"
 
@@ -69,10 +70,11 @@ class JobQueue(ABC):
 
     @abstractmethod
     async def submit(
-        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None,
+        self, requests: Sequence[JobRequest], *, batch_id: str | None = None, deadline: float | None = None,
         request_id: str | None = None, owner: str | None = None,
     ) -> list[str]:  # fmt: skip
-        """Enqueue jobs atomically (all or none); returns their ids in order.
+        """Enqueue jobs atomically (all or none); returns their ids in order. Each job's kind is its request's
+        (`clients.schemas.kind_of`): a synthesis, or a plan (answered in `JobPublic.plan`).
 
         ``owner``: the tenant the jobs belong to (None: nobody in particular); their registered robot is looked
         up in that owner's namespace.
@@ -178,7 +180,7 @@ async def _poll_events(queue: JobQueue, job_id: str, interval: float) -> AsyncIt
     last: tuple[object, ...] | None = None
     while True:
         job = await queue.get(job_id, with_result=False)
-        key = (job.state, job.progress.stage, job.progress.iteration)
+        key = (job.state, job.progress.stage, job.progress.iteration, job.progress.completed)
         if key != last:
             last = key
             yield job

@@ -19,19 +19,21 @@ import contextlib
 import logging
 import threading
 import time
+from collections.abc import Sequence
 from typing import Any
 
-from clients.codec import pack, unpack
+from clients.codec import pack
 from clients.schemas import (
     DeadLetter,
     JobPublic,
+    JobRequest,
     JobState,
     QueueStats,
     RobotPublic,
     RobotRegister,
     SynthesisRequest,
-    SynthesisResult,
     WorkerPublic,
+    kind_of,
 )
 from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
 from workers.queue.embedded_parts import JobRecord, WorkerHandle
@@ -42,6 +44,7 @@ from workers.queue.records import (
     result_expired_error,
     scoped_robot,
     shutdown_error,
+    with_answer,
 )
 
 log = logging.getLogger("workers.queue.embedded")
@@ -87,7 +90,7 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
 
     # ---- submit / observe ------------------------------------------------------------------------------------
     async def submit(
-        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None,
+        self, requests: Sequence[JobRequest], *, batch_id: str | None = None, deadline: float | None = None,
         request_id: str | None = None, owner: str | None = None,
     ) -> list[str]:  # fmt: skip
         if not self._running:
@@ -98,7 +101,9 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
                 raise QueueFull(f"queue holds {len(self._pending)} jobs (max {self.settings.max_queue})", 1.0)
             ids = []
             for request, payload in zip(requests, payloads, strict=True):
-                job = JobRecord(new_id(), payload, request.robot.name, deadline, batch_id, request_id, owner)
+                hand = request.robot.name if request.robot else None
+                kind = kind_of(request)
+                job = JobRecord(new_id(), payload, hand, deadline, batch_id, request_id, owner, kind)
                 self._jobs[job.id] = job
                 self._pending.append(job.id)
                 ids.append(job.id)
@@ -123,9 +128,7 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
                 public, raw = None, None
                 gone = None if job is not None else self._tombstones.get(job_id)
         if public is not None:
-            if raw is not None:  # the one validation of a result on the service side, outside the lock
-                public.result = SynthesisResult.model_validate(unpack(raw))
-            return public
+            return with_answer(public, raw)  # the one validation of a result on the service side, outside the lock
         if gone is None or (owner is not None and gone[2] != owner):
             raise JobNotFound(f"no job {job_id}")
         created, batch, _ = gone

@@ -11,22 +11,23 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 from clients.codec import pack
-from clients.schemas import ErrorBody, JobProgress, JobPublic, JobState, WorkerPublic
+from clients.schemas import ErrorBody, JobKind, JobProgress, JobPublic, JobState, WorkerPublic
 
 
 class JobRecord:
     """A job as the embedded queue keeps it (payload dropped once terminal)."""
 
     __slots__ = (
-        "batch_id", "cancel", "created_at", "deadline", "deliveries", "error", "finished_at", "id", "owner",
+        "batch_id", "cancel", "created_at", "deadline", "deliveries", "error", "finished_at", "id", "kind", "owner",
         "payload", "progress", "request_id", "result", "robot", "started_at", "state", "timings", "worker",
     )  # fmt: skip
 
     def __init__(
         self, job_id: str, payload: bytes, robot: str | None, deadline: float | None, batch: str | None,
-        request_id: str | None = None, owner: str | None = None,
+        request_id: str | None = None, owner: str | None = None, kind: JobKind = JobKind.SYNTHESIS,
     ) -> None:  # fmt: skip
         self.id, self.payload, self.robot, self.deadline, self.batch_id = job_id, payload, robot, deadline, batch
+        self.kind = kind
         self.request_id = request_id  # X-Request-ID of the submitting HTTP request (internal: logs, operators)
         self.owner = owner  # the tenant (internal: never in JobPublic)
         self.created_at = time.time()
@@ -37,7 +38,7 @@ class JobRecord:
         self.deliveries = 0
         self.worker: str | None = None
         self.timings: dict[str, float] = {}
-        self.result: bytes | None = None  # msgpack of the SynthesisResult, as the worker encoded it
+        self.result: bytes | None = None  # msgpack of the SynthesisResult (PlanResult), as the worker encoded it
         self.error: ErrorBody | None = None
         self.cancel = False
 
@@ -45,6 +46,7 @@ class JobRecord:
         """The job without its result (the caller decodes ``result`` outside the queue's lock)."""
         return JobPublic(
             id=self.id,
+            kind=self.kind,
             state=self.state,
             progress=self.progress.model_copy(),
             created_at=self.created_at,

@@ -21,7 +21,7 @@ from multiprocessing.connection import Connection, wait
 from typing import Any
 
 from clients.codec import unpack
-from clients.schemas import DeadLetter, ErrorBody, JobProgress, JobState, RobotPublic, Stage, WorkerPublic
+from clients.schemas import DeadLetter, ErrorBody, JobKind, JobProgress, JobState, RobotPublic, Stage, WorkerPublic
 from workers.queue.embedded_parts import ChildProcess, JobRecord, WorkerHandle, settle
 from workers.queue.records import (
     cancelled_error,
@@ -189,19 +189,21 @@ class EmbeddedPump:
                     if job is None or job.state is not JobState.QUEUED:
                         self._pending.popleft()
                         continue
-                    if job.deliveries and batch:
-                        break  # a job whose worker died runs alone: a poison job takes no batch-mate down
+                    alone = job.deliveries or job.kind is JobKind.PLAN
+                    if alone and batch:
+                        break  # a job whose worker died runs alone: a poison job takes no batch-mate down; a plan
+                        # runs alone: it takes seconds to minutes
                     self._pending.popleft()
                     job.state, job.worker, job.deliveries = JobState.RUNNING, worker.id, job.deliveries + 1
                     job.started_at = now
                     robot = self._registered.get(scoped_robot(job.owner, job.robot or ""))
                     batch.append({
                         "id": job.id, "deadline": job.deadline, "request_id": job.request_id,
-                        "queued_for": now - job.created_at, "robot": robot is not None,
+                        "queued_for": now - job.created_at, "robot": robot is not None, "kind": job.kind.value,
                     })  # fmt: skip
                     frames += [job.payload, robot] if robot is not None else [job.payload]
                     worker.inflight.add(job.id)
-                    if job.deliveries > 1:
+                    if job.deliveries > 1 or job.kind is JobKind.PLAN:
                         break
                 if not batch:
                     break

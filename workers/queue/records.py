@@ -1,15 +1,16 @@
 """Error bodies and state rules shared by both backends and the worker side (torch-free).
 
-A job's outcome is a `SynthesisResult` or an `ErrorBody`; the error's `ErrorType` decides the terminal state
-(`ErrorType.job_state`): ``Cancelled`` → cancelled, ``DeadlineExceeded`` / ``ResultExpired`` → expired, anything
-else → failed.
+A job's outcome is a `SynthesisResult` (a plan job's: a `PlanResult`) or an `ErrorBody`; the error's `ErrorType`
+decides the terminal state (`ErrorType.job_state`): ``Cancelled`` → cancelled, ``DeadlineExceeded`` /
+``ResultExpired`` → expired, anything else → failed.
 """
 
 from __future__ import annotations
 
 import uuid
 
-from clients.schemas import ErrorBody, ErrorType, JobState
+from clients.codec import unpack
+from clients.schemas import ErrorBody, ErrorType, JobKind, JobPublic, JobState, PlanResult, SynthesisResult
 
 
 def state_for_error(error: ErrorBody) -> JobState:
@@ -17,6 +18,16 @@ def state_for_error(error: ErrorBody) -> JobState:
     know)."""
     kind = error.kind
     return kind.job_state if kind is not None else JobState.FAILED
+
+
+def with_answer(job: JobPublic, raw: bytes | None) -> JobPublic:
+    """``job`` with its stored answer (msgpack bytes, None: none) validated as its kind's: ``result`` for a
+    synthesis, ``plan`` for a plan. The one validation of an answer on the service side."""
+    if raw is not None and job.kind is JobKind.PLAN:
+        job.plan = PlanResult.model_validate(unpack(raw))
+    elif raw is not None:
+        job.result = SynthesisResult.model_validate(unpack(raw))
+    return job
 
 
 def cancelled_error() -> ErrorBody:

@@ -19,7 +19,7 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Sequence
 from typing import Any
 
 import redis.asyncio as aioredis
@@ -34,20 +34,23 @@ from clients.schemas import (
     DeadLetter,
     ErrorBody,
     ErrorType,
+    FieldError,
+    JobKind,
     JobProgress,
     JobPublic,
+    JobRequest,
     JobState,
     QueueStats,
     RobotPublic,
     RobotRegister,
     Stage,
     SynthesisRequest,
-    SynthesisResult,
     WorkerPublic,
+    kind_of,
 )
 from workers.queue.base import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
 from workers.queue.persistence import check_persistence_async
-from workers.queue.records import new_id, result_expired_error, scoped_robot
+from workers.queue.records import new_id, result_expired_error, scoped_robot, with_answer
 from workers.queue.redis_lua import CANCEL, GROUP, SUBMIT, Keys
 from workers.settings import QueueSettings
 
@@ -79,20 +82,24 @@ def _f(value: bytes | None) -> float | None:
 def job_from_hash(job_id: str, h: dict[bytes, bytes], result: bytes | None, has_result: bool) -> JobPublic:
     """A `JobPublic` from a job's record hash (and its result bytes, when fetched)."""
     state = JobState(h[b"state"].decode())
-    error = ErrorBody(error=h[b"error"].decode(), type=h[b"error_type"].decode()) if b"error" in h else None
+    detail = [FieldError.model_validate(d) for d in unpack(h[b"error_detail"])] if h.get(b"error_detail") else None
+    error = None
+    if b"error" in h:
+        error = ErrorBody(error=h[b"error"].decode(), type=h[b"error_type"].decode(), detail=detail)
     progress = JobProgress.model_validate(unpack(h[b"progress"])) if h.get(b"progress") else JobProgress()
     if state is JobState.SUCCEEDED and not has_result:
         state, error = JobState.EXPIRED, result_expired_error()
     if state is JobState.SUCCEEDED:
         progress = JobProgress(stage=Stage.DONE, fraction=1.0)
-    return JobPublic(
-        id=job_id, state=state, progress=progress, created_at=float(h[b"created_at"]),
+    job = JobPublic(
+        id=job_id, kind=JobKind(h.get(b"kind", b"synthesis").decode()), state=state, progress=progress,
+        created_at=float(h[b"created_at"]),
         started_at=_f(h.get(b"started_at")), finished_at=_f(h.get(b"finished_at")), deadline=_f(h.get(b"deadline")),
         deliveries=int(h.get(b"deliveries", b"0")), worker=_s(h.get(b"worker")), batch_id=_s(h.get(b"batch_id")),
         timings=unpack(h[b"timings"]) if h.get(b"timings") else {},
-        result=SynthesisResult.model_validate(unpack(result)) if result else None,
         error=error if state is not JobState.SUCCEEDED else None,
     )  # fmt: skip
+    return with_answer(job, result or None)
 
 
 class RedisQueue(JobQueue):
@@ -182,7 +189,7 @@ class RedisQueue(JobQueue):
 
     # ---- submit / observe ------------------------------------------------------------------------------------
     async def submit(
-        self, requests: list[SynthesisRequest], *, batch_id: str | None = None, deadline: float | None = None,
+        self, requests: Sequence[JobRequest], *, batch_id: str | None = None, deadline: float | None = None,
         request_id: str | None = None, owner: str | None = None,
     ) -> list[str]:  # fmt: skip
         ids = [new_id() for _ in requests]
@@ -195,7 +202,8 @@ class RedisQueue(JobQueue):
                 payload,
                 "" if deadline is None else repr(deadline),
                 batch_id or "",
-                request.robot.name or "",
+                "" if request.robot is None else request.robot.name or "",
+                "" if kind_of(request) is JobKind.SYNTHESIS else kind_of(request).value,
             ]
         async with self._guard():
             answer = int(await self._submit(keys=[self.keys.stream, self.keys.recent], args=args))

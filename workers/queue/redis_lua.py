@@ -1,14 +1,15 @@
 """Redis key layout and the Lua scripts that keep each state change atomic (shared by client and worker).
 
-Keys under the prefix P: ``P:jobs`` (stream, one consumer group "workers"; entries ``k`` job|robot, ``id``,
-``p`` msgpack payload, ``r`` the submitting HTTP request's id when there is one, ``o`` the owner (tenant) when
-there is one; deleted once acked, so XLEN = queued + running), ``P:job:ID`` (hash: the job's record,
-``request_id`` and ``owner`` among its fields when known, TTL ``record_ttl``), ``P:result:ID`` (msgpack result, TTL
-``result_ttl``), ``P:recent`` (zset of ids by submit order, ``P:seq``) and ``P:recent:OWNER`` (the same per
-owner), ``P:batch:ID`` (list) + ``P:batchowner:ID``, ``P:dead`` (stream of dead letters), ``P:counts`` (hash of
-totals), ``P:workers`` (zset by last heartbeat) + ``P:worker:ID`` (msgpack, TTL), ``P:robots`` / ``P:robot_urdf``
-(hashes; field = the hand's name, ``OWNER/name`` for a tenant's registered hand), ``P:robotreply:RID``; channel
-``P:done`` announces finished job ids (and ``robot:RID``).
+Keys under the prefix P: ``P:jobs`` (stream, one consumer group "workers"; entries ``k`` job|robot, ``id``, ``p``
+msgpack payload, ``t`` the job's kind when it is not a synthesis ("plan"; also ``kind`` in its record), ``r`` the
+submitting HTTP request's id when there is one, ``o`` the owner (tenant) when there is one; deleted once acked, so
+XLEN = queued + running), ``P:job:ID`` (hash: the job's record, ``request_id`` and ``owner`` among its fields when
+known, TTL ``record_ttl``), ``P:result:ID`` (msgpack result, TTL ``result_ttl``), ``P:recent`` (zset of ids by
+submit order, ``P:seq``) and ``P:recent:OWNER`` (the same per owner), ``P:batch:ID`` (list) + ``P:batchowner:ID``,
+``P:dead`` (stream of dead letters), ``P:counts`` (hash of totals), ``P:workers`` (zset by last heartbeat) +
+``P:worker:ID`` (msgpack, TTL), ``P:robots`` / ``P:robot_urdf`` (hashes; field = the hand's name, ``OWNER/name`` for
+a tenant's registered hand), ``P:robotreply:RID``; channel ``P:done`` announces finished job ids (and
+``robot:RID``).
 """
 
 from __future__ import annotations
@@ -55,7 +56,8 @@ class Keys:
 
 # KEYS: stream, recent. ARGV: prefix, max_queue, record_ttl, now, n, result_ttl (ms: the submitter decides how long
 # results are kept), request_id ('' = none; the same for every job of the call), owner ('' = none), then
-# n × (id, payload, deadline, batch, robot). Returns n, or -(depth + 1) when the jobs do not fit.
+# n × (id, payload, deadline, batch, robot, kind ('' = synthesis)). Returns n, or -(depth + 1) when the jobs do
+# not fit.
 SUBMIT = (
     """
 local n = tonumber(ARGV[5])
@@ -65,7 +67,7 @@ local rid = ARGV[7]
 local owner = ARGV[8]
 local mine = ARGV[1] .. 'recent:' .. owner
 for i = 0, n - 1 do
-  local b = 9 + i * 5
+  local b = 9 + i * 6
   local id = ARGV[b]
   local key = ARGV[1] .. 'job:' .. id
   redis.call('HSET', key, 'state', 'queued', 'created_at', ARGV[4], 'deliveries', 0, 'ttl', ARGV[6])
@@ -86,6 +88,11 @@ for i = 0, n - 1 do
   if ARGV[b + 4] ~= '' then
     table.insert(fields, 'h')
     table.insert(fields, ARGV[b + 4])
+  end
+  if ARGV[b + 5] ~= '' then
+    redis.call('HSET', key, 'kind', ARGV[b + 5])
+    table.insert(fields, 't')
+    table.insert(fields, ARGV[b + 5])
   end
   local entry = redis.call('XADD', KEYS[1], '*', unpack(fields))
   redis.call('HSET', key, 'entry', entry)
@@ -136,7 +143,7 @@ return {'run', d, redis.call('HGET', KEYS[1], 'created_at'), deadline or ''}
 # KEYS: stream, job, result, counts, done-channel.
 # ARGV: group, worker, entry, state, now, result ('' = none), error, error_type, timings, progress, result_ttl
 #       (used when the record does not carry the submitter's),
-#       record_ttl, job id, require_owner ('1'/'0').
+#       record_ttl, job id, require_owner ('1'/'0'), error detail (msgpack list of {field, problem}; '' = none).
 FINISH = """
 if ARGV[14] == '1' then
   local p = redis.call('XPENDING', KEYS[1], ARGV[1], ARGV[3], ARGV[3], 1)
@@ -148,6 +155,7 @@ if st == 'queued' or st == 'running' then
   if ARGV[6] ~= '' then redis.call('SET', KEYS[3], ARGV[6], 'PX', ttl) end
   redis.call('HSET', KEYS[2], 'state', ARGV[4], 'finished_at', ARGV[5], 'timings', ARGV[9], 'progress', ARGV[10])
   if ARGV[7] ~= '' then redis.call('HSET', KEYS[2], 'error', ARGV[7], 'error_type', ARGV[8]) end
+  if ARGV[15] and ARGV[15] ~= '' then redis.call('HSET', KEYS[2], 'error_detail', ARGV[15]) end
   redis.call('PEXPIRE', KEYS[2], math.max(tonumber(ARGV[12]), tonumber(ttl)))
   redis.call('HINCRBY', KEYS[4], ARGV[4], 1)
 end

@@ -17,11 +17,14 @@ DOCUMENTED = {
     # inputs
     "object_from_points", "object_from_mesh", "object_from_file", "save_object", "delta_pose", "target_points",
     "force_closure", "wrench", "make_request", "robot_registration", "hand_registration", "zip_folder",
+    # plans (Client.plan / submit_plan)
+    "make_plan", "box_obstacle", "as_pose",
     # outputs
     "result_to_dict", "result_to_json", "load_result", "result_figure",
     # errors
     "ManiError", "RequestError", "ValidationError", "Unauthorized", "NotFound", "RateLimited", "ServerError",
-    "Unreachable", "TimeoutError", "JobFailed",
+    "Unreachable", "TimeoutError", "JobFailed", "IncompatibleService", "MissingExtra",
+    "ContractWarning",
 }  # fmt: skip
 
 
@@ -49,7 +52,7 @@ def _top_level_modules_after(code: str) -> set[str]:
 
 def test_sdk_and_cli_import_no_server_or_science_code() -> None:
     loaded = _top_level_modules_after("import clients.sdk, clients.cli.main")
-    forbidden = {"torch", "fastapi", "service", "workers", "models", "uvicorn", "plotly", "trimesh"}
+    forbidden = {"torch", "fastapi", "service", "workers", "models", "uvicorn", "plotly", "trimesh", "grpc"}
     assert not loaded & forbidden, f"loaded {sorted(loaded & forbidden)}"
 
 

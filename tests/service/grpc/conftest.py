@@ -16,11 +16,11 @@ import pytest
 from fastapi import FastAPI
 from grpc_health.v1 import health_pb2, health_pb2_grpc
 
+from clients.protos.convert import to_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
+from clients.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from clients.schemas import SynthesisRequest
 from service.app import create_app
-from service.grpc.convert import to_proto
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from service.grpc.server import SERVICE_NAME
 from service.settings import Settings
 

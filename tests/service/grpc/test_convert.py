@@ -9,13 +9,15 @@ import pytest
 from pydantic import BaseModel, ValidationError
 
 from clients import schemas
+from clients.protos.convert import from_proto, to_data, to_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.schemas import BatchPublic, JobPublic, RobotRegister, SynthesisRequest, SynthesisResult
-from service.grpc.convert import from_proto, to_data, to_proto
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 
 from ..helpers import request_body
 
 TASKS = {"DeltaPoseTask", "PointMotionTask", "TargetPointsTask", "WrenchTask", "ForceClosureTask", "JointMotionTask"}
+OBSTACLES = {"BoxObstacleIn", "MeshObstacleIn", "PointCloudObstacleIn"}
+UNIONS = TASKS | OBSTACLES  # members of a discriminated union: their `kind` is the proto's oneof
 
 
 def _models(root: type[BaseModel], seen: dict[str, type[BaseModel]]) -> dict[str, type[BaseModel]]:
@@ -33,14 +35,15 @@ def _models(root: type[BaseModel], seen: dict[str, type[BaseModel]]) -> dict[str
     return seen
 
 
-ROOTS = (SynthesisRequest, SynthesisResult, JobPublic, BatchPublic, RobotRegister, schemas.RobotPublic)
+ROOTS = (SynthesisRequest, SynthesisResult, JobPublic, BatchPublic, RobotRegister, schemas.RobotPublic,
+         schemas.PlanRequest, schemas.PlanResult)  # fmt: skip
 MODELS = {name: m for root in ROOTS for name, m in _models(root, {}).items()}
 
 
 @pytest.mark.parametrize("name", sorted(MODELS))
 def test_every_contract_field_has_a_proto_field(name: str) -> None:
     message = getattr(pb, name).DESCRIPTOR
-    wanted = set(MODELS[name].model_fields) - ({"kind"} if name in TASKS else set())
+    wanted = set(MODELS[name].model_fields) - ({"kind"} if name in UNIONS else set())
     assert wanted <= set(message.fields_by_name), f"{name}: the proto lacks {wanted - set(message.fields_by_name)}"
     assert set(message.fields_by_name) <= set(MODELS[name].model_fields), f"{name}: the proto has extra fields"
 
@@ -48,6 +51,32 @@ def test_every_contract_field_has_a_proto_field(name: str) -> None:
 def test_task_union_has_every_kind() -> None:
     kinds = {m.model_fields["kind"].default for m in MODELS.values() if m.__name__ in TASKS}
     assert set(pb.TaskIn.DESCRIPTOR.fields_by_name) == kinds
+
+
+def test_obstacle_union_has_every_kind() -> None:
+    kinds = {m.model_fields["kind"].default for m in MODELS.values() if m.__name__ in OBSTACLES}
+    assert set(pb.ObstacleIn.DESCRIPTOR.fields_by_name) == kinds
+
+
+def test_plan_request_round_trip_keeps_every_value() -> None:
+    points = np.random.default_rng(0).normal(size=(64, 3)) * 0.03
+    plan = schemas.PlanRequest.model_validate({
+        "object": {"points": points, "properties": {"friction": 0.7}},
+        "start": {"position": [0, 0, 0.1]},
+        "waypoints": [{"position": [0.1, 0, 0.2], "quaternion": [0, 0, 0, 2]}, {"position": [0.2, 0, 0.1]}],
+        "scene": {"support_plane": {"height": 0.0}, "obstacles": [
+            {"kind": "box", "name": "wall", "size": [0.02, 0.4, 0.3], "pose": {"position": [0.05, 0, 0.15]}},
+            {"kind": "points", "points": points[:5], "resolution": 0.02},
+            {"kind": "mesh", "vertices": points[:4], "faces": [[0, 1, 2], [0, 2, 3]]},
+        ]},
+        "robot": {"name": "test_gripper"},
+        "options": {"seed": 3, "repair": "report", "contacts": False, "time_limit": 2.5},
+    })  # fmt: skip
+    message = to_proto(plan, pb.PlanRequest)
+    assert [o.WhichOneof("kind") for o in message.scene.obstacles] == ["box", "points", "mesh"]
+    back = from_proto(pb.PlanRequest.FromString(message.SerializeToString()), schemas.PlanRequest)
+    assert back.model_dump_json() == plan.model_dump_json()  # (0, 0, 0, 2) was normalised once, on input
+    np.testing.assert_array_equal(back.waypoints[0].quaternion, [0, 0, 0, 1])
 
 
 def test_request_round_trip_keeps_every_value() -> None:
@@ -110,3 +139,18 @@ def test_result_and_job_to_proto() -> None:
     assert back.result is not None and np.array_equal(back.result.proposals[0].forces, rows)
     assert back.result.proposals[0].quality == quality
     assert to_data(pb.BatchPublic(counts={"queued": 2}))["counts"] == {"queued": 2}
+
+
+def test_contacts_without_a_robot_come_back_without_a_hand() -> None:
+    rows = np.arange(6.0).reshape(2, 3)
+    quality = schemas.Quality(success=False, converged=False, reason="deformable_open_loop", iterations=0,
+                              wrench_residual=0, max_tip_distance=0, penetration_depth=0,
+                              self_collision_depth=0)  # fmt: skip
+    proposal = schemas.Proposal(contact_points=rows, contact_normals=rows, forces=rows, quality=quality,
+                                contact_motions=rows, rollout_points=rows, shape_error=0.1)  # fmt: skip
+    message = to_proto(SynthesisResult(model_version="m", proposals=[proposal]), pb.SynthesisResult)
+    back = from_proto(pb.SynthesisResult.FromString(message.SerializeToString()), SynthesisResult, answer=True)
+    [got] = back.proposals
+    assert back.hand is None and got.palm_position is None and got.palm_quaternion is None
+    assert got.fingertips == [] and len(got.joint_values) == 0 and got.shape_error == 0.1
+    assert got.rollout_points is not None and np.array_equal(got.rollout_points, rows)

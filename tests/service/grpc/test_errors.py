@@ -8,9 +8,9 @@ from google.rpc import error_details_pb2, status_pb2
 from grpc_health.v1 import health_pb2, health_pb2_grpc
 from grpc_reflection.v1alpha.proto_reflection_descriptor_database import ProtoReflectionDescriptorDatabase
 
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.schemas import ErrorType
 from service.grpc.errors import DETAILS_KEY, ERROR_KEY, GRPC_CODE
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from service.grpc.server import SERVICE_NAME
 from service.security import RateLimiter
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from .conftest import KEY, Service
 
-PROTO = Path(__file__).resolve().parents[3] / "service/grpc/protos/manifoundation/v1/manifoundation.proto"
+PROTO = Path(__file__).resolve().parents[3] / "clients/protos/manifoundation/v1/manifoundation.proto"
 
 CLIENT = """
 import sys

@@ -5,7 +5,7 @@ from __future__ import annotations
 import grpc
 import pytest
 
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 
 from .conftest import HAND, Service, request, wait_terminal
 

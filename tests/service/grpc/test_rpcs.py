@@ -9,9 +9,9 @@ import httpx
 import numpy as np
 import pytest
 
+from clients.protos.convert import from_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.schemas import JobPublic, SynthesisResult
-from service.grpc.convert import from_proto
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as pb
 
 from .conftest import HAND, KEY, OTHER, Service, metrics_text, request, wait_terminal
 
@@ -87,7 +87,8 @@ def test_the_call_deadline_is_the_jobs_deadline(service: Service) -> None:
 
 
 def test_watch_can_cancel_on_disconnect(service: Service) -> None:
-    created = service.stub.SubmitJob(request(max_iterations=20), metadata=service.auth())
+    # 200 iterations (≈ 10 s): long enough that a loaded machine cannot finish the job before the cancel lands
+    created = service.stub.SubmitJob(request(max_iterations=200), metadata=service.auth())
     stream = service.stub.WatchJob(
         pb.WatchJobRequest(id=created.id, cancel_on_disconnect=True), metadata=service.auth()
     )

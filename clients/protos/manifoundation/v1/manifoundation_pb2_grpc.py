@@ -3,7 +3,7 @@
 import grpc
 import warnings
 
-from service.grpc.protos.manifoundation.v1 import manifoundation_pb2 as service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2
 
 GRPC_GENERATED_VERSION = '1.85.1'
 GRPC_VERSION = grpc.__version__
@@ -18,7 +18,7 @@ except ImportError:
 if _version_not_supported:
     raise RuntimeError(
         f'The grpc package installed is at version {GRPC_VERSION},'
-        + ' but the generated code in service/grpc/protos/manifoundation/v1/manifoundation_pb2_grpc.py depends on'
+        + ' but the generated code in clients/protos/manifoundation/v1/manifoundation_pb2_grpc.py depends on'
         + f' grpcio>={GRPC_GENERATED_VERSION}.'
         + f' Please upgrade your grpc module to grpcio>={GRPC_GENERATED_VERSION}'
         + f' or downgrade your generated code using grpcio-tools<={GRPC_VERSION}.'
@@ -37,53 +37,58 @@ class ManiFoundationStub:
         """
         self.Synthesize = channel.unary_unary(
                 '/manifoundation.v1.ManiFoundation/Synthesize',
-                request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.SerializeToString,
-                response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisResult.FromString,
+                request_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.SerializeToString,
+                response_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisResult.FromString,
                 _registered_method=True)
         self.SubmitJob = channel.unary_unary(
                 '/manifoundation.v1.ManiFoundation/SubmitJob',
-                request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.SerializeToString,
-                response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.FromString,
+                request_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.SerializeToString,
+                response_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.FromString,
                 _registered_method=True)
         self.GetJob = channel.unary_unary(
                 '/manifoundation.v1.ManiFoundation/GetJob',
-                request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetJobRequest.SerializeToString,
-                response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
+                request_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetJobRequest.SerializeToString,
+                response_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
                 _registered_method=True)
         self.CancelJob = channel.unary_unary(
                 '/manifoundation.v1.ManiFoundation/CancelJob',
-                request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobRef.SerializeToString,
-                response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
+                request_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobRef.SerializeToString,
+                response_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
                 _registered_method=True)
         self.WatchJob = channel.unary_stream(
                 '/manifoundation.v1.ManiFoundation/WatchJob',
-                request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.WatchJobRequest.SerializeToString,
-                response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
+                request_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.WatchJobRequest.SerializeToString,
+                response_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
                 _registered_method=True)
         self.SubmitBatch = channel.unary_unary(
                 '/manifoundation.v1.ManiFoundation/SubmitBatch',
-                request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchCreate.SerializeToString,
-                response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
+                request_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchCreate.SerializeToString,
+                response_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
                 _registered_method=True)
         self.GetBatch = channel.unary_unary(
                 '/manifoundation.v1.ManiFoundation/GetBatch',
-                request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetBatchRequest.SerializeToString,
-                response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
+                request_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetBatchRequest.SerializeToString,
+                response_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
                 _registered_method=True)
         self.WatchBatch = channel.unary_stream(
                 '/manifoundation.v1.ManiFoundation/WatchBatch',
-                request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchRef.SerializeToString,
-                response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchItem.FromString,
+                request_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchRef.SerializeToString,
+                response_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchItem.FromString,
+                _registered_method=True)
+        self.SubmitPlan = channel.unary_unary(
+                '/manifoundation.v1.ManiFoundation/SubmitPlan',
+                request_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.PlanRequest.SerializeToString,
+                response_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.FromString,
                 _registered_method=True)
         self.ListRobots = channel.unary_unary(
                 '/manifoundation.v1.ManiFoundation/ListRobots',
-                request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.ListRobotsRequest.SerializeToString,
-                response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotList.FromString,
+                request_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.ListRobotsRequest.SerializeToString,
+                response_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotList.FromString,
                 _registered_method=True)
         self.RegisterRobot = channel.unary_unary(
                 '/manifoundation.v1.ManiFoundation/RegisterRobot',
-                request_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotRegister.SerializeToString,
-                response_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotPublic.FromString,
+                request_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotRegister.SerializeToString,
+                response_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotPublic.FromString,
                 _registered_method=True)
 
 
@@ -145,6 +150,14 @@ class ManiFoundationServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def SubmitPlan(self, request, context):
+        """Plan a manipulation (trajectory + contacts per step) as a job; follow it with GetJob / WatchJob (its answer
+        in JobPublic.plan). A separate RPC, not a kind of SubmitJob: its request is its own typed message.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
     def ListRobots(self, request, context):
         """Missing associated documentation comment in .proto file."""
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
@@ -162,53 +175,58 @@ def add_ManiFoundationServicer_to_server(servicer, server):
     rpc_method_handlers = {
             'Synthesize': grpc.unary_unary_rpc_method_handler(
                     servicer.Synthesize,
-                    request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.FromString,
-                    response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisResult.SerializeToString,
+                    request_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.FromString,
+                    response_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisResult.SerializeToString,
             ),
             'SubmitJob': grpc.unary_unary_rpc_method_handler(
                     servicer.SubmitJob,
-                    request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.FromString,
-                    response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.SerializeToString,
+                    request_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.FromString,
+                    response_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.SerializeToString,
             ),
             'GetJob': grpc.unary_unary_rpc_method_handler(
                     servicer.GetJob,
-                    request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetJobRequest.FromString,
-                    response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.SerializeToString,
+                    request_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetJobRequest.FromString,
+                    response_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.SerializeToString,
             ),
             'CancelJob': grpc.unary_unary_rpc_method_handler(
                     servicer.CancelJob,
-                    request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobRef.FromString,
-                    response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.SerializeToString,
+                    request_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobRef.FromString,
+                    response_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.SerializeToString,
             ),
             'WatchJob': grpc.unary_stream_rpc_method_handler(
                     servicer.WatchJob,
-                    request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.WatchJobRequest.FromString,
-                    response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.SerializeToString,
+                    request_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.WatchJobRequest.FromString,
+                    response_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.SerializeToString,
             ),
             'SubmitBatch': grpc.unary_unary_rpc_method_handler(
                     servicer.SubmitBatch,
-                    request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchCreate.FromString,
-                    response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.SerializeToString,
+                    request_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchCreate.FromString,
+                    response_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.SerializeToString,
             ),
             'GetBatch': grpc.unary_unary_rpc_method_handler(
                     servicer.GetBatch,
-                    request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetBatchRequest.FromString,
-                    response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.SerializeToString,
+                    request_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetBatchRequest.FromString,
+                    response_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.SerializeToString,
             ),
             'WatchBatch': grpc.unary_stream_rpc_method_handler(
                     servicer.WatchBatch,
-                    request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchRef.FromString,
-                    response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchItem.SerializeToString,
+                    request_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchRef.FromString,
+                    response_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchItem.SerializeToString,
+            ),
+            'SubmitPlan': grpc.unary_unary_rpc_method_handler(
+                    servicer.SubmitPlan,
+                    request_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.PlanRequest.FromString,
+                    response_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.SerializeToString,
             ),
             'ListRobots': grpc.unary_unary_rpc_method_handler(
                     servicer.ListRobots,
-                    request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.ListRobotsRequest.FromString,
-                    response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotList.SerializeToString,
+                    request_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.ListRobotsRequest.FromString,
+                    response_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotList.SerializeToString,
             ),
             'RegisterRobot': grpc.unary_unary_rpc_method_handler(
                     servicer.RegisterRobot,
-                    request_deserializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotRegister.FromString,
-                    response_serializer=service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotPublic.SerializeToString,
+                    request_deserializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotRegister.FromString,
+                    response_serializer=clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotPublic.SerializeToString,
             ),
     }
     generic_handler = grpc.method_handlers_generic_handler(
@@ -237,8 +255,8 @@ class ManiFoundation:
             request,
             target,
             '/manifoundation.v1.ManiFoundation/Synthesize',
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.SerializeToString,
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisResult.FromString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.SerializeToString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisResult.FromString,
             options,
             channel_credentials,
             insecure,
@@ -264,8 +282,8 @@ class ManiFoundation:
             request,
             target,
             '/manifoundation.v1.ManiFoundation/SubmitJob',
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.SerializeToString,
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.FromString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.SynthesisRequest.SerializeToString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.FromString,
             options,
             channel_credentials,
             insecure,
@@ -291,8 +309,8 @@ class ManiFoundation:
             request,
             target,
             '/manifoundation.v1.ManiFoundation/GetJob',
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetJobRequest.SerializeToString,
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetJobRequest.SerializeToString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
             options,
             channel_credentials,
             insecure,
@@ -318,8 +336,8 @@ class ManiFoundation:
             request,
             target,
             '/manifoundation.v1.ManiFoundation/CancelJob',
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobRef.SerializeToString,
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobRef.SerializeToString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
             options,
             channel_credentials,
             insecure,
@@ -345,8 +363,8 @@ class ManiFoundation:
             request,
             target,
             '/manifoundation.v1.ManiFoundation/WatchJob',
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.WatchJobRequest.SerializeToString,
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.WatchJobRequest.SerializeToString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobPublic.FromString,
             options,
             channel_credentials,
             insecure,
@@ -372,8 +390,8 @@ class ManiFoundation:
             request,
             target,
             '/manifoundation.v1.ManiFoundation/SubmitBatch',
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchCreate.SerializeToString,
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchCreate.SerializeToString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
             options,
             channel_credentials,
             insecure,
@@ -399,8 +417,8 @@ class ManiFoundation:
             request,
             target,
             '/manifoundation.v1.ManiFoundation/GetBatch',
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetBatchRequest.SerializeToString,
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.GetBatchRequest.SerializeToString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
             options,
             channel_credentials,
             insecure,
@@ -426,8 +444,35 @@ class ManiFoundation:
             request,
             target,
             '/manifoundation.v1.ManiFoundation/WatchBatch',
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchRef.SerializeToString,
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchItem.FromString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchRef.SerializeToString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.BatchItem.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def SubmitPlan(request,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.unary_unary(
+            request,
+            target,
+            '/manifoundation.v1.ManiFoundation/SubmitPlan',
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.PlanRequest.SerializeToString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.JobCreated.FromString,
             options,
             channel_credentials,
             insecure,
@@ -453,8 +498,8 @@ class ManiFoundation:
             request,
             target,
             '/manifoundation.v1.ManiFoundation/ListRobots',
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.ListRobotsRequest.SerializeToString,
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotList.FromString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.ListRobotsRequest.SerializeToString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotList.FromString,
             options,
             channel_credentials,
             insecure,
@@ -480,8 +525,8 @@ class ManiFoundation:
             request,
             target,
             '/manifoundation.v1.ManiFoundation/RegisterRobot',
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotRegister.SerializeToString,
-            service_dot_grpc_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotPublic.FromString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotRegister.SerializeToString,
+            clients_dot_protos_dot_manifoundation_dot_v1_dot_manifoundation__pb2.RobotPublic.FromString,
             options,
             channel_credentials,
             insecure,

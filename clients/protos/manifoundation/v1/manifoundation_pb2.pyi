@@ -139,7 +139,7 @@ class RobotIn(_message.Message):
     def __init__(self, name: _Optional[str] = ..., urdf: _Optional[str] = ..., fingertips: _Optional[_Iterable[str]] = ..., tip_offsets: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class SynthesisOptions(_message.Message):
-    __slots__ = ("method", "num_proposals", "refine", "max_iterations", "seed", "timeout", "return_heatmap", "return_force_map", "return_history", "return_hand_mesh")
+    __slots__ = ("method", "num_proposals", "refine", "max_iterations", "seed", "timeout", "return_heatmap", "return_force_map", "return_history", "return_hand_mesh", "simulate_rollout", "num_contacts", "return_all_heatmaps")
     METHOD_FIELD_NUMBER: _ClassVar[int]
     NUM_PROPOSALS_FIELD_NUMBER: _ClassVar[int]
     REFINE_FIELD_NUMBER: _ClassVar[int]
@@ -150,6 +150,9 @@ class SynthesisOptions(_message.Message):
     RETURN_FORCE_MAP_FIELD_NUMBER: _ClassVar[int]
     RETURN_HISTORY_FIELD_NUMBER: _ClassVar[int]
     RETURN_HAND_MESH_FIELD_NUMBER: _ClassVar[int]
+    SIMULATE_ROLLOUT_FIELD_NUMBER: _ClassVar[int]
+    NUM_CONTACTS_FIELD_NUMBER: _ClassVar[int]
+    RETURN_ALL_HEATMAPS_FIELD_NUMBER: _ClassVar[int]
     method: str
     num_proposals: int
     refine: bool
@@ -160,7 +163,10 @@ class SynthesisOptions(_message.Message):
     return_force_map: bool
     return_history: bool
     return_hand_mesh: bool
-    def __init__(self, method: _Optional[str] = ..., num_proposals: _Optional[int] = ..., refine: _Optional[bool] = ..., max_iterations: _Optional[int] = ..., seed: _Optional[int] = ..., timeout: _Optional[float] = ..., return_heatmap: _Optional[bool] = ..., return_force_map: _Optional[bool] = ..., return_history: _Optional[bool] = ..., return_hand_mesh: _Optional[bool] = ...) -> None: ...
+    simulate_rollout: bool
+    num_contacts: int
+    return_all_heatmaps: bool
+    def __init__(self, method: _Optional[str] = ..., num_proposals: _Optional[int] = ..., refine: _Optional[bool] = ..., max_iterations: _Optional[int] = ..., seed: _Optional[int] = ..., timeout: _Optional[float] = ..., return_heatmap: _Optional[bool] = ..., return_force_map: _Optional[bool] = ..., return_history: _Optional[bool] = ..., return_hand_mesh: _Optional[bool] = ..., simulate_rollout: _Optional[bool] = ..., num_contacts: _Optional[int] = ..., return_all_heatmaps: _Optional[bool] = ...) -> None: ...
 
 class ContactsIn(_message.Message):
     __slots__ = ("points",)
@@ -227,7 +233,7 @@ class HandMesh(_message.Message):
     def __init__(self, vertices: _Optional[_Union[Array, _Mapping]] = ..., faces: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class Proposal(_message.Message):
-    __slots__ = ("contact_points", "contact_normals", "forces", "fingertips", "palm_position", "palm_quaternion", "joint_names", "joint_values", "quality", "contact_source", "hand_spheres", "hand_mesh", "history", "contact_motions", "network_sample", "network_forces")
+    __slots__ = ("contact_points", "contact_normals", "forces", "fingertips", "palm_position", "palm_quaternion", "joint_names", "joint_values", "quality", "contact_source", "hand_spheres", "hand_mesh", "history", "contact_motions", "network_sample", "network_forces", "rollout_points", "shape_error")
     CONTACT_POINTS_FIELD_NUMBER: _ClassVar[int]
     CONTACT_NORMALS_FIELD_NUMBER: _ClassVar[int]
     FORCES_FIELD_NUMBER: _ClassVar[int]
@@ -244,6 +250,8 @@ class Proposal(_message.Message):
     CONTACT_MOTIONS_FIELD_NUMBER: _ClassVar[int]
     NETWORK_SAMPLE_FIELD_NUMBER: _ClassVar[int]
     NETWORK_FORCES_FIELD_NUMBER: _ClassVar[int]
+    ROLLOUT_POINTS_FIELD_NUMBER: _ClassVar[int]
+    SHAPE_ERROR_FIELD_NUMBER: _ClassVar[int]
     contact_points: Array
     contact_normals: Array
     forces: Array
@@ -260,10 +268,12 @@ class Proposal(_message.Message):
     contact_motions: Array
     network_sample: int
     network_forces: Array
-    def __init__(self, contact_points: _Optional[_Union[Array, _Mapping]] = ..., contact_normals: _Optional[_Union[Array, _Mapping]] = ..., forces: _Optional[_Union[Array, _Mapping]] = ..., fingertips: _Optional[_Iterable[str]] = ..., palm_position: _Optional[_Iterable[float]] = ..., palm_quaternion: _Optional[_Iterable[float]] = ..., joint_names: _Optional[_Iterable[str]] = ..., joint_values: _Optional[_Iterable[float]] = ..., quality: _Optional[_Union[Quality, _Mapping]] = ..., contact_source: _Optional[str] = ..., hand_spheres: _Optional[_Union[Array, _Mapping]] = ..., hand_mesh: _Optional[_Union[HandMesh, _Mapping]] = ..., history: _Optional[_Iterable[_Union[IterationRecord, _Mapping]]] = ..., contact_motions: _Optional[_Union[Array, _Mapping]] = ..., network_sample: _Optional[int] = ..., network_forces: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
+    rollout_points: Array
+    shape_error: float
+    def __init__(self, contact_points: _Optional[_Union[Array, _Mapping]] = ..., contact_normals: _Optional[_Union[Array, _Mapping]] = ..., forces: _Optional[_Union[Array, _Mapping]] = ..., fingertips: _Optional[_Iterable[str]] = ..., palm_position: _Optional[_Iterable[float]] = ..., palm_quaternion: _Optional[_Iterable[float]] = ..., joint_names: _Optional[_Iterable[str]] = ..., joint_values: _Optional[_Iterable[float]] = ..., quality: _Optional[_Union[Quality, _Mapping]] = ..., contact_source: _Optional[str] = ..., hand_spheres: _Optional[_Union[Array, _Mapping]] = ..., hand_mesh: _Optional[_Union[HandMesh, _Mapping]] = ..., history: _Optional[_Iterable[_Union[IterationRecord, _Mapping]]] = ..., contact_motions: _Optional[_Union[Array, _Mapping]] = ..., network_sample: _Optional[int] = ..., network_forces: _Optional[_Union[Array, _Mapping]] = ..., rollout_points: _Optional[_Union[Array, _Mapping]] = ..., shape_error: _Optional[float] = ...) -> None: ...
 
 class SynthesisResult(_message.Message):
-    __slots__ = ("hand", "model_version", "proposals", "heatmap", "force_map", "timings")
+    __slots__ = ("hand", "model_version", "proposals", "heatmap", "force_map", "timings", "heatmaps")
     class TimingsEntry(_message.Message):
         __slots__ = ("key", "value")
         KEY_FIELD_NUMBER: _ClassVar[int]
@@ -277,13 +287,15 @@ class SynthesisResult(_message.Message):
     HEATMAP_FIELD_NUMBER: _ClassVar[int]
     FORCE_MAP_FIELD_NUMBER: _ClassVar[int]
     TIMINGS_FIELD_NUMBER: _ClassVar[int]
+    HEATMAPS_FIELD_NUMBER: _ClassVar[int]
     hand: str
     model_version: str
     proposals: _containers.RepeatedCompositeFieldContainer[Proposal]
     heatmap: Array
     force_map: Array
     timings: _containers.ScalarMap[str, float]
-    def __init__(self, hand: _Optional[str] = ..., model_version: _Optional[str] = ..., proposals: _Optional[_Iterable[_Union[Proposal, _Mapping]]] = ..., heatmap: _Optional[_Union[Array, _Mapping]] = ..., force_map: _Optional[_Union[Array, _Mapping]] = ..., timings: _Optional[_Mapping[str, float]] = ...) -> None: ...
+    heatmaps: Array
+    def __init__(self, hand: _Optional[str] = ..., model_version: _Optional[str] = ..., proposals: _Optional[_Iterable[_Union[Proposal, _Mapping]]] = ..., heatmap: _Optional[_Union[Array, _Mapping]] = ..., force_map: _Optional[_Union[Array, _Mapping]] = ..., timings: _Optional[_Mapping[str, float]] = ..., heatmaps: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class FieldError(_message.Message):
     __slots__ = ("field", "problem")
@@ -304,19 +316,23 @@ class ErrorBody(_message.Message):
     def __init__(self, error: _Optional[str] = ..., type: _Optional[str] = ..., detail: _Optional[_Iterable[_Union[FieldError, _Mapping]]] = ...) -> None: ...
 
 class JobProgress(_message.Message):
-    __slots__ = ("stage", "fraction", "iteration", "max_iterations")
+    __slots__ = ("stage", "fraction", "iteration", "max_iterations", "completed", "total")
     STAGE_FIELD_NUMBER: _ClassVar[int]
     FRACTION_FIELD_NUMBER: _ClassVar[int]
     ITERATION_FIELD_NUMBER: _ClassVar[int]
     MAX_ITERATIONS_FIELD_NUMBER: _ClassVar[int]
+    COMPLETED_FIELD_NUMBER: _ClassVar[int]
+    TOTAL_FIELD_NUMBER: _ClassVar[int]
     stage: str
     fraction: float
     iteration: int
     max_iterations: int
-    def __init__(self, stage: _Optional[str] = ..., fraction: _Optional[float] = ..., iteration: _Optional[int] = ..., max_iterations: _Optional[int] = ...) -> None: ...
+    completed: int
+    total: int
+    def __init__(self, stage: _Optional[str] = ..., fraction: _Optional[float] = ..., iteration: _Optional[int] = ..., max_iterations: _Optional[int] = ..., completed: _Optional[int] = ..., total: _Optional[int] = ...) -> None: ...
 
 class JobPublic(_message.Message):
-    __slots__ = ("id", "state", "progress", "created_at", "started_at", "finished_at", "deadline", "deliveries", "worker", "batch_id", "timings", "result", "error")
+    __slots__ = ("id", "kind", "state", "progress", "created_at", "started_at", "finished_at", "deadline", "deliveries", "worker", "batch_id", "timings", "result", "error", "plan")
     class TimingsEntry(_message.Message):
         __slots__ = ("key", "value")
         KEY_FIELD_NUMBER: _ClassVar[int]
@@ -325,6 +341,7 @@ class JobPublic(_message.Message):
         value: float
         def __init__(self, key: _Optional[str] = ..., value: _Optional[float] = ...) -> None: ...
     ID_FIELD_NUMBER: _ClassVar[int]
+    KIND_FIELD_NUMBER: _ClassVar[int]
     STATE_FIELD_NUMBER: _ClassVar[int]
     PROGRESS_FIELD_NUMBER: _ClassVar[int]
     CREATED_AT_FIELD_NUMBER: _ClassVar[int]
@@ -337,7 +354,9 @@ class JobPublic(_message.Message):
     TIMINGS_FIELD_NUMBER: _ClassVar[int]
     RESULT_FIELD_NUMBER: _ClassVar[int]
     ERROR_FIELD_NUMBER: _ClassVar[int]
+    PLAN_FIELD_NUMBER: _ClassVar[int]
     id: str
+    kind: str
     state: str
     progress: JobProgress
     created_at: float
@@ -350,7 +369,8 @@ class JobPublic(_message.Message):
     timings: _containers.ScalarMap[str, float]
     result: SynthesisResult
     error: ErrorBody
-    def __init__(self, id: _Optional[str] = ..., state: _Optional[str] = ..., progress: _Optional[_Union[JobProgress, _Mapping]] = ..., created_at: _Optional[float] = ..., started_at: _Optional[float] = ..., finished_at: _Optional[float] = ..., deadline: _Optional[float] = ..., deliveries: _Optional[int] = ..., worker: _Optional[str] = ..., batch_id: _Optional[str] = ..., timings: _Optional[_Mapping[str, float]] = ..., result: _Optional[_Union[SynthesisResult, _Mapping]] = ..., error: _Optional[_Union[ErrorBody, _Mapping]] = ...) -> None: ...
+    plan: PlanResult
+    def __init__(self, id: _Optional[str] = ..., kind: _Optional[str] = ..., state: _Optional[str] = ..., progress: _Optional[_Union[JobProgress, _Mapping]] = ..., created_at: _Optional[float] = ..., started_at: _Optional[float] = ..., finished_at: _Optional[float] = ..., deadline: _Optional[float] = ..., deliveries: _Optional[int] = ..., worker: _Optional[str] = ..., batch_id: _Optional[str] = ..., timings: _Optional[_Mapping[str, float]] = ..., result: _Optional[_Union[SynthesisResult, _Mapping]] = ..., error: _Optional[_Union[ErrorBody, _Mapping]] = ..., plan: _Optional[_Union[PlanResult, _Mapping]] = ...) -> None: ...
 
 class JobCreated(_message.Message):
     __slots__ = ("id", "state")
@@ -444,6 +464,207 @@ class BatchRef(_message.Message):
     ID_FIELD_NUMBER: _ClassVar[int]
     id: str
     def __init__(self, id: _Optional[str] = ...) -> None: ...
+
+class PoseIn(_message.Message):
+    __slots__ = ("position", "quaternion")
+    POSITION_FIELD_NUMBER: _ClassVar[int]
+    QUATERNION_FIELD_NUMBER: _ClassVar[int]
+    position: _containers.RepeatedScalarFieldContainer[float]
+    quaternion: _containers.RepeatedScalarFieldContainer[float]
+    def __init__(self, position: _Optional[_Iterable[float]] = ..., quaternion: _Optional[_Iterable[float]] = ...) -> None: ...
+
+class BoxObstacleIn(_message.Message):
+    __slots__ = ("name", "size", "pose")
+    NAME_FIELD_NUMBER: _ClassVar[int]
+    SIZE_FIELD_NUMBER: _ClassVar[int]
+    POSE_FIELD_NUMBER: _ClassVar[int]
+    name: str
+    size: _containers.RepeatedScalarFieldContainer[float]
+    pose: PoseIn
+    def __init__(self, name: _Optional[str] = ..., size: _Optional[_Iterable[float]] = ..., pose: _Optional[_Union[PoseIn, _Mapping]] = ...) -> None: ...
+
+class MeshObstacleIn(_message.Message):
+    __slots__ = ("name", "vertices", "faces", "pose")
+    NAME_FIELD_NUMBER: _ClassVar[int]
+    VERTICES_FIELD_NUMBER: _ClassVar[int]
+    FACES_FIELD_NUMBER: _ClassVar[int]
+    POSE_FIELD_NUMBER: _ClassVar[int]
+    name: str
+    vertices: Array
+    faces: Array
+    pose: PoseIn
+    def __init__(self, name: _Optional[str] = ..., vertices: _Optional[_Union[Array, _Mapping]] = ..., faces: _Optional[_Union[Array, _Mapping]] = ..., pose: _Optional[_Union[PoseIn, _Mapping]] = ...) -> None: ...
+
+class PointCloudObstacleIn(_message.Message):
+    __slots__ = ("name", "points", "resolution")
+    NAME_FIELD_NUMBER: _ClassVar[int]
+    POINTS_FIELD_NUMBER: _ClassVar[int]
+    RESOLUTION_FIELD_NUMBER: _ClassVar[int]
+    name: str
+    points: Array
+    resolution: float
+    def __init__(self, name: _Optional[str] = ..., points: _Optional[_Union[Array, _Mapping]] = ..., resolution: _Optional[float] = ...) -> None: ...
+
+class ObstacleIn(_message.Message):
+    __slots__ = ("box", "mesh", "points")
+    BOX_FIELD_NUMBER: _ClassVar[int]
+    MESH_FIELD_NUMBER: _ClassVar[int]
+    POINTS_FIELD_NUMBER: _ClassVar[int]
+    box: BoxObstacleIn
+    mesh: MeshObstacleIn
+    points: PointCloudObstacleIn
+    def __init__(self, box: _Optional[_Union[BoxObstacleIn, _Mapping]] = ..., mesh: _Optional[_Union[MeshObstacleIn, _Mapping]] = ..., points: _Optional[_Union[PointCloudObstacleIn, _Mapping]] = ...) -> None: ...
+
+class SupportPlaneIn(_message.Message):
+    __slots__ = ("height", "tolerance")
+    HEIGHT_FIELD_NUMBER: _ClassVar[int]
+    TOLERANCE_FIELD_NUMBER: _ClassVar[int]
+    height: float
+    tolerance: float
+    def __init__(self, height: _Optional[float] = ..., tolerance: _Optional[float] = ...) -> None: ...
+
+class SceneIn(_message.Message):
+    __slots__ = ("obstacles", "support_plane")
+    OBSTACLES_FIELD_NUMBER: _ClassVar[int]
+    SUPPORT_PLANE_FIELD_NUMBER: _ClassVar[int]
+    obstacles: _containers.RepeatedCompositeFieldContainer[ObstacleIn]
+    support_plane: SupportPlaneIn
+    def __init__(self, obstacles: _Optional[_Iterable[_Union[ObstacleIn, _Mapping]]] = ..., support_plane: _Optional[_Union[SupportPlaneIn, _Mapping]] = ...) -> None: ...
+
+class PlanOptions(_message.Message):
+    __slots__ = ("time_limit", "translation_step", "rotation_step", "seed", "repair", "max_repair_distance", "contacts", "method", "num_proposals", "max_iterations", "max_contact_shift", "timeout", "return_hand_mesh")
+    TIME_LIMIT_FIELD_NUMBER: _ClassVar[int]
+    TRANSLATION_STEP_FIELD_NUMBER: _ClassVar[int]
+    ROTATION_STEP_FIELD_NUMBER: _ClassVar[int]
+    SEED_FIELD_NUMBER: _ClassVar[int]
+    REPAIR_FIELD_NUMBER: _ClassVar[int]
+    MAX_REPAIR_DISTANCE_FIELD_NUMBER: _ClassVar[int]
+    CONTACTS_FIELD_NUMBER: _ClassVar[int]
+    METHOD_FIELD_NUMBER: _ClassVar[int]
+    NUM_PROPOSALS_FIELD_NUMBER: _ClassVar[int]
+    MAX_ITERATIONS_FIELD_NUMBER: _ClassVar[int]
+    MAX_CONTACT_SHIFT_FIELD_NUMBER: _ClassVar[int]
+    TIMEOUT_FIELD_NUMBER: _ClassVar[int]
+    RETURN_HAND_MESH_FIELD_NUMBER: _ClassVar[int]
+    time_limit: float
+    translation_step: float
+    rotation_step: float
+    seed: int
+    repair: str
+    max_repair_distance: float
+    contacts: bool
+    method: str
+    num_proposals: int
+    max_iterations: int
+    max_contact_shift: float
+    timeout: float
+    return_hand_mesh: bool
+    def __init__(self, time_limit: _Optional[float] = ..., translation_step: _Optional[float] = ..., rotation_step: _Optional[float] = ..., seed: _Optional[int] = ..., repair: _Optional[str] = ..., max_repair_distance: _Optional[float] = ..., contacts: _Optional[bool] = ..., method: _Optional[str] = ..., num_proposals: _Optional[int] = ..., max_iterations: _Optional[int] = ..., max_contact_shift: _Optional[float] = ..., timeout: _Optional[float] = ..., return_hand_mesh: _Optional[bool] = ...) -> None: ...
+
+class PlanRequest(_message.Message):
+    __slots__ = ("object", "start", "waypoints", "scene", "robot", "options")
+    OBJECT_FIELD_NUMBER: _ClassVar[int]
+    START_FIELD_NUMBER: _ClassVar[int]
+    WAYPOINTS_FIELD_NUMBER: _ClassVar[int]
+    SCENE_FIELD_NUMBER: _ClassVar[int]
+    ROBOT_FIELD_NUMBER: _ClassVar[int]
+    OPTIONS_FIELD_NUMBER: _ClassVar[int]
+    object: ObjectIn
+    start: PoseIn
+    waypoints: _containers.RepeatedCompositeFieldContainer[PoseIn]
+    scene: SceneIn
+    robot: RobotIn
+    options: PlanOptions
+    def __init__(self, object: _Optional[_Union[ObjectIn, _Mapping]] = ..., start: _Optional[_Union[PoseIn, _Mapping]] = ..., waypoints: _Optional[_Iterable[_Union[PoseIn, _Mapping]]] = ..., scene: _Optional[_Union[SceneIn, _Mapping]] = ..., robot: _Optional[_Union[RobotIn, _Mapping]] = ..., options: _Optional[_Union[PlanOptions, _Mapping]] = ...) -> None: ...
+
+class WaypointRepair(_message.Message):
+    __slots__ = ("index", "requested", "repaired", "distance", "obstacles")
+    INDEX_FIELD_NUMBER: _ClassVar[int]
+    REQUESTED_FIELD_NUMBER: _ClassVar[int]
+    REPAIRED_FIELD_NUMBER: _ClassVar[int]
+    DISTANCE_FIELD_NUMBER: _ClassVar[int]
+    OBSTACLES_FIELD_NUMBER: _ClassVar[int]
+    index: int
+    requested: PoseIn
+    repaired: PoseIn
+    distance: float
+    obstacles: _containers.RepeatedScalarFieldContainer[str]
+    def __init__(self, index: _Optional[int] = ..., requested: _Optional[_Union[PoseIn, _Mapping]] = ..., repaired: _Optional[_Union[PoseIn, _Mapping]] = ..., distance: _Optional[float] = ..., obstacles: _Optional[_Iterable[str]] = ...) -> None: ...
+
+class SegmentReport(_message.Message):
+    __slots__ = ("index", "straight", "planner_seconds", "simplify_seconds", "raw_states", "simplified_states", "dense_steps")
+    INDEX_FIELD_NUMBER: _ClassVar[int]
+    STRAIGHT_FIELD_NUMBER: _ClassVar[int]
+    PLANNER_SECONDS_FIELD_NUMBER: _ClassVar[int]
+    SIMPLIFY_SECONDS_FIELD_NUMBER: _ClassVar[int]
+    RAW_STATES_FIELD_NUMBER: _ClassVar[int]
+    SIMPLIFIED_STATES_FIELD_NUMBER: _ClassVar[int]
+    DENSE_STEPS_FIELD_NUMBER: _ClassVar[int]
+    index: int
+    straight: bool
+    planner_seconds: float
+    simplify_seconds: float
+    raw_states: int
+    simplified_states: int
+    dense_steps: int
+    def __init__(self, index: _Optional[int] = ..., straight: _Optional[bool] = ..., planner_seconds: _Optional[float] = ..., simplify_seconds: _Optional[float] = ..., raw_states: _Optional[int] = ..., simplified_states: _Optional[int] = ..., dense_steps: _Optional[int] = ...) -> None: ...
+
+class PlanStep(_message.Message):
+    __slots__ = ("index", "grasp", "success", "proposal", "contact_shift", "hand_collisions", "dropped", "seconds", "calls")
+    INDEX_FIELD_NUMBER: _ClassVar[int]
+    GRASP_FIELD_NUMBER: _ClassVar[int]
+    SUCCESS_FIELD_NUMBER: _ClassVar[int]
+    PROPOSAL_FIELD_NUMBER: _ClassVar[int]
+    CONTACT_SHIFT_FIELD_NUMBER: _ClassVar[int]
+    HAND_COLLISIONS_FIELD_NUMBER: _ClassVar[int]
+    DROPPED_FIELD_NUMBER: _ClassVar[int]
+    SECONDS_FIELD_NUMBER: _ClassVar[int]
+    CALLS_FIELD_NUMBER: _ClassVar[int]
+    index: int
+    grasp: str
+    success: bool
+    proposal: Proposal
+    contact_shift: float
+    hand_collisions: _containers.RepeatedScalarFieldContainer[str]
+    dropped: str
+    seconds: float
+    calls: int
+    def __init__(self, index: _Optional[int] = ..., grasp: _Optional[str] = ..., success: _Optional[bool] = ..., proposal: _Optional[_Union[Proposal, _Mapping]] = ..., contact_shift: _Optional[float] = ..., hand_collisions: _Optional[_Iterable[str]] = ..., dropped: _Optional[str] = ..., seconds: _Optional[float] = ..., calls: _Optional[int] = ...) -> None: ...
+
+class PlanResult(_message.Message):
+    __slots__ = ("success", "positions", "quaternions", "waypoint_indices", "repairs", "segments", "steps", "regrasps", "kept_share", "hand", "model_version", "timings")
+    class TimingsEntry(_message.Message):
+        __slots__ = ("key", "value")
+        KEY_FIELD_NUMBER: _ClassVar[int]
+        VALUE_FIELD_NUMBER: _ClassVar[int]
+        key: str
+        value: float
+        def __init__(self, key: _Optional[str] = ..., value: _Optional[float] = ...) -> None: ...
+    SUCCESS_FIELD_NUMBER: _ClassVar[int]
+    POSITIONS_FIELD_NUMBER: _ClassVar[int]
+    QUATERNIONS_FIELD_NUMBER: _ClassVar[int]
+    WAYPOINT_INDICES_FIELD_NUMBER: _ClassVar[int]
+    REPAIRS_FIELD_NUMBER: _ClassVar[int]
+    SEGMENTS_FIELD_NUMBER: _ClassVar[int]
+    STEPS_FIELD_NUMBER: _ClassVar[int]
+    REGRASPS_FIELD_NUMBER: _ClassVar[int]
+    KEPT_SHARE_FIELD_NUMBER: _ClassVar[int]
+    HAND_FIELD_NUMBER: _ClassVar[int]
+    MODEL_VERSION_FIELD_NUMBER: _ClassVar[int]
+    TIMINGS_FIELD_NUMBER: _ClassVar[int]
+    success: bool
+    positions: Array
+    quaternions: Array
+    waypoint_indices: _containers.RepeatedScalarFieldContainer[int]
+    repairs: _containers.RepeatedCompositeFieldContainer[WaypointRepair]
+    segments: _containers.RepeatedCompositeFieldContainer[SegmentReport]
+    steps: _containers.RepeatedCompositeFieldContainer[PlanStep]
+    regrasps: _containers.RepeatedScalarFieldContainer[int]
+    kept_share: float
+    hand: str
+    model_version: str
+    timings: _containers.ScalarMap[str, float]
+    def __init__(self, success: _Optional[bool] = ..., positions: _Optional[_Union[Array, _Mapping]] = ..., quaternions: _Optional[_Union[Array, _Mapping]] = ..., waypoint_indices: _Optional[_Iterable[int]] = ..., repairs: _Optional[_Iterable[_Union[WaypointRepair, _Mapping]]] = ..., segments: _Optional[_Iterable[_Union[SegmentReport, _Mapping]]] = ..., steps: _Optional[_Iterable[_Union[PlanStep, _Mapping]]] = ..., regrasps: _Optional[_Iterable[int]] = ..., kept_share: _Optional[float] = ..., hand: _Optional[str] = ..., model_version: _Optional[str] = ..., timings: _Optional[_Mapping[str, float]] = ...) -> None: ...
 
 class RobotPreview(_message.Message):
     __slots__ = ("vertices", "faces", "spheres", "pads", "tips")

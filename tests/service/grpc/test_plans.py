@@ -1,0 +1,50 @@
+"""SubmitPlan over the staged pipeline (stages only, no science): the plan is a job like the others — watched by
+stage with its counts, answered in `JobPublic.plan`, another key's to nobody else, its bad fields named."""
+
+from __future__ import annotations
+
+import grpc
+import pytest
+
+from clients.protos.convert import from_proto, to_proto
+from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
+from clients.schemas import JobPublic, PlanRequest
+
+from ..helpers import sphere
+from .conftest import HAND, OTHER, Service
+
+
+def _plan(waypoints: int = 3, **options: object) -> pb.PlanRequest:
+    points, normals = sphere(128)
+    request = PlanRequest.model_validate({
+        "object": {"points": points, "normals": normals}, "start": {"position": [0, 0, 0.1]},
+        "waypoints": [{"position": [0.05 * (i + 1), 0, 0.1]} for i in range(waypoints)], "robot": {"name": HAND},
+        "options": options,
+    })  # fmt: skip
+    return to_proto(request, pb.PlanRequest)
+
+
+def test_submit_plan_is_watched_by_stage_and_answered_in_plan(service: Service) -> None:
+    created = service.stub.SubmitPlan(_plan(3), metadata=service.auth())
+    updates = list(service.stub.WatchJob(pb.WatchJobRequest(id=created.id), metadata=service.auth(), timeout=30))
+    counted = [(u.progress.stage, u.progress.completed, u.progress.total) for u in updates[:-1]
+               if u.progress.HasField("total")]  # fmt: skip
+    # polled every 0.05 s, as long as a stage lasts: a stage may pass unseen, but the counts seen are the plan's
+    assert ("planning", 3, 3) in counted and {stage for stage, _, _ in counted} <= {"repair", "planning", "contacts"}
+    planned = [completed for stage, completed, _ in counted if stage == "planning"]
+    assert planned == sorted(planned), counted
+    job = from_proto(updates[-1], JobPublic, answer=True)
+    assert job.kind == "plan" and job.state == "succeeded" and job.result is None and job.plan is not None
+    assert job.plan.positions.shape == (4, 3) and job.plan.waypoint_indices == [1, 2, 3]
+    with pytest.raises(grpc.RpcError) as caught:
+        service.stub.GetJob(pb.GetJobRequest(id=created.id), metadata=service.auth(OTHER))
+    assert caught.value.code() is grpc.StatusCode.NOT_FOUND
+
+
+def test_submit_plan_names_the_bad_field(service: Service) -> None:
+    message = _plan(1)
+    message.waypoints[0].quaternion[:] = [0, 0, 0, 0]
+    with pytest.raises(grpc.RpcError) as caught:
+        service.stub.SubmitPlan(message, metadata=service.auth())
+    assert caught.value.code() is grpc.StatusCode.INVALID_ARGUMENT
+    assert "waypoints.0.quaternion" in (caught.value.details() or "")
