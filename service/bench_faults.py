@@ -41,7 +41,8 @@ SCENARIOS = ("soak", "poison", "large_bodies", "full_queue", "slow_headers")
 EXAMPLE = """examples (the README's figures):
   mani bench faults --jobs 120 --kills 4 --restarts 2 --poison-batches 4 --bodies 100 --body-mb 8
   mani bench faults --only large_bodies,full_queue --bodies 100 --body-mb 50
-  mani bench faults --only slow_headers --slow 300 --slow-interval 15 --slow-seconds 50"""
+  mani bench faults --only slow_headers --slow 300 --slow-interval 15 --slow-seconds 50
+  mani bench faults --only full_queue --rounds 10 --checkouts ../base,.   # two versions side by side"""
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -62,6 +63,9 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--slow", type=int, default=100, help="slow headers: connections (100)")
     parser.add_argument("--slow-interval", type=float, default=2.0, help="slow headers: s between bytes (2)")
     parser.add_argument("--slow-seconds", type=float, default=30.0, help="slow headers: s watched (30)")
+    parser.add_argument("--rounds", type=int, default=1, help="full queue: bursts of each kind (1); medians reported")
+    parser.add_argument("--checkouts", metavar="DIRS",
+                        help="full queue: one service per checkout (comma-separated), side by side, bursts alternating")
     parser.add_argument("--only", default=",".join(SCENARIOS), help=f"scenarios to run ({','.join(SCENARIOS)})")
     parser.add_argument("--budget", type=float, default=240.0, help="seconds per scenario at most (240)")
     parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
@@ -227,7 +231,11 @@ async def poison(args: argparse.Namespace, directory: str) -> dict[str, Any]:
     }  # fmt: skip
 
 
-def _serve(max_queue: int, stage_seconds: float, **env: str) -> tuple[subprocess.Popen[bytes], str]:
+def _serve(
+    max_queue: int, stage_seconds: float, checkout: str | None = None, **env: str
+) -> tuple[subprocess.Popen[bytes], str]:
+    """`mani serve` on the staged pipeline; ``checkout``: run that directory's code (PYTHONPATH and working
+    directory: ``python -m`` puts the latter first on sys.path)."""
     import httpx
 
     port = _free_port()
@@ -235,8 +243,10 @@ def _serve(max_queue: int, stage_seconds: float, **env: str) -> tuple[subprocess
                    MANI_MAX_QUEUE=str(max_queue), MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING",
                    MANI_CONCURRENCY="1", MANI_BODY_TIMEOUT="120", **env)  # fmt: skip
     environ.pop("MANI_REDIS_URL", None)
+    if checkout:
+        environ["PYTHONPATH"] = checkout
     cmd = [sys.executable, "-m", "clients.cli.main", "serve", "--port", str(port), "--no-grpc"]
-    proc = subprocess.Popen(cmd, env=environ, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(cmd, env=environ, cwd=checkout, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     base = f"http://127.0.0.1:{port}"
     end = time.monotonic() + 120
     while time.monotonic() < end:
@@ -334,28 +344,48 @@ async def large_bodies(args: argparse.Namespace) -> dict[str, Any]:
 
 async def full_queue(args: argparse.Namespace) -> dict[str, Any]:
     """The queue full (10 slow jobs), then ``--bodies`` posts at once of a small body, of a large one pushed at
-    once, and of a large one sent with ``Expect: 100-continue``: 429 latency to the status line."""
+    once, and of a large one sent with ``Expect: 100-continue``: 429 latency to the status line, the median over
+    ``--rounds`` bursts of each burst's p50 and p99; with ``--checkouts``, one service per checkout, side by side,
+    their bursts alternating."""
+    import statistics
+
     import httpx
 
     from service.bench_probes import raw_posts
 
-    proc, base = _serve(max_queue=10, stage_seconds=5.0)
-    host, port = base.split("//")[1].rsplit(":", 1)
+    checkouts = args.checkouts.split(",") if args.checkouts else [None]
     small = json.dumps(request_body(256, "test_gripper", "direct_grasp")).encode()
     large = _large_body(args.body_mb)
+    servers = []
+    json_type = {"Content-Type": "application/json"}
     try:
-        with httpx.Client(base_url=base, timeout=30) as http:
-            while http.post("/v1/jobs", content=small, headers={"Content-Type": "application/json"}).status_code == 202:
-                pass
-        out: dict[str, Any] = {"max_queue": 10, "posts": args.bodies, "large_mb": round(len(large) / 1e6, 1)}
-        for name, data, expect in (("small", small, False), ("large", large, False), ("large_expect", large, True)):
-            answers = await raw_posts(host, int(port), "/v1/jobs", data, args.bodies, args.budget, expect=expect)
-            refused = [t for s, t in answers if s == 429]
-            out[f"{name}_429"] = len(refused)
-            out[f"{name}_p50_ms"], out[f"{name}_p99_ms"] = _pct(refused, 0.5), _pct(refused, 0.99)
+        for checkout in checkouts:
+            servers.append(_serve(max_queue=10, stage_seconds=30.0, checkout=checkout))
+            with httpx.Client(base_url=servers[-1][1], timeout=30, headers=json_type) as http:
+                while http.post("/v1/jobs", content=small).status_code == 202:
+                    pass
+        figures: dict[str, dict[str, Any]] = {}
+        kinds = (("small", small, False), ("large", large, False), ("large_expect", large, True))
+        for name, data, expect in kinds:
+            bursts: dict[str, list[tuple[int, float | None, float | None]]] = {str(c): [] for c in checkouts}
+            for _ in range(args.rounds):
+                for checkout, (_, base) in zip(checkouts, servers, strict=True):
+                    host, port = base.split("//")[1].rsplit(":", 1)
+                    answers = await raw_posts(host, int(port), "/v1/jobs", data, args.bodies, args.budget,
+                                              expect=expect)  # fmt: skip
+                    refused = [t for s, t in answers if s == 429]
+                    bursts[str(checkout)].append((len(refused), _pct(refused, 0.5), _pct(refused, 0.99)))
+            for checkout, runs in bursts.items():
+                out = figures.setdefault(checkout, {"max_queue": 10, "posts": args.bodies, "rounds": args.rounds,
+                                                    "large_mb": round(len(large) / 1e6, 1)})  # fmt: skip
+                out[f"{name}_429"] = min(n for n, _, _ in runs)
+                for q, values in (("p50", [r[1] for r in runs]), ("p99", [r[2] for r in runs])):
+                    known = [v for v in values if v is not None]
+                    out[f"{name}_{q}_ms"] = round(statistics.median(known), 1) if known else None
     finally:
-        _stop(proc)
-    return out
+        for proc, _ in servers:
+            _stop(proc)
+    return figures["None"] if checkouts == [None] else figures
 
 
 async def slow_headers(args: argparse.Namespace) -> dict[str, Any]:

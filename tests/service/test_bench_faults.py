@@ -13,8 +13,10 @@ from clients.cli.main import build_parser
 
 
 def test_faults_bench_is_a_mani_bench_command() -> None:
-    args = build_parser().parse_args(["bench", "faults", "--jobs", "8", "--bodies", "2", "--only", "slow_headers"])
-    assert (args.jobs, args.bodies, args.kills, args.only) == (8, 2, 4, "slow_headers")
+    argv = ["bench", "faults", "--jobs", "8", "--bodies", "2", "--only", "full_queue", "--checkouts", "a,b"]
+    args = build_parser().parse_args(argv)
+    assert (args.jobs, args.bodies, args.kills, args.only) == (8, 2, 4, "full_queue")
+    assert (args.checkouts, args.rounds) == ("a,b", 1)
 
 
 @pytest.mark.slow
