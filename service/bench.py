@@ -25,7 +25,9 @@ EXAMPLE = """examples:
   mani bench service --clients 1,8 --requests 40 --json artifacts/bench_service.json
   mani bench service --url http://127.0.0.1:8000  # an already running service
   mani bench service --pipeline workers.testing:StagedPipeline --pipeline-options '{"stage_seconds": 0.01}'
-                                                  # the service and queue alone, with a known compute time"""
+                                                  # the service and queue alone, with a known compute time
+  mani bench service --clients 1 --rss 10000 --pipeline workers.testing:StagedPipeline
+                                                  # API and worker RSS over 10 000 requests"""
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -47,6 +49,14 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--pipeline", help="worker pipeline 'module:attr' of the started service (MANI_PIPELINE)")
     parser.add_argument("--pipeline-options", metavar="JSON", help="its keyword arguments (MANI_PIPELINE_OPTIONS)")
     parser.add_argument("--key", help="API key of a service with auth on")
+    parser.add_argument(
+        "--rss",
+        type=int,
+        default=0,
+        metavar="N",
+        help="then N more requests, with API and worker RSS every N/10 (`service.bench_rss`)",
+    )
+    parser.add_argument("--rss-clients", type=int, default=8, help="clients of the --rss run (8)")
     parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
     parser.set_defaults(func=run)
 
@@ -217,6 +227,14 @@ def run(args: argparse.Namespace) -> int:
                 row["api_rss_mb"] = round(rss_mb(proc.pid).get("VmRSS", 0.0), 1)
             rows.append(row)
             print(_format(row), flush=True)
+        if args.rss and proc is not None:
+            from service.bench_rss import HEADER, rss_over_requests
+
+            print(HEADER, flush=True)
+            table = asyncio.run(
+                rss_over_requests(url, headers, body, proc.pid, args.rss, args.rss_clients, on_row=_print_row)
+            )
+            rows.append({"rss": table})
         figures = {
             "url": url,
             "hand": hand,
@@ -231,7 +249,7 @@ def run(args: argparse.Namespace) -> int:
         if args.json:
             args.json.parent.mkdir(parents=True, exist_ok=True)
             args.json.write_text(json.dumps(figures, indent=2))
-        return 0 if all(r["ok"] for r in rows) else 1
+        return 0 if all(r.get("ok", True) for r in rows) else 1
     finally:
         if proc is not None:
             proc.terminate()
@@ -239,6 +257,12 @@ def run(args: argparse.Namespace) -> int:
                 proc.wait(timeout=30)
             except subprocess.TimeoutExpired:
                 proc.kill()
+
+
+def _print_row(row: dict[str, Any]) -> None:
+    from service.bench_rss import format_row
+
+    print(format_row(row), flush=True)
 
 
 def _format(row: dict[str, Any]) -> str:

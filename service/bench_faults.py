@@ -1,6 +1,6 @@
 """`mani bench faults`: what holds under faults and hostile load, measured (bounded in count and time, loopback only).
 
-Four scenarios, each on its own private processes (a `redis-server` on a free port with AOF in a temporary
+Five scenarios, each on its own private processes (a `redis-server` on a free port with AOF in a temporary
 directory, `mani worker` / `mani serve` children), all killed at the end:
 
 - soak: N jobs through Redis with 2 workers (batch 4) while workers are killed (kill -9) and Redis is killed and
@@ -8,9 +8,12 @@ directory, `mani worker` / `mani serve` children), all killed at the end:
   and the longest redelivery delay (kill → the job's next start).
 - poison: a crashing job in every micro-batch of 4: how many jobs were dead-lettered, and whether all were poison.
 - large bodies: C concurrent valid bodies of S MB against `mani serve`: /healthz latency meanwhile, API RSS.
-- full queue: C concurrent posts (small and large bodies) against a full queue: 429 latency.
+- full queue: C concurrent posts (small and large bodies) against a full queue: 429 latency, timed by raw
+  sockets to the status line (`service.bench_probes`); large bodies both pushed at once and sent with
+  ``Expect: 100-continue`` (as curl does), which a refusal answers before any of the body is sent.
+- slow headers: connections sending their request head a byte at a time: how many the server closed, how soon.
 
-Why one module: four scenarios of one benchmark share their process and Redis helpers and one report table.
+Why one module: five scenarios of one benchmark share their process and Redis helpers and one report table.
 """
 
 from __future__ import annotations
@@ -34,8 +37,12 @@ from typing import Any
 from service.bench import _free_port, request_body, rss_mb
 
 STAGED = "workers.testing:StagedPipeline"
-EXAMPLE = """example (the README's figures):
-  mani bench faults --jobs 120 --kills 4 --restarts 2 --poison-batches 4 --bodies 100 --body-mb 8"""
+SCENARIOS = ("soak", "poison", "large_bodies", "full_queue", "slow_headers")
+EXAMPLE = """examples (the README's figures):
+  mani bench faults --jobs 120 --kills 4 --restarts 2 --poison-batches 4 --bodies 100 --body-mb 8
+  mani bench faults --only large_bodies,full_queue --bodies 100 --body-mb 50
+  mani bench faults --only slow_headers --slow 300 --slow-interval 15 --slow-seconds 50
+  mani bench faults --only full_queue --rounds 10 --checkouts ../base,.   # two versions side by side"""
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -52,7 +59,14 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--restarts", type=int, default=2, help="soak: Redis kill -9 + restarts (2)")
     parser.add_argument("--poison-batches", type=int, default=4, help="poison: batches of 4 with one crasher (4)")
     parser.add_argument("--bodies", type=int, default=100, help="large bodies / full-queue posts at once (100)")
-    parser.add_argument("--body-mb", type=float, default=8.0, help="size of each large body, MB (8)")
+    parser.add_argument("--body-mb", type=float, default=8.0, help="size of each large body, MB (8; at most 55)")
+    parser.add_argument("--slow", type=int, default=100, help="slow headers: connections (100)")
+    parser.add_argument("--slow-interval", type=float, default=2.0, help="slow headers: s between bytes (2)")
+    parser.add_argument("--slow-seconds", type=float, default=30.0, help="slow headers: s watched (30)")
+    parser.add_argument("--rounds", type=int, default=1, help="full queue: bursts of each kind (1); medians reported")
+    parser.add_argument("--checkouts", metavar="DIRS",
+                        help="full queue: one service per checkout (comma-separated), side by side, bursts alternating")
+    parser.add_argument("--only", default=",".join(SCENARIOS), help=f"scenarios to run ({','.join(SCENARIOS)})")
     parser.add_argument("--budget", type=float, default=240.0, help="seconds per scenario at most (240)")
     parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
     parser.set_defaults(func=run)
@@ -217,16 +231,22 @@ async def poison(args: argparse.Namespace, directory: str) -> dict[str, Any]:
     }  # fmt: skip
 
 
-def _serve(max_queue: int, stage_seconds: float) -> tuple[subprocess.Popen[bytes], str]:
+def _serve(
+    max_queue: int, stage_seconds: float, checkout: str | None = None, **env: str
+) -> tuple[subprocess.Popen[bytes], str]:
+    """`mani serve` on the staged pipeline; ``checkout``: run that directory's code (PYTHONPATH and working
+    directory: ``python -m`` puts the latter first on sys.path)."""
     import httpx
 
     port = _free_port()
-    env = dict(os.environ, MANI_PIPELINE=STAGED, MANI_PIPELINE_OPTIONS=json.dumps({"stage_seconds": stage_seconds}),
-               MANI_MAX_QUEUE=str(max_queue), MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING", MANI_CONCURRENCY="1",
-               MANI_BODY_TIMEOUT="120")  # fmt: skip
-    env.pop("MANI_REDIS_URL", None)
+    environ = dict(os.environ, MANI_PIPELINE=STAGED, MANI_PIPELINE_OPTIONS=json.dumps({"stage_seconds": stage_seconds}),
+                   MANI_MAX_QUEUE=str(max_queue), MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING",
+                   MANI_CONCURRENCY="1", MANI_BODY_TIMEOUT="120", **env)  # fmt: skip
+    environ.pop("MANI_REDIS_URL", None)
+    if checkout:
+        environ["PYTHONPATH"] = checkout
     cmd = [sys.executable, "-m", "clients.cli.main", "serve", "--port", str(port), "--no-grpc"]
-    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    proc = subprocess.Popen(cmd, env=environ, cwd=checkout, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     base = f"http://127.0.0.1:{port}"
     end = time.monotonic() + 120
     while time.monotonic() < end:
@@ -238,16 +258,28 @@ def _serve(max_queue: int, stage_seconds: float) -> tuple[subprocess.Popen[bytes
     raise RuntimeError("mani serve did not become ready")
 
 
+# bytes per point of each body layout: rounded points + normals; full-precision points, normals and a per-point
+# motion task; the same pretty-printed (indent 1), as some clients send it. The smallest that reaches the size.
+_LAYOUTS = ((60.0, False, None), (203.0, True, None), (263.0, True, 1))
+
+
 def _large_body(mb: float) -> bytes:
+    """A valid request of about ``mb`` MB (at most 200 000 points: ≈ 12 MB compact, 41 MB full precision with a
+    point-motion task, 53 MB of that pretty-printed)."""
     import numpy as np
 
-    n = min(200_000, max(64, int(mb * 1e6 / 60)))
+    per_point, full, indent = next((layout for layout in _LAYOUTS if mb * 1e6 / layout[0] <= 200_000), _LAYOUTS[-1])
+    n = min(200_000, max(64, int(mb * 1e6 / per_point)))
     rng = np.random.default_rng(0)
     p = rng.normal(size=(n, 3))
     p /= np.linalg.norm(p, axis=1, keepdims=True)
     body = request_body(64, "test_gripper", "direct_grasp")
-    body["object"] = {"points": (0.04 * p).round(6).tolist(), "normals": p.round(6).tolist()}
-    return json.dumps(body).encode()
+    if full:
+        body["object"] = {"points": (0.04 * p).tolist(), "normals": p.tolist()}
+        body["task"] = {"kind": "point_motion", "motion": (0.01 * rng.normal(size=(n, 3))).tolist()}
+    else:
+        body["object"] = {"points": (0.04 * p).round(6).tolist(), "normals": p.round(6).tolist()}
+    return json.dumps(body, indent=indent).encode()
 
 
 def _pct(values: list[float], q: float) -> float | None:
@@ -274,24 +306,24 @@ async def _posts(base: str, bodies: list[bytes], timeout: float) -> list[tuple[i
 
 
 async def large_bodies(args: argparse.Namespace) -> dict[str, Any]:
-    """``--bodies`` concurrent bodies of ``--body-mb`` MB; /healthz polled every 20 ms meanwhile."""
+    """``--bodies`` concurrent bodies of ``--body-mb`` MB; /healthz polled every 20 ms meanwhile by a process of
+    its own (this one is busy uploading), API RSS sampled every 20 ms."""
     import httpx
+
+    from service.bench_probes import health_probe
 
     data = _large_body(args.body_mb)
     proc, base = _serve(max_queue=10 * args.bodies, stage_seconds=0.0)
-    health: list[float] = []
     try:
-        async with httpx.AsyncClient(base_url=base, timeout=60) as http:
+        with health_probe(f"{base}/healthz") as health:
             posting = asyncio.ensure_future(_posts(base, [data] * args.bodies, args.budget))
             peak = 0.0
             while not posting.done():
-                t0 = time.perf_counter()
-                await http.get("/healthz")
-                health.append(time.perf_counter() - t0)
                 peak = max(peak, rss_mb(proc.pid).get("VmRSS", 0.0))
                 await asyncio.sleep(0.02)
             answers = posting.result()
-            after = rss_mb(proc.pid)
+        after = rss_mb(proc.pid)
+        async with httpx.AsyncClient(base_url=base, timeout=60) as http:
             queued = (await http.get("/dashboard/data")).json()["stats"]["depth"]
             end = time.monotonic() + args.budget
             while (await http.get("/dashboard/data")).json()["stats"]["depth"] and time.monotonic() < end:
@@ -311,38 +343,94 @@ async def large_bodies(args: argparse.Namespace) -> dict[str, Any]:
 
 
 async def full_queue(args: argparse.Namespace) -> dict[str, Any]:
-    """The queue full (10 slow jobs), then ``--bodies`` small and as many large posts at once: 429 latency."""
+    """The queue full (10 slow jobs), then ``--bodies`` posts at once of a small body, of a large one pushed at
+    once, and of a large one sent with ``Expect: 100-continue``: 429 latency to the status line, the median over
+    ``--rounds`` bursts of each burst's p50 and p99; with ``--checkouts``, one service per checkout, side by side,
+    their bursts alternating."""
+    import statistics
+
     import httpx
 
-    proc, base = _serve(max_queue=10, stage_seconds=5.0)
+    from service.bench_probes import raw_posts
+
+    checkouts = args.checkouts.split(",") if args.checkouts else [None]
     small = json.dumps(request_body(256, "test_gripper", "direct_grasp")).encode()
     large = _large_body(args.body_mb)
+    servers = []
+    json_type = {"Content-Type": "application/json"}
     try:
-        with httpx.Client(base_url=base, timeout=30) as http:
-            while http.post("/v1/jobs", content=small, headers={"Content-Type": "application/json"}).status_code == 202:
-                pass
-        out: dict[str, Any] = {"max_queue": 10, "posts": args.bodies}
-        for name, data in (("small", small), ("large", large)):
-            answers = await _posts(base, [data] * args.bodies, args.budget)
-            refused = [t for s, t in answers if s == 429]
-            out[f"{name}_429"] = len(refused)
-            out[f"{name}_p50_ms"], out[f"{name}_p99_ms"] = _pct(refused, 0.5), _pct(refused, 0.99)
+        for checkout in checkouts:
+            servers.append(_serve(max_queue=10, stage_seconds=30.0, checkout=checkout))
+            with httpx.Client(base_url=servers[-1][1], timeout=30, headers=json_type) as http:
+                while http.post("/v1/jobs", content=small).status_code == 202:
+                    pass
+        figures: dict[str, dict[str, Any]] = {}
+        kinds = (("small", small, False), ("large", large, False), ("large_expect", large, True))
+        for name, data, expect in kinds:
+            bursts: dict[str, list[tuple[int, float | None, float | None]]] = {str(c): [] for c in checkouts}
+            for _ in range(args.rounds):
+                for checkout, (_, base) in zip(checkouts, servers, strict=True):
+                    host, port = base.split("//")[1].rsplit(":", 1)
+                    answers = await raw_posts(host, int(port), "/v1/jobs", data, args.bodies, args.budget,
+                                              expect=expect)  # fmt: skip
+                    refused = [t for s, t in answers if s == 429]
+                    bursts[str(checkout)].append((len(refused), _pct(refused, 0.5), _pct(refused, 0.99)))
+            for checkout, runs in bursts.items():
+                out = figures.setdefault(checkout, {"max_queue": 10, "posts": args.bodies, "rounds": args.rounds,
+                                                    "large_mb": round(len(large) / 1e6, 1)})  # fmt: skip
+                out[f"{name}_429"] = min(n for n, _, _ in runs)
+                for q, values in (("p50", [r[1] for r in runs]), ("p99", [r[2] for r in runs])):
+                    known = [v for v in values if v is not None]
+                    out[f"{name}_{q}_ms"] = round(statistics.median(known), 1) if known else None
+    finally:
+        for proc, _ in servers:
+            _stop(proc)
+    return figures["None"] if checkouts == [None] else figures
+
+
+async def slow_headers(args: argparse.Namespace) -> dict[str, Any]:
+    """``--slow`` connections sending their head a byte every ``--slow-interval`` s for ``--slow-seconds``: how
+    many were closed and when; /healthz on a fresh connection meanwhile."""
+    import httpx
+
+    from service.bench_probes import slow_headers as probe
+
+    proc, base = _serve(max_queue=10, stage_seconds=0.0)
+    host, port = base.split("//")[1].rsplit(":", 1)
+    try:
+        watching = asyncio.ensure_future(probe(host, int(port), args.slow, args.slow_interval, args.slow_seconds))
+        health: list[float] = []
+        async with httpx.AsyncClient(base_url=base, timeout=10) as http:
+            while not watching.done():
+                t0 = time.perf_counter()
+                if (await http.get("/healthz")).status_code == 200:
+                    health.append(time.perf_counter() - t0)
+                await asyncio.sleep(0.25)
+        closed, after = watching.result()
     finally:
         _stop(proc)
-    return out
+    return {
+        "connections": args.slow, "byte_every_s": args.slow_interval, "watched_s": args.slow_seconds,
+        "closed": closed, "closed_after_max_s": round(max(after), 1) if after else None,
+        "healthz_ok": len(health), "healthz_p99_ms": _pct(health, 0.99),
+    }  # fmt: skip
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the four scenarios and print a table of what held."""
+    """Run the scenarios (``--only``) and print a table of what held."""
     figures: dict[str, Any] = {}
+    chosen = [name for name in SCENARIOS if name in args.only.split(",")]
     with tempfile.TemporaryDirectory(prefix="mani-bench-faults-") as directory:
-        for name, scenario in (("soak", soak), ("poison", poison)):
-            figures[name] = asyncio.run(scenario(args, tempfile.mkdtemp(dir=directory)))
+        scenarios = {
+            "soak": lambda: soak(args, tempfile.mkdtemp(dir=directory)),
+            "poison": lambda: poison(args, tempfile.mkdtemp(dir=directory)),
+            "large_bodies": lambda: large_bodies(args),
+            "full_queue": lambda: full_queue(args),
+            "slow_headers": lambda: slow_headers(args),
+        }
+        for name in chosen:
+            figures[name] = asyncio.run(scenarios[name]())
             print(f"{name}: {figures[name]}", flush=True)
-    figures["large_bodies"] = asyncio.run(large_bodies(args))
-    print(f"large_bodies: {figures['large_bodies']}", flush=True)
-    figures["full_queue"] = asyncio.run(full_queue(args))
-    print(f"full_queue: {figures['full_queue']}", flush=True)
     print()
     print("| scenario | figures |")
     print("|---|---|")

@@ -2,10 +2,11 @@
 
 Decoding a 50 MB JSON body (millions of floats into Python lists, then into arrays) holds the GIL for seconds, so
 a thread would still stall every other request; a process does not. Bodies up to ``offload_bytes`` are decoded
-inline (the common case, ~2 ms); larger ones take one of ``slots`` slots before they are even read (so at most
-``slots`` large bodies are in memory at once) and are decoded in one of ``slots`` child processes
-(`service.body_child`). A request that waits longer than ``wait_s`` for a slot gets 503 with Retry-After. The
-children import `clients` only (no torch, no server code).
+inline (the common case, ~2 ms); larger ones take one of ``slots`` slots before they are even read and are
+streamed, chunk by chunk as they arrive, to one of ``slots`` child processes (`service.body_child`): the API
+process never holds a large body, only the decoded request (its arrays: a third to a fifth of the JSON). A
+request that waits longer than ``wait_s`` for a slot gets 503 with Retry-After. The children import `clients`
+only (no torch, no server code).
 """
 
 from __future__ import annotations
@@ -27,8 +28,11 @@ ModelT = TypeVar("ModelT", bound=BaseModel)
 
 
 def decode(cls: type[ModelT], data: bytes, content_type: str | None) -> tuple[str, Any]:
-    """Decode and validate in a child process; answers ``(kind, value)`` with plain, picklable values:
-    ``("ok", model)``, ``("decode", message)``, ``("invalid", [FieldError, ...])``, ``("bad", message)``."""
+    """Decode and validate (inline or in a child process); answers ``(kind, value)`` with plain, picklable values:
+    ``("ok", model)``, ``("empty", "")``, ``("decode", message)``, ``("invalid", [FieldError, ...])``,
+    ``("bad", message)``."""
+    if not data:
+        return "empty", ""
     try:
         return "ok", load_model(cls, data, content_type)
     except DecodeError as exc:
@@ -78,21 +82,27 @@ class BodyPool:
         finally:
             self._slots.release()
 
-    async def decode(self, cls: type[ModelT], data: bytes, content_type: str | None) -> tuple[str, Any]:
-        """`decode` in a child process (call while holding a `slot`)."""
+    async def decode(
+        self, cls: type[ModelT], chunks: AsyncIterator[bytes], content_type: str | None
+    ) -> tuple[str, Any]:
+        """`decode` in a child process of the body ``chunks`` streamed to it as they come (call while holding a
+        `slot`). The exceptions of ``chunks`` (408, 413) pass through; the child is then killed."""
         from service.errors import Unavailable
 
         child = self._idle.pop() if self._idle else await self._spawn()
         try:
-            header = json.dumps({"cls": f"{cls.__module__}:{cls.__qualname__}", "ct": content_type,
-                                 "size": len(data)}).encode()  # fmt: skip
             assert child.stdin is not None and child.stdout is not None
+            header = json.dumps({"cls": f"{cls.__module__}:{cls.__qualname__}", "ct": content_type}).encode()
             child.stdin.write(len(header).to_bytes(4, "big") + header)
-            child.stdin.write(data)
+            async for chunk in chunks:
+                child.stdin.write(len(chunk).to_bytes(4, "big"))
+                child.stdin.write(chunk)
+                await child.stdin.drain()  # the pipe's pace: at most a chunk or two in this process
+            child.stdin.write(bytes(4))
             await child.stdin.drain()
             size = int.from_bytes(await child.stdout.readexactly(8), "big")
             answer: tuple[str, Any] = pickle.loads(await child.stdout.readexactly(size))
-        except BaseException as exc:  # broken, or abandoned half-way (client gone): never reuse it
+        except BaseException as exc:  # broken, or abandoned half-way (client gone, 408, 413): never reuse it
             _kill(child)
             if isinstance(exc, OSError | asyncio.IncompleteReadError):
                 raise Unavailable("the body decoder failed; retry", retry_after=1) from exc

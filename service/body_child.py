@@ -1,8 +1,9 @@
 """A body-decoding process (``python -m service.body_child``): reads framed bodies on stdin, answers on stdout.
 
-Frame in: 4-byte big-endian header length, the header (JSON: ``cls`` "module:Name", ``ct`` content type,
-``size``), then ``size`` body bytes. Frame out: 8-byte big-endian length, then the pickled ``(kind, value)`` of
-`service.bodies.decode`. Imports `clients` and pydantic only: no torch, no server code. Exits at EOF.
+Frame in: 4-byte big-endian header length, the header (JSON: ``cls`` "module:Name", ``ct`` content type), then
+the body as chunks, each a 4-byte big-endian length and that many bytes, ended by a chunk of length 0. Frame
+out: 8-byte big-endian length, then the pickled ``(kind, value)`` of `service.bodies.decode`. Imports `clients`
+and pydantic only: no torch, no server code. Exits at EOF.
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import importlib
 import json
 import pickle
 import sys
+from typing import BinaryIO
 
 
 def main() -> None:
@@ -23,7 +25,7 @@ def main() -> None:
         if len(head) < 4:
             return
         header = json.loads(source.read(int.from_bytes(head, "big")))
-        data = source.read(int(header["size"]))
+        data = _body(source)
         module, _, name = header["cls"].partition(":")
         cls = getattr(importlib.import_module(module), name)
         try:
@@ -32,6 +34,14 @@ def main() -> None:
             blob = pickle.dumps(("bad", f"body could not be read: {exc}"))
         sink.write(len(blob).to_bytes(8, "big") + blob)
         sink.flush()
+
+
+def _body(source: BinaryIO) -> bytes:
+    """The chunks of one body, up to the empty one, joined (the parent has already checked its size)."""
+    chunks = []
+    while size := int.from_bytes(source.read(4), "big"):
+        chunks.append(source.read(size))
+    return b"".join(chunks)
 
 
 if __name__ == "__main__":

@@ -60,8 +60,11 @@ def settings_from(args: argparse.Namespace) -> Any:
 
 def uvicorn_config(app: Any, settings: Any) -> Any:
     """uvicorn's configuration for ``app``: X-Forwarded-For believed only from ``forwarded_allow_ips`` (uvicorn's
-    default believes it from 127.0.0.1, so any local client could pose as any address)."""
+    default believes it from 127.0.0.1, so any local client could pose as any address); request heads bounded
+    by ``header_timeout`` (`service.http_protocol`)."""
     import uvicorn
+
+    from service.http_protocol import bounded_head_protocol
 
     return uvicorn.Config(
         app,
@@ -72,6 +75,7 @@ def uvicorn_config(app: Any, settings: Any) -> Any:
         timeout_graceful_shutdown=10,
         timeout_keep_alive=5,
         lifespan="on",
+        http=bounded_head_protocol(settings.header_timeout),
         proxy_headers=settings.forwarded_allow_ips is not None,
         forwarded_allow_ips=settings.forwarded_allow_ips or "",
     )

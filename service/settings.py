@@ -82,6 +82,9 @@ class Settings(BaseSettings):
     robot_register_timeout: float = Field(30.0, gt=0, le=600)
     body_timeout: float = Field(60.0, gt=0, le=3600, description="A request body must arrive within this, s (408).")
     body_idle_timeout: float = Field(10.0, gt=0, le=600, description="Longest pause within a body, s (408).")
+    header_timeout: float = Field(
+        10.0, gt=0, le=600, description="A request's line and headers must arrive within this, s (408, closed)."
+    )
     parse_offload_bytes: int = Field(
         1024 * 1024, ge=0, description="Bodies larger than this are decoded in a worker process, off the event loop."
     )

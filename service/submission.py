@@ -55,8 +55,7 @@ class Submitter:
 
     async def admit(self, count: int = 1) -> None:
         """429 `QueueFull` before reading a body the queue has no room for (`submit` still decides, atomically)."""
-        if not await self.queue.room(count):
-            raise QueueFullError("the queue is full; retry later", retry_after=1.0)
+        await refuse_if_full(self.queue, count)
 
     async def submit(self, body: JobRequest, kind: str, deadline: float | None) -> str:
         """Check the hand, submit one validated request (a synthesis or a plan; its job's deadline: ``deadline``,
@@ -107,9 +106,9 @@ async def read_and_submit(
     request: Request, submitter: Submitter, kind: str, *, deadline_from_timeout: bool,
     model: type[RequestT] = SynthesisRequest,  # type: ignore[assignment]
 ) -> tuple[RequestT, str]:  # fmt: skip
-    """HTTP: admit, read and validate the body as ``model``, submit (the job's deadline ``options.timeout`` from
-    now when ``deadline_from_timeout``). Returns the request and the job's id."""
-    await submitter.admit()
+    """HTTP: read and validate the body as ``model``, submit (the job's deadline ``options.timeout`` from now
+    when ``deadline_from_timeout``; the route's `Admitted` has refused a full queue). Returns the request and the
+    job's id."""
     body = await read_model(request, model, submitter.settings.max_body_bytes)
     deadline = time.time() + body.options.timeout if deadline_from_timeout else None
     job_id = await submitter.submit(body, kind, deadline)
@@ -118,10 +117,25 @@ async def read_and_submit(
 
 
 async def read_and_submit_batch(request: Request, submitter: Submitter) -> tuple[BatchCreate, str]:
-    """HTTP: admit, read and validate a batch, submit it all or none. Returns the batch and its id."""
-    await submitter.admit()
+    """HTTP: read and validate a batch (`Admitted` has refused a full queue), submit it all or none. Returns the
+    batch and its id."""
     body = await read_model(request, BatchCreate, submitter.settings.max_body_bytes)
     return body, await submitter.submit_batch(body)
+
+
+async def refuse_if_full(queue: JobQueue, count: int = 1) -> None:
+    """429 `QueueFull` when the queue has no room for ``count`` more jobs."""
+    if not await queue.room(count):
+        raise QueueFullError("the queue is full; retry later", retry_after=1.0)
+
+
+async def admitted(queue: QueueDep) -> None:
+    """The HTTP submit routes' first check after the key's: a full queue is refused before the body is read and
+    before the rest of the call is prepared (the cheapest refusal; gRPC calls `Submitter.admit`)."""
+    await refuse_if_full(queue)
+
+
+Admitted = Depends(admitted)
 
 
 async def get_submitter(

@@ -2,8 +2,9 @@
 
 Every field can be set from the environment: ``MANI_REDIS_URL``, ``MANI_QUEUE_PREFIX``, ``MANI_CONCURRENCY``,
 ``MANI_BATCH_SIZE``, ``MANI_MAX_WAIT_MS``, ``MANI_MAX_QUEUE``, ``MANI_RESULT_TTL``, ``MANI_MAX_RESULTS``,
-``MANI_REDIS_TIMEOUT``, ``MANI_VISIBILITY_TIMEOUT``, ``MANI_HEARTBEAT_INTERVAL``, ``MANI_MAX_DELIVERIES``,
-``MANI_PIPELINE``, ``MANI_PIPELINE_OPTIONS`` (JSON), ``MANI_WEIGHTS_DIR``, ``MANI_START_TIMEOUT``, ``MANI_LOG_LEVEL``.
+``MANI_MAX_RESULT_BYTES``, ``MANI_REDIS_TIMEOUT``, ``MANI_VISIBILITY_TIMEOUT``, ``MANI_HEARTBEAT_INTERVAL``,
+``MANI_MAX_DELIVERIES``, ``MANI_PIPELINE``, ``MANI_PIPELINE_OPTIONS`` (JSON), ``MANI_WEIGHTS_DIR``,
+``MANI_START_TIMEOUT``, ``MANI_LOG_LEVEL``.
 Validated at start-up: a bad value fails fast.
 """
 
@@ -27,6 +28,9 @@ class QueueSettings(BaseSettings):
     result_ttl: float = Field(3600.0, gt=0, description="Seconds a result is kept after the job ends.")
     record_ttl: float = Field(7 * 86400.0, gt=0, description="Seconds a job's record (state, no result) is kept.")
     max_results: int = Field(10_000, ge=1, description="Embedded: finished jobs kept in memory at most.")
+    max_result_bytes: int = Field(
+        32 * 2**20, ge=0, description="Embedded: bytes of finished jobs' results kept in memory at most."
+    )
     redis_timeout: float = Field(
         2.0, gt=0, le=60, description="Seconds a Redis connect or command may take before the call fails (503)."
     )

@@ -12,7 +12,7 @@ from service.batch_pages import batch_page
 from service.deps import Authorized, CallerDep, QueueDep, SettingsDep
 from service.negotiation import body_openapi, respond
 from service.responses import ERRORS, READ_ERRORS
-from service.submission import SubmitterDep, read_and_submit_batch
+from service.submission import Admitted, SubmitterDep, read_and_submit_batch
 
 router = APIRouter(prefix="/v1/batches", tags=["batches"], dependencies=[Authorized])
 log = logging.getLogger("service.batches")
@@ -21,6 +21,7 @@ log = logging.getLogger("service.batches")
 @router.post(
     "",
     status_code=202,
+    dependencies=[Admitted],
     summary="Submit up to 1000 requests at once",
     openapi_extra=body_openapi("BatchCreate", "`{requests: [SynthesisRequest, ...]}` (1 to 1000 of them)."),
     responses={202: {"model": BatchPublic}, **ERRORS},

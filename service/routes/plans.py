@@ -10,7 +10,7 @@ from service.deps import Authorized
 from service.negotiation import body_openapi
 from service.responses import ERRORS
 from service.routes.synthesis import job_created
-from service.submission import SubmitterDep, read_and_submit
+from service.submission import Admitted, SubmitterDep, read_and_submit
 
 router = APIRouter(prefix="/v1", tags=["plans"], dependencies=[Authorized])
 
@@ -18,6 +18,7 @@ router = APIRouter(prefix="/v1", tags=["plans"], dependencies=[Authorized])
 @router.post(
     "/plans",
     status_code=202,
+    dependencies=[Admitted],
     summary="Plan a manipulation: waypoints → a collision-free trajectory with contacts at every step",
     openapi_extra=body_openapi(
         "PlanRequest",

@@ -14,7 +14,7 @@ from service.deps import Authorized, QueueDep
 from service.errors import Unavailable
 from service.negotiation import body_openapi, respond
 from service.responses import ERRORS
-from service.submission import SubmitterDep, read_and_submit
+from service.submission import Admitted, SubmitterDep, read_and_submit
 
 router = APIRouter(prefix="/v1", tags=["synthesis"], dependencies=[Authorized])
 log = logging.getLogger("service.synthesis")
@@ -39,6 +39,7 @@ def job_created(request: Request, job_id: str, job: JobPublic | None = None) -> 
 
 @router.post(
     "/synthesize",
+    dependencies=[Admitted],
     summary="Synthesise contacts, forces and a hand pose; wait for the answer",
     openapi_extra=body_openapi("SynthesisRequest"),
     responses={200: {"model": SynthesisResult}, 202: {"model": JobCreated}, **ERRORS},
@@ -79,6 +80,7 @@ async def wait_for(request: Request, queue: QueueDep, job_id: str, timeout: floa
 @router.post(
     "/jobs",
     status_code=202,
+    dependencies=[Admitted],
     summary="Submit a job; poll it or stream its events",
     openapi_extra=body_openapi("SynthesisRequest"),
     responses={202: {"model": JobCreated}, **ERRORS},

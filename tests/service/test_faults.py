@@ -104,6 +104,23 @@ def test_full_queue_refuses_before_reading_the_body() -> None:
             assert time.monotonic() - t0 < 1.0
 
 
+def test_a_full_queue_is_refused_after_the_key_check() -> None:
+    """The refusal comes first among the route's own work, but a wrong key is still 401, not 429."""
+    from fastapi.testclient import TestClient
+
+    key = "secret-key-1234"
+    queue = create_queue(None, redis_url=None, concurrency=0, max_queue=1)
+    with TestClient(create_app(Settings(api_keys=[key], rate_limit_per_s=0), queue=queue)) as client:
+        body, auth = request_body("test_gripper"), {"Authorization": f"Bearer {key}"}
+        assert client.post("/v1/jobs", json=body, headers=auth).status_code == 202
+        assert client.post("/v1/jobs", json=body).status_code == 401
+        for path in ("/v1/jobs", "/v1/synthesize"):
+            answer = client.post(path, json=body, headers=auth)
+            assert answer.status_code == 429 and answer.json()["type"] == "QueueFull", answer.text
+        assert client.post("/v1/batches", json={"requests": [body]}, headers=auth).status_code == 429
+        assert client.post("/v1/plans", json={}, headers=auth).status_code == 429  # refused before the body is read
+
+
 def test_a_slow_body_is_cut_off() -> None:
     """One byte now and then never holds a request open: 408 after the idle (and total) body timeout."""
     queue = create_queue(None, redis_url=None, concurrency=0, max_queue=10)

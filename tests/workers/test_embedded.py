@@ -93,6 +93,28 @@ def test_cancel_full_deadline_and_expiry() -> None:
     run(main())
 
 
+def test_results_are_bounded_by_bytes() -> None:
+    """Finished jobs' results beyond ``max_result_bytes`` are evicted oldest first (and then answer "expired"),
+    however few they are: the API's memory stays bounded whatever the results' size."""
+
+    async def main() -> None:
+        queue = embedded(concurrency=0, max_result_bytes=2500)
+        await queue.start()
+        try:
+            ids = await queue.submit([small_request(i) for i in range(4)])
+            with queue._lock:
+                for job_id in ids:
+                    queue._finish(queue._jobs[job_id], result=b"x" * 1000)
+            await asyncio.sleep(0.3)  # the pump sweeps every 50 ms
+            states = [(await queue.get(i, with_result=False)).state for i in ids]
+            assert states == [JobState.EXPIRED] * 2 + [JobState.SUCCEEDED] * 2
+            assert queue._result_bytes == 2000
+        finally:
+            await queue.close()
+
+    run(main())
+
+
 def test_cancel_running_failure_isolation_and_kill_redelivery() -> None:
     async def main() -> None:
         queue = embedded(pipeline_options={"stage_seconds": 0.1, "iterations": 20, "fail_seed": 13}, batch_size=2)

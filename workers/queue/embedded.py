@@ -1,12 +1,13 @@
 """Embedded backend: an in-process queue feeding N spawned worker processes (the default; NOT durable).
 
 Jobs, results and dead letters live in this process's memory: they are lost when it exits. Results are kept
-``result_ttl`` seconds and at most ``max_results`` finished jobs (oldest evicted first); an evicted job still
-answers state "expired" (a bounded list of tombstones), never "unknown". One pump thread talks to the workers
-over one duplex pipe each (`workers.child`): it dispatches up to ``batch_size`` queued jobs to an idle worker,
-takes progress and outcomes back, and notices a dead worker (EOF): its jobs go back to the queue until they have
-been delivered ``max_deliveries`` times, then to the dead letters with the error; a replacement is spawned. A job
-given back that way runs alone (a micro-batch of one), so a job that kills its worker fails no batch-mate.
+``result_ttl`` seconds, at most ``max_results`` finished jobs and ``max_result_bytes`` of their results (oldest
+evicted first: memory stays bounded whatever the results' size); an evicted job still answers state "expired"
+(a bounded list of tombstones), never "unknown". One pump thread talks to the workers over one duplex pipe each
+(`workers.child`): it dispatches up to ``batch_size`` queued jobs to an idle worker, takes progress and outcomes
+back, and notices a dead worker (EOF): its jobs go back to the queue until they have been delivered
+``max_deliveries`` times, then to the dead letters with the error; a replacement is spawned. A job given back
+that way runs alone (a micro-batch of one), so a job that kills its worker fails no batch-mate.
 
 This module is the queue's asyncio API; the state and the pump thread are `workers.queue.embedded_pump`.
 """

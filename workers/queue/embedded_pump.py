@@ -51,6 +51,7 @@ class EmbeddedPump:
         self._jobs: dict[str, JobRecord] = {}
         self._pending: deque[str] = deque()
         self._finished: OrderedDict[str, None] = OrderedDict()
+        self._result_bytes = 0  # of the finished jobs' results held in `_jobs`
         self._tombstones: OrderedDict[str, tuple[float, str | None, str | None]] = OrderedDict()
         self._batches: OrderedDict[str, tuple[str | None, list[str]]] = OrderedDict()
         self._waiters: dict[str, list[tuple[asyncio.AbstractEventLoop, asyncio.Future[None]]]] = {}
@@ -222,9 +223,12 @@ class EmbeddedPump:
             while self._finished:
                 oldest = next(iter(self._finished))
                 job = self._jobs[oldest]
-                if len(self._finished) <= self.settings.max_results and (job.finished_at or now) + ttl > now:
+                fits = len(self._finished) <= self.settings.max_results
+                fits = fits and self._result_bytes <= self.settings.max_result_bytes
+                if fits and (job.finished_at or now) + ttl > now:
                     break
                 self._finished.popitem(last=False)
+                self._result_bytes -= len(job.result or b"")
                 del self._jobs[oldest]
                 self._tombstones[oldest] = (job.created_at, job.batch_id, job.owner)
                 if len(self._tombstones) > _TOMBSTONES_PER_RESULT * self.settings.max_results:
@@ -236,6 +240,7 @@ class EmbeddedPump:
             with contextlib.suppress(ValueError):
                 self._pending.remove(job.id)
         job.finished_at = time.time()
+        self._result_bytes += len(result or b"") - len(job.result or b"")
         job.result, job.error, job.payload = result, error, b""
         job.state = JobState.SUCCEEDED if error is None else state_for_error(error)
         if job.state is JobState.SUCCEEDED:
