@@ -2,9 +2,8 @@
 
 The procedure (every step the same for URDF and MJCF):
 
-1. The archive is checked and read in memory (:mod:`models.robots.archive`); the description is the member the
-   caller names, else the archive's only ``.urdf``, else its only MJCF (``.xml``/``.mjcf`` with a ``<mujoco>``
-   root).
+1. The archive is checked and read in memory (:mod:`models.robots.archive`); the description is the member named,
+   else the archive's only ``.urdf``, else its only MJCF (``.xml``/``.mjcf`` with a ``<mujoco>`` root).
 2. The description is parsed hardened: a URDF with :func:`models.robots.urdf.parse_urdf` (mesh files resolved in
    the archive only, geometry read only for the links below the palm), an MJCF rewritten and compiled by MuJoCo
    from memory (:mod:`models.robots.mjcf_archive`), body frames kept so palm poses mean what they mean in MuJoCo.
@@ -41,7 +40,7 @@ from models.robots.pads import PAD_RADIUS
 from models.robots.urdf import parse_urdf
 
 if TYPE_CHECKING:
-    import mujoco  # untyped (no stubs): its objects read as Any
+    import mujoco  # no stubs: its objects read as Any
 
 MAX_FINGERTIPS = 8
 TIP_PULLBACK = 0.25
