@@ -34,7 +34,8 @@ def pyramid_edges(normals: np.ndarray, mu: float) -> np.ndarray:
     t1, t2 = tangents(normals)
     ang = np.linspace(0.0, 2 * np.pi, PYRAMID_EDGES, endpoint=False)
     tang = np.cos(ang)[None, :, None] * t1[:, None] + np.sin(ang)[None, :, None] * t2[:, None]
-    return -normals[:, None, :] + mu * tang
+    result: np.ndarray = -normals[:, None, :] + mu * tang
+    return result
 
 
 def feasible_forces(
@@ -62,7 +63,8 @@ def feasible_forces(
     if res.status != 0:
         return None
     lam = res.x.reshape(m, PYRAMID_EDGES)
-    return np.einsum("me,mej->mj", lam, edges)
+    result: np.ndarray = np.einsum("me,mej->mj", lam, edges)
+    return result
 
 
 @dataclass

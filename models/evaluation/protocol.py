@@ -32,6 +32,7 @@ import numpy as np
 from models.evaluation.testset import TestCase
 
 if TYPE_CHECKING:
+    from models.pipeline import SynthesisInput
     from models.robots.hand import Hand
 
 METHODS = ("network", "network_no_refine", "random_contacts", "direct_grasp")
@@ -55,7 +56,9 @@ class MethodResult:
         return self.successes / self.cases if self.cases else 0.0
 
 
-def synthesis_input(case: TestCase, hand: Hand, method: str, num_proposals: int, seed: int, max_iterations: int):
+def synthesis_input(
+    case: TestCase, hand: Hand, method: str, num_proposals: int, seed: int, max_iterations: int
+) -> SynthesisInput:
     """The `SynthesisInput` of one case for one method."""
     from models.pipeline import JointInput, SynthesisInput, TaskInput
 

@@ -8,7 +8,8 @@ Modules: ``config`` (registry), ``point_ops`` / ``hierarchy`` / ``layers`` (Poin
 ``checkpoint`` (safetensors + model card).
 """
 
-from models.network.checkpoint import CheckpointError, ModelCard, load_checkpoint, save_checkpoint
+from models.errors import CheckpointError
+from models.network.checkpoint import ModelCard, load_checkpoint, save_checkpoint
 from models.network.config import LevelConfig, NetworkConfig, get_config, list_configs, register_config
 from models.network.inference import ContactPredictor, NetworkInput, NetworkOutput
 from models.network.loss import cvae_loss

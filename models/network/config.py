@@ -90,7 +90,8 @@ class NetworkConfig:
 
     def to_dict(self) -> dict[str, Any]:
         """Plain-JSON form (tuples become lists), as stored in model cards."""
-        return json_ready(dataclasses.asdict(self))
+        result: dict[str, Any] = json_ready(dataclasses.asdict(self))
+        return result
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> NetworkConfig:

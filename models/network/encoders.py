@@ -62,7 +62,8 @@ class HandEncoder(nn.Module):
 
     def forward(self, hand: torch.Tensor) -> torch.Tensor:
         """Args: hand (B, M_h, 6). Returns (B, C_h)."""
-        return self.net(hand)
+        result: torch.Tensor = self.net(hand)
+        return result
 
 
 class Posterior(nn.Module):
@@ -125,4 +126,5 @@ class Decoder(nn.Module):
         local = self.local(self.first_act(h))
         glob = local.max(dim=2, keepdim=True).values
         out = self.head(self.head_act(self.head_first(local, glob)))
-        return self.out(out)
+        result: torch.Tensor = self.out(out)
+        return result

@@ -64,7 +64,8 @@ class MLP(nn.Module):
         self.out_dim = in_dim
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        return self.net(x)
+        result: torch.Tensor = self.net(x)
+        return result
 
 
 class SplitLinear(nn.Module):
@@ -83,7 +84,8 @@ class SplitLinear(nn.Module):
         out = self.parts[0](xs[0])
         for lin, x in zip(list(self.parts)[1:], xs[1:], strict=True):
             out = out + lin(x)
-        return out
+        result: torch.Tensor = out
+        return result
 
 
 class SetAbstraction(nn.Module):
@@ -123,7 +125,8 @@ class SetAbstraction(nn.Module):
         per_centre = F.linear(new_xyz / radius, w_x) - self.lin_x.bias
         h = gather_points(per_point, group) - per_centre.unsqueeze(2)
         # max, not amax: its backward scatters into the arg-max only (amax's spreads over ties: 2.5x slower)
-        return self.post(self.rest(self.act(h)).max(dim=2).values)
+        result: torch.Tensor = self.post(self.rest(self.act(h)).max(dim=2).values)
+        return result
 
 
 class FeaturePropagation(nn.Module):
@@ -149,7 +152,8 @@ class FeaturePropagation(nn.Module):
         # Linear(interp(coarse)) == interp(Linear(coarse)): project on the (fewer) coarse points first.
         lin_skip, lin_coarse = self.first.parts[0], self.first.parts[1]
         h = lin_skip(skip) + interpolate(lin_coarse(coarse), idx, weights)
-        return self.rest(self.act(h))
+        result: torch.Tensor = self.rest(self.act(h))
+        return result
 
 
 class PointNetGlobal(nn.Module):
@@ -161,4 +165,5 @@ class PointNetGlobal(nn.Module):
         self.out_dim = self.mlp.out_dim
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        return self.mlp(x).max(dim=-2).values
+        result: torch.Tensor = self.mlp(x).max(dim=-2).values
+        return result

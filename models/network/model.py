@@ -76,7 +76,8 @@ class ManiFoundationNet(nn.Module):
 
     def encode_hand(self, hand: torch.Tensor) -> torch.Tensor:
         """φ_h: hand clouds (B, M_h, 6) = (x / hand_scale_m, n) → ε^h (B, C_h)."""
-        return self.hand_encoder(hand)
+        result: torch.Tensor = self.hand_encoder(hand)
+        return result
 
     def encode(self, obj: ObjectTensors, eh: torch.Tensor, hierarchy: PointHierarchy | None = None) -> Encoded:
         """φ_o over (x, n, m, r, Γ, log-scale) → the condition ε^oh (kept as ε^o and ε^h).

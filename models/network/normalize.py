@@ -55,7 +55,8 @@ class Normalizer:
 
     def points(self, x: np.ndarray) -> np.ndarray:
         """Positions to the normalised frame."""
-        return (np.asarray(x, dtype=np.float64) - self.centre) / self.scale
+        result: np.ndarray = (np.asarray(x, dtype=np.float64) - self.centre) / self.scale
+        return result
 
     def vectors(self, v: np.ndarray) -> np.ndarray:
         """Motions (or forces) to normalised units."""
@@ -63,7 +64,8 @@ class Normalizer:
 
     def unpoints(self, x: np.ndarray) -> np.ndarray:
         """Inverse of :meth:`points`."""
-        return np.asarray(x, dtype=np.float64) * self.scale + self.centre
+        result: np.ndarray = np.asarray(x, dtype=np.float64) * self.scale + self.centre
+        return result
 
     def unvectors(self, v: np.ndarray) -> np.ndarray:
         """Inverse of :meth:`vectors`: network force/motion maps back to the request's units."""

@@ -40,7 +40,8 @@ class Resampling:
         if self.back_idx.shape[1] == 1:
             return values[:, self.back_idx[:, 0], :]
         gathered = values[:, self.back_idx, :]  # (K, N, k, C)
-        return (gathered * self.back_w[None, :, :, None].astype(values.dtype)).sum(axis=2)
+        result: np.ndarray = (gathered * self.back_w[None, :, :, None].astype(values.dtype)).sum(axis=2)
+        return result
 
 
 def resample(points: np.ndarray, m: int) -> Resampling:
