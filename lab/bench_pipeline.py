@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 EXIT_OK = 0
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]
 STAGES = ("prepare", "network", "initialisation", "refinement", "verification")
 PARTS = ("linearise", "contacts", "guards", "solve")
 """Refinement parts timed by wrapping the functions of these names (contacts, guards ⊂ linearise)."""
