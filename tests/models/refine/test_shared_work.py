@@ -113,3 +113,24 @@ def test_part_grid_bounds_hold_and_the_pruned_guards_are_the_same_rows(box):
                 np.testing.assert_allclose(b, a, rtol=0, atol=1e-15)
             compared += len(want[0])
     assert compared > 0
+
+
+def test_bounded_contacts_are_the_contacts_of_every_sample(box):
+    """Measuring only the samples their representatives' distances cannot rule out gives the same contacts, gaps
+    and guard rows as measuring every pad and near-body sample (the cover's bound holds on the points' field)."""
+    from models.refine.cover import sample_cover
+    from models.robots import get_hand
+
+    _, pts, nrm = box
+    cloud = PointCloudField(pts, nrm)
+    hand = get_hand("leap")
+    cover = sample_cover(hand)
+    assert np.all(cover.delta[cover.rep == np.arange(len(cover.rep))] == 0.0)
+    assert len(np.unique(cover.rep)) < len(cover.rep) / 3
+    for seed in range(4):
+        pose = _near_pose(hand, cloud, seed)
+        full = surface_contacts(hand, pose.tensors(), cloud, bounded=False)
+        part = surface_contacts(hand, pose.tensors(), cloud)
+        assert len(full.clear) > 0
+        for name in ("sample", "nearest", "phi", "gap", "point_gap", "clear", "clear_grad", "row_jac", "projected"):
+            np.testing.assert_array_equal(getattr(part, name), getattr(full, name), err_msg=name)
