@@ -13,8 +13,9 @@ machine load), and prints both, the ratios, and how many answers are identical (
 within 1e-9). Both workers run this file as a script, so the reference needs no copy of it.
 
 Objects: ``third_party`` (the audit's meshes that installed packages ship, `models.audit.third_party_objects`;
-there are 18, so ``--seeds`` repeats each with other samples and contacts), ``procedural`` (`models.objects`), or
-``box`` (``examples/data/box.npz``, no mesh: the README protocol).
+there are 43, the first 18 the original set; ``--seeds`` repeats each with other samples and contacts; each spec
+names its file, so a reference checkout with fewer candidates loads the same objects), ``procedural``
+(`models.objects`), or ``box`` (``examples/data/box.npz``, no mesh: the README protocol).
 
 Example:
     mani bench pipeline --hand leap,allegro --set third_party --seeds 3 --audit 6 --compare /tmp/ref-23
@@ -49,7 +50,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """The command's options (shared with `main`)."""
     p.add_argument("--hand", default="leap,allegro", help="hand names, comma separated, or 'all'")
     p.add_argument("--set", default="third_party", choices=("third_party", "procedural", "box"))
-    p.add_argument("--objects", type=int, default=18, help="objects of the set (third_party: at most 18)")
+    p.add_argument("--objects", type=int, default=18, help="objects of the set (third_party: at most 43)")
     p.add_argument("--seeds", type=int, default=3, help="requests per object (seeds 0..N-1)")
     p.add_argument("--task", default="lift", choices=("lift", "closure"))
     p.add_argument("--geometry", default="mesh", choices=("mesh", "points"), help="send the mesh or points only")
@@ -67,12 +68,20 @@ def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
 
     hands = list(list_hands()) if args.hand == "all" else [h for h in args.hand.split(",") if h]
     count = 1 if args.set == "box" else args.objects
+    files: list[tuple[str, str]] = []
+    if args.set == "third_party":
+        from models.audit import third_party_objects
+
+        files = [(o.name, str(o.path)) for o in third_party_objects()]
+        count = min(count, len(files))
     out = []
     for hand in hands:
         n = 0
         for obj in range(count):
             for seed in range(args.seeds):
-                out.append({"hand": hand, "set": args.set, "object": obj, "seed": seed, "task": args.task,
+                name, path = files[obj] if files else ("", "")
+                out.append({"hand": hand, "set": args.set, "object": obj, "name": name, "path": path,
+                            "seed": seed, "task": args.task,
                             "geometry": args.geometry, "proposals": args.proposals, "method": args.method,
                             "points": args.points, "audit": n < args.audit and args.set != "box",
                             "box": str(ROOT / "examples/data/box.npz")})
