@@ -28,6 +28,7 @@ import json
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -60,6 +61,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--audit", type=int, default=0, help="audit the proposals of the first N requests per hand")
     p.add_argument("--compare", default=None, help="a reference checkout's root, run side by side")
     p.add_argument("--json", default=None, help="also write every request's record here")
+    p.add_argument("--workers", type=int, default=1,
+                   help="N > 1: the batch mode, every request through N worker processes at once (one thread "
+                        "each), each checkout in turn, twice (A B A B); prints verified grasps/s of the wall time "
+                        "(an audited request counts its audit: use --audit 0 for throughput)")
 
 
 def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
@@ -95,6 +100,8 @@ def run(args: argparse.Namespace) -> int:
     trees = {"current": str(ROOT)}
     if args.compare:
         trees["reference"] = str(Path(args.compare).resolve())
+    if args.workers > 1:
+        return _batch(args, specs, trees)
     workers = {name: _Worker(tree) for name, tree in trees.items()}
     records: dict[str, list[dict[str, Any]]] = {name: [] for name in trees}
     try:
@@ -118,6 +125,63 @@ def run(args: argparse.Namespace) -> int:
 
     print_report(specs, records, load=os.getloadavg())
     return EXIT_OK
+
+
+def _batch(args: argparse.Namespace, specs: list[dict[str, Any]], trees: dict[str, str]) -> int:
+    """The batch mode: each checkout's N workers take the requests from one queue; checkouts in turn, twice."""
+    from rich.console import Console
+
+    console = Console(width=200)
+    rounds: dict[str, list[tuple[float, list[dict[str, Any]]]]] = {name: [] for name in trees}
+    for _ in range(2):
+        for name, tree in trees.items():
+            rounds[name].append(_pool_run(tree, specs, args.workers))
+    load = os.getloadavg()
+    for name, runs in rounds.items():
+        for k, (wall, recs) in enumerate(runs):
+            verified = sum(sum(r["success"]) for r in recs)
+            audited = [r for r in recs if r["audit"] is not None]
+            passed = sum(bool(r["audit"][0]) for r in audited)
+            false = sum(c and not a for r in audited for c, a in zip(r["success"], r["audit"], strict=True))
+            console.print(f"{name} round {k + 1}: {len(recs)} requests on {args.workers} workers in {wall:.1f} s: "
+                          f"{len(recs) / wall:.2f} requests/s, {verified / wall:.2f} verified grasps/s "
+                          f"({verified} verified); audit {passed}/{len(audited)} best proposals, {false} false "
+                          f"claims")  # fmt: skip
+    console.print(f"load average at the end (1, 5, 15 min): {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+    if args.json:
+        Path(args.json).write_text(json.dumps({"specs": specs, "rounds": rounds}))
+    return EXIT_OK
+
+
+def _pool_run(tree: str, specs: list[dict[str, Any]], count: int) -> tuple[float, list[dict[str, Any]]]:
+    """Every spec through ``count`` workers of ``tree`` (each takes the next request when done): wall seconds
+    (warm-up excluded) and the records in spec order."""
+    import queue
+    from concurrent.futures import ThreadPoolExecutor
+
+    pool = [_Worker(tree) for _ in range(count)]
+    free: queue.Queue[_Worker] = queue.Queue()
+    first = [dict(s, audit=False) for s in {s["hand"]: s for s in reversed(specs)}.values()]
+
+    def one(spec: dict[str, Any]) -> dict[str, Any]:
+        worker = free.get()
+        try:
+            return worker.ask(spec)
+        finally:
+            free.put(worker)
+
+    try:
+        for w in pool:
+            free.put(w)
+        with ThreadPoolExecutor(count) as ex:  # warm-up, not timed: each worker's imports and hands
+            list(ex.map(lambda w: [w.ask(s) for s in first], pool))
+        t0 = time.perf_counter()
+        with ThreadPoolExecutor(count) as ex:
+            records = list(ex.map(one, specs))
+        return time.perf_counter() - t0, records
+    finally:
+        for w in pool:
+            w.close()
 
 
 class _Worker:
