@@ -77,7 +77,7 @@ def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
     if args.set == "third_party":
         from models.audit import third_party_objects
 
-        files = [(o.name, str(o.path)) for o in third_party_objects()]
+        files = [(o.name, str(o.path)) for o in third_party_objects(count)]
         count = min(count, len(files))
     out = []
     for hand in hands:
