@@ -75,6 +75,8 @@ class SurfaceContacts:
             samples (1.8 mm deep where the samples read 0.45 mm, LEAP on the example box).
         projected: (m, 3) the contacts projected onto the object, from the samples' own distances.
         body_poses: (1, nb, 4, 4) the hand's body poses at this pose (the linearisation's spheres reuse them).
+        jacobian_request: the points (P, 3) and their bodies (P,) whose Jacobians make ``jac``, ``gap_jac``,
+            ``row_jac`` (`contact_jacobians`; a refinement asks for them only once a candidate is accepted).
     """
 
     sample: np.ndarray
@@ -91,6 +93,7 @@ class SurfaceContacts:
     row_jac: np.ndarray | None
     projected: np.ndarray | None = None
     body_poses: torch.Tensor | None = None
+    jacobian_request: tuple[np.ndarray, np.ndarray] | None = None
 
     def object_points(self, field: ObjectField) -> np.ndarray:
         """(m, 3) the contacts projected onto the object's surface (measured with the samples when they were:
@@ -230,6 +233,19 @@ def part_grids_of(hand: Any) -> list[list[PartGrid]]:
     return list(cache["grids"])
 
 
+def contact_jacobians(
+    hand: Any, body_poses: torch.Tensor, palm_pos: torch.Tensor, request: tuple[np.ndarray, np.ndarray], m: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """``jac`` (m, 3, n), ``gap_jac`` (m, 3, n), ``row_jac`` (R, 3, n) of `surface_contacts`: one point Jacobian for
+    the contact samples, the pads' nearest samples, the guard samples and the guards' feet (its per-body terms
+    once), from the body poses (1, nb, 4, 4) and the palm position (1, 3) of the pose."""
+    points, bodies = request
+    at_points = torch.as_tensor(points, dtype=body_poses.dtype)[None]
+    with torch.no_grad():
+        full = hand.tree.point_jacobian(body_poses, bodies, at_points, palm_pos)[0].numpy()
+    return full[:m], full[m : 2 * m], full[2 * m :]
+
+
 def _ball(field: ObjectField, centre: np.ndarray, radius: float) -> np.ndarray:
     ball = getattr(field, "ball_indices", None)
     if ball is not None:
@@ -314,17 +330,15 @@ def surface_contacts(
         np.full(len(e[2]), tip_body[i]) for i, e in zip(np.flatnonzero(near_body), extra, strict=True)
     ])  # fmt: skip
     jac = gap_jac = row_jac = None
-    if jacobian:  # one point Jacobian for the samples and the guards' feet (its per-body terms once)
-        wanted = np.concatenate([sample, nearest, guard_sample])
-        at_points = torch.as_tensor(np.concatenate([world[wanted], feet]), dtype=T_all.dtype)[None]
-        bodies = np.concatenate([surf.body[wanted], foot_body])
-        with torch.no_grad():
-            full = hand.tree.point_jacobian(T_all, bodies, at_points, pose[0])[0].numpy()  # type: ignore[attr-defined]
-        jac, gap_jac, row_jac = full[:m], full[m : 2 * m], full[2 * m :]
+    wanted = np.concatenate([sample, nearest, guard_sample])
+    request = (np.concatenate([world[wanted], feet]), np.concatenate([surf.body[wanted], foot_body]))
+    if jacobian:
+        jac, gap_jac, row_jac = contact_jacobians(hand, T_all, pose[0], request, m)
     return SurfaceContacts(
         sample=sample, points=points, jac=jac, nearest=nearest, gap_jac=gap_jac, phi=np.asarray(phi, dtype=np.float64),
         grad=np.asarray(grad, dtype=np.float64), gap=np.asarray(gap, dtype=np.float64),
         point_gap=np.asarray(point_gap, dtype=np.float64),
         clear=np.asarray(clear, dtype=np.float64), clear_grad=np.asarray(clear_grad, dtype=np.float64),
         row_jac=row_jac, projected=np.asarray(projected, dtype=np.float64), body_poses=T_all,
+        jacobian_request=request,
     )  # fmt: skip

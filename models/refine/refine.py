@@ -193,8 +193,8 @@ def refine(
     )
     step_fn = solve_step if cfg.solver == "clarabel" else solve_step_cvxpy
 
-    def lin_at(pose: HandPose) -> Linearisation:
-        return linearise(hand, pose, field_, task, mu, cfg.max_normal_force, tip_field)
+    def lin_at(pose: HandPose, jacobian: bool = True) -> Linearisation:
+        return linearise(hand, pose, field_, task, mu, cfg.max_normal_force, tip_field, jacobian=jacobian)
 
     pose, lin = start, lin_at(start)
     value = merit(lin, cfg)
@@ -222,12 +222,12 @@ def refine(
             scale = max(scale * cfg.trust_shrink, cfg.trust_min_scale)
         else:
             cand_pose = pose.step(hand, step.delta)
-            cand = lin_at(cand_pose)
+            cand = lin_at(cand_pose, jacobian=False)  # its Jacobians only if it is accepted
             new_value = merit(cand, cfg)
             predicted = value - step.objective
             ratio = (value - new_value) / predicted if predicted > 1e-15 else 0.0
             if new_value < value:
-                pose, lin, value, accepted = cand_pose, cand, new_value, True
+                pose, lin, value, accepted = cand_pose, cand.completed(), new_value, True
             if cfg.adaptive:
                 if not accepted or ratio < 0.25:
                     scale = max(scale * cfg.trust_shrink, cfg.trust_min_scale)
