@@ -19,7 +19,7 @@ from typing import Any, Protocol
 import numpy as np
 import torch
 
-from models.refine.cover import SampleCover, sample_cover
+from models.refine.cover import deciding_samples, sample_cover
 from models.refine.part_bounds import PartGrid, clearance, part_grids
 
 GUARD_ROWS_PER_FINGERTIP = 24
@@ -104,8 +104,6 @@ class SurfaceContacts:
         return np.asarray(self.points - phi[:, None] * grad)
 
 
-SIGN_BAND = 2e-3
-"""m: a representative this near the surface bounds its samples on either side (`_deciding_samples`)."""
 OBJECT_GUARDS_PER_FINGERTIP = 8
 """Object points nearest inside (or nearest to) each fingertip's convex parts that enter the rows ..."""
 OBJECT_GUARD_MARGIN = 0.005
@@ -172,51 +170,6 @@ def _prune(
     index[keep] = np.arange(len(keep))
     parts = [index[near][index[near] >= 0] for near in near_parts]
     return pts[keep], local[keep], parts
-
-
-def _deciding_samples(
-    field: ObjectField, world: np.ndarray, wanted: np.ndarray, near_body: np.ndarray, margin: float,
-    all_pads: bool, surf: Any, cover: SampleCover,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
-    """The sorted indices (T,) of the ``wanted`` samples (K,) whose Φ can decide a contact or a guard row: their
-    representatives' Φ (world (K, 3)) bounds every sample's within its ``delta`` and the field's resolution (see
-    below); a pad sample is kept while its
-    lower bound is within ``CONTACT_TIE`` of its pad's smallest upper bound (the contact and its ties), a near
-    body's sample while its lower bound is below the margin and the ``GUARD_ROWS_PER_FINGERTIP``-th smallest upper
-    bound of its body (the rows), with their Φ (T,) and ∇Φ (T, 3). ``all_pads``: every pad sample (a region's
-    score is not Φ)."""
-    idx = np.flatnonzero(wanted)
-    reps = np.unique(cover.rep[idx])
-    phi_r, grad_r, _ = field.signed_distance(world[reps])
-    # |Φ(s) − Φ(r)| ≤ δ + h: Φ is the distance to the nearest of the 8 nearest discs (radius h), not to all of
-    # them; within SIGN_BAND of the surface either side is allowed (the points' side is least sure there)
-    slack = float(getattr(field, "resolution", 0.0))
-    low_r = np.where(np.abs(phi_r) < SIGN_BAND, -np.abs(phi_r), phi_r)
-    high_r = np.where(np.abs(phi_r) < SIGN_BAND, np.abs(phi_r), phi_r)
-    low, high = np.zeros(len(wanted)), np.zeros(len(wanted))
-    low[reps], high[reps] = low_r, high_r
-    lower = low[cover.rep[idx]] - cover.delta[idx] - slack
-    upper = high[cover.rep[idx]] + cover.delta[idx] + slack
-    owner, pad = surf.fingertip[idx], surf.pad[idx]
-    keep = pad.copy() if all_pads else np.zeros(len(idx), dtype=bool)
-    for i in range(len(near_body)):
-        mine = owner == i
-        if not all_pads:
-            on_pad = mine & pad
-            keep |= on_pad & (lower <= upper[on_pad].min() + CONTACT_TIE + 1e-12)
-        if near_body[i]:
-            cap, ub = margin, upper[mine]
-            if len(ub) >= GUARD_ROWS_PER_FINGERTIP:
-                cap = min(cap, float(np.partition(ub, GUARD_ROWS_PER_FINGERTIP - 1)[GUARD_ROWS_PER_FINGERTIP - 1]))
-            keep |= mine & (lower <= cap + 1e-12)
-    extra = np.setdiff1d(idx[keep], reps, assume_unique=True)
-    phi_e, grad_e = (field.signed_distance(world[extra])[:2] if len(extra)
-                     else (np.zeros(0), np.zeros((0, 3))))  # fmt: skip
-    at = np.concatenate([reps, extra])
-    order = np.argsort(at)
-    inside = wanted[at[order]]  # a representative of a wanted sample may itself not be wanted (a non-pad one)
-    return (at[order][inside], np.concatenate([phi_r, phi_e])[order][inside],
-            np.concatenate([grad_r, grad_e])[order][inside])  # fmt: skip
 
 
 def part_grids_of(hand: Any) -> list[list[PartGrid]]:
@@ -287,8 +240,9 @@ def surface_contacts(
     near_body = (centre_phi < surf.bound_radius * 2.0 + margin) & guards
     asked = surf.pad | near_body[surf.fingertip]
     if bounded:
-        measure, phi_all, grad_all = _deciding_samples(field, world, asked, near_body, margin,
-                                                       tip_field is not None, surf, sample_cover(hand))  # fmt: skip
+        measure, phi_all, grad_all = deciding_samples(field, world, asked, near_body, margin, tip_field is not None,
+                                                      surf, sample_cover(hand), CONTACT_TIE,
+                                                      GUARD_ROWS_PER_FINGERTIP)  # fmt: skip
     else:
         measure = np.flatnonzero(asked)
         phi_all, grad_all, _ = field.signed_distance(world[measure])
