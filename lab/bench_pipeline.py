@@ -13,8 +13,9 @@ machine load), and prints both, the ratios, and how many answers are identical (
 within 1e-9). Both workers run this file as a script, so the reference needs no copy of it.
 
 Objects: ``third_party`` (the audit's meshes that installed packages ship, `models.audit.third_party_objects`;
-there are 18, so ``--seeds`` repeats each with other samples and contacts), ``procedural`` (`models.objects`), or
-``box`` (``examples/data/box.npz``, no mesh: the README protocol).
+there are 43, the first 18 the original set; ``--seeds`` repeats each with other samples and contacts; each spec
+names its file, so a reference checkout with fewer candidates loads the same objects), ``procedural``
+(`models.objects`), or ``box`` (``examples/data/box.npz``, no mesh: the README protocol).
 
 Example:
     mani bench pipeline --hand leap,allegro --set third_party --seeds 3 --audit 6 --compare /tmp/ref-23
@@ -27,11 +28,12 @@ import json
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
 EXIT_OK = 0
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]
 STAGES = ("prepare", "network", "initialisation", "refinement", "verification")
 PARTS = ("linearise", "contacts", "guards", "solve")
 """Refinement parts timed by wrapping the functions of these names (contacts, guards ⊂ linearise)."""
@@ -49,7 +51,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """The command's options (shared with `main`)."""
     p.add_argument("--hand", default="leap,allegro", help="hand names, comma separated, or 'all'")
     p.add_argument("--set", default="third_party", choices=("third_party", "procedural", "box"))
-    p.add_argument("--objects", type=int, default=18, help="objects of the set (third_party: at most 18)")
+    p.add_argument("--objects", type=int, default=18, help="objects of the set (third_party: at most 43)")
     p.add_argument("--seeds", type=int, default=3, help="requests per object (seeds 0..N-1)")
     p.add_argument("--task", default="lift", choices=("lift", "closure"))
     p.add_argument("--geometry", default="mesh", choices=("mesh", "points"), help="send the mesh or points only")
@@ -59,6 +61,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--audit", type=int, default=0, help="audit the proposals of the first N requests per hand")
     p.add_argument("--compare", default=None, help="a reference checkout's root, run side by side")
     p.add_argument("--json", default=None, help="also write every request's record here")
+    p.add_argument("--workers", type=int, default=1,
+                   help="N > 1: the batch mode, every request through N worker processes at once (one thread "
+                        "each), each checkout in turn, twice (A B A B); prints verified grasps/s of the wall time "
+                        "(an audited request counts its audit: use --audit 0 for throughput)")
 
 
 def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
@@ -67,12 +73,20 @@ def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
 
     hands = list(list_hands()) if args.hand == "all" else [h for h in args.hand.split(",") if h]
     count = 1 if args.set == "box" else args.objects
+    files: list[tuple[str, str]] = []
+    if args.set == "third_party":
+        from models.audit import third_party_objects
+
+        files = [(o.name, str(o.path)) for o in third_party_objects(count)]
+        count = min(count, len(files))
     out = []
     for hand in hands:
         n = 0
         for obj in range(count):
             for seed in range(args.seeds):
-                out.append({"hand": hand, "set": args.set, "object": obj, "seed": seed, "task": args.task,
+                name, path = files[obj] if files else ("", "")
+                out.append({"hand": hand, "set": args.set, "object": obj, "name": name, "path": path,
+                            "seed": seed, "task": args.task,
                             "geometry": args.geometry, "proposals": args.proposals, "method": args.method,
                             "points": args.points, "audit": n < args.audit and args.set != "box",
                             "box": str(ROOT / "examples/data/box.npz")})
@@ -86,6 +100,8 @@ def run(args: argparse.Namespace) -> int:
     trees = {"current": str(ROOT)}
     if args.compare:
         trees["reference"] = str(Path(args.compare).resolve())
+    if args.workers > 1:
+        return _batch(args, specs, trees)
     workers = {name: _Worker(tree) for name, tree in trees.items()}
     records: dict[str, list[dict[str, Any]]] = {name: [] for name in trees}
     try:
@@ -109,6 +125,63 @@ def run(args: argparse.Namespace) -> int:
 
     print_report(specs, records, load=os.getloadavg())
     return EXIT_OK
+
+
+def _batch(args: argparse.Namespace, specs: list[dict[str, Any]], trees: dict[str, str]) -> int:
+    """The batch mode: each checkout's N workers take the requests from one queue; checkouts in turn, twice."""
+    from rich.console import Console
+
+    console = Console(width=200)
+    rounds: dict[str, list[tuple[float, list[dict[str, Any]]]]] = {name: [] for name in trees}
+    for _ in range(2):
+        for name, tree in trees.items():
+            rounds[name].append(_pool_run(tree, specs, args.workers))
+    load = os.getloadavg()
+    for name, runs in rounds.items():
+        for k, (wall, recs) in enumerate(runs):
+            verified = sum(sum(r["success"]) for r in recs)
+            audited = [r for r in recs if r["audit"] is not None]
+            passed = sum(bool(r["audit"][0]) for r in audited)
+            false = sum(c and not a for r in audited for c, a in zip(r["success"], r["audit"], strict=True))
+            console.print(f"{name} round {k + 1}: {len(recs)} requests on {args.workers} workers in {wall:.1f} s: "
+                          f"{len(recs) / wall:.2f} requests/s, {verified / wall:.2f} verified grasps/s "
+                          f"({verified} verified); audit {passed}/{len(audited)} best proposals, {false} false "
+                          f"claims")  # fmt: skip
+    console.print(f"load average at the end (1, 5, 15 min): {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+    if args.json:
+        Path(args.json).write_text(json.dumps({"specs": specs, "rounds": rounds}))
+    return EXIT_OK
+
+
+def _pool_run(tree: str, specs: list[dict[str, Any]], count: int) -> tuple[float, list[dict[str, Any]]]:
+    """Every spec through ``count`` workers of ``tree`` (each takes the next request when done): wall seconds
+    (warm-up excluded) and the records in spec order."""
+    import queue
+    from concurrent.futures import ThreadPoolExecutor
+
+    pool = [_Worker(tree) for _ in range(count)]
+    free: queue.Queue[_Worker] = queue.Queue()
+    first = [dict(s, audit=False) for s in {s["hand"]: s for s in reversed(specs)}.values()]
+
+    def one(spec: dict[str, Any]) -> dict[str, Any]:
+        worker = free.get()
+        try:
+            return worker.ask(spec)
+        finally:
+            free.put(worker)
+
+    try:
+        for w in pool:
+            free.put(w)
+        with ThreadPoolExecutor(count) as ex:  # warm-up, not timed: each worker's imports and hands
+            list(ex.map(lambda w: [w.ask(s) for s in first], pool))
+        t0 = time.perf_counter()
+        with ThreadPoolExecutor(count) as ex:
+            records = list(ex.map(one, specs))
+        return time.perf_counter() - t0, records
+    finally:
+        for w in pool:
+            w.close()
 
 
 class _Worker:

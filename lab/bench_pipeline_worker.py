@@ -100,6 +100,15 @@ class _Objects:
                 self.procedural = object_set(max(i + 1, 18), seed=0)
             obj = self.procedural[i]
             return np.asarray(obj.points), np.asarray(obj.normals), obj.mesh
+        if spec.get("path"):  # the file the spec names: the same object whatever this checkout's candidates
+            from pathlib import Path
+
+            from models.audit.objects import load_third_party
+
+            named = load_third_party(str(spec["name"]), Path(spec["path"]))
+            assert named is not None, spec["path"]
+            points, normals = named.sample(int(spec["points"]), seed)
+            return points, normals, named.mesh
         from models.audit import third_party_objects
 
         if self.third is None:

@@ -27,7 +27,7 @@ def add_audit_parser(sub: Any) -> None:
     a.add_argument("--hand", default="leap,allegro", help="hand name(s), comma separated")
     a.add_argument("--task", default="lift,closure", help="lift and/or closure")
     a.add_argument("--geometry", default="mesh,points", help="what the caller sends: mesh and/or points")
-    a.add_argument("--objects", type=int, default=18, help="third-party objects (at most 18 here)")
+    a.add_argument("--objects", type=int, default=18, help="third-party objects (at most 43 here)")
     a.add_argument("--proposals", type=int, default=2, help="proposals per request")
     a.add_argument("--points", type=int, default=2048, help="surface points sent")
     a.add_argument("--method", default="random_contacts", help="request method (random_contacts, network, ...)")

@@ -1,12 +1,13 @@
 """Test objects: meshes that installed third-party packages ship, and concave shapes built here.
 
 :func:`third_party_objects` loads object meshes shipped by packages nobody on this team wrote (gymnasium-robotics'
-kitchen assets and its hand-manipulation objects, an Adroit mesh, a TIAGo part), in the fixed order of
-:data:`CANDIDATES`. Each is made watertight the simple way: vertices merged, split into connected components,
-the largest watertight component kept (files without one are skipped); then it is centred (bounding-box centre
-at the origin) and scaled uniformly so that its largest bounding-box extent is ``size`` (default 8 cm, within the
-graspable 4–12 cm). The gymnasium hand-manipulation objects (egg, block, pen) are MJCF primitives: they are
-tessellated from the ``<geom name="object">`` of their XML.
+kitchen assets, its hand-manipulation objects, ShadowHand and Fetch link meshes, an Adroit mesh, a TIAGo part,
+robosuite's object meshes), in the fixed order of :data:`CANDIDATES` (the first 18 are the original set: the
+benchmarks' and tests' first N are unchanged). Each is made watertight the simple way: vertices merged, split
+into connected components, the largest watertight component kept (files without one are skipped); then it is
+centred (bounding-box centre at the origin) and scaled uniformly so that its largest bounding-box extent is
+``size`` (default 8 cm, within the graspable 4–12 cm). The gymnasium hand-manipulation objects (egg, block, pen)
+are MJCF primitives: they are tessellated from the ``<geom name="object">`` of their XML.
 
 :func:`concave_test_shapes` are NOT third-party: a cup with a handle, a mug, a torus and an L-shaped part, built
 from tessellations without booleans (none is installed). Each is watertight; the handles are separate
@@ -27,6 +28,8 @@ from models.audit.hands import site_packages
 
 _KITCHEN = "gymnasium_robotics/envs/assets/kitchen_franka/kitchen_assets/meshes"
 _HAND = "gymnasium_robotics/envs/assets/hand"
+_STLS = "gymnasium_robotics/envs/assets/stls"
+_ROBOSUITE = "robosuite/models/assets/objects/meshes"
 CANDIDATES: tuple[tuple[str, str], ...] = (
     ("kettle_handle", f"{_KITCHEN}/kettlehandle.stl"),
     ("micro_handle", f"{_KITCHEN}/microhandle.stl"),
@@ -48,6 +51,21 @@ CANDIDATES: tuple[tuple[str, str], ...] = (
     ("tiago_antenna", "cmeel.prefix/share/example-robot-data/robots/tiago_description/meshes/pmb2/objects/antenna.stl"),
     ("knob", f"{_KITCHEN}/knob.stl"),  # not watertight in any component: skipped
     ("light_switch", f"{_KITCHEN}/lightswitch.stl"),  # idem
+    # robosuite's object meshes (MIT)
+    ("bread", f"{_ROBOSUITE}/bread.stl"),
+    ("cereal_box", f"{_ROBOSUITE}/cereal.stl"),
+    ("lemon", f"{_ROBOSUITE}/lemon.stl"),
+    ("milk_carton", f"{_ROBOSUITE}/milk.stl"),
+    # more of gymnasium-robotics' kitchen (MIT), its ShadowHand link meshes (Apache 2.0) and its Fetch's links
+    ("cabinet_base", f"{_KITCHEN}/cabinetbase.stl"),
+    ("hinge_handle", f"{_KITCHEN}/hingehandle.stl"),
+    ("oven", f"{_KITCHEN}/oven.stl"),
+    *((f"shadow_{name.lower()}", f"{_STLS}/hand/{name}.stl")
+      for name in ("F1", "F2", "F3", "TH1_z", "TH2_z", "TH3_z", "knuckle", "lfmetacarpal")),
+    *((f"fetch_{name}", f"{_STLS}/fetch/{name}_link_collision.stl")
+      for name in ("elbow_flex", "forearm_roll", "head_pan", "head_tilt", "shoulder_lift", "shoulder_pan",
+                   "upperarm_roll", "wrist_flex", "wrist_roll")),
+    ("fetch_gripper", f"{_STLS}/fetch/gripper_link.stl"),
 )
 """(name, path under site-packages) of the candidate third-party objects, in the order they are returned."""
 

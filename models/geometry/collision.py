@@ -263,9 +263,15 @@ def self_collision_body_pairs(hand: Hand) -> list[tuple[int, int]]:
     return checked
 
 
-def _pair_depth(a: _BodyGeom, b: _BodyGeom, poses: dict[str, np.ndarray]) -> float:
+def _pair_depth(
+    a: _BodyGeom, b: _BodyGeom, poses: dict[str, np.ndarray], objects: dict[str, fcl.CollisionObject] | None = None,
+) -> float:  # fmt: skip
+    """Depth of the pair's overlap (0 when their meshes do not touch); ``objects``: the bodies' posed fcl objects
+    when the caller has them (one per body, not one per pair)."""
     Ta, Tb = poses[a.name], poses[b.name]
-    if not _hits(_obj(a.bvh, Ta), _obj(b.bvh, Tb)):
+    oa = objects[a.name] if objects is not None else _obj(a.bvh, Ta)
+    ob = objects[b.name] if objects is not None else _obj(b.bvh, Tb)
+    if not _hits(oa, ob):
         return 0.0
     T_ba = np.linalg.inv(Tb) @ Ta  # a's frame -> b's frame
     T_ab = np.linalg.inv(T_ba)
@@ -278,8 +284,11 @@ def hand_self_collision(hand: Hand, palm_pos: np.ndarray, palm_quat: np.ndarray,
     """Self-collision depth (m, 0 if none) over the checked body pairs."""
     bodies = _bodies(hand)
     poses = _poses(hand, palm_pos, palm_quat, q)
+    pairs = self_collision_body_pairs(hand)
+    used = {k for pair in pairs for k in pair}
+    objects = {bodies[k].name: _obj(bodies[k].bvh, poses[bodies[k].name]) for k in used}
     depth = 0.0
-    for i, j in self_collision_body_pairs(hand):
-        d = _pair_depth(bodies[i], bodies[j], poses)
+    for i, j in pairs:
+        d = _pair_depth(bodies[i], bodies[j], poses, objects)
         depth = max(depth, d if d > 1e-9 else 0.0)
     return depth

@@ -14,10 +14,13 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
 import numpy as np
 import torch
+
+from models.refine.cover import deciding_samples, sample_cover
+from models.refine.part_bounds import PartGrid, clearance, part_grids
 
 GUARD_ROWS_PER_FINGERTIP = 24
 """At most this many of a fingertip body's samples (the nearest to the object) enter the step's rows."""
@@ -72,6 +75,8 @@ class SurfaceContacts:
             samples (1.8 mm deep where the samples read 0.45 mm, LEAP on the example box).
         projected: (m, 3) the contacts projected onto the object, from the samples' own distances.
         body_poses: (1, nb, 4, 4) the hand's body poses at this pose (the linearisation's spheres reuse them).
+        jacobian_request: the points (P, 3) and their bodies (P,) whose Jacobians make ``jac``, ``gap_jac``,
+            ``row_jac`` (`contact_jacobians`; a refinement asks for them only once a candidate is accepted).
     """
 
     sample: np.ndarray
@@ -88,6 +93,7 @@ class SurfaceContacts:
     row_jac: np.ndarray | None
     projected: np.ndarray | None = None
     body_poses: torch.Tensor | None = None
+    jacobian_request: tuple[np.ndarray, np.ndarray] | None = None
 
     def object_points(self, field: ObjectField) -> np.ndarray:
         """(m, 3) the contacts projected onto the object's surface (measured with the samples when they were:
@@ -106,13 +112,16 @@ OBJECT_GUARD_MARGIN = 0.005
 
 def _object_guards(
     field: ObjectField, parts: list[tuple[np.ndarray, np.ndarray]], T: np.ndarray, centre: np.ndarray,
-    radius: float,
+    radius: float, grids: list[PartGrid] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """Object points within ``radius`` of a fingertip body's ``centre`` against its convex parts (half-spaces
     (f, 4) ``n·x ≤ d`` and bounds, body frame; the body's pose ``T`` (4, 4)): each point's clearance to the part
     it is deepest in (max_f n_f·p − d_f: minus the depth inside, a lower bound on the distance outside), the world
     direction −n of the active face (moving the face's points that way increases it) and the point's foot on
-    that face (world; a point fixed to the body whose Jacobian the rows use) — for the points nearest inside."""
+    that face (world; a point fixed to the body whose Jacobian the rows use) — for the points nearest inside.
+
+    With the parts' ``grids`` (`models.refine.part_bounds`), only the points whose clearance bounds let them be
+    among the nearest are measured against every face: the same rows."""
     empty = np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))
     if not hasattr(field, "points") or not parts:  # an analytic field (tests): no object points to test
         return empty
@@ -121,16 +130,17 @@ def _object_guards(
         return empty
     R, t = T[:3, :3], T[:3, 3]
     local = (pts - t) @ R
+    near_parts = [np.flatnonzero(np.all((local > bounds[0] - OBJECT_GUARD_MARGIN)
+                                        & (local < bounds[1] + OBJECT_GUARD_MARGIN), axis=1))
+                  for _, bounds in parts]  # fmt: skip
+    if grids is not None:
+        pts, local, near_parts = _prune(local, pts, near_parts, grids)
     best = np.full(len(pts), np.inf)
     normal = np.zeros((len(pts), 3))
-    for planes, bounds in parts:
-        near = np.flatnonzero(np.all((local > bounds[0] - OBJECT_GUARD_MARGIN)
-                                     & (local < bounds[1] + OBJECT_GUARD_MARGIN), axis=1))  # fmt: skip
+    for (planes, _), near in zip(parts, near_parts, strict=True):
         if not len(near):
             continue
-        excess = local[near] @ planes[:, :3].T - planes[:, 3][None]  # (k, f) > 0 outside a face
-        face = np.argmax(excess, axis=1)
-        value = excess[np.arange(len(near)), face]
+        value, face = clearance(planes, local[near])
         better = value < best[near]
         best[near[better]] = value[better]
         normal[near[better]] = planes[face[better], :3]
@@ -139,6 +149,54 @@ def _object_guards(
     n_world = normal[order] @ R.T
     foot = pts[order] - best[order, None] * n_world
     return best[order], -n_world, foot
+
+
+def _prune(
+    local: np.ndarray, pts: np.ndarray, near_parts: list[np.ndarray], grids: list[PartGrid]
+) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """The points (and each part's near ones among them) whose clearance's lower bound is below the margin and
+    the ``OBJECT_GUARDS_PER_FINGERTIP``-th smallest upper bound: the only ones that can be chosen."""
+    lower, upper = np.full(len(pts), np.inf), np.full(len(pts), np.inf)
+    for grid, near in zip(grids, near_parts, strict=True):
+        if len(near):
+            lo, hi = grid.bounds(local[near])
+            np.minimum.at(lower, near, lo)
+            np.minimum.at(upper, near, hi)
+    cap = OBJECT_GUARD_MARGIN
+    if len(upper) >= OBJECT_GUARDS_PER_FINGERTIP:
+        cap = min(cap, float(np.partition(upper, OBJECT_GUARDS_PER_FINGERTIP - 1)[OBJECT_GUARDS_PER_FINGERTIP - 1]))
+    keep = np.flatnonzero(lower <= cap + 1e-9)
+    index = np.full(len(pts), -1)
+    index[keep] = np.arange(len(keep))
+    parts = [index[near][index[near] >= 0] for near in near_parts]
+    return pts[keep], local[keep], parts
+
+
+def part_grids_of(hand: Any) -> list[list[PartGrid]]:
+    """Per fingertip, its parts' clearance grids (`models.refine.part_bounds`), built once per hand."""
+    cache = hand.__dict__.setdefault("_part_grids", {})
+    if "grids" not in cache:
+        built: dict[bytes, list[PartGrid]] = {}  # fingers with the same mesh (LEAP's three) share their grids
+        keys = [b"".join(planes.tobytes() + bounds.tobytes() for planes, bounds in parts)
+                for parts in hand.fingertip_parts]  # fmt: skip
+        for key, parts in zip(keys, hand.fingertip_parts, strict=True):
+            if key not in built:
+                built[key] = part_grids(parts, OBJECT_GUARD_MARGIN)
+        cache["grids"] = [built[key] for key in keys]
+    return list(cache["grids"])
+
+
+def contact_jacobians(
+    hand: Any, body_poses: torch.Tensor, palm_pos: torch.Tensor, request: tuple[np.ndarray, np.ndarray], m: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """``jac`` (m, 3, n), ``gap_jac`` (m, 3, n), ``row_jac`` (R, 3, n) of `surface_contacts`: one point Jacobian for
+    the contact samples, the pads' nearest samples, the guard samples and the guards' feet (its per-body terms
+    once), from the body poses (1, nb, 4, 4) and the palm position (1, 3) of the pose."""
+    points, bodies = request
+    at_points = torch.as_tensor(points, dtype=body_poses.dtype)[None]
+    with torch.no_grad():
+        full = hand.tree.point_jacobian(body_poses, bodies, at_points, palm_pos)[0].numpy()
+    return full[:m], full[m : 2 * m], full[2 * m :]
 
 
 def _ball(field: ObjectField, centre: np.ndarray, radius: float) -> np.ndarray:
@@ -152,6 +210,7 @@ def _ball(field: ObjectField, centre: np.ndarray, radius: float) -> np.ndarray:
 def surface_contacts(
     hand: object, pose: tuple[torch.Tensor, torch.Tensor, torch.Tensor], field: ObjectField,
     tip_field: TipField | None = None, jacobian: bool = True, margin: float = GUARD_MARGIN, guards: bool = True,
+    bounded: bool = True,
 ) -> SurfaceContacts:  # fmt: skip
     """Measure the fingertips' real surfaces against the object at ``pose`` (batch-of-one tensors).
 
@@ -164,6 +223,8 @@ def surface_contacts(
         margin: guards farther than this from the object are left out of the rows.
         guards: also measure the guards (refinement); without them (verification: only the contacts) just the
             pads are measured — the same contacts, without the other samples' distances or the object points.
+        bounded: measure only the samples that can decide the contacts and guard rows, bounded by their
+            representatives' distances (`models.refine.cover`); False measures every pad and near-body sample.
     """
     surf = hand.contact_surface  # type: ignore[attr-defined]
     standoff = max(GUARD_STANDOFF, float(getattr(field, "resolution", 0.0)))
@@ -177,8 +238,14 @@ def surface_contacts(
     centres = np.stack([world[surf.fingertip == i].mean(0) for i in range(m)])
     centre_phi = field.signed_distance(centres)[0]
     near_body = (centre_phi < surf.bound_radius * 2.0 + margin) & guards
-    measure = np.flatnonzero(surf.pad | near_body[surf.fingertip])
-    phi_all, grad_all, _ = field.signed_distance(world[measure])
+    asked = surf.pad | near_body[surf.fingertip]
+    if bounded:
+        measure, phi_all, grad_all = deciding_samples(field, world, asked, near_body, margin, tip_field is not None,
+                                                      surf, sample_cover(hand), CONTACT_TIE,
+                                                      GUARD_ROWS_PER_FINGERTIP)  # fmt: skip
+    else:
+        measure = np.flatnonzero(asked)
+        phi_all, grad_all, _ = field.signed_distance(world[measure])
     score = phi_all if tip_field is None else tip_field(world[measure])[0]
     sample = np.zeros(m, dtype=np.int64)
     nearest = np.zeros(m, dtype=np.int64)
@@ -187,6 +254,7 @@ def surface_contacts(
     rows: list[np.ndarray] = []
     extra: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     body_T = T_all[0, torch.as_tensor(tip_body)].numpy()
+    grids = part_grids_of(hand) if near_body.any() else [None] * m
     for i in range(m):
         mine = np.flatnonzero((owner == i) & pad)
         nearest[i] = measure[mine[np.argmin(score[mine])]]
@@ -196,7 +264,7 @@ def surface_contacts(
             body = np.flatnonzero((owner == i) & (phi_all < margin))
             rows.append(body[np.argsort(phi_all[body])[:GUARD_ROWS_PER_FINGERTIP]])
             extra.append(_object_guards(field, hand.fingertip_parts[i], body_T[i], centres[i],  # type: ignore[attr-defined]
-                                        float(surf.bound_radius[i])))  # fmt: skip
+                                        float(surf.bound_radius[i]), grids[i]))  # fmt: skip
     at = np.searchsorted(measure, nearest)  # ``measure`` is sorted (np.flatnonzero)
     points = world[sample]
     gap = phi_all[at]
@@ -216,17 +284,15 @@ def surface_contacts(
         np.full(len(e[2]), tip_body[i]) for i, e in zip(np.flatnonzero(near_body), extra, strict=True)
     ])  # fmt: skip
     jac = gap_jac = row_jac = None
-    if jacobian:  # one point Jacobian for the samples and the guards' feet (its per-body terms once)
-        wanted = np.concatenate([sample, nearest, guard_sample])
-        at_points = torch.as_tensor(np.concatenate([world[wanted], feet]), dtype=T_all.dtype)[None]
-        bodies = np.concatenate([surf.body[wanted], foot_body])
-        with torch.no_grad():
-            full = hand.tree.point_jacobian(T_all, bodies, at_points, pose[0])[0].numpy()  # type: ignore[attr-defined]
-        jac, gap_jac, row_jac = full[:m], full[m : 2 * m], full[2 * m :]
+    wanted = np.concatenate([sample, nearest, guard_sample])
+    request = (np.concatenate([world[wanted], feet]), np.concatenate([surf.body[wanted], foot_body]))
+    if jacobian:
+        jac, gap_jac, row_jac = contact_jacobians(hand, T_all, pose[0], request, m)
     return SurfaceContacts(
         sample=sample, points=points, jac=jac, nearest=nearest, gap_jac=gap_jac, phi=np.asarray(phi, dtype=np.float64),
         grad=np.asarray(grad, dtype=np.float64), gap=np.asarray(gap, dtype=np.float64),
         point_gap=np.asarray(point_gap, dtype=np.float64),
         clear=np.asarray(clear, dtype=np.float64), clear_grad=np.asarray(clear_grad, dtype=np.float64),
         row_jac=row_jac, projected=np.asarray(projected, dtype=np.float64), body_poses=T_all,
+        jacobian_request=request,
     )  # fmt: skip

@@ -17,11 +17,15 @@ from scipy.spatial import cKDTree
 
 WINDING_FROM = 0.5
 """Points farther than this many disc radii from the nearest disc take their side from the winding number ..."""
-WINDING_TO = 0.015
 WINDING_BELOW = 0.9
-"""... where the discs' vote is less clear than this (|Σ w cos|cos|| / Σ w)."""
-"""... up to this distance (m); farther points are beyond the refinement's guards and keep the discs' side."""
+"""... where the discs' vote is less clear than this (|Σ w cos|cos|| / Σ w), however far they are: far off the
+surface the 8 nearest discs' vote is no guide (fingertip samples 15-50 mm outside third-party objects read as
+that deep inside: false guard penetrations and a wrong nearest pad sample, when the winding number read 0.00-0.02
+for every one of them)."""
 
+
+HULL_MARGIN = 2.0
+"""Disc radii: points farther than this outside the points' convex hull are outside (no winding number needed)."""
 
 WINDING_FAR = 2.0
 WINDING_CELLS = 8
@@ -118,8 +122,10 @@ class PointCloudField:
         side = np.sum(w * cos * np.abs(cos), axis=1)
         sign = np.where(side < 0, -1.0, 1.0)
         confident = np.abs(side) > WINDING_BELOW * np.sum(w, axis=1)  # every near disc agrees and faces x
-        off = np.flatnonzero(~confident & (nearest > WINDING_FROM * self.disc_radius) & (nearest < WINDING_TO))
+        off = np.flatnonzero(~confident & (nearest > WINDING_FROM * self.disc_radius))
         if len(off):  # off the surface the discs' side can flip (a finger 5 mm inside near an edge read outside)
+            sign[off] = 1.0
+            off = off[self.within_hull(x[off])]  # outside the points' hull: outside, as the winding number says
             sign[off] = np.where(self.winding_number(x[off]) > 0.5, -1.0, 1.0)
         a_b, e_b, n_b = a[rows, best], excess[rows, best], n[rows, best]
         t_hat = tang[rows, best] / np.maximum(b[rows, best], 1e-12)[:, None]
@@ -154,6 +160,26 @@ class PointCloudField:
             r = np.maximum(np.linalg.norm(d, axis=1), 0.5 * self.disc_radius)
             out += np.bincount(row, np.einsum("ta,ta->t", d, cells.weighted[j]) / r**3, minlength=len(x))
         return out / (4.0 * np.pi)
+
+    def within_hull(self, x: np.ndarray) -> np.ndarray:
+        """(M,) bool: x lies within the convex hull of the points grown by ``HULL_MARGIN`` disc radii (False: x
+        is outside the object; the true surface reaches at most about a disc radius beyond its points)."""
+        if not hasattr(self, "_hull"):
+            from scipy.spatial import ConvexHull, QhullError
+
+            try:
+                self._hull: np.ndarray | None = np.asarray(ConvexHull(self.points).equations)
+            except (QhullError, ValueError):  # flat or degenerate points: no hull to rule anything out
+                self._hull = None
+        x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
+        if self._hull is None or not len(x):
+            return np.ones(len(x), dtype=bool)
+        grow = HULL_MARGIN * self.disc_radius
+        lo, hi = self.points.min(0) - grow, self.points.max(0) + grow
+        inside = np.all((x >= lo) & (x <= hi), axis=1)
+        near = np.flatnonzero(inside)
+        inside[near] = np.max(x[near] @ self._hull[:, :3].T + self._hull[:, 3], axis=1) <= grow
+        return inside
 
     def winding_number_exact(self, x: np.ndarray, chunk: int = 512) -> np.ndarray:
         """The winding number of `winding_number` summed over every sample (M × N work)."""

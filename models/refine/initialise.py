@@ -144,6 +144,37 @@ def fit_palm(
     return rot, t, rms
 
 
+def fit_palms(
+    rest_tips: np.ndarray, assigns: list[tuple[int, ...]], contacts: np.ndarray, approach_axis: np.ndarray,
+    directions: np.ndarray, approach_weight: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
+    """`fit_palm` for every approach direction (d, 3) × assignment (A of them, H fingertips each), direction-major:
+    rotations (d·A, 3, 3), positions (d·A, 3) and rms fingertip errors (d·A,), in one batched SVD."""
+    tips = rest_tips[np.asarray(assigns, dtype=np.int64)]  # (A, H, 3)
+    mu_s, mu_d = tips.mean(axis=1), contacts.mean(axis=0)
+    spread = max(float(np.mean(np.sum((contacts - mu_d) ** 2, axis=1))), 1e-6)
+    w = np.concatenate([np.ones(len(contacts)), [approach_weight * spread * max(1, 4 - len(contacts))]])
+    n_dir, n_as = len(directions), len(assigns)
+    src = np.concatenate([tips - mu_s[:, None], np.broadcast_to(approach_axis, (n_as, 1, 3))], axis=1)  # (A, H+1, 3)
+    src = np.broadcast_to(src[None], (n_dir, *src.shape)).reshape(n_dir * n_as, -1, 3)
+    dst = np.concatenate([np.broadcast_to(contacts - mu_d, (n_dir, *contacts.shape)), directions[:, None]], axis=1)
+    dst = np.repeat(dst, n_as, axis=0)  # (d·A, H+1, 3)
+    hmat = np.matmul(np.swapaxes(src * w[None, :, None], 1, 2), dst)
+    u, _, vt = np.linalg.svd(hmat)
+    v, ut = np.swapaxes(vt, 1, 2), np.swapaxes(u, 1, 2)
+    sign = np.sign(np.linalg.det(v @ ut))
+    sign[sign == 0] = 1.0
+    fix = np.tile(np.eye(3), (len(hmat), 1, 1))
+    fix[:, 2, 2] = sign
+    rots = v @ fix @ ut
+    mu_all = np.tile(mu_s, (n_dir, 1))
+    ts = mu_d - np.einsum("fab,fb->fa", rots, mu_all)
+    tips_all = np.tile(tips, (n_dir, 1, 1))
+    placed = np.einsum("fab,fkb->fka", rots, tips_all) + ts[:, None]
+    rms = np.sqrt(np.mean(np.sum((placed - contacts[None]) ** 2, axis=2), axis=1))
+    return rots, ts, rms
+
+
 def back_off(
     rot: np.ndarray, t: np.ndarray, rest: RestGeometry, radii: np.ndarray, field: PointCloudField,
     direction: np.ndarray, max_distance: float = 0.1, step: float = 0.005,
@@ -198,24 +229,23 @@ def initialise(
     target = heatmap(field.points, contacts, radius) if predicted is None else np.asarray(predicted) >= 0.5
     radii = np.asarray(hand.sphere_radii, dtype=np.float64)
     axis = np.asarray(hand.approach_axis, dtype=np.float64)
-    fits = []
-    for direction in approach_directions(contacts, contact_normals):
-        for assign in itertools.permutations(range(m), h):
-            rot, t, rms = fit_palm(rest.tips[list(assign)], contacts, axis, direction, approach_weight)
-            fits.append((rot, t, rms, assign, direction))
+    directions = approach_directions(contacts, contact_normals)
+    assigns = list(itertools.permutations(range(m), h))
+    rots, ts, rms = fit_palms(rest.tips, assigns, contacts, axis, np.asarray(directions), approach_weight)
+    fits = [(rots[f], ts[f], float(rms[f]), assigns[f % len(assigns)]) for f in range(len(rots))]
     # score on the fitted (not yet backed-off) pose: where the fingertips land (one batched ball query)
-    all_tips = np.stack([rest.tips @ rot.T + t for rot, t, *_ in fits]).reshape(-1, 3)
+    all_tips = (np.einsum("fab,kb->fka", rots, rest.tips) + ts[:, None]).reshape(-1, 3)
     balls = field.ball_indices(all_tips, radius)
     target_set = set(np.flatnonzero(target).tolist())
     scored = []
-    for f, (rot, t, rms, assign, direction) in enumerate(fits):
+    for f, (rot, t, err, assign) in enumerate(fits):
         touched: set[int] = set().union(*balls[f * m : (f + 1) * m])
         union = len(touched | target_set)
         score = len(touched & target_set) / union if union else 0.0
-        scored.append((score, -rms, rot, t, assign, direction))
+        scored.append((score, -err, rot, t, assign, None))
     scored.sort(key=lambda s: (s[0], s[1]), reverse=True)
     out = []
-    for score, neg_rms, rot, t, assign, _direction in scored[:top_k]:
+    for score, neg_rms, rot, t, assign, _ in scored[:top_k]:
         t = back_off(rot, t, rest, radii, field, rot @ axis)
         quat = Rotation.from_matrix(rot).as_quat()[[3, 0, 1, 2]]
         pose = HandPose(t, quat, np.asarray(hand.rest, dtype=np.float64).copy())

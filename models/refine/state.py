@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import torch
 
-from models.refine.contact import ObjectField, surface_contacts
+from models.refine.contact import ObjectField, contact_jacobians, surface_contacts
 from models.refine.forces import ForceSolution, solve_forces
 from models.refine.wrench import WrenchTask
 
@@ -39,6 +40,17 @@ class HandPose:
         return HandPose(pos[0].numpy().copy(), quat[0].numpy().copy(), q[0].numpy().copy())
 
 
+@dataclass(frozen=True)
+class Jacobians:
+    """The Jacobians of a `Linearisation` (its fields of the same names)."""
+
+    tip_jac: np.ndarray
+    gap_jac: np.ndarray
+    normal_jac: np.ndarray
+    sph_jac: np.ndarray
+    clear_jac: np.ndarray
+
+
 @dataclass
 class Linearisation:
     """Everything the SCP step needs at one iterate (all numpy, float64).
@@ -62,6 +74,8 @@ class Linearisation:
             verification's region test, which the convergence test also applies (Φ^R is to the samples' discs).
         contact_gap: (m,) Φ less the standoff at the contact samples (where the force acts and verification
             measures, up to ``CONTACT_TIE`` farther than the pad's nearest sample); the convergence test asks it.
+        pending: without Jacobians (``linearise(..., jacobian=False)``: tip_jac, gap_jac, normal_jac, clear_jac
+            and sph_jac are empty), what computes them (`completed`).
     """
 
     task: WrenchTask
@@ -89,6 +103,16 @@ class Linearisation:
     upper: np.ndarray
     region_point: np.ndarray | None = None
     contact_gap: np.ndarray | None = None
+    pending: Callable[[], Jacobians] | None = None
+
+    def completed(self) -> Linearisation:
+        """This linearisation with its Jacobians: itself, or (``linearise(..., jacobian=False)``) a copy with them
+        computed now."""
+        if self.pending is None:
+            return self
+        j = self.pending()
+        return replace(self, pending=None, tip_jac=j.tip_jac, gap_jac=j.gap_jac, normal_jac=j.normal_jac,
+                       sph_jac=j.sph_jac, clear_jac=j.clear_jac)  # fmt: skip
 
     @property
     def forces(self) -> np.ndarray:
@@ -120,11 +144,14 @@ def body_spheres(hand: Hand) -> np.ndarray:
 
 def sphere_kinematics(
     hand: Hand, pose: tuple[torch.Tensor, torch.Tensor, torch.Tensor], body_poses: torch.Tensor | None,
-) -> tuple[torch.Tensor, torch.Tensor]:  # fmt: skip
-    """Collision-sphere centres (1, S, 3) and Jacobians (1, S, 3, n), as `Hand.spheres` computes them, from body
-    poses (1, nb, 4, 4) the contact model already has (the forward kinematics once an iterate, not twice)."""
+    jacobian: bool = True,
+) -> tuple[torch.Tensor, torch.Tensor | None]:  # fmt: skip
+    """Collision-sphere centres (1, S, 3) and Jacobians (1, S, 3, n) (None without ``jacobian``), as
+    `Hand.spheres` computes them, from body poses (1, nb, 4, 4) the contact model already has (the forward
+    kinematics once an iterate, not twice)."""
     if body_poses is None:
-        return hand.spheres(*pose)
+        pts, jac = hand.spheres(*pose)
+        return pts, jac if jacobian else None
     cache = hand.__dict__.setdefault("_sphere_kinematics", {})
     key = (body_poses.dtype, body_poses.device)
     if key not in cache:
@@ -134,7 +161,7 @@ def sphere_kinematics(
     bodies, index, local = cache[key]
     Tb = body_poses[:, index]
     pts = (Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]
-    return pts, hand.tree.point_jacobian(body_poses, bodies, pts, pose[0])
+    return pts, hand.tree.point_jacobian(body_poses, bodies, pts, pose[0]) if jacobian else None
 
 
 def linearise(
@@ -145,6 +172,7 @@ def linearise(
     mu: float,
     max_normal_force: float,
     tip_field: Any | None = None,
+    jacobian: bool = True,
 ) -> Linearisation:
     """Kinematics, distances and optimal forces at ``pose``.
 
@@ -155,20 +183,43 @@ def linearise(
         task: residual definition.
         mu, max_normal_force: friction and force bound.
         tip_field: optional callable ``x -> (Φ^R, ∇Φ^R)`` used instead of Φ for the tip objective (masks).
+        jacobian: False leaves the Jacobians to `Linearisation.completed` (a candidate's merit needs none of them:
+            the refinement completes only the accepted ones).
     """
     tensors = pose.tensors()
-    contacts = surface_contacts(hand, tensors, field, tip_field)
-    assert contacts.jac is not None and contacts.gap_jac is not None and contacts.row_jac is not None
+    contacts = surface_contacts(hand, tensors, field, tip_field, jacobian=jacobian)
     with torch.no_grad():
-        sph_t, sph_jac_t = sphere_kinematics(hand, tensors, contacts.body_poses)
-    sph, sph_jac = sph_t[0].numpy(), sph_jac_t[0].numpy()
+        sph_t, sph_jac_t = sphere_kinematics(hand, tensors, contacts.body_poses, jacobian=jacobian)
+    sph = sph_t[0].numpy()
     radius = np.asarray(hand.sphere_radii, dtype=np.float64)
     guard = body_spheres(hand)
     sph_phi, sph_grad, _ = field.signed_distance(sph[guard])
     tips = contacts.points
     on_object = contacts.object_points(field)
     normals = field.given_normal(on_object)
-    normal_jac = field.normal_jacobian(tips) if hasattr(field, "normal_jacobian") else np.zeros((len(tips), 3, 3))
+
+    def jacobians() -> Jacobians:
+        m = len(tips)
+        if contacts.jac is not None and contacts.gap_jac is not None and contacts.row_jac is not None:
+            jac, gap_jac, row_jac = contacts.jac, contacts.gap_jac, contacts.row_jac
+        else:
+            assert contacts.body_poses is not None and contacts.jacobian_request is not None
+            jac, gap_jac, row_jac = contact_jacobians(hand, contacts.body_poses, tensors[0],
+                                                      contacts.jacobian_request, m)  # fmt: skip
+        if sph_jac_t is not None:
+            sph_jac = sph_jac_t[0].numpy()
+        else:
+            with torch.no_grad():
+                sph_jac_full = sphere_kinematics(hand, tensors, contacts.body_poses)[1]
+            assert sph_jac_full is not None
+            sph_jac = sph_jac_full[0].numpy()
+        has_curvature = hasattr(field, "normal_jacobian")
+        normal_jac = field.normal_jacobian(tips) if has_curvature else np.zeros((m, 3, 3))  # type: ignore[attr-defined]
+        return Jacobians(jac, gap_jac, normal_jac, sph_jac, np.concatenate([row_jac, sph_jac[guard]]))
+
+    n = 6 + hand.dof
+    empty = np.zeros((0, 3, n))
+    done = jacobians() if jacobian else Jacobians(empty, empty, np.zeros((0, 3, 3)), empty, empty)
     point_distance = getattr(field, "region_point_distance", None) if tip_field is not None else None
     solution = solve_forces(task, on_object, normals, mu, max_normal_force)  # where verification applies them
     pairs = np.asarray(hand.self_collision_pairs, dtype=np.int64).reshape(-1, 2)
@@ -179,18 +230,18 @@ def linearise(
         mu=mu,
         max_normal_force=max_normal_force,
         tips=on_object,
-        tip_jac=contacts.jac,
+        tip_jac=done.tip_jac,
         tip_phi=contacts.phi,
         tip_grad=contacts.grad,
-        gap_jac=contacts.gap_jac,
+        gap_jac=done.gap_jac,
         normals=np.asarray(normals, dtype=np.float64),
-        normal_jac=normal_jac,
+        normal_jac=done.normal_jac,
         solution=solution,
         clear=np.concatenate([contacts.clear, sph_phi - radius[guard]]),
         clear_grad=np.concatenate([contacts.clear_grad, sph_grad]),
-        clear_jac=np.concatenate([contacts.row_jac, sph_jac[guard]]),
+        clear_jac=done.clear_jac,
         sph=sph,
-        sph_jac=sph_jac,
+        sph_jac=done.sph_jac,
         sph_radius=radius,
         pair_idx=pairs,
         pair_dist=dist,
@@ -200,4 +251,5 @@ def linearise(
         upper=np.asarray(hand.upper, dtype=np.float64),
         region_point=None if point_distance is None else np.asarray(point_distance(on_object), dtype=np.float64),
         contact_gap=contacts.point_gap if tip_field is None else None,
+        pending=None if jacobian else jacobians,
     )

@@ -59,6 +59,14 @@ class StepSolution:
     status: str
 
 
+def _can_bind(rows: np.ndarray, rhs: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(r,) bool: whether the guard ``rhs + row·δq ≥ 0`` (rows (r, n)) can be violated for some δq in the box
+    [lo, hi] (n,). A row that cannot is redundant (its slack is 0 at every feasible step): leaving it and its
+    slack out leaves the step unchanged, and at a small trust region most rows are such."""
+    reach = np.minimum(rows * lo[None], rows * hi[None]).sum(axis=1)  # the least row·δq within the box
+    return np.asarray(rhs + reach < 0.0)
+
+
 def _model_terms(lin: Linearisation, params: StepParams) -> dict[str, np.ndarray]:
     """Matrices shared by both builds."""
     task = lin.task
@@ -72,21 +80,23 @@ def _model_terms(lin: Linearisation, params: StepParams) -> dict[str, np.ndarray
     g = grasp_maps(lin.tips, task.centre, task.length)
     bmat = bmat + task.projection @ np.einsum("mia,man->in", g, dforce)
     tip_rows = np.einsum("ma,man->mn", lin.tip_grad, lin.gap_jac)
+    lo = np.maximum(-params.trust, np.concatenate([np.full(6, -np.inf), lin.lower - lin.q]))
+    hi = np.minimum(params.trust, np.concatenate([np.full(6, np.inf), lin.upper - lin.q]))
+    lo = np.minimum(lo, 0.0)  # a start outside the limits may only move back towards them
+    hi = np.maximum(hi, 0.0)
     active = np.flatnonzero(lin.clear < params.active_margin)
     sph_rows = np.einsum("sa,san->sn", lin.clear_grad[active], lin.clear_jac[active])
-    sph_rhs = lin.clear[active]  # row·δq + σ ≥ −rhs
+    keep = _can_bind(sph_rows, lin.clear[active], lo, hi)
+    sph_rows, sph_rhs = sph_rows[keep], lin.clear[active][keep]  # row·δq + σ ≥ −rhs
     if len(lin.pair_idx):
         gap = lin.pair_dist - lin.sph_radius[lin.pair_idx].sum(axis=1)
         pairs = np.flatnonzero(gap < params.pair_margin)
         i, j = lin.pair_idx[pairs, 0], lin.pair_idx[pairs, 1]
         pair_rows = np.einsum("pa,pan->pn", lin.pair_dir[pairs], lin.sph_jac[i] - lin.sph_jac[j])
-        pair_rhs = gap[pairs]
+        keep = _can_bind(pair_rows, gap[pairs], lo, hi)
+        pair_rows, pair_rhs = pair_rows[keep], gap[pairs][keep]
     else:
         pair_rows, pair_rhs = np.zeros((0, lin.tip_jac.shape[2])), np.zeros(0)
-    lo = np.maximum(-params.trust, np.concatenate([np.full(6, -np.inf), lin.lower - lin.q]))
-    hi = np.minimum(params.trust, np.concatenate([np.full(6, np.inf), lin.upper - lin.q]))
-    lo = np.minimum(lo, 0.0)  # a start outside the limits may only move back towards them
-    hi = np.maximum(hi, 0.0)
     return {
         "G": gmat,
         "B": bmat,

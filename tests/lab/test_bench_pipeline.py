@@ -73,3 +73,12 @@ def test_largest_difference() -> None:
 
     assert largest_difference(_record(0.1, [True]), _record(0.2, [True], answer=3e-7)) == pytest.approx(3e-7)
     assert largest_difference(_record(0.1, [True]), _record(0.2, [True, False])) == float("inf")
+
+
+def test_third_party_specs_name_their_files() -> None:
+    """Each third-party spec names its object's file: a reference checkout with fewer candidates loads the same."""
+    p = argparse.ArgumentParser()
+    add_arguments(p)
+    specs = requests(p.parse_args(["--hand", "allegro", "--objects", "2", "--seeds", "1"]))
+    assert [s["name"] for s in specs] == ["kettle_handle", "micro_handle"]
+    assert all(s["path"].endswith(".stl") for s in specs)

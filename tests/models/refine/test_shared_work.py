@@ -80,3 +80,57 @@ def test_cell_members_are_each_cells_samples(box):
         np.testing.assert_array_equal(mine, np.arange(cells.start[c], cells.start[c] + cells.count[c]))
     # the samples sorted by cell hold every sample exactly once
     assert sorted(map(tuple, np.round(cells.points, 12))) == sorted(map(tuple, np.round(pts, 12)))
+
+
+def test_part_grid_bounds_hold_and_the_pruned_guards_are_the_same_rows(box):
+    """A convex part's clearance lies between its grid's bounds everywhere the guards look, and the object-point
+    guards measured on the pruned points are the rows measured on every point (LEAP: hulls of up to 4 800 faces)."""
+    from models.refine.contact import OBJECT_GUARD_MARGIN, _object_guards, part_grids_of
+    from models.refine.part_bounds import clearance
+    from models.robots import get_hand
+
+    hand = get_hand("leap")
+    rng = np.random.default_rng(0)
+    parts, grids = hand.fingertip_parts[3], part_grids_of(hand)[3]
+    for (planes, bounds), grid in zip(parts, grids, strict=True):
+        x = rng.uniform(bounds[0] - OBJECT_GUARD_MARGIN, bounds[1] + OBJECT_GUARD_MARGIN, size=(500, 3))
+        lower, upper = grid.bounds(x)
+        exact = clearance(planes, x)[0]
+        assert np.all(lower <= exact + 1e-12) and np.all(exact <= upper + 1e-12)
+    _, pts, nrm = box
+    cloud = PointCloudField(pts, nrm)
+    compared = 0
+    for seed in range(6):
+        pose = _near_pose(hand, cloud, seed)
+        with torch.no_grad():
+            T_all = hand.tree.body_poses(*pose.tensors())[0].numpy()
+        for i, body in enumerate(hand.fingertip_body_index):
+            centre = T_all[body, :3, :3] @ hand.contact_surface.bound_centre[i] + T_all[body, :3, 3]
+            radius = float(hand.contact_surface.bound_radius[i])
+            want = _object_guards(cloud, hand.fingertip_parts[i], T_all[body], centre, radius)
+            got = _object_guards(cloud, hand.fingertip_parts[i], T_all[body], centre, radius, part_grids_of(hand)[i])
+            for a, b in zip(want, got, strict=True):
+                np.testing.assert_allclose(b, a, rtol=0, atol=1e-15)
+            compared += len(want[0])
+    assert compared > 0
+
+
+def test_bounded_contacts_are_the_contacts_of_every_sample(box):
+    """Measuring only the samples their representatives' distances cannot rule out gives the same contacts, gaps
+    and guard rows as measuring every pad and near-body sample (the cover's bound holds on the points' field)."""
+    from models.refine.cover import sample_cover
+    from models.robots import get_hand
+
+    _, pts, nrm = box
+    cloud = PointCloudField(pts, nrm)
+    hand = get_hand("leap")
+    cover = sample_cover(hand)
+    assert np.all(cover.delta[cover.rep == np.arange(len(cover.rep))] == 0.0)
+    assert len(np.unique(cover.rep)) < len(cover.rep) / 3
+    for seed in range(4):
+        pose = _near_pose(hand, cloud, seed)
+        full = surface_contacts(hand, pose.tensors(), cloud, bounded=False)
+        part = surface_contacts(hand, pose.tensors(), cloud)
+        assert len(full.clear) > 0
+        for name in ("sample", "nearest", "phi", "gap", "point_gap", "clear", "clear_grad", "row_jac", "projected"):
+            np.testing.assert_array_equal(getattr(part, name), getattr(full, name), err_msg=name)
