@@ -159,7 +159,8 @@ class PointCloudField:
             d = cells.points[j] - x[row]  # (T, 3)
             r = np.maximum(np.linalg.norm(d, axis=1), 0.5 * self.disc_radius)
             out += np.bincount(row, np.einsum("ta,ta->t", d, cells.weighted[j]) / r**3, minlength=len(x))
-        return out / (4.0 * np.pi)
+        result: np.ndarray = out / (4.0 * np.pi)
+        return result
 
     def within_hull(self, x: np.ndarray) -> np.ndarray:
         """(M,) bool: x lies within the convex hull of the points grown by ``HULL_MARGIN`` disc radii (False: x
@@ -179,7 +180,8 @@ class PointCloudField:
         inside = np.all((x >= lo) & (x <= hi), axis=1)
         near = np.flatnonzero(inside)
         inside[near] = np.max(x[near] @ self._hull[:, :3].T + self._hull[:, 3], axis=1) <= grow
-        return inside
+        result: np.ndarray = inside
+        return result
 
     def winding_number_exact(self, x: np.ndarray, chunk: int = 512) -> np.ndarray:
         """The winding number of `winding_number` summed over every sample (M × N work)."""
@@ -204,14 +206,16 @@ class PointCloudField:
             k = min(9, len(self.points))
             r = self._tree.query(self.points, k=k)[0][:, -1]
             self._area = np.pi * r**2 / (k - 1)
-        return self._area
+        result: np.ndarray = self._area
+        return result
 
     def robust_signed_distance(self, x: np.ndarray) -> np.ndarray:
         """Φ (M,) with the side from the winding number (inside where w > 1/2) and the magnitude of
         `signed_distance`: what verification measures penetration with when no mesh is known."""
         phi = self.signed_distance(x)[0]
         inside = self.winding_number(x) > 0.5
-        return np.where(inside, -np.abs(phi), np.abs(phi))
+        result: np.ndarray = np.where(inside, -np.abs(phi), np.abs(phi))
+        return result
 
     @property
     def resolution(self) -> float:
@@ -234,7 +238,8 @@ class PointCloudField:
         sigma = 2.0 * self.disc_radius
         w = np.exp(-((dist - dist[:, :1]) ** 2) / sigma**2)
         n = np.einsum("mk,mka->ma", w, self.normals[idx])
-        return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+        result: np.ndarray = n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
+        return result
 
     def normal_jacobian(self, x: np.ndarray, h: float = 1e-3) -> np.ndarray:
         """∂n/∂x (M, 3, 3) of `surface_normal` by central differences with step ``h`` (m)."""
@@ -280,7 +285,8 @@ class PointCloudField:
         """(M,) distance to the nearest allowed sample (without a mask: |Φ|) — the verification's region test."""
         x = np.asarray(x, dtype=np.float64)
         if self.mask is None:
-            return np.abs(self.signed_distance(x)[0])
+            result: np.ndarray = np.abs(self.signed_distance(x)[0])
+            return result
         return np.asarray(self._region_tree.query(x)[0], dtype=np.float64)
 
     def ball_indices(self, x: np.ndarray, radius: float) -> list[list[int]]:
