@@ -28,7 +28,7 @@ def test_rss_rows_over_requests() -> None:
             run = rss_over_requests(base, {"Content-Type": "application/json"}, body, os.getpid(), total=6,
                                     clients=2, rows=3, on_row=lambda row: seen.append(row["requests"]))  # fmt: skip
             table = asyncio.run(run)
-        assert worker_pids(os.getpid()) == [worker.pid]
+        assert worker.pid in worker_pids(os.getpid())  # (other tests' embedded workers may be children too)
     finally:
         worker.communicate(b"", timeout=30)
     assert [r["requests"] for r in table] == seen == [0, 2, 4, 6]
