@@ -27,7 +27,7 @@ from clients.schemas import (
     SynthesisRequest,
 )
 from service.deps import CallerDep, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
-from service.errors import InvalidInput, QueueFullError
+from service.errors import InvalidInput, QueueFullError, Unavailable
 from service.metrics import Metrics
 from service.negotiation import read_model
 from service.robots import RobotCatalog
@@ -38,6 +38,15 @@ from workers.queue import JobQueue
 
 log = logging.getLogger("service.submission")
 RequestT = TypeVar("RequestT", SynthesisRequest, PlanRequest)
+
+
+def running_queue(state: object) -> JobQueue:
+    """The app's queue while it takes work; `Unavailable` before the lifespan started it or while shutting down.
+    (The front ends outside FastAPI's dependencies, gRPC and MCP, ask for it here.)"""
+    queue = getattr(state, "queue", None)
+    if queue is None or getattr(state, "shutting_down", False):
+        raise Unavailable("the service is not accepting work (starting or shutting down)")
+    return queue
 
 
 @dataclass

@@ -17,10 +17,9 @@ from google.protobuf.message import Message
 
 from clients.protos.convert import from_proto
 from clients.schemas import BatchCreate, SynthesisRequest, WireModel
-from service.errors import Unavailable
 from service.middleware import request_id_from
 from service.security import Caller
-from service.submission import RequestT, Submitter
+from service.submission import RequestT, Submitter, running_queue
 
 ModelT = TypeVar("ModelT", bound=WireModel)
 
@@ -40,10 +39,7 @@ class Submission:
     @property
     def queue(self) -> Any:
         """The running queue (UNAVAILABLE before the lifespan started it or while shutting down)."""
-        queue = getattr(self.state, "queue", None)
-        if queue is None or getattr(self.state, "shutting_down", False):
-            raise Unavailable("the service is not accepting work (starting or shutting down)")
-        return queue
+        return running_queue(self.state)
 
     async def validate(self, message: Message, model: type[ModelT]) -> ModelT:
         """The contract's validation of ``message``; a message larger than ``parse_offload_bytes`` off the loop."""

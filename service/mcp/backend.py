@@ -19,9 +19,9 @@ from clients.schemas import BatchPublic, ErrorBody, JobPublic, PlanRequest, Robo
 from clients.sdk import AsyncBatch, AsyncClient, ManiError, RequestError
 from clients.sdk.errors import TimeoutError as SdkTimeout
 from service.batch_pages import batch_page
-from service.errors import Unavailable, from_exception
+from service.errors import from_exception
 from service.security import Caller
-from service.submission import Submitter
+from service.submission import Submitter, running_queue
 
 
 class Backend(Protocol):
@@ -73,10 +73,7 @@ class ServiceBackend:
 
     @property
     def queue(self) -> Any:
-        queue = getattr(self.state, "queue", None)
-        if queue is None or getattr(self.state, "shutting_down", False):
-            raise Unavailable("the service is not accepting work (starting or shutting down)")
-        return queue
+        return running_queue(self.state)
 
     def _submitter(self) -> Submitter:
         s = self.state
