@@ -28,6 +28,7 @@ def test_rebuilt_cloth_and_rope_reach_the_native_rollout(material: str, kind: st
     assert score.top_mean_error < 0.1 * shape_score(material, body.points, native.cloud, body.points).top_mean_error
 
 
+@pytest.mark.slow
 def test_rebuilt_plasticine_embeds_the_cloud_exactly_and_presses_like_the_native_box() -> None:
     body = make_body("plasticine", "box", 7)
     rebuilt = body_from_cloud("plasticine", body.points, body.normals, body.properties)

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import pytest
 from mcp import Client, StdioServerParameters
 
 from ..science import HAND, KEY, Science
@@ -37,6 +38,7 @@ async def _session(science: Science) -> dict[str, Any]:
     return seen
 
 
+@pytest.mark.slow  # ≈ 4 s: a subprocess importing the SDK and the mcp package; the HTTP twin runs by default
 def test_stdio_tools_go_through_the_service(science: Science) -> None:
     seen = asyncio.run(_session(science))
     assert [h["name"] for h in seen["hands"]["hands"]] == [HAND]
