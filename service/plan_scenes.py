@@ -36,7 +36,8 @@ def placed(pose: PoseIn, points: np.ndarray) -> np.ndarray:
     return np.asarray(points, dtype=np.float64) @ quaternion_matrix(pose.quaternion).T + pose.position
 
 
-def _evenly(rows: np.ndarray, limit: int) -> np.ndarray:
+def evenly(rows: np.ndarray, limit: int = MAX_VIEW_POINTS) -> np.ndarray:
+    """At most ``limit`` of ``rows``, evenly spaced (all of them when there are no more)."""
     if len(rows) <= limit:
         return rows
     return rows[np.linspace(0, len(rows) - 1, limit).astype(np.int64)]
@@ -58,8 +59,8 @@ def obstacle_view(obstacle: ObstacleIn, index: int) -> SceneObstacle:
         if len(obstacle.faces) <= MAX_VIEW_FACES:
             return SceneObstacle(name=name, kind="mesh", vertices=_rounded(vertices),
                                  faces=np.asarray(obstacle.faces, dtype=np.int64).tolist())  # fmt: skip
-        return SceneObstacle(name=name, kind="points", vertices=_rounded(_evenly(vertices, MAX_VIEW_POINTS)))
-    return SceneObstacle(name=name, kind="points", vertices=_rounded(_evenly(obstacle.points, MAX_VIEW_POINTS)))
+        return SceneObstacle(name=name, kind="points", vertices=_rounded(evenly(vertices, MAX_VIEW_POINTS)))
+    return SceneObstacle(name=name, kind="points", vertices=_rounded(evenly(obstacle.points, MAX_VIEW_POINTS)))
 
 
 def scene_view(request: PlanRequest) -> tuple[list[SceneObstacle], float | None, list[list[float]]]:

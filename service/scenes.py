@@ -15,9 +15,8 @@ import numpy as np
 
 from clients.schemas import JobPublic, JobRequest, PlanRequest, SceneObstacle, ScenePublic
 from clients.schemas.tasks import PointMotionTask, TargetPointsTask
-from service.plan_scenes import scene_view
+from service.plan_scenes import evenly, scene_view
 
-MAX_VIEW_POINTS = 4096
 MAX_SCENES = 128
 
 
@@ -44,7 +43,7 @@ class SceneStore:
     def put(self, job_id: str, request: JobRequest) -> None:
         obj = request.object
         n = obj.num_points
-        index = np.arange(n) if n <= MAX_VIEW_POINTS else np.linspace(0, n - 1, MAX_VIEW_POINTS).astype(np.int64)
+        index = evenly(np.arange(n))
         scene = _Scene(
             index=index,
             points=obj.points[index].astype(np.float32),
@@ -89,9 +88,7 @@ def _targets(request: JobRequest, index: np.ndarray) -> np.ndarray | None:
     if isinstance(task, TargetPointsTask):
         if task.correspondence == "index":
             return task.targets[index].astype(np.float32)
-        m = len(task.targets)
-        keep = np.arange(m) if m <= MAX_VIEW_POINTS else np.linspace(0, m - 1, MAX_VIEW_POINTS).astype(np.int64)
-        return task.targets[keep].astype(np.float32)
+        return evenly(task.targets).astype(np.float32)
     return None
 
 
