@@ -129,9 +129,7 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
             continue
         cand = initialise(hand, cloud, s.points, p.normals[s.indices])[0]
         tips = [hand.fingertip_links[j] for j in cand.assignment]
-        quality = QualityOutput(success=False, converged=False, reason="deformable_open_loop", iterations=0,
-                                wrench_residual=0.0, max_tip_distance=float(cand.rms), penetration_depth=0.0,
-                                self_collision_depth=0.0, epsilon=None, failures=["not_simulated"])  # fmt: skip
+        quality = _open_loop(tip_distance=float(cand.rms))
         proposals.append(ProposalOutput(
             contact_points=s.points, contact_normals=p.normals[s.indices], forces=np.zeros_like(s.points),
             fingertips=tips, palm_position=cand.pose.palm_pos.copy(), palm_quaternion=cand.pose.palm_quat.copy(),
@@ -155,13 +153,17 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
                            timings=timings)  # fmt: skip
 
 
+def _open_loop(tip_distance: float) -> QualityOutput:
+    """The quality of an answer nobody simulated (``tip_distance``: the fingertips' fit, m; 0 without a hand)."""
+    return QualityOutput(success=False, converged=False, reason="deformable_open_loop", iterations=0,
+                         wrench_residual=0.0, max_tip_distance=tip_distance, penetration_depth=0.0,
+                         self_collision_depth=0.0, epsilon=None, failures=["not_simulated"])  # fmt: skip
+
+
 def _contacts_only(s: DeformableContacts, normals: np.ndarray) -> ProposalOutput:
     """A proposal without a robot: the contacts and their motions, for whatever gripper takes them."""
-    quality = QualityOutput(success=False, converged=False, reason="deformable_open_loop", iterations=0,
-                            wrench_residual=0.0, max_tip_distance=0.0, penetration_depth=0.0,
-                            self_collision_depth=0.0, epsilon=None, failures=["not_simulated"])  # fmt: skip
     return ProposalOutput(
         contact_points=s.points, contact_normals=normals[s.indices], forces=np.zeros_like(s.points), fingertips=[],
-        palm_position=None, palm_quaternion=None, joint_names=[], joint_values=None, quality=quality,
+        palm_position=None, palm_quaternion=None, joint_names=[], joint_values=None, quality=_open_loop(0.0),
         contact_source=s.source, contact_motions=s.motions,
     )  # fmt: skip
