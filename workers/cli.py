@@ -16,9 +16,10 @@ import os
 import signal
 import sys
 import time
+from collections.abc import Callable
 from typing import Any
 
-from workers.supervisor import CrashLoop, spawn, stop_all
+from workers.supervisor import Child, CrashLoop, spawn_ready, stop_all
 
 log = logging.getLogger("workers.cli")
 GRACE_S = 120.0
@@ -87,6 +88,13 @@ def warn_without_persistence(url: str, timeout: float) -> None:
 
 def supervise(settings_json: str, concurrency: int) -> int:
     """Keep ``concurrency`` worker processes alive until told to stop."""
+    return keep_alive(lambda _slot: spawn_ready("workers.worker", settings_json), concurrency)
+
+
+def keep_alive(start: Callable[[int], Child], concurrency: int) -> int:
+    """Run ``start(slot)`` for each slot and start it again whenever its process exits, until SIGTERM/SIGINT;
+    a slot that keeps dying before its worker is ready waits its `CrashLoop` back-off, without holding up the
+    others."""
     stopping = False
 
     def stop(*_: object) -> None:
@@ -95,17 +103,23 @@ def supervise(settings_json: str, concurrency: int) -> int:
 
     signal.signal(signal.SIGTERM, stop)
     signal.signal(signal.SIGINT, stop)
-    children = [(spawn("workers.worker", [], settings_json), time.monotonic()) for _ in range(concurrency)]
+    children = [start(slot) for slot in range(concurrency)]
     crash_loop = CrashLoop()
+    restart_at: dict[int, float] = {}  # slot -> when its exited worker is started again
     log.info("started %d workers", concurrency)
     while not stopping:
         time.sleep(0.1)
-        for i, (proc, born) in enumerate(children):
-            code = proc.poll()
+        now = time.monotonic()
+        for slot, child in enumerate(children):
+            if slot in restart_at:
+                if now >= restart_at[slot]:
+                    del restart_at[slot]
+                    children[slot] = start(slot)
+                continue
+            code = child.process.poll()
             if code is not None and not stopping:
-                log.warning("worker pid %d exited with code %s; restarting", proc.pid, code)
-                time.sleep(crash_loop.delay(i, time.monotonic() - born))
-                children[i] = (spawn("workers.worker", [], settings_json), time.monotonic())
-    stop_all([proc for proc, _ in children], GRACE_S)
+                log.warning("worker pid %d exited with code %s; restarting", child.process.pid, code)
+                restart_at[slot] = now + crash_loop.delay(slot, now - child.born, child.ready())
+    stop_all([child.process for child in children], GRACE_S)
     log.info("workers stopped")
     return 0

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import os
 import signal
 import socket
@@ -49,6 +50,7 @@ from workers.pipeline import load_pipeline
 from workers.queue.records import cancelled_error, deadline_error, new_id, scoped_robot
 from workers.queue.redis_lua import BEGIN, FINISH, GROUP, TOUCH, Keys
 from workers.settings import QueueSettings
+from workers.supervisor import announce_ready
 
 log = logging.getLogger("workers.worker")
 PROGRESS_S = PROGRESS_INTERVAL_S
@@ -83,7 +85,7 @@ class RedisWorker:
         self._last_claim = 0.0
         self._last_orphans = 0.0
         self._last_tidy = time.monotonic()
-        self._healthy_since = time.monotonic()  # since the last Redis error: other workers had time to beat
+        self._healthy_since = -math.inf  # since this worker's last Redis error: other workers had time to beat
 
     # ---- lifecycle -------------------------------------------------------------------------------------------
     def run(self) -> None:
@@ -91,10 +93,12 @@ class RedisWorker:
         s = self.settings
         self.core = WorkerCore(load_pipeline(s.pipeline, s.pipeline_options, s.weights_dir))
         self.info = self.core.info(self.id)
-        self._connect()
+        if not self._connect_when_up():
+            return
         beat = threading.Thread(target=self._heartbeat_loop, name="mani-heartbeat", daemon=True)
         beat.start()
         log.info("worker ready", extra={"model_loaded": self.info.model_loaded})
+        announce_ready()
         backoff = 0.1
         while not self.stopping:
             try:
@@ -138,6 +142,21 @@ class RedisWorker:
         except RedisError:
             if not quiet:
                 raise
+
+    def _connect_when_up(self) -> bool:
+        """`_connect`, retried with back-off while Redis is unreachable (a worker started during a Redis restart
+        waits instead of exiting); False when told to stop first."""
+        backoff = 0.1
+        while not self.stopping:
+            try:
+                self._connect()
+                return True
+            except RedisError as exc:
+                log.warning("redis unreachable at start, retrying in %.1f s: %s", backoff, exc)
+                self._healthy_since = time.monotonic()
+                time.sleep(backoff)
+                backoff = min(backoff * 2, 5.0)
+        return False
 
     def _leave(self) -> None:
         try:
@@ -188,11 +207,13 @@ class RedisWorker:
 
     def _orphan(self) -> list[tuple[bytes, dict[bytes, bytes]]]:
         """One entry of a consumer whose heartbeat key has expired (its worker died): claimed within seconds of
-        the death instead of after the visibility timeout. Only once this worker has been talking to Redis for a
-        heartbeat timeout (after a Redis restart every worker's key is gone until its next beat), and only an
-        entry idle that long too (a live worker's heartbeat keeps resetting its entries' idle time)."""
+        the death instead of after the visibility timeout. Only once Redis has been up, and this worker talking
+        to it, for a heartbeat timeout (after a Redis restart or a hang every live worker's key is gone until its
+        next beat; a worker that has just started has no such doubt), and only an entry idle that long too (a
+        live worker's heartbeat keeps resetting its entries' idle time)."""
         timeout = self.settings.heartbeat_timeout
-        if time.monotonic() - self._healthy_since < timeout + self.settings.heartbeat_interval:
+        settle = timeout + self.settings.heartbeat_interval
+        if time.monotonic() - self._healthy_since < settle or self._redis_uptime() < settle:
             return []
         for consumer in self.r.xinfo_consumers(self.keys.stream, GROUP):
             name = consumer["name"].decode() if isinstance(consumer["name"], bytes) else consumer["name"]
@@ -205,6 +226,10 @@ class RedisWorker:
                     log.info("re-delivering an entry of dead worker %s (no heartbeat)", name)
                     return entries
         return []
+
+    def _redis_uptime(self) -> float:
+        """Seconds since the Redis server started (INFO server)."""
+        return float(self.r.info("server").get("uptime_in_seconds", 0))
 
     def _take(self) -> list[tuple[bytes, dict[bytes, bytes]]]:
         size = self.settings.batch_size
@@ -305,9 +330,7 @@ class RedisWorker:
                 log.error("outcome discarded: the job's stream entry is gone (%s)", exc)
                 return
 
-    def _start_job(
-        self, entry: str, job_id: str, fields: dict[bytes, bytes], request_id: str | None
-    ) -> RawJob | None:
+    def _start_job(self, entry: str, job_id: str, fields: dict[bytes, bytes], request_id: str | None) -> RawJob | None:
         """BEGIN the delivery; the job as the core takes it when it is to run, else end it here (dead, expired,
         cancelled or already terminal)."""
         s = self.settings
@@ -365,7 +388,7 @@ class RedisWorker:
         if not self._finish(keys=keys, args=args):
             log.warning("result discarded: the job was re-delivered to another worker")
         elif state:
-            log.debug("outcome written", extra={"state": state})
+            log.info("outcome written", extra={"state": state})
 
     def _progress(self, job_id: str, progress: JobProgress) -> None:
         """A job's (throttled) progress, written to its record; best effort."""

@@ -1,14 +1,21 @@
 """Fuzz the API from its own OpenAPI schema (schemathesis): whatever arrives, never a 5xx, and every answer
 matches its documented schema; against the in-memory fake queue and the real embedded queue (a worker process
-running the staged pipeline). Bounded: 10 cases per operation and backend by default (a few hundred in all); the
-`slow` run does 200 per operation."""
+running the staged pipeline) and, in the `slow` run, the Redis queue with a `mani worker`. Bounded: 10 cases
+per operation and backend by default (a few hundred in all); the `slow` run does ``MANI_FUZZ_EXAMPLES`` (200) per
+operation and prints how many cases each backend answered."""
 
 from __future__ import annotations
 
 import json
+import os
+import sys
+import time
+import uuid
+from collections import Counter
 from collections.abc import Iterator
 from typing import Any
 
+import httpx
 import pytest
 import schemathesis
 from hypothesis import HealthCheck, settings
@@ -20,6 +27,7 @@ from service.app import create_app
 from service.settings import Settings
 from workers.queue import create_queue
 
+from ..workers.helpers import redis_workers
 from .fakes import FakeQueue
 from .server import serving
 
@@ -46,16 +54,55 @@ CONFIG = SchemathesisConfig.from_dict({"phases": {"coverage": {"enabled": False}
 schema = schemathesis.openapi.from_dict(_app().openapi(), config=CONFIG)
 
 
-@pytest.fixture(scope="module", params=["fake", "embedded"])
+LONG_EXAMPLES = int(os.environ.get("MANI_FUZZ_EXAMPLES", "200"))
+CASES: Counter[str] = Counter()  # answered cases per base URL
+
+
+@pytest.fixture(scope="module", params=["fake", "embedded", pytest.param("redis", marks=pytest.mark.slow)])
 def base_url(request: pytest.FixtureRequest) -> Iterator[str]:
+    if request.param == "redis":
+        yield from _on_redis(request.getfixturevalue("redis_url"))
+        return
     queue = None
     if request.param == "embedded":
         queue = create_queue(None, redis_url=None, concurrency=1, pipeline=STAGED, max_queue=1000, log_level="ERROR")
     with serving(_app(queue)) as base:
         yield base
+        _report(request.param, base)
+
+
+def _on_redis(url: str) -> Iterator[str]:
+    import redis
+
+    prefix = f"mani-fuzz:{uuid.uuid4().hex[:12]}:"
+    queue = create_queue(None, redis_url=url, queue_prefix=prefix, max_queue=1000)
+    try:
+        with redis_workers(url, prefix, 1), serving(_app(queue)) as base:
+            _until_ready(base)
+            yield base
+            _report("redis", base)
+    finally:
+        client = redis.Redis.from_url(url)
+        keys = list(client.scan_iter(match=prefix + "*", count=1000))
+        if keys:
+            client.delete(*keys)
+
+
+def _until_ready(base: str, timeout: float = 60) -> None:
+    """Wait for /readyz 200 (the worker has sent its first heartbeat)."""
+    end = time.monotonic() + timeout
+    while httpx.get(f"{base}/readyz").status_code != 200:
+        if time.monotonic() > end:
+            raise AssertionError("the Redis-backed service did not become ready")
+        time.sleep(0.2)
+
+
+def _report(backend: str, base: str) -> None:
+    print(f"\nfuzz: {CASES[base]} cases answered by the {backend} backend", file=sys.__stderr__, flush=True)
 
 
 def _check(case: Any, base_url: str) -> None:
+    CASES[base_url] += 1
     case.call_and_validate(
         base_url=base_url,
         headers={"Authorization": f"Bearer {KEY}"},
@@ -72,6 +119,6 @@ def test_no_server_errors(case: Any, base_url: str) -> None:
 
 @pytest.mark.slow
 @schema.parametrize()
-@settings(max_examples=200, deadline=None, suppress_health_check=list(HealthCheck))
+@settings(max_examples=LONG_EXAMPLES, deadline=None, suppress_health_check=list(HealthCheck))
 def test_no_server_errors_long(case: Any, base_url: str) -> None:
     _check(case, base_url)
