@@ -8,7 +8,9 @@ once. Imported by the clients after they checked that the ``[grpc]`` extra is in
 
 from __future__ import annotations
 
+import contextlib
 import random
+from collections.abc import Iterator
 from typing import Any, TypedDict
 
 import grpc
@@ -20,7 +22,7 @@ from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.schemas import ContactsIn, JobPublic, RobotPublic, SynthesisRequest, SynthesisResult
 from clients.schemas.plans import PlanRequest
 from clients.sdk.compat import VersionCheck
-from clients.sdk.errors import ManiError, TimeoutError
+from clients.sdk.errors import TimeoutError
 from clients.sdk.grpc_errors import RETRYABLE, error_from, pairs, retry_after, sent_by_service
 from clients.sdk.objects import ObjectLike
 from clients.sdk.plans import PoseLike, make_plan
@@ -103,13 +105,20 @@ class GrpcBase:
             return self.retry_policy.delay(attempt, after, self._rng)
         return None
 
-    def stream_failure(self, exc: grpc.RpcError, job_id: str, timeout: float | None) -> ManiError:
-        """The SDK's exception for a `WatchJob` stream that failed (past its ``timeout``: `TimeoutError`)."""
-        self.check_failed(exc)
-        failure = error_from(exc, self.target, job_id)
-        if isinstance(failure, TimeoutError):
-            return TimeoutError(f"job {job_id} still running after {timeout} s", job_id=job_id)
-        return failure
+    @contextlib.contextmanager
+    def following(self, call: Any, job_id: str, timeout: float | None) -> Iterator[None]:
+        """Around the reading of a ``WatchJob`` stream: its failure as the SDK's exception (past its ``timeout``:
+        `TimeoutError` naming the job), and the stream cancelled however the reading ends."""
+        try:
+            yield
+        except grpc.RpcError as exc:
+            self.check_failed(exc)
+            failure = error_from(exc, self.target, job_id)
+            if isinstance(failure, TimeoutError):
+                raise TimeoutError(f"job {job_id} still running after {timeout} s", job_id=job_id) from exc
+            raise failure from exc
+        finally:
+            call.cancel()
 
     def check(self, metadata: Any) -> None:
         """The version handshake on an answer's metadata (`clients.sdk.compat`)."""

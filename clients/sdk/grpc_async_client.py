@@ -95,12 +95,10 @@ class AsyncGrpcClient(GrpcBase):
         contacts: ContactsIn | dict[str, Any] | None = None,
         **options: Any,
     ) -> SynthesisResult:
-        """Synthesise and wait for the answer (``Synthesize``; arguments and errors as `GrpcClient.synthesize`).
+        """Synthesise and wait for the answer (``Synthesize``, its deadline the request's ``options.timeout``).
 
         Raises:
-            ValidationError: invalid input (checked before sending, and by the service).
-            TimeoutError: no result within ``options.timeout`` (``exc.job_id``: the job, which then expired).
-            JobFailed: the job failed, was cancelled or expired.
+            ValidationError, TimeoutError (naming the expired job), JobFailed: as `GrpcClient.synthesize`.
         """
         request, message = core.synthesis(object, task, robot, contacts, options)
         reply = await self._unary(self._stub.Synthesize, message, timeout=request.options.timeout, idempotent=False)
@@ -147,15 +145,15 @@ class AsyncGrpcClient(GrpcBase):
         return await job.plan_result(core.plan_wait(request, wait))
 
     def job(self, job_id: str) -> AsyncGrpcJob:
-        """A handle on an existing job (submitted over either transport)."""
+        """A handle on an existing job; see `GrpcClient.job`."""
         return AsyncGrpcJob(self, job_id)
 
     async def get(self, job_id: str, *, with_result: bool = True) -> JobPublic:
-        """The job now: state, stage and progress, timings, and its result or error when finished."""
+        """The job now (``GetJob``); see `GrpcClient.get`."""
         return core.as_job(await self._unary(self._stub.GetJob, core.get_job(job_id, with_result)))
 
     async def cancel(self, job_id: str) -> JobPublic:
-        """Ask the service to cancel the job (no effect when it already finished)."""
+        """Ask the service to cancel the job (``CancelJob``); see `GrpcClient.cancel`."""
         return core.as_job(await self._unary(self._stub.CancelJob, core.job_ref(job_id)))
 
     async def watch(
@@ -165,28 +163,24 @@ class AsyncGrpcClient(GrpcBase):
         `GrpcClient.watch`: ``timeout`` for the whole stream; `TimeoutError` when the job had not ended by then)."""
         request = core.watch_job(job_id, cancel_on_disconnect)
         call = self._stub.WatchJob(request, timeout=timeout, metadata=self.metadata)
-        try:
+        with self.following(call, job_id, timeout):
             self.check(await call.initial_metadata())
             async for message in call:
                 job = core.as_job(message)
                 yield job
                 if job.state.terminal:
                     return
-        except grpc.RpcError as exc:
-            raise self.stream_failure(exc, job_id, timeout) from exc
-        finally:
-            call.cancel()
 
     # ---- robots ---------------------------------------------------------------------------------------------
 
     async def robots(self) -> list[RobotPublic]:
-        """The built-in hands and the ones this key registered."""
+        """The hands this key may use (``ListRobots``); see `GrpcClient.robots`."""
         return core.as_robots(await self._unary(self._stub.ListRobots, pb.ListRobotsRequest()))
 
     # ---- plumbing -------------------------------------------------------------------------------------------
 
     async def _unary(self, rpc: Any, request: Message, *, timeout: float | None = None, idempotent: bool = True) -> Any:
-        """One unary call with retries; its answer, or the SDK's exception for its failure."""
+        """One awaited unary call, retried as `GrpcClient`'s (`GrpcBase.next_delay` decides); its answer."""
         for attempt in itertools.count():
             call = rpc(request, timeout=timeout or self.timeout, metadata=self.metadata)
             try:

@@ -182,17 +182,13 @@ class GrpcClient(GrpcBase):
         """
         request = core.watch_job(job_id, cancel_on_disconnect)
         call = self._stub.WatchJob(request, timeout=timeout, metadata=self.metadata)
-        try:
+        with self.following(call, job_id, timeout):
             self.check(call.initial_metadata())
             for message in call:
                 job = core.as_job(message)
                 yield job
                 if job.state.terminal:
                     return
-        except grpc.RpcError as exc:
-            raise self.stream_failure(exc, job_id, timeout) from exc
-        finally:
-            call.cancel()
 
     # ---- robots ---------------------------------------------------------------------------------------------
 
