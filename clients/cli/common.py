@@ -16,6 +16,7 @@ from clients.cli.main import EXIT_FAILED, EXIT_OK, EXIT_UNREACHABLE, EXIT_USAGE
 
 if TYPE_CHECKING:
     from clients.sdk import Client
+    from clients.sdk.grpc_client import GrpcClient
 
 DEFAULT_URL = "http://127.0.0.1:8000"
 EXIT_CODES_HELP = (
@@ -24,14 +25,22 @@ EXIT_CODES_HELP = (
 )
 
 
-def add_connection_args(parser: argparse.ArgumentParser, *, json_flag: bool = True) -> None:
-    """``--url``, ``--api-key``, ``--encoding``, ``--retries`` (and ``--json``) for a command talking to a service."""
+def add_connection_args(parser: argparse.ArgumentParser, *, json_flag: bool = True, grpc: bool = False) -> None:
+    """``--url``, ``--api-key``, ``--encoding``, ``--retries`` (and ``--json``) for a command talking to a service;
+    ``grpc``: ``--grpc HOST:PORT`` too, for a command that can send over either transport (see `job_client`)."""
     group = parser.add_argument_group("service")
     group.add_argument(
         "--url",
         default=os.environ.get("MANI_URL", DEFAULT_URL),
         help="service base URL (env MANI_URL; default %(default)s)",
     )
+    if grpc:
+        group.add_argument(
+            "--grpc",
+            metavar="HOST:PORT",
+            help="send over gRPC to the service's gRPC port (e.g. 127.0.0.1:50051) instead of HTTP to --url; "
+            "--api-key and --retries apply, --encoding does not (needs the [grpc] extra)",
+        )
     group.add_argument("--api-key", default=os.environ.get("MANI_API_KEY"), help="bearer API key (env MANI_API_KEY)")
     group.add_argument(
         "--encoding", choices=("msgpack", "json"), default="msgpack", help="wire encoding (default %(default)s)"
@@ -70,6 +79,29 @@ def make_client(args: argparse.Namespace) -> Client:
 
 
 client_factory: Callable[[argparse.Namespace], Client] = make_client
+
+
+def make_grpc_client(args: argparse.Namespace) -> GrpcClient:
+    """The SDK's gRPC client for ``--grpc HOST:PORT`` and the command's ``--api-key`` and ``--retries``.
+
+    Raises:
+        MissingExtra: the ``[grpc]`` extra is not installed.
+    """
+    from clients.sdk.grpc_client import GrpcClient
+
+    return GrpcClient(args.grpc, args.api_key, retries=max(0, args.retries))
+
+
+grpc_client_factory: Callable[[argparse.Namespace], GrpcClient] = make_grpc_client
+
+
+def job_client(args: argparse.Namespace) -> Client | GrpcClient:
+    """The client of a command that runs jobs over either transport: gRPC with ``--grpc``, else HTTP.
+
+    Both have ``submit`` and ``job`` with handles that ``status`` and ``cancel``, with the same results, so the
+    command's output is the same whichever carried it.
+    """
+    return grpc_client_factory(args) if getattr(args, "grpc", None) else client_factory(args)
 
 
 def run_guarded(func: Callable[[argparse.Namespace], int]) -> Callable[[argparse.Namespace], int]:
@@ -153,7 +185,10 @@ __all__ = [
     "client_factory",
     "command_parser",
     "fail",
+    "grpc_client_factory",
+    "job_client",
     "make_client",
+    "make_grpc_client",
     "print_json",
     "run_guarded",
 ]

@@ -1,4 +1,8 @@
-"""`mani jobs`: list recent jobs, show one (with its result), cancel one."""
+"""`mani jobs`: list recent jobs, show one (with its result), cancel one.
+
+``show`` and ``cancel`` take ``--grpc HOST:PORT`` as well (`common.job_client`); ``list`` is HTTP only (the gRPC
+contract has no call listing jobs).
+"""
 
 from __future__ import annotations
 
@@ -33,20 +37,20 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         actions,
         "show",
         "Show one job: state, stage, timings, and its result or error; --follow waits for it with a progress bar.",
-        "mani jobs show JOB_ID --follow --out result.json",
+        "mani jobs show JOB_ID --follow --out result.json   (over gRPC: add --grpc 127.0.0.1:50051)",
         run_show,
     )
     show.add_argument("job_id", metavar="JOB_ID")
     show.add_argument("--follow", action="store_true", help="wait for the job to end, showing its progress")
     show.add_argument("--timeout", type=float, default=600.0, help="with --follow: seconds to wait (default 600)")
     show.add_argument("--out", type=Path, help="write the result as JSON to this file")
-    common.add_connection_args(show)
+    common.add_connection_args(show, grpc=True)
 
     cancel = common.command_parser(
         actions, "cancel", "Cancel a queued or running job.", "mani jobs cancel JOB_ID", run_cancel
     )
     cancel.add_argument("job_id", metavar="JOB_ID")
-    common.add_connection_args(cancel)
+    common.add_connection_args(cancel, grpc=True)
 
 
 def _list_args(parser: argparse.ArgumentParser) -> None:
@@ -113,7 +117,7 @@ def run_show(args: argparse.Namespace) -> int:
     from clients.cli.synthesize import result_table, wait_with_progress
     from clients.sdk import result_to_json
 
-    with common.client_factory(args) as client:
+    with common.job_client(args) as client:
         job = client.job(args.job_id)
         status = wait_with_progress(job, args.timeout, show=not args.json) if args.follow else job.status()
         if args.follow and status.result is None and status.error is None:
@@ -145,7 +149,7 @@ def run_show(args: argparse.Namespace) -> int:
 @common.run_guarded
 def run_cancel(args: argparse.Namespace) -> int:
     """Run ``mani jobs cancel``."""
-    with common.client_factory(args) as client:
+    with common.job_client(args) as client:
         status = client.job(args.job_id).cancel()
     if args.json:
         common.print_json(job_summary(status))

@@ -27,7 +27,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
         "synthesize",
         "Synthesise contacts, forces and a hand pose for one object and wait for the answer.",
         "mani synthesize examples/data/box.npz --hand leap --task delta:0,0,0.05 --method direct_grasp "
-        "--out result.json --view result.html",
+        "--out result.json --view result.html   (over gRPC: add --grpc 127.0.0.1:50051)",
         run,
     )
     parser.add_argument(
@@ -43,7 +43,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     out.add_argument("--view", type=Path, help="write an interactive 3D view (HTML, works offline) to this file")
     out.add_argument("--open", action="store_true", help="open the --view file in the browser")
     out.add_argument("--require-success", action="store_true", help="exit 1 when no proposal passes verification")
-    common.add_connection_args(parser)
+    common.add_connection_args(parser, grpc=True)
 
 
 def add_request_args(parser: argparse.ArgumentParser) -> None:
@@ -220,7 +220,7 @@ def run(args: argparse.Namespace) -> int:
     if args.view is not None:
         require("plotly", "view", "--view")  # before the job runs, not after
     request = build_request(args)
-    with common.client_factory(args) as client:
+    with common.job_client(args) as client:
         job = client.submit(request)
         try:
             status = wait_with_progress(job, request.options.timeout, show=not args.json)

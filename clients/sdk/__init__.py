@@ -22,8 +22,10 @@ Public names:
   `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed`; `IncompatibleService` (another major version of the
   contract); `MissingExtra` (an optional part not installed); the warning `ContractWarning` (a newer minor version:
   docs/compatibility.md).
-- gRPC: `GrpcClient` and its `GrpcJob` in ``clients.sdk.grpc_client`` (the ``[grpc]`` extra), the same calls,
-  results and errors over the service's gRPC port.
+- gRPC: `GrpcClient` and its `GrpcJob` in ``clients.sdk.grpc_client``, `AsyncGrpcClient` and its `AsyncGrpcJob`
+  (the same calls, awaited) in ``clients.sdk.grpc_async_client``: the same results and errors over the service's
+  gRPC port. They need the ``[grpc]`` extra, so they are imported from their modules, not from here (importing
+  ``clients.sdk`` never loads grpcio).
 
 The wire models (`SynthesisRequest`, `SynthesisResult`, `JobPublic`, ...) live in `clients.schemas`. The SDK
 never imports torch or server code.

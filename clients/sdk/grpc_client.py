@@ -20,10 +20,10 @@ its retry delay; a service that cannot be reached is retried for the calls that 
 
 from __future__ import annotations
 
-import random
+import itertools
 import time
 from collections.abc import Callable, Iterator
-from typing import Any, TypeVar
+from typing import Any, Unpack
 
 from clients.sdk.extras import missing_extra
 
@@ -33,40 +33,32 @@ try:
 except ModuleNotFoundError as exc:  # the [grpc] extra is not installed
     raise missing_extra(exc, "grpc", "GrpcClient") from exc
 
-from clients.protos import metadata as keys
-from clients.protos.convert import from_proto, to_proto
 from clients.protos.manifoundation.v1 import manifoundation_pb2 as pb
 from clients.protos.manifoundation.v1 import manifoundation_pb2_grpc as pb_grpc
 from clients.schemas import ContactsIn, JobPublic, RobotPublic, SynthesisRequest, SynthesisResult
 from clients.schemas.plans import PlanRequest, PlanResult
-from clients.sdk.compat import VersionCheck
-from clients.sdk.errors import TimeoutError
-from clients.sdk.grpc_errors import RETRYABLE, error_from, pairs, retry_after, sent_by_service
+from clients.sdk import _grpc_core as core
+from clients.sdk._grpc_core import DEFAULT_TARGET, MAX_MESSAGE_BYTES, GrpcBase, GrpcSettings
 from clients.sdk.grpc_job import GrpcJob
 from clients.sdk.objects import ObjectLike
-from clients.sdk.plans import PoseLike, make_plan
-from clients.sdk.requests import RobotLike, make_request
-from clients.sdk.retry import DEFAULT_RETRY, RetryPolicy
+from clients.sdk.plans import PoseLike
+from clients.sdk.requests import RobotLike
 from clients.sdk.tasks import TaskLike
 
-ReplyT = TypeVar("ReplyT", bound=Message)
-DEFAULT_TARGET = "127.0.0.1:50051"
-MAX_MESSAGE_BYTES = 64 * 1024 * 1024
-"""Largest message sent or received: the service's default limit (``MANI_GRPC_MAX_MESSAGE_BYTES``)."""
-USER_AGENT = "manifoundation-sdk/0.1"
+__all__ = ["DEFAULT_TARGET", "MAX_MESSAGE_BYTES", "GrpcClient", "GrpcJob"]
 
 
-class GrpcClient:
+class GrpcClient(GrpcBase):
     """Talk to a ManiFoundation service over gRPC, from synchronous code.
 
     Args:
         target: ``host:port`` of the service's gRPC port.
         api_key: sent as ``authorization: Bearer ...`` metadata (None: no auth).
-        timeout: deadline of one unary call other than `synthesize`, seconds.
-        retries: a `RetryPolicy`, or the number of retries with the default backoff.
         credentials: ``grpc.ssl_channel_credentials(...)`` for TLS (None: plaintext).
-        max_message_bytes: largest message sent or received.
         sleep: how to wait between retries (tests may record instead).
+        settings: ``timeout`` (of one unary call other than `synthesize`, seconds; default 30), ``retries`` (a
+            `RetryPolicy`, or the number of retries with the default backoff), ``max_message_bytes``: see
+            `clients.sdk._grpc_core.GrpcBase`.
     """
 
     def __init__(
@@ -74,32 +66,17 @@ class GrpcClient:
         target: str = DEFAULT_TARGET,
         api_key: str | None = None,
         *,
-        timeout: float = 30.0,
-        retries: RetryPolicy | int = DEFAULT_RETRY,
         credentials: grpc.ChannelCredentials | None = None,
-        max_message_bytes: int = MAX_MESSAGE_BYTES,
         sleep: Callable[[float], None] = time.sleep,
+        **settings: Unpack[GrpcSettings],
     ) -> None:
-        self.target = target
-        self.timeout = timeout
-        self.retry_policy = retries if isinstance(retries, RetryPolicy) else RetryPolicy(max_retries=int(retries))
-        self.versions = VersionCheck(f"grpc://{target}")
-        self._metadata = ((keys.AUTHORIZATION, f"Bearer {api_key}"),) if api_key else ()
-        options = [
-            ("grpc.max_send_message_length", max_message_bytes),
-            ("grpc.max_receive_message_length", max_message_bytes),
-            ("grpc.primary_user_agent", USER_AGENT),
-        ]
+        super().__init__(target, api_key, **settings)
         if credentials is None:
-            self._channel = grpc.insecure_channel(target, options=options)
+            self._channel = grpc.insecure_channel(target, options=self.options)
         else:
-            self._channel = grpc.secure_channel(target, credentials, options=options)
+            self._channel = grpc.secure_channel(target, credentials, options=self.options)
         self._stub = pb_grpc.ManiFoundationStub(self._channel)
         self._sleep = sleep
-        self._rng = random.Random()
-
-    def __repr__(self) -> str:
-        return f"GrpcClient(target={self.target!r})"
 
     def close(self) -> None:
         """Close the channel."""
@@ -129,10 +106,9 @@ class GrpcClient:
             TimeoutError: no result within ``options.timeout`` (``exc.job_id``: the job, which then expired).
             JobFailed: the job failed, was cancelled or expired.
         """
-        request = make_request(object, task, robot, contacts=contacts, **options)
-        message = to_proto(request, pb.SynthesisRequest)
+        request, message = core.synthesis(object, task, robot, contacts, options)
         reply = self._unary(self._stub.Synthesize, message, timeout=request.options.timeout, idempotent=False)
-        return from_proto(reply, SynthesisResult, answer=True)
+        return core.as_result(reply)
 
     def submit(
         self,
@@ -144,9 +120,8 @@ class GrpcClient:
         **options: Any,
     ) -> GrpcJob:
         """Queue a synthesis and return at once with its `GrpcJob` (same arguments as `synthesize`)."""
-        request = make_request(object, task, robot, contacts=contacts, **options)
-        reply = self._unary(self._stub.SubmitJob, to_proto(request, pb.SynthesisRequest), idempotent=False)
-        return GrpcJob(self, reply.id)
+        _, message = core.synthesis(object, task, robot, contacts, options)
+        return GrpcJob(self, self._unary(self._stub.SubmitJob, message, idempotent=False).id)
 
     def submit_plan(
         self,
@@ -158,9 +133,8 @@ class GrpcClient:
     ) -> GrpcJob:
         """Queue a manipulation plan (``SubmitPlan``) and return at once with its `GrpcJob` (``job.plan_result()``
         waits for it). Arguments as `clients.sdk.make_plan` (or one whole `PlanRequest`)."""
-        request = make_plan(object, start, waypoints or [], robot, **fields)
-        reply = self._unary(self._stub.SubmitPlan, to_proto(request, pb.PlanRequest), idempotent=False)
-        return GrpcJob(self, reply.id)
+        _, message = core.planning(object, start, waypoints, robot, fields)
+        return GrpcJob(self, self._unary(self._stub.SubmitPlan, message, idempotent=False).id)
 
     def plan(
         self,
@@ -179,9 +153,8 @@ class GrpcClient:
             ValidationError: invalid input; JobFailed: e.g. ``InfeasibleWaypoint`` / ``NoPathFound``;
                 TimeoutError: not finished within ``wait`` (default: the plan's ``options.timeout`` + 60 s).
         """
-        request = make_plan(object, start, waypoints or [], robot, **fields)
-        job = self.submit_plan(request)
-        return job.plan_result(request.options.timeout + 60.0 if wait is None else wait)
+        request, _ = core.planning(object, start, waypoints, robot, fields)
+        return self.submit_plan(request).plan_result(core.plan_wait(request, wait))
 
     def job(self, job_id: str) -> GrpcJob:
         """A handle on an existing job (submitted over either transport)."""
@@ -189,12 +162,11 @@ class GrpcClient:
 
     def get(self, job_id: str, *, with_result: bool = True) -> JobPublic:
         """The job now: state, stage and progress, timings, and its result or error when finished."""
-        request = pb.GetJobRequest(id=job_id, without_result=not with_result)
-        return from_proto(self._unary(self._stub.GetJob, request), JobPublic, answer=True)
+        return core.as_job(self._unary(self._stub.GetJob, core.get_job(job_id, with_result)))
 
     def cancel(self, job_id: str) -> JobPublic:
         """Ask the service to cancel the job (no effect when it already finished)."""
-        return from_proto(self._unary(self._stub.CancelJob, pb.JobRef(id=job_id)), JobPublic, answer=True)
+        return core.as_job(self._unary(self._stub.CancelJob, core.job_ref(job_id)))
 
     def watch(
         self, job_id: str, *, timeout: float | None = None, cancel_on_disconnect: bool = False
@@ -208,66 +180,32 @@ class GrpcClient:
         Raises:
             TimeoutError: the job had not ended after ``timeout``.
         """
-        request = pb.WatchJobRequest(id=job_id, cancel_on_disconnect=cancel_on_disconnect)
-        call = self._stub.WatchJob(request, timeout=timeout, metadata=self._metadata)
-        try:
-            self._check(call.initial_metadata())
+        request = core.watch_job(job_id, cancel_on_disconnect)
+        call = self._stub.WatchJob(request, timeout=timeout, metadata=self.metadata)
+        with self.following(call, job_id, timeout):
+            self.check(call.initial_metadata())
             for message in call:
-                job = from_proto(message, JobPublic, answer=True)
+                job = core.as_job(message)
                 yield job
                 if job.state.terminal:
                     return
-        except grpc.RpcError as exc:
-            self._check_failed(exc)
-            failure = error_from(exc, self.target, job_id)
-            if isinstance(failure, TimeoutError):
-                raise TimeoutError(f"job {job_id} still running after {timeout} s", job_id=job_id) from exc
-            raise failure from exc
-        finally:
-            call.cancel()
 
     # ---- robots ---------------------------------------------------------------------------------------------
 
     def robots(self) -> list[RobotPublic]:
         """The built-in hands and the ones this key registered."""
-        reply = self._unary(self._stub.ListRobots, pb.ListRobotsRequest())
-        return [from_proto(robot, RobotPublic, answer=True) for robot in reply.robots]
+        return core.as_robots(self._unary(self._stub.ListRobots, pb.ListRobotsRequest()))
 
     # ---- plumbing -------------------------------------------------------------------------------------------
 
     def _unary(self, rpc: Any, request: Message, *, timeout: float | None = None, idempotent: bool = True) -> Any:
         """One unary call with retries; its answer, or the SDK's exception for its failure."""
-        attempt = 0
-        while True:
+        for attempt in itertools.count():
             try:
-                reply, call = rpc.with_call(request, timeout=timeout or self.timeout, metadata=self._metadata)
+                reply, call = rpc.with_call(request, timeout=timeout or self.timeout, metadata=self.metadata)
             except grpc.RpcError as exc:
-                self._check_failed(exc)
-                delay = self._retry_delay(attempt, exc, idempotent)
-                if delay is None:
-                    job_id = pairs(exc.initial_metadata()).get(keys.JOB_ID)
-                    raise error_from(exc, self.target, job_id) from exc
-                self._sleep(delay)
-                attempt += 1
+                self._sleep(self.next_delay(attempt, exc, idempotent))
                 continue
-            self._check(call.initial_metadata())
+            self.check(call.initial_metadata())
             return reply
-
-    def _retry_delay(self, attempt: int, exc: grpc.RpcError, idempotent: bool) -> float | None:
-        """Seconds before the next try, or None: the failure stands."""
-        code = exc.code()
-        if attempt >= self.retry_policy.max_retries or code not in RETRYABLE:
-            return None
-        if sent_by_service(exc) or (idempotent and code is grpc.StatusCode.UNAVAILABLE):
-            after = retry_after(pairs(exc.trailing_metadata()))
-            return self.retry_policy.delay(attempt, after, self._rng)
-        return None
-
-    def _check(self, metadata: Any) -> None:
-        """The version handshake on an answer's metadata (`clients.sdk.compat`)."""
-        self.versions.see(pairs(metadata).get)
-
-    def _check_failed(self, exc: grpc.RpcError) -> None:
-        """The version handshake on a failed call (its initial metadata, else its trailers)."""
-        found = {**pairs(exc.trailing_metadata()), **pairs(exc.initial_metadata())}
-        self.versions.see(found.get)
+        raise AssertionError("unreachable")
