@@ -68,8 +68,9 @@ class Proposal(WireModel):
     quality: Quality
     contact_source: str | None = Field(
         None,
-        description="Where the contacts came from: network, given, random, direct_grasp, or random_fallback "
-        "(the network's heatmap had no point above the selection threshold, so random contacts were refined).",
+        description="Where the contacts came from: network, given, random, direct_grasp, random_fallback "
+        "(the network's heatmap had no point above the selection threshold, so random contacts were refined) "
+        "or motion_fallback (a deformable's flat heatmap: the points the task moves most, with its motion).",
     )
     hand_spheres: Annotated[np.ndarray, spec("S", 4)] | None = Field(
         None, description="The hand's collision spheres at this pose: centre (world, m) and radius, for viewers."

@@ -4,7 +4,8 @@ For each latent sample k: NMS on the heatmap (`models.network.selection.select_c
 picks H ≤ ``max_contacts`` contacts; the motion of each is the motion map's vector there (the network's φ_f map,
 which for deformables is the post-contact motion map). No hand refinement: a deformable is moved by grasping
 its points, not by balancing a wrench. A heatmap with no peak gives no network contacts; the answer then takes
-H spread points of the allowed region with the target motion at them and says ``random_fallback``.
+the H allowed points that the target moves most, spread apart (`moving_indices`), with the target motion at
+them, and says ``motion_fallback``.
 """
 
 from __future__ import annotations
@@ -39,6 +40,36 @@ def spread_indices(points: np.ndarray, allowed: np.ndarray, count: int, rng: np.
     return np.array(pick, dtype=np.int64)
 
 
+def moving_indices(
+    points: np.ndarray, allowed: np.ndarray, motion: np.ndarray, count: int, rng: np.random.Generator | None = None
+) -> np.ndarray:
+    """``count`` indices of ``allowed`` points that the motion moves most, spread apart: first the most-moved
+    point (with ``rng``: a random one of those moved at least 80 % as much, for another proposal), then each time
+    the point maximising |m_i| · min(1, d_i / r), d_i its distance to the points taken and r a quarter of the
+    cloud's size (so a second contact is not the first one's neighbour unless nothing else moves), ties going to
+    the farthest point. With an equal motion everywhere it is farthest-point sampling from the first point.
+
+    Args:
+        points: (N, 3). allowed: (A,) candidate indices. motion: (N, 3) per-point target motion. count: H.
+        rng: draws the first point (None: the most-moved one).
+    """
+    moved = np.linalg.norm(np.asarray(motion, dtype=np.float64)[allowed], axis=1)
+    candidates = np.asarray(points, dtype=np.float64)[allowed]
+    reach = 0.25 * float(np.linalg.norm(np.ptp(np.asarray(points, dtype=np.float64), axis=0)))
+    first = int(np.argmax(moved)) if rng is None else int(rng.choice(np.flatnonzero(moved >= 0.8 * moved.max())))
+    pick = [first]
+    dist: np.ndarray = np.linalg.norm(candidates - candidates[first], axis=1)
+    while len(pick) < min(count, len(allowed)):
+        near = dist / max(reach, 1e-12)
+        score: np.ndarray = moved * np.minimum(1.0, near) * (1.0 + 1e-3 * near)  # ties: the farthest point
+        score[pick] = -1.0
+        nxt = int(np.argmax(score))
+        pick.append(nxt)
+        dist = np.minimum(dist, np.linalg.norm(candidates - candidates[nxt], axis=1))
+    chosen: np.ndarray = np.asarray(allowed, dtype=np.int64)[pick]
+    return chosen
+
+
 def deformable_contacts(
     points: np.ndarray,
     heatmap: np.ndarray,
@@ -46,7 +77,7 @@ def deformable_contacts(
     target_motion: np.ndarray,
     mask: np.ndarray | None,
     max_contacts: int,
-    rng: np.random.Generator,
+    rng: np.random.Generator | None = None,
 ) -> DeformableContacts:
     """Contacts and post-contact motions of one latent sample.
 
@@ -54,12 +85,12 @@ def deformable_contacts(
         points: (N, 3) cloud. heatmap: (N,) predicted contact heat. motion_map: (N, 3) predicted motion map (m).
         target_motion: (N, 3) the task's per-point motion (used only by the fallback).
         mask: (N,) bool allowed region or None. max_contacts: H, e.g. the hand's fingertips.
-        rng: draws the fallback's spread points.
+        rng: draws the fallback's first point (None: the most-moved one; see `moving_indices`).
     """
     sel = select_contacts(points, heatmap, motion_map, mask, max_contacts)
     if len(sel):
         return DeformableContacts(sel.indices, points[sel.indices], np.asarray(sel.forces, dtype=np.float64),
                                   "network")  # fmt: skip
     allowed = np.flatnonzero(mask) if mask is not None else np.arange(len(points))
-    idx = spread_indices(points, allowed, max_contacts, rng)
-    return DeformableContacts(idx, points[idx], np.asarray(target_motion, dtype=np.float64)[idx], "random_fallback")
+    idx = moving_indices(points, allowed, target_motion, max_contacts, rng)
+    return DeformableContacts(idx, points[idx], np.asarray(target_motion, dtype=np.float64)[idx], "motion_fallback")

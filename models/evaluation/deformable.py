@@ -12,6 +12,8 @@ Methods (all in one run, on the same cases):
 - ``random_motion``: H random cloud points (spread), each with a random motion (uniform direction, length
   uniform up to the target's largest displacement) — the paper's baseline.
 - ``random_target_motion``: the same points, each with the target's displacement at it.
+- ``moving_target_motion``: the points the target moves most, spread apart (`models.deformable.answer.
+  moving_indices`, the service's fallback when the heatmap is flat), each with the target's displacement.
 - ``ground_truth``: the procedure's own contacts and motions — the ceiling the simulator allows (the target was
   made by them, so it measures the simulator's repeatability: 100 % when deterministic).
 - ``network``: `models.pipeline.run_pipeline` with method "network" (what the service answers: NMS contacts on
@@ -38,7 +40,7 @@ if TYPE_CHECKING:
     from models.network.inference import ContactPredictor
     from models.robots import Hand
 
-METHODS = ("random_motion", "random_target_motion", "ground_truth", "network")
+METHODS = ("random_motion", "random_target_motion", "moving_target_motion", "ground_truth", "network")
 SPLITS = ("test_so", "test_uo")
 MOTION_TRIES = 60
 
@@ -150,6 +152,11 @@ def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int,
             out.append(MethodResult(method, _score(case, rand, d), len(rand)))
         elif method == "random_target_motion":
             out.append(MethodResult(method, _score(case, rand, target_motion[rand]), len(rand)))
+        elif method == "moving_target_motion":
+            from models.deformable.answer import moving_indices
+
+            moving = moving_indices(case.body.points, np.arange(len(case.body.points)), target_motion, contacts)
+            out.append(MethodResult(method, _score(case, moving, target_motion[moving]), len(moving)))
         elif method == "ground_truth":
             m = case.manipulation
             out.append(MethodResult(method, _score(case, m.contacts, m.motions), len(m.contacts)))

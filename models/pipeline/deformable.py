@@ -113,7 +113,8 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
     for k in range(inp.num_proposals):
         if inp.method == "network" and net_out is not None:
             heat, motion_map = net_out.heatmaps[k], net_out.force_maps[k]
-            sets.append(deformable_contacts(p.points, heat, motion_map, p.motion, p.mask, m, rng))
+            explore = rng if k > 0 else None  # the first proposal's fallback takes the most-moved point
+            sets.append(deformable_contacts(p.points, heat, motion_map, p.motion, p.mask, m, explore))
         elif inp.method == "contacts":
             given = np.asarray(inp.contacts, dtype=np.float64).reshape(-1, 3)[:m]
             idx = PointCloudField(p.points, p.normals).nearest_index(given)

@@ -160,7 +160,7 @@ class ProposalOutput:
     joint_names: list[str]
     joint_values: np.ndarray | None
     quality: QualityOutput
-    contact_source: str = "given"  # given | random | network | random_fallback | direct_grasp | initial_pose
+    contact_source: str = "given"  # given|random|network|random_fallback|motion_fallback|direct_grasp|initial_pose
     history: list[IterationOutput] | None = None
     contact_motions: np.ndarray | None = None  # (H, 3) post-contact motion per contact (deformables), m
     network_forces: np.ndarray | None = None  # (H, 3) the network's force prediction at its contacts (model units)

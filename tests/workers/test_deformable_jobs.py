@@ -33,7 +33,7 @@ def test_shipped_network_answers_a_rope_drag_with_contacts_and_motions() -> None
         assert proposal.contact_motions is not None
         assert proposal.contact_motions.shape == proposal.contact_points.shape
         assert len(proposal.fingertips) == len(proposal.contact_points)
-        assert proposal.contact_source in ("network", "random_fallback")
+        assert proposal.contact_source in ("network", "motion_fallback")
 
 
 def test_unordered_targets_may_differ_in_count_but_ordered_ones_may_not() -> None:

@@ -1,0 +1,49 @@
+"""The deformable answer's fallback: the points the task moves most, spread apart."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from models.deformable.answer import deformable_contacts, moving_indices
+
+
+def _line(n: int = 101) -> np.ndarray:
+    return np.stack([np.linspace(0.0, 1.0, n), np.zeros(n), np.zeros(n)], axis=1)
+
+
+def test_the_most_moved_point_comes_first_and_the_second_is_not_its_neighbour() -> None:
+    points = _line()
+    motion = np.zeros_like(points)
+    motion[:, 2] = np.exp(-(((points[:, 0] - 0.3) / 0.05) ** 2)) + 0.9 * np.exp(-(((points[:, 0] - 0.8) / 0.05) ** 2))
+    picked = moving_indices(points, np.arange(len(points)), motion, 2)
+    assert picked[0] == 30  # the peak of the larger bump
+    assert abs(points[picked[1], 0] - 0.8) < 0.03  # the other bump's peak, not a point beside the first
+
+
+def test_an_equal_motion_everywhere_is_farthest_point_sampling() -> None:
+    points = _line()
+    motion = np.tile([0.0, 0.0, 0.1], (len(points), 1))
+    picked = moving_indices(points, np.arange(len(points)), motion, 3)
+    assert picked[0] == 0 and set(picked[1:]) == {100, 50}
+
+
+def test_only_allowed_points_are_taken_and_a_later_proposal_may_start_elsewhere() -> None:
+    points = _line()
+    motion = np.zeros_like(points)
+    motion[:, 2] = points[:, 0]  # the far end moves most
+    allowed = np.arange(0, 60)
+    picked = moving_indices(points, allowed, motion, 2)
+    assert set(picked) <= set(allowed) and picked[0] == 59
+    starts = {int(moving_indices(points, allowed, motion, 2, np.random.default_rng(s))[0]) for s in range(20)}
+    assert len(starts) > 1 and all(motion[i, 2] >= 0.8 * motion[59, 2] for i in starts)
+
+
+def test_a_flat_heatmap_falls_back_to_the_moving_points_with_their_motion() -> None:
+    points = _line()
+    motion = np.zeros_like(points)
+    motion[95:, 1] = 0.2
+    flat = np.full(len(points), 0.02)
+    answer = deformable_contacts(points, flat, np.zeros_like(points), motion, None, 1)
+    assert answer.source == "motion_fallback"
+    assert answer.indices[0] >= 95
+    np.testing.assert_array_equal(answer.motions, motion[answer.indices])
