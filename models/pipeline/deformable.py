@@ -6,7 +6,9 @@ the task's motion at them), "contacts" (the given points, with the task's motion
 proposal names the fingertip at each contact from the rigid fit of the hand's fingertips onto the contacts
 (`models.refine.initialise`, the pose is that fit's, not refined); ``quality.success`` is False with reason
 ``deformable_open_loop`` unless the request asks for ``simulate_rollout``: then each answer is applied in the
-simulator and judged by the shape metric (`models.pipeline.deformable_rollout`).
+simulator and judged by the shape metric (`models.pipeline.deformable_rollout`), and when every proposal has the
+network's own contacts, the most-moved points (`models.deformable.answer.moving_indices`, ``motion_fallback``)
+are simulated beside them as one more candidate; the best ``num_proposals`` by the rollout are returned.
 Unordered targets (``target_points`` with ``correspondence="unknown"``) get their per-point motion by coherent
 point drift and optimal transport (`models.deformable.registration`).
 """
@@ -100,7 +102,7 @@ def network_input(p: PreparedDeformable) -> NetworkInput:
 def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timings: dict[str, float]
                       ) -> SynthesisOutput:  # fmt: skip
     """Proposals of contacts + post-contact motions (see the module doc)."""
-    from models.deformable.answer import DeformableContacts, deformable_contacts, spread_indices
+    from models.deformable.answer import DeformableContacts, deformable_contacts, moving_indices, spread_indices
     from models.refine.field import PointCloudField
     from models.refine.initialise import initialise
 
@@ -122,6 +124,10 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
         else:
             idx = spread_indices(p.points, allowed, m, rng)
             sets.append(DeformableContacts(idx, p.points[idx], p.motion[idx], "random"))
+    if inp.simulate_rollout and inp.method == "network" and all(s.source == "network" for s in sets):
+        # judged in the simulator: the most-moved points compete with the network's contacts for a place
+        idx = moving_indices(p.points, allowed, p.motion, m)
+        sets.append(DeformableContacts(idx, p.points[idx], p.motion[idx], "motion_fallback"))
     cloud = PointCloudField(p.points, p.normals, p.mask)
     proposals = []
     for s in sets:
@@ -143,6 +149,7 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
 
         t0 = time.perf_counter()
         proposals = judge_by_rollout(inp.material, p.points, p.normals, p.motion, inp.properties, proposals)
+        proposals = proposals[: inp.num_proposals]  # the best by the rollout (a competing candidate may drop)
         timings["rollout"] = time.perf_counter() - t0
     heat = force = None
     if net_out is not None:

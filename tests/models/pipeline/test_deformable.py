@@ -1,3 +1,5 @@
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -44,3 +46,23 @@ def test_direct_grasp_is_refused_for_a_deformable(gripper) -> None:  # type: ign
     task = TaskInput("point_motion", motion=np.zeros((len(make_rope(seed=0).points), 3)))
     with pytest.raises(InvalidInput, match="method"):
         run_pipeline(_request(gripper, task, method="direct_grasp"))
+
+
+def test_with_a_rollout_the_most_moved_points_compete_with_the_networks_contacts(gripper) -> None:  # type: ignore[no-untyped-def]
+    """The shipped network (trained on rigid objects) puts a peak on this rope; judged in the simulator, the
+    most-moved points are one more candidate, and the answer that reaches the target is the one returned."""
+    from models.deformable.simulate import simulate
+    from models.network.inference import ContactPredictor
+
+    predictor = ContactPredictor.from_checkpoint("models/weights/cpu")
+    rope = make_rope(seed=1, length=0.5)
+    drag = rope_drag(rope, np.random.default_rng(1))
+    motion = simulate(rope, drag.contacts, drag.motions).cloud - rope.points
+    asked = SynthesisInput(points=rope.points, hand=gripper, task=TaskInput("point_motion", motion=motion),
+                           normals=rope.normals, material="rope", properties=rope.properties, method="network",
+                           num_proposals=1, seed=0)  # fmt: skip
+    [open_loop] = run_pipeline(asked, predictor).proposals
+    assert open_loop.contact_source == "network"  # the network's own contacts, not its flat-map fallback
+    [judged] = run_pipeline(replace(asked, simulate_rollout=True), predictor).proposals
+    assert judged.quality.success and judged.quality.reason == "rollout_reached_target"
+    assert judged.contact_source in ("network", "motion_fallback")
