@@ -214,6 +214,24 @@ def example_sets(ex: Examples, i: int, take: np.ndarray | slice) -> tuple[np.nda
     return np.stack(heats), np.stack(forces)
 
 
+def grasps_in_mask(points: np.ndarray, mask: np.ndarray, set_contacts: np.ndarray, count: int) -> np.ndarray:
+    """(G,) bool: which of an example's valid grasps have every contact on the region mask (its nearest point
+    allowed). A partial mask is drawn around the example's own grasp (row 0, always inside), so the others may
+    lie outside it: a target there would contradict the mask the network is given.
+
+    Args:
+        points: (N, 3) the object's points. mask: (N,) bool. set_contacts: (G, C, 3), NaN rows padding.
+        count: how many of the G rows are grasps.
+    """
+    inside = np.zeros(len(set_contacts), dtype=bool)
+    for g in range(count):
+        c = set_contacts[g][np.isfinite(set_contacts[g][:, 0])]
+        nearest = np.argmin(np.linalg.norm(points[None, :, :] - c[:, None, :], axis=2), axis=1)
+        inside[g] = bool(np.all(mask[nearest]))
+    inside[0] = True
+    return inside
+
+
 def make_batch(
     ex: Examples,
     idx: np.ndarray,
@@ -226,7 +244,8 @@ def make_batch(
     """Normalised tensors of examples ``idx``; ``rng`` turns on random-rotation augmentation, a random valid
     grasp as the CVAE target and, with probability ``mask_dropout``, an all-ones mask in place of a partial one
     (a partial mask is drawn around the label's contacts: a shortcut the network otherwise learns alone);
-    ``prepared`` gives the network's point subsets and hierarchies."""
+    ``prepared`` gives the network's point subsets and hierarchies. Under a partial mask only the valid grasps
+    inside it (`grasps_in_mask`) are targets or count in the set loss."""
     keys = ("xyz", "normals", "motion", "mask", "heat", "force", "hand", "s", "set_heat", "set_force", "valid")
     rows: dict[str, list[Any]] = {k: [] for k in keys}
     for i in idx:
@@ -244,17 +263,21 @@ def make_batch(
         heat_pad = np.zeros((max_set, len(set_heat[0])))
         force_pad = np.zeros((max_set, len(set_heat[0]), 3))
         heat_pad[:g_n], force_pad[:g_n] = set_heat[:g_n], nz.vectors(set_force[:g_n] @ rot.T)
-        pick = int(rng.integers(g_n)) if rng is not None else 0
+        drop = rng is not None and mask_dropout > 0.0 and rng.random() < mask_dropout
+        mask = np.ones(len(pts), dtype=bool) if drop else np.asarray(ex.mask[i], dtype=bool)
+        usable = np.arange(max_set) < g_n
+        if not mask.all() and "set_contacts" in ex.extra:
+            usable[:g_n] &= grasps_in_mask(ex.points[o], mask, ex.extra["set_contacts"][i][:g_n], g_n)
+        pick = int(rng.choice(np.flatnonzero(usable))) if rng is not None else 0
         rows["xyz"].append(nz.points(pts[take]))
         rows["normals"].append(nrm[take])
         rows["motion"].append(nz.vectors(mot[take]))
-        drop = rng is not None and mask_dropout > 0.0 and rng.random() < mask_dropout
-        rows["mask"].append(np.ones(len(pts[take])) if drop else ex.mask[i][take].astype(np.float64))
+        rows["mask"].append(mask[take].astype(np.float64))
         rows["heat"].append(heat_pad[pick])
         rows["force"].append(force_pad[pick])
         rows["set_heat"].append(heat_pad)
         rows["set_force"].append(force_pad)
-        rows["valid"].append(np.arange(max_set) < g_n)
+        rows["valid"].append(usable)
         rows["hand"].append(hand_cloud(str(ex.hand[i]), hand_scale_m))
         rows["s"].append(nz.scale)
     if "properties" in ex.extra:  # every property channel the examples carry (deformables), NaN = absent
