@@ -24,7 +24,7 @@ import numpy as np
 import torch
 from scipy.spatial.transform import Rotation
 
-from models.data.grasp_sets import GraspSets, shard_grasp_sets
+from models.data.grasp_sets import GraspSets, grasps_in_mask, shard_grasp_sets
 from models.data.labels import kernel
 from models.data.prepare import PreparedObjects
 from models.network.hierarchy import PointHierarchy, gather_hierarchy
@@ -212,24 +212,6 @@ def example_sets(ex: Examples, i: int, take: np.ndarray | slice) -> tuple[np.nda
         heats.append(k.max(axis=1))
         forces.append(k @ ex.extra["set_forces"][i, g][ok])
     return np.stack(heats), np.stack(forces)
-
-
-def grasps_in_mask(points: np.ndarray, mask: np.ndarray, set_contacts: np.ndarray, count: int) -> np.ndarray:
-    """(G,) bool: which of an example's valid grasps have every contact on the region mask (its nearest point
-    allowed). A partial mask is drawn around the example's own grasp (row 0, always inside), so the others may
-    lie outside it: a target there would contradict the mask the network is given.
-
-    Args:
-        points: (N, 3) the object's points. mask: (N,) bool. set_contacts: (G, C, 3), NaN rows padding.
-        count: how many of the G rows are grasps.
-    """
-    inside = np.zeros(len(set_contacts), dtype=bool)
-    for g in range(count):
-        c = set_contacts[g][np.isfinite(set_contacts[g][:, 0])]
-        nearest = np.argmin(np.linalg.norm(points[None, :, :] - c[:, None, :], axis=2), axis=1)
-        inside[g] = bool(np.all(mask[nearest]))
-    inside[0] = True
-    return inside
 
 
 def make_batch(

@@ -132,3 +132,21 @@ def shard_grasp_sets(z: dict[str, np.ndarray]) -> GraspSets:
                 k += 1
             out.count[e] = k
     return out
+
+
+def grasps_in_mask(points: np.ndarray, mask: np.ndarray, set_contacts: np.ndarray, count: int) -> np.ndarray:
+    """(G,) bool: which of an example's valid grasps have every contact on the region mask (its nearest point
+    allowed). A partial mask is drawn around the example's own grasp (row 0, always inside), so the others may
+    lie outside it: a target there would contradict the mask the network is given.
+
+    Args:
+        points: (N, 3) the object's points. mask: (N,) bool. set_contacts: (G, C, 3), NaN rows padding.
+        count: how many of the G rows are grasps.
+    """
+    inside = np.zeros(len(set_contacts), dtype=bool)
+    for g in range(count):
+        c = set_contacts[g][np.isfinite(set_contacts[g][:, 0])]
+        nearest = np.argmin(np.linalg.norm(points[None, :, :] - c[:, None, :], axis=2), axis=1)
+        inside[g] = bool(np.all(mask[nearest]))
+    inside[0] = True
+    return inside

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from models.data.dataset import Examples, grasps_in_mask, make_batch
+from models.data.dataset import Examples, make_batch
 
 
 def _sphere(n: int = 200) -> np.ndarray:
@@ -28,17 +28,6 @@ def _examples(mask: np.ndarray) -> Examples:
         extra={"set_contacts": contacts, "set_normals": contacts / 0.05, "set_forces": np.zeros_like(contacts),
                "set_count": np.array([2]), "object_scale": np.array([0.1])},
     )  # fmt: skip
-
-
-def test_a_grasp_is_in_the_mask_when_every_contact_is() -> None:
-    points = _sphere()
-    mask = points[:, 0] > 0  # the +x half
-    sets = np.full((3, 2, 3), np.nan)
-    sets[0] = [[0.05, 0, 0], [0.03, 0.04, 0]]
-    sets[1] = [[0.05, 0, 0], [-0.05, 0, 0]]  # one contact outside
-    sets[2, 0] = [0.0, 0.0, 0.05]  # one contact, padding after it; nearest point at x ≈ 0
-    inside = grasps_in_mask(points, mask, sets, 2)
-    assert inside.tolist() == [True, False, False]
 
 
 def test_under_a_partial_mask_the_target_is_never_a_grasp_outside_it() -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from models.data.grasp_sets import feasible_forces, shard_grasp_sets
+from models.data.grasp_sets import feasible_forces, grasps_in_mask, shard_grasp_sets
 from models.refine.grasp import grasp_maps
 
 CENTRE, LENGTH = np.zeros(3), 0.05
@@ -58,3 +58,19 @@ def test_a_shard_example_keeps_its_own_grasp_first_and_the_others_that_can_do_it
     np.testing.assert_allclose(sets.contacts[0, 0, :2], _pinch(0)[0])
     np.testing.assert_allclose(sets.contacts[0, 1, :2], _pinch(1)[0])
     assert np.isnan(sets.contacts[1, 1]).all()
+
+def _sphere_points(n: int = 200) -> np.ndarray:
+    k = np.arange(n) + 0.5
+    phi, theta = np.arccos(1 - 2 * k / n), np.pi * (1 + 5**0.5) * k
+    return 0.05 * np.stack([np.cos(theta) * np.sin(phi), np.sin(theta) * np.sin(phi), np.cos(phi)], axis=1)
+
+
+def test_a_grasp_is_in_the_mask_when_every_contact_is() -> None:
+    points = _sphere_points()
+    mask = points[:, 0] > 0  # the +x half
+    sets = np.full((3, 2, 3), np.nan)
+    sets[0] = [[0.05, 0, 0], [0.03, 0.04, 0]]
+    sets[1] = [[0.05, 0, 0], [-0.05, 0, 0]]  # one contact outside
+    sets[2, 0] = [0.0, 0.0, 0.05]  # one contact, padding after it; nearest point at x ≈ 0
+    inside = grasps_in_mask(points, mask, sets, 2)
+    assert inside.tolist() == [True, False, False]
