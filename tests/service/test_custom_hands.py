@@ -110,6 +110,7 @@ def grasp_and_audit(base: str, hand: ThirdPartyHand, size: float) -> dict[str, i
     return passed
 
 
+@pytest.mark.slow  # with the third-party hands below; the default run keeps the archive, CLI and SDK tests
 def test_a_parallel_gripper_from_robosuite(base: str) -> None:
     passed = grasp_and_audit(base, HANDS["rethink"], 0.03)
     assert passed["box"] >= 1 and passed["cylinder"] >= 1, passed

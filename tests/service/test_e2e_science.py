@@ -41,6 +41,7 @@ def base(request: pytest.FixtureRequest) -> Iterator[str]:
         yield url
 
 
+@pytest.mark.slow  # the quickstart test below covers the real science in the default run (suite time)
 def test_direct_grasp_and_viewer(base: str) -> None:
     hand = HAND
     body = request_body(hand, n=512, timeout=120, return_heatmap=False, max_iterations=30)
