@@ -10,7 +10,6 @@ import json
 import os
 import sys
 import time
-import uuid
 from collections import Counter
 from collections.abc import Iterator
 from typing import Any
@@ -27,9 +26,9 @@ from service.app import create_app
 from service.settings import Settings
 from workers.queue import create_queue
 
-from ..workers.helpers import redis_workers
 from .fakes import FakeQueue
 from .server import serving
+from .workers import start_queue_and_workers
 
 KEY = "fuzz-test-key-1"
 STAGED = "workers.testing:StagedPipeline"
@@ -60,8 +59,11 @@ CASES: Counter[str] = Counter()  # answered cases per base URL
 
 @pytest.fixture(scope="module", params=["fake", "embedded", pytest.param("redis", marks=pytest.mark.slow)])
 def base_url(request: pytest.FixtureRequest) -> Iterator[str]:
-    if request.param == "redis":
-        yield from _on_redis(request.getfixturevalue("redis_url"))
+    if request.param == "redis":  # a `mani worker` behind the Redis queue, keys under a prefix of this module's
+        with start_queue_and_workers(request, max_queue=1000) as queue, serving(_app(queue)) as base:
+            _until_ready(base)
+            yield base
+            _report("redis", base)
         return
     queue = None
     if request.param == "embedded":
@@ -69,23 +71,6 @@ def base_url(request: pytest.FixtureRequest) -> Iterator[str]:
     with serving(_app(queue)) as base:
         yield base
         _report(request.param, base)
-
-
-def _on_redis(url: str) -> Iterator[str]:
-    import redis
-
-    prefix = f"mani-fuzz:{uuid.uuid4().hex[:12]}:"
-    queue = create_queue(None, redis_url=url, queue_prefix=prefix, max_queue=1000)
-    try:
-        with redis_workers(url, prefix, 1), serving(_app(queue)) as base:
-            _until_ready(base)
-            yield base
-            _report("redis", base)
-    finally:
-        client = redis.Redis.from_url(url)
-        keys = list(client.scan_iter(match=prefix + "*", count=1000))
-        if keys:
-            client.delete(*keys)
 
 
 def _until_ready(base: str, timeout: float = 60) -> None:
