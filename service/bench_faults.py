@@ -76,8 +76,8 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 
 
 class RedisProcess:
-    """A private redis-server with AOF on a free port (``fsync``: its appendfsync, the docker-compose setting
-    by default)."""
+    """A private redis-server with AOF on a free port (``fsync``: its appendfsync; docker-compose keeps Redis's
+    default, everysec)."""
 
     def __init__(self, directory: str, fsync: str = "always") -> None:
         binary = shutil.which("redis-server")

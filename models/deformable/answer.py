@@ -53,9 +53,10 @@ def moving_indices(
         points: (N, 3). allowed: (A,) candidate indices. motion: (N, 3) per-point target motion. count: H.
         rng: draws the first point (None: the most-moved one).
     """
+    cloud = np.asarray(points, dtype=np.float64)
     moved = np.linalg.norm(np.asarray(motion, dtype=np.float64)[allowed], axis=1)
-    candidates = np.asarray(points, dtype=np.float64)[allowed]
-    reach = 0.25 * float(np.linalg.norm(np.ptp(np.asarray(points, dtype=np.float64), axis=0)))
+    candidates = cloud[allowed]
+    reach = 0.25 * float(np.linalg.norm(np.ptp(cloud, axis=0)))
     first = int(np.argmax(moved)) if rng is None else int(rng.choice(np.flatnonzero(moved >= 0.8 * moved.max())))
     pick = [first]
     dist: np.ndarray = np.linalg.norm(candidates - candidates[first], axis=1)
