@@ -26,6 +26,8 @@ def add_network_parser(eval_subparsers: Any) -> None:
     p.add_argument("--samples", type=int, default=8, help="K for the diversity and heatmap figures")
     p.add_argument("--no-audit", action="store_true", help="skip the outside audit of claimed successes")
     p.add_argument("--no-random", action="store_true", help="skip the random-contacts rows (e.g. run separately)")
+    p.add_argument("--oracle", action="store_true",
+                   help="also the ceiling: each case's own valid grasps as the heatmaps (models.evaluation.oracle)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", default=None, help="write all figures to this JSON file")
     p.add_argument("--no-progress", action="store_true")
@@ -66,6 +68,14 @@ def _run(args: argparse.Namespace) -> int:
         for budget in budgets:
             run(f"network ({w})", "network", predictor, budget)
         props[w] = dataclasses.asdict(evaluate_properties(cases, hand, predictor, k=args.samples, seed=args.seed))
+    if args.oracle:
+        from models.evaluation.oracle import OraclePredictor
+
+        oracle = OraclePredictor(cases)
+        for budget in budgets:
+            run("valid grasps (oracle)", "network", oracle, budget)
+        props["valid grasps (oracle)"] = dataclasses.asdict(
+            evaluate_properties(cases, hand, oracle, k=args.samples, seed=args.seed))
     for budget in [] if args.no_random else budgets:
         run("random contacts", "random_contacts", None, budget)
     n = len(cases)

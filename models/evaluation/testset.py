@@ -38,6 +38,9 @@ class TestCase:
     delta_x: np.ndarray | None = None  # (3,) rigid: the motion's translation (m) and rotation vector (rad)
     delta_theta: np.ndarray | None = None
     valid_region: np.ndarray | None = None  # (N,) bool: in the contact region of a grasp that can do the task
+    grasp_contacts: np.ndarray | None = None  # (G, C, 3) the valid grasps (own first), NaN rows padding
+    grasp_normals: np.ndarray | None = None  # (G, C, 3)
+    grasp_forces: np.ndarray | None = None  # (G, C, 3) forces that produce the motion
 
 
 def load_cases(
@@ -102,6 +105,7 @@ def load_cases(
                 delta_x=z["delta_x"][e].astype(np.float64),
                 delta_theta=z["delta_theta"][e].astype(np.float64),
                 valid_region=_valid_region(path, z, e, obj.points, obj.normals),
+                **_grasp_set(path, z, e),
             )
         )
     return cases
@@ -117,6 +121,14 @@ def _valid_region(path: Path, z: Any, e: int, points: np.ndarray, normals: np.nd
         ok = np.isfinite(c[:, 0])
         region |= kernel(points, normals, c[ok], sets.normals[e, g][ok], scale).max(axis=1) >= 0.5
     return region
+
+
+def _grasp_set(path: Path, z: Any, e: int) -> dict[str, np.ndarray]:
+    """Example ``e``'s valid grasps: ``grasp_contacts``, ``grasp_normals``, ``grasp_forces`` (G, C, 3)."""
+    sets = cached_grasp_sets(path, z)
+    g = int(sets.count[e])
+    return {"grasp_contacts": sets.contacts[e, :g], "grasp_normals": sets.normals[e, :g],
+            "grasp_forces": sets.forces[e, :g]}  # fmt: skip
 
 
 def motion_kind(case: TestCase) -> str:

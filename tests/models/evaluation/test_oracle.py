@@ -1,0 +1,74 @@
+"""The oracle predictor: the case's own valid grasps as heatmaps, through the pipeline's contact selection."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from models.evaluation import testset
+from models.evaluation.oracle import OraclePredictor
+from models.evaluation.properties import _inputs, _select
+from models.objects import make_object
+from models.robots import get_hand
+
+
+def _case(grasp_points: list[list[int]], mask: np.ndarray | None = None) -> testset.TestCase:
+    obj = make_object("box", 0.1, 0, num_points=1024)
+    idx = np.array(grasp_points)  # (G, C) point indices of each valid grasp
+    contacts, normals = obj.points[idx], obj.normals[idx]
+    return testset.TestCase(
+        split="test_uo", object_id=obj.id, label_hand="panda_gripper", points=obj.points, normals=obj.normals,
+        mesh_vertices=np.asarray(obj.mesh.vertices), mesh_faces=np.asarray(obj.mesh.faces),
+        motion=np.tile([0.0, 0.0, 0.02], (1024, 1)), mask=np.ones(1024, bool) if mask is None else mask,
+        friction=0.5, articulated=False, joint_type="", joint_axis=np.zeros(3), joint_origin=np.zeros(3),
+        joint_amount=0.0, grasp_contacts=contacts, grasp_normals=normals, grasp_forces=-0.5 * normals,
+    )  # fmt: skip
+
+
+def _opposite_pairs(points: np.ndarray, normals: np.ndarray, count: int) -> list[list[int]]:
+    """``count`` pairs of points on opposite faces (normals within 10° of antiparallel)."""
+    pairs: list[list[int]] = []
+    for i in range(len(points)):
+        j = int(np.argmin(normals @ normals[i]))
+        if normals[j] @ normals[i] < -0.98 and all(i not in p for p in pairs):
+            pairs.append([i, j])
+        if len(pairs) == count:
+            break
+    return pairs
+
+
+def test_samples_cycle_through_the_valid_grasps_and_select_their_contacts() -> None:
+    obj = make_object("box", 0.1, 0, num_points=1024)
+    case = _case(_opposite_pairs(obj.points, obj.normals, 2))
+    hand = get_hand("panda_gripper")
+    out = OraclePredictor([case]).predict([_inputs(case, hand)], num_samples=3)[0]
+    assert out.heatmaps.shape == (3, 1024) and out.force_maps.shape == (3, 1024, 3)
+    np.testing.assert_array_equal(out.heatmaps[0], out.heatmaps[2])  # G = 2: sample 2 is grasp 0 again
+    assert not np.array_equal(out.heatmaps[0], out.heatmaps[1])
+    assert case.grasp_contacts is not None
+    for k in range(2):
+        chosen = case.points[_select(case, out.heatmaps[k], out.force_maps[k], hand)]
+        # each selected contact lies on one of grasp k's contacts (within the sample spacing)
+        gap = np.linalg.norm(chosen[:, None] - case.grasp_contacts[k][None], axis=2).min(axis=1)
+        assert len(chosen) == 2 and gap.max() < 0.02
+
+
+def test_a_partial_mask_keeps_only_the_grasps_inside_it() -> None:
+    obj = make_object("box", 0.1, 0, num_points=1024)
+    pairs = _opposite_pairs(obj.points, obj.normals, 2)
+    mask = np.ones(1024, bool)
+    mask[pairs[1][0]] = False  # grasp 1 touches a masked-out point
+    case = _case(pairs, mask)
+    heat, _ = OraclePredictor.case_maps(case)
+    assert len(heat) == 1
+    assert heat[0, pairs[0]].min() > 0.9
+
+
+def test_an_input_that_is_not_a_case_is_refused() -> None:
+    obj = make_object("box", 0.1, 0, num_points=1024)
+    case = _case(_opposite_pairs(obj.points, obj.normals, 1))
+    other = dataclasses.replace(case, motion=-case.motion)
+    with pytest.raises(KeyError):
+        OraclePredictor([case]).predict([_inputs(other, get_hand("panda_gripper"))])
