@@ -14,6 +14,7 @@ from models.geometry.spread import spread_contacts
 from models.pipeline.tasks import build_task, network_motion
 from models.pipeline.types import MATERIALS, METHODS, InvalidInput, SynthesisInput
 from models.refine.field import PointCloudField
+from models.refine.surface_samples import object_field
 from models.refine.volume import points_mass_properties
 from models.refine.wrench import WrenchTask
 
@@ -79,7 +80,7 @@ def prepare(inp: SynthesisInput) -> Prepared:
         raise InvalidInput(str(exc)) from exc
     density = float(inp.properties.get("density", DEFAULT_DENSITY))
     exact = mesh if mesh is not None and mesh.is_watertight else None  # else the points' surface, never a hull
-    cloud = PointCloudField(points, geom.normals, mask)
+    cloud = object_field(points, geom.normals, mask, exact)  # a sparse cloud: distances on the mesh's samples too
     mp = geom.mass_properties(density) if exact is not None else points_mass_properties(cloud, density)
     centre = np.asarray(mp.com, dtype=np.float64)
     inertia = np.asarray(mp.inertia, dtype=np.float64)

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from models.refine.winding_cells import SampleCells
+
 WINDING_FROM = 0.5
 """Points farther than this many disc radii from the nearest disc take their side from the winding number ..."""
 WINDING_BELOW = 0.9
@@ -28,69 +30,53 @@ HULL_MARGIN = 2.0
 """Disc radii: points farther than this outside the points' convex hull are outside (no winding number needed)."""
 
 WINDING_FAR = 2.0
-WINDING_CELLS = 8
-"""Cells per side of the object's bounding box for the winding number's far field."""
 
 
 @dataclass(frozen=True)
-class _Cells:
-    """Samples grouped in grid cells: centre (C, 3), radius (C,), moment (C, 3) = Σ a_j n_j, and the samples
-    sorted by cell — points (N, 3), weighted normals a_j n_j (N, 3) — with each cell's first index ``start`` (C,)
-    and ``count`` (C,)."""
+class SurfaceSamples:
+    """Points (S, 3) on the exact surface with its outward face normals (S, 3), the surface's area (m²), and the
+    mesh vertices (V, 3) (the samples' convex hull lies within theirs)."""
 
-    centre: np.ndarray
-    radius: np.ndarray
-    moment: np.ndarray
     points: np.ndarray
-    weighted: np.ndarray
-    start: np.ndarray
-    count: np.ndarray
-
-    @classmethod
-    def build(cls, points: np.ndarray, weighted: np.ndarray) -> _Cells:
-        lo, hi = points.min(0), points.max(0)
-        size = max(float((hi - lo).max()) / WINDING_CELLS, 1e-6)
-        key = np.floor((points - lo) / size).astype(np.int64)
-        _, cell = np.unique(key, axis=0, return_inverse=True)
-        cell = cell.reshape(-1)
-        count = np.bincount(cell)
-        order = np.argsort(cell, kind="stable")
-        area = np.linalg.norm(weighted, axis=1)
-        centre = np.stack([np.bincount(cell, area * points[:, k]) for k in range(3)], 1) / np.bincount(cell, area)[
-            :, None
-        ]
-        radius = np.zeros(len(count))
-        np.maximum.at(radius, cell, np.linalg.norm(points - centre[cell], axis=1))
-        moment = np.stack([np.bincount(cell, weighted[:, k]) for k in range(3)], 1)
-        return cls(centre, radius, moment, points[order], weighted[order], np.cumsum(count) - count, count)
-
-    def members(self, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """For cell indices (P,), the sorted-sample indices of every member (T,) and which entry each is of (T,)."""
-        counts = self.count[cells]
-        owner = np.repeat(np.arange(len(cells)), counts)
-        first = np.cumsum(counts) - counts  # where each entry's run starts in the output
-        return self.start[cells][owner] + np.arange(len(owner)) - first[owner], owner
+    normals: np.ndarray
+    area: float
+    vertices: np.ndarray
 
 
 class PointCloudField:
     """Signed distance to an oriented point cloud, and unsigned distance to a masked region of it.
 
+    The distances (Φ, its side, the winding number, the hull) are measured on the caller's points or, when
+    ``surface`` is given (samples of the object's exact surface, `models.refine.surface_samples`), on those and the
+    caller's points together; normals (the friction cones'), nearest points, the region and the object-point
+    guards always use the caller's points.
+
     Args:
         points: (N, 3). normals: (N, 3) outward unit normals. mask: (N,) bool region allowed for fingertips.
+        surface: denser samples of the same surface to measure distances on.
     """
 
-    def __init__(self, points: np.ndarray, normals: np.ndarray, mask: np.ndarray | None = None) -> None:
+    def __init__(self, points: np.ndarray, normals: np.ndarray, mask: np.ndarray | None = None,
+                 surface: SurfaceSamples | None = None) -> None:  # fmt: skip
         self.points = np.asarray(points, dtype=np.float64)
         n = np.asarray(normals, dtype=np.float64)
         self.normals = n / np.linalg.norm(n, axis=1, keepdims=True)
         self._tree = cKDTree(self.points)
+        self.surface = surface
+        if surface is None:
+            self._dist_points, self._dist_normals, self._dist_tree = self.points, self.normals, self._tree
+        else:
+            self._dist_points = np.concatenate([self.points, surface.points])
+            self._dist_normals = np.concatenate([self.normals, surface.normals])
+            self._dist_tree = cKDTree(self._dist_points)
         self.mask = None if mask is None else np.asarray(mask, dtype=bool)
         if self.mask is not None:
             if self.mask.shape != (len(self.points),) or not self.mask.any():
                 raise ValueError("mask must be (N,) bool with at least one allowed point")
             self._region = np.flatnonzero(self.mask)
             self._region_tree = cKDTree(self.points[self._region])
-        spacing = self._tree.query(self.points[: min(len(self.points), 512)], k=2)[0][:, 1]
+        probe = self.points[:512] if surface is None else surface.points[:: max(1, len(surface.points) // 512)]
+        spacing = self._dist_tree.query(probe, k=2)[0][:, 1]
         self.disc_radius = 0.75 * float(np.mean(spacing))
 
     def signed_distance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -104,10 +90,10 @@ class PointCloudField:
         outvote it (sign errors on a box: 22 of 2 419 test points with weights by point distance, 0 with these).
         """
         x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
-        k = min(8, len(self.points))
-        _, idx = self._tree.query(x, k=k)
+        k = min(8, len(self._dist_points))
+        _, idx = self._dist_tree.query(x, k=k)
         idx = np.asarray(idx).reshape(len(x), k)
-        p, n = self.points[idx], self.normals[idx]  # (M, k, 3)
+        p, n = self._dist_points[idx], self._dist_normals[idx]  # (M, k, 3)
         d = x[:, None, :] - p
         a = np.einsum("mka,mka->mk", d, n)
         tang = d - a[..., None] * n
@@ -169,14 +155,16 @@ class PointCloudField:
             from scipy.spatial import ConvexHull, QhullError
 
             try:
-                self._hull: np.ndarray | None = np.asarray(ConvexHull(self.points).equations)
+                hull_points = self.points if self.surface is None else np.concatenate(
+                    [self.points, self.surface.vertices])  # the samples lie on the surface's faces
+                self._hull: np.ndarray | None = np.asarray(ConvexHull(hull_points).equations)
             except (QhullError, ValueError):  # flat or degenerate points: no hull to rule anything out
                 self._hull = None
         x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
         if self._hull is None or not len(x):
             return np.ones(len(x), dtype=bool)
         grow = HULL_MARGIN * self.disc_radius
-        lo, hi = self.points.min(0) - grow, self.points.max(0) + grow
+        lo, hi = self._dist_points.min(0) - grow, self._dist_points.max(0) + grow
         inside = np.all((x >= lo) & (x <= hi), axis=1)
         near = np.flatnonzero(inside)
         inside[near] = np.max(x[near] @ self._hull[:, :3].T + self._hull[:, 3], axis=1) <= grow
@@ -186,17 +174,17 @@ class PointCloudField:
     def winding_number_exact(self, x: np.ndarray, chunk: int = 512) -> np.ndarray:
         """The winding number of `winding_number` summed over every sample (M × N work)."""
         x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
-        area = self.sample_area()
+        area = self._distance_area()
         out = np.empty(len(x))
         for start in range(0, len(x), chunk):
-            d = self.points[None] - x[start : start + chunk, None]  # (c, N, 3)
+            d = self._dist_points[None] - x[start : start + chunk, None]  # (c, N, 3)
             r = np.maximum(np.linalg.norm(d, axis=2), 0.5 * self.disc_radius)
-            out[start : start + chunk] = (np.einsum("cna,na->cn", d, self.normals) * area / r**3).sum(1)
+            out[start : start + chunk] = (np.einsum("cna,na->cn", d, self._dist_normals) * area / r**3).sum(1)
         return out / (4.0 * np.pi)
 
-    def _cells(self) -> _Cells:
+    def _cells(self) -> SampleCells:
         if not hasattr(self, "_cell_cache"):
-            self._cell_cache = _Cells.build(self.points, self.normals * self.sample_area()[:, None])
+            self._cell_cache = SampleCells.build(self._dist_points, self._dist_normals * self._distance_area()[:, None])
         return self._cell_cache
 
     def sample_area(self) -> np.ndarray:
@@ -208,6 +196,13 @@ class PointCloudField:
             self._area = np.pi * r**2 / (k - 1)
         result: np.ndarray = self._area
         return result
+
+    def _distance_area(self) -> np.ndarray:
+        """(N + S,) the area each point the distances use stands for; with surface samples (uniform on the
+        surface, the caller's points among them) the surface's area shared equally."""
+        if self.surface is None:
+            return self.sample_area()
+        return np.full(len(self._dist_points), self.surface.area / len(self._dist_points))
 
     def robust_signed_distance(self, x: np.ndarray) -> np.ndarray:
         """Φ (M,) with the side from the winding number (inside where w > 1/2) and the magnitude of
