@@ -163,3 +163,26 @@ def test_network_proposals_keep_the_networks_forces_and_sample(box, gripper):
         assert p.network_forces is not None and np.all(p.network_forces == p.network_sample + 1)
     best = out.proposals[0].network_sample
     assert out.force_map is not None and np.all(out.force_map == best + 1)
+
+
+def test_a_sparse_cloud_with_its_mesh_gives_a_grasp_that_touches(gripper):
+    """256 points on a 7 × 7 × 25 cm box (disc radius ≈ 7 mm, above the 4 mm contact tolerance): the mesh's samples
+    let the refinement bring the jaws onto the faces, and the outside audit (its own kinematics, meshes and
+    cones) confirms the contact."""
+    from models.audit import AuditedGrasp, audit_grasp
+
+    mesh = trimesh.creation.box(extents=[0.07, 0.07, 0.25])
+    pts, faces = trimesh.sample.sample_surface(mesh, 256, seed=1)
+    pts, nrm = np.asarray(pts), np.asarray(mesh.face_normals[faces])
+    inp = SynthesisInput(
+        points=pts, normals=nrm, hand=gripper, task=TaskInput("force_closure"), method="contacts",
+        contacts=np.array([[0.035, 0.0, 0.02], [-0.035, 0.0, 0.02]]), num_proposals=1,
+        mesh_vertices=np.asarray(mesh.vertices), mesh_faces=np.asarray(mesh.faces),
+    )  # fmt: skip
+    best = run_pipeline(inp).proposals[0]
+    assert best.quality.success, best.quality.failures
+    assert best.quality.max_tip_distance <= 4e-3
+    grasp = AuditedGrasp(best.contact_points, best.forces, best.fingertips, best.palm_position, best.palm_quaternion,
+                         best.joint_names, best.joint_values)  # fmt: skip
+    report = audit_grasp("panda_gripper", grasp, mesh, pts, nrm, mu=0.8, closure=True, soft_finger=0.005)
+    assert report.passed, report
