@@ -5,15 +5,16 @@ disc radius h (0.75 × the mean point spacing) clear of the points, since the tr
 them. On a sparse cloud that standoff is larger than the verification's contact tolerance (4 mm on the exact
 mesh): 2 048 points on a 36 cm sphere give h = 5.4 mm, and every grasp the refinement called converged there
 stood 5-7 mm off the mesh and failed verification. Measured on 24 held-out cases of 20-40 cm objects (allegro,
-4 proposals): random contacts + refinement verified 12 of 24 on the caller's 2 048 points, 23 of 24 with the
-mesh's samples added, and the ground-truth grasps 11 and 24 (`mani eval network --oracle`).
+4 proposals, 100 iterations; `mani eval network --oracle`, docs/contact-model.md): random contacts + refinement
+verified 12 of 24 on the caller's 2 048 points and 22 of 24 with the mesh's samples; each case's own valid grasps
+11 and 24.
 
-So when a request carries a watertight mesh and its points are coarser than ``TARGET_SPACING``, the mesh is
-sampled uniformly at random (area-weighted, seeded: the same request gets the same samples) to that spacing, at
-most ``MAX_SAMPLES`` points, and the distances use those samples with the caller's points. Random samples were
-chosen over Poisson-disc ones (`trimesh.sample.sample_surface_even`): at twice the count they bound the field's
-error as well (the field read at most 1.0-1.1 mm farther than the mesh at the 99th percentile of probes 0-4 mm
-outside, against 1.0-1.2 mm) in 11-39 ms instead of 47-235 ms on the same six meshes.
+So when a request carries a watertight mesh and its points' disc radius is above ``DENSE_ENOUGH``, the mesh is
+sampled uniformly at random (area-weighted, seeded: the same request gets the same samples), one sample per
+``TARGET_SPACING`` squared and at most ``MAX_SAMPLES`` points, and the distances use those samples with the
+caller's points. Random samples were chosen over Poisson-disc ones (`trimesh.sample.sample_surface_even`): at twice
+the count they bound the field's error as well (the field read at most 1.0-1.1 mm farther than the mesh at the 99th
+percentile of probes 0-4 mm outside, against 1.0-1.2 mm) in 11-39 ms instead of 47-235 ms on the same six meshes.
 """
 
 from __future__ import annotations
@@ -27,8 +28,11 @@ from models.refine.field import PointCloudField, SurfaceSamples
 TARGET_SPACING = 2.1e-3
 """m: one random sample per ``TARGET_SPACING²`` of surface (the field's disc radius then ≈ 0.8 mm)."""
 MAX_SAMPLES = 80_000
-DENSE_ENOUGH = 1.0e-3
-"""m: a caller's cloud whose disc radius is already at most this needs no samples."""
+DENSE_ENOUGH = 1.5e-3
+"""m: a caller's cloud whose disc radius is at most this needs no samples: the refinement stops within 2 mm of its
+standoff, so a standoff up to ≈ 1.5 mm leaves the contact within the verification's 4 mm (with samples added below
+that, 17 third-party clouds of 1.0-1.6 mm changed by chance, not for the better: LEAP 2 more best proposals
+audited, Allegro 2 fewer, requests ×0.95-0.97 as fast; `mani bench pipeline --compare`, docs/performance.md)."""
 
 
 def mesh_surface_samples(mesh: Any, disc_radius: float, seed: int = 0) -> SurfaceSamples | None:
