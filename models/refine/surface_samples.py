@@ -6,7 +6,7 @@ them. On a sparse cloud that standoff is larger than the verification's contact 
 mesh): 2 048 points on a 36 cm sphere give h = 5.4 mm, and every grasp the refinement called converged there
 stood 5-7 mm off the mesh and failed verification. Measured on 24 held-out cases of 20-40 cm objects (allegro,
 4 proposals, 100 iterations; `mani eval network --oracle`, docs/contact-model.md): random contacts + refinement
-verified 12 of 24 on the caller's 2 048 points and 22 of 24 with the mesh's samples; each case's own valid grasps
+verified 12 of 24 on the caller's 2 048 points and 24 of 24 with the mesh's samples; each case's own valid grasps
 11 and 24.
 
 So when a request carries a watertight mesh and its points' disc radius is above ``DENSE_ENOUGH``, the mesh is
