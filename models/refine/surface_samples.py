@@ -28,11 +28,11 @@ from models.refine.field import PointCloudField, SurfaceSamples
 TARGET_SPACING = 2.1e-3
 """m: one random sample per ``TARGET_SPACING²`` of surface (the field's disc radius then ≈ 0.8 mm)."""
 MAX_SAMPLES = 80_000
-DENSE_ENOUGH = 1.5e-3
+DENSE_ENOUGH = 2.0e-3
 """m: a caller's cloud whose disc radius is at most this needs no samples: the refinement stops within 2 mm of its
-standoff, so a standoff up to ≈ 1.5 mm leaves the contact within the verification's 4 mm (with samples added below
-that, 17 third-party clouds of 1.0-1.6 mm changed by chance, not for the better: LEAP 2 more best proposals
-audited, Allegro 2 fewer, requests ×0.95-0.97 as fast; `mani bench pipeline --compare`, docs/performance.md)."""
+standoff, so a standoff up to 2 mm leaves the contact within the verification's 4 mm. Samples added below that
+change answers by chance, not for the better (at 1 mm, 17 third-party clouds of 1.0-1.6 mm: LEAP 2 more best
+proposals audited, Allegro 2 fewer; `mani bench pipeline --compare`) and cost time (the example box, 1.5 mm)."""
 
 
 def mesh_surface_samples(mesh: Any, disc_radius: float, seed: int = 0) -> SurfaceSamples | None:
