@@ -65,3 +65,12 @@ def test_no_samples_for_a_dense_cloud_or_an_open_mesh() -> None:
     open_mesh.update_faces(np.arange(len(mesh.faces)) > 10)
     assert not open_mesh.is_watertight
     assert mesh_surface_samples(open_mesh, 5e-3) is None
+
+
+def test_the_standoff_left_without_samples_fits_within_the_verifications_contact_tolerance() -> None:
+    """A cloud gets no samples up to DENSE_ENOUGH: its standoff (its disc radius) plus where the refinement stops
+    must stay within the tip tolerance the verification measures on the mesh, or its grasps cannot pass."""
+    from models.refine.refine import RefineConfig
+    from models.refine.verify import TIP_TOL
+
+    assert DENSE_ENOUGH + RefineConfig().tip_tol <= TIP_TOL
