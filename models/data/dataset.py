@@ -24,8 +24,7 @@ import numpy as np
 import torch
 from scipy.spatial.transform import Rotation
 
-from models.data.grasp_sets import GraspSets, grasps_in_mask, shard_grasp_sets
-from models.data.labels import kernel
+from models.data.grasp_sets import GraspSets, grasps_in_mask, set_maps, shard_grasp_sets
 from models.data.prepare import PreparedObjects
 from models.network.hierarchy import PointHierarchy, gather_hierarchy
 from models.network.model import ObjectTensors
@@ -203,15 +202,9 @@ def example_sets(ex: Examples, i: int, take: np.ndarray | slice) -> tuple[np.nda
         return ex.heat[i][take][None].astype(np.float64), ex.force_map[i][take][None].astype(np.float64)
     o = ex.obj_index[i]
     pts, nrm = ex.points[o][take].astype(np.float64), ex.normals[o][take].astype(np.float64)
-    scale = float(ex.extra["object_scale"][o])
-    heats, forces = [], []
-    for g in range(int(ex.extra["set_count"][i])):
-        c = ex.extra["set_contacts"][i, g]
-        ok = np.isfinite(c[:, 0])
-        k = kernel(pts, nrm, c[ok], ex.extra["set_normals"][i, g][ok], scale)
-        heats.append(k.max(axis=1))
-        forces.append(k @ ex.extra["set_forces"][i, g][ok])
-    return np.stack(heats), np.stack(forces)
+    g = int(ex.extra["set_count"][i])
+    return set_maps(pts, nrm, ex.extra["set_contacts"][i, :g], ex.extra["set_normals"][i, :g],
+                    ex.extra["set_forces"][i, :g], float(ex.extra["object_scale"][o]))  # fmt: skip
 
 
 def make_batch(

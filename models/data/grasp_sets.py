@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import linprog
 
+from models.data.labels import heat_and_force
 from models.refine.grasp import grasp_maps, tangents
 from models.refine.wrench import articulated_task
 
@@ -150,3 +151,20 @@ def grasps_in_mask(points: np.ndarray, mask: np.ndarray, set_contacts: np.ndarra
         inside[g] = bool(np.all(mask[nearest]))
     inside[0] = True
     return inside
+
+
+def set_maps(points: np.ndarray, normals: np.ndarray, contacts: np.ndarray, contact_normals: np.ndarray,
+             forces: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Heatmaps (G, N) and force maps (G, N, 3) of G grasps (`models.data.labels.heat_and_force` each).
+
+    Args:
+        points, normals: (N, 3) the object's oriented points. scale: its longest side (the kernel's s).
+        contacts, contact_normals, forces: (G, C, 3) the grasps, NaN rows padding.
+    """
+    heats, maps = [], []
+    for c, n, f in zip(contacts, contact_normals, forces, strict=True):
+        ok = np.isfinite(c[:, 0])
+        heat, force = heat_and_force(points, normals, c[ok], n[ok], f[ok], scale)
+        heats.append(heat)
+        maps.append(force)
+    return np.stack(heats), np.stack(maps)

@@ -17,8 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from models.data.grasp_sets import grasps_in_mask
-from models.data.labels import kernel
+from models.data.grasp_sets import grasps_in_mask, set_maps
 
 if TYPE_CHECKING:
     from models.evaluation.testset import TestCase
@@ -51,13 +50,8 @@ class OraclePredictor:
         if not case.mask.all():
             usable = grasps_in_mask(case.points, case.mask, case.grasp_contacts, count)
         scale = float(np.ptp(case.points, axis=0).max())
-        heats, forces = [], []
-        for g in np.flatnonzero(usable):
-            ok = np.isfinite(case.grasp_contacts[g][:, 0])
-            k = kernel(case.points, case.normals, case.grasp_contacts[g][ok], case.grasp_normals[g][ok], scale)
-            heats.append(k.max(axis=1))
-            forces.append(k @ case.grasp_forces[g][ok])
-        return np.stack(heats), np.stack(forces)
+        return set_maps(case.points, case.normals, case.grasp_contacts[usable], case.grasp_normals[usable],
+                        case.grasp_forces[usable], scale)  # fmt: skip
 
     def predict(self, batch: Sequence[NetworkInput], num_samples: int = 4, seed: int | Sequence[int] = 0
                 ) -> list[NetworkOutput]:  # fmt: skip

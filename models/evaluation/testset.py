@@ -13,7 +13,7 @@ import numpy as np
 
 from models.data.dataset import cached_grasp_sets
 from models.data.generate import DataConfig, make_dataset_object
-from models.data.labels import kernel
+from models.data.grasp_sets import GraspSets, set_maps
 
 
 @dataclass
@@ -104,31 +104,21 @@ def load_cases(
                 joint_amount=float(z["joint_amount"][e]),
                 delta_x=z["delta_x"][e].astype(np.float64),
                 delta_theta=z["delta_theta"][e].astype(np.float64),
-                valid_region=_valid_region(path, z, e, obj.points, obj.normals),
-                **_grasp_set(path, z, e),
+                **_grasp_set(cached_grasp_sets(path, z), e, obj.points, obj.normals),
             )
         )
     return cases
 
 
-def _valid_region(path: Path, z: Any, e: int, points: np.ndarray, normals: np.ndarray) -> np.ndarray:
-    """(N,) bool: points where any valid grasp of example ``e`` has heat ≥ 0.5."""
-    sets = cached_grasp_sets(path, z)
-    scale = float(np.ptp(points, axis=0).max())
-    region = np.zeros(len(points), dtype=bool)
-    for g in range(int(sets.count[e])):
-        c = sets.contacts[e, g]
-        ok = np.isfinite(c[:, 0])
-        region |= kernel(points, normals, c[ok], sets.normals[e, g][ok], scale).max(axis=1) >= 0.5
-    return region
-
-
-def _grasp_set(path: Path, z: Any, e: int) -> dict[str, np.ndarray]:
-    """Example ``e``'s valid grasps: ``grasp_contacts``, ``grasp_normals``, ``grasp_forces`` (G, C, 3)."""
-    sets = cached_grasp_sets(path, z)
+def _grasp_set(sets: GraspSets, e: int, points: np.ndarray, normals: np.ndarray) -> dict[str, np.ndarray]:
+    """Example ``e``'s valid grasps (``grasp_contacts``, ``grasp_normals``, ``grasp_forces`` (G, C, 3)) and its
+    ``valid_region`` (N,): the points where any of them has heat ≥ 0.5."""
     g = int(sets.count[e])
-    return {"grasp_contacts": sets.contacts[e, :g], "grasp_normals": sets.normals[e, :g],
-            "grasp_forces": sets.forces[e, :g]}  # fmt: skip
+    contacts, grasp_normals, forces = sets.contacts[e, :g], sets.normals[e, :g], sets.forces[e, :g]
+    heats, _ = set_maps(points, normals, contacts, grasp_normals, forces, float(np.ptp(points, axis=0).max()))
+    region = np.asarray((heats >= 0.5).any(axis=0))
+    return {"grasp_contacts": contacts, "grasp_normals": grasp_normals, "grasp_forces": forces,
+            "valid_region": region}  # fmt: skip
 
 
 def motion_kind(case: TestCase) -> str:
