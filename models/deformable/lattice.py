@@ -1,7 +1,11 @@
 """Lattice tetrahedra shared by the solid bodies (plasticine blobs, rope rods): Kuhn's cube split and boundaries.
 
 Kuhn's split cuts a cube into six tetrahedra around its main diagonal (corner 0 to corner 7); neighbouring cubes
-split this way share their face diagonals, so the tetrahedra conform. The boundary of a tetrahedral mesh is the
+split this way share their face diagonals, so the tetrahedra conform. Split the same way everywhere, a lattice
+leans along that diagonal: a straight press on a symmetric block slides it 1.4-4.5 mm sideways (measured,
+docs/deformables.md). `mirrored_kuhn` reflects the split in every odd cube along each axis, so each cube is the
+mirror image of its neighbours across their shared face (which keeps the face diagonals shared) and the lattice
+has the cube grid's mirror symmetries. The boundary of a tetrahedral mesh is the
 faces used by one tetrahedron only; a boundary vertex's normal is the area-weighted sum of its faces' outward
 normals.
 """
@@ -13,6 +17,20 @@ import numpy as np
 # Kuhn's six tetrahedra of the unit cube, corners indexed by (x, y, z) bits: 0 = (0,0,0) ... 7 = (1,1,1).
 KUHN = np.array([[0, 1, 3, 7], [0, 3, 2, 7], [0, 2, 6, 7], [0, 6, 4, 7], [0, 4, 5, 7], [0, 5, 1, 7]])
 CORNERS = np.array([[(c >> 0) & 1, (c >> 1) & 1, (c >> 2) & 1] for c in range(8)])
+
+
+def mirrored_kuhn(cubes: np.ndarray, corner_ids: np.ndarray) -> np.ndarray:
+    """Tetrahedra (6C, 4) of lattice cubes, Kuhn's split mirrored along each axis where the cube's index is odd.
+
+    Args:
+        cubes: (C, 3) integer lattice index of each cube's corner 0.
+        corner_ids: (C, 8) vertex id of each cube's corners, in `CORNERS` order.
+    """
+    mask = (cubes[:, 0] % 2) | ((cubes[:, 1] % 2) << 1) | ((cubes[:, 2] % 2) << 2)
+    local = KUHN[None] ^ mask[:, None, None]  # reflecting axis a maps corner c to c XOR (1 << a)
+    tets: np.ndarray = np.take_along_axis(np.repeat(corner_ids[:, None, :], 6, axis=1), local, axis=2)
+    return tets.reshape(-1, 4)
+
 
 def boundary(vertices: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Boundary vertex indices (N,) and their outward unit normals (N, 3)."""

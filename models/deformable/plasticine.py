@@ -1,10 +1,11 @@
 """Plasticine blobs: spheres, boxes, ellipsoids, composites (unions of ellipsoids) and bumpy blobs, as tetrahedra.
 
 A shape is an implicit inside test on a cubic lattice of spacing h (about ``cells`` cells across the longest
-side); every lattice cube whose eight corners are inside is split into six tetrahedra (Kuhn's split along the
-main diagonal, which conforms across neighbouring cubes). The cloud is the boundary vertices (those on faces used
-by one tetrahedron only); their normals are the area-weighted outward normals of those faces. Sizes (longest
-side) are drawn in ``PLASTICINE_SIZE``; the body rests on the table.
+side); every lattice cube whose eight corners are inside is split into six tetrahedra (Kuhn's split, mirrored
+in every other cube so that the lattice does not lean along one diagonal: `models.deformable.lattice`). The
+cloud is the boundary vertices (those on faces used by one tetrahedron only); their normals are the
+area-weighted outward normals of those faces. Sizes (longest side) are drawn in ``PLASTICINE_SIZE``; the body
+rests on the table.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from collections.abc import Callable
 import numpy as np
 
 from models.deformable.body import DeformableBody
-from models.deformable.lattice import CORNERS, KUHN, boundary
+from models.deformable.lattice import CORNERS, boundary, mirrored_kuhn
 from models.deformable.materials import sample_properties
 
 PLASTICINE_SIZE = (0.04, 0.1)  # m
@@ -79,7 +80,7 @@ def tetrahedralise(inside: Inside, cells: int, keep: str = "corners") -> tuple[n
     if len(cubes) == 0:
         raise ValueError("shape holds no lattice cube; use more cells")
     corner_ids = np.ravel_multi_index((cubes[:, None, :] + CORNERS[None]).reshape(-1, 3).T, (n, n, n))
-    tets = corner_ids.reshape(-1, 8)[:, KUHN].reshape(-1, 4)
+    tets = mirrored_kuhn(cubes, corner_ids.reshape(-1, 8))
     used, tets = np.unique(tets, return_inverse=True)
     return ticks[np.stack(np.unravel_index(used, (n, n, n)), axis=1)], tets.reshape(-1, 4)
 
