@@ -67,3 +67,34 @@ def test_masked_convergence_also_applies_the_verifications_point_test(setup, gri
     assert verify(gripper, res.pose, masked, task, 0.5, mesh).success
     unattainable = RefineConfig(region_point_tol=1e-9, max_iterations=15)  # no contact lies exactly on a sample
     assert not refine(gripper, masked, task, start.pose, 0.5, unattainable, tip_field=masked.region_distance).converged
+
+
+def test_a_hand_stuck_in_the_object_stops_early_with_the_same_iterates():
+    """A LEAP hand pushed 4 cm into a box from its initial pose: its guards stay > 1 mm deep and the merit stops
+    falling, so it stops after the stuck window (3 iterations) instead of the stall window (8); every iterate up
+    to there is the one the run without the rule takes."""
+    import trimesh
+
+    from models.refine.state import HandPose
+    from models.robots import get_hand
+
+    hand = get_hand("leap")
+    mesh = trimesh.creation.box((0.06, 0.06, 0.06))
+    pts, faces = trimesh.sample.sample_surface_even(mesh, 1500, seed=0)
+    field = PointCloudField(pts, mesh.face_normals[faces])
+    idx = [1093, 263, 1269, 1145]
+    start = initialise(hand, field, pts[idx], mesh.face_normals[faces][idx])[0].pose
+    inward = -start.palm_pos / np.linalg.norm(start.palm_pos)
+    pushed = HandPose(start.palm_pos + 0.04 * inward, start.palm_quat, start.q)
+    task = rigid_task(np.array([0, 0, 1.0, 0, 0, 0]), np.zeros(3), 0.05)
+    cfg = RefineConfig(history=True)
+    stuck = refine(hand, field, task, pushed, 0.8, cfg)
+    patient = refine(hand, field, task, pushed, 0.8, RefineConfig(history=True, stuck_penetration=np.inf))
+    assert stuck.reason == "stalled" and not patient.converged
+    assert stuck.iterations < patient.iterations
+    kept = len(stuck.history)  # the stopping iteration is not recorded
+    assert kept == stuck.iterations - 1 and kept >= cfg.stuck_window
+    assert [r.merit for r in stuck.history] == [r.merit for r in patient.history[:kept]]
+    final = patient.history[kept].merit  # the iterate it stopped at: the same one
+    assert stuck.penetration > cfg.stuck_penetration
+    assert final > (1 - cfg.stuck_tolerance) * stuck.history[kept - cfg.stuck_window].merit
