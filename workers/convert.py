@@ -78,6 +78,7 @@ def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = Non
         handless=request.robot is None,
         num_contacts=options.num_contacts,
         hand_key=hand.name,
+        stop_after_verified=options.stop_after_verified,
     )
 
 

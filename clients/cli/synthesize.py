@@ -63,6 +63,8 @@ def add_request_args(parser: argparse.ArgumentParser) -> None:
         help="how contacts are found (default %(default)s; direct_grasp needs no trained model)",
     )
     req.add_argument("--proposals", type=int, default=1, help="hand proposals to return (default 1)")
+    req.add_argument("--stop-after", type=int, metavar="N",
+                     help="stop once N proposals are verified: the later ones are not refined (stop_after_verified)")
     req.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
     req.add_argument("--timeout", type=float, default=30.0, help="seconds to wait for the answer (default 30)")
     req.add_argument("--max-iterations", type=int, default=100, help="refinement iterations (default 100)")
@@ -134,6 +136,7 @@ def build_request(args: argparse.Namespace, path: Path | None = None) -> Any:
         robot,
         method=args.method,
         num_proposals=args.proposals,
+        stop_after_verified=args.stop_after,
         seed=args.seed,
         timeout=args.timeout,
         max_iterations=args.max_iterations,

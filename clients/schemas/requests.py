@@ -29,6 +29,11 @@ class SynthesisOptions(WireModel):
 
     method: Method = Method.AUTO
     num_proposals: int = Field(1, ge=1, le=16, description="Hand proposals to return (K latent samples).")
+    stop_after_verified: int | None = Field(
+        None, ge=1, le=16, description="Stop once this many proposals are verified: the later ones are neither "
+        "refined nor returned, so fewer than `num_proposals` may come back (a caller that needs one grasp, with "
+        "fallbacks, waits only for the first good one). Unset: all `num_proposals`.",
+    )
     refine: bool = Field(True, description="Run the SOCP pose refinement (off: initial pose only).")
     max_iterations: int = Field(100, ge=1, le=500)
     seed: int = Field(0, ge=0, le=2**31 - 1, description="Seeds sampling; same seed, same answer.")
@@ -55,6 +60,13 @@ class SynthesisOptions(WireModel):
         "rebuilt from the points, resting on a table under its lowest point) and judge success by the paper's "
         "shape metric against the target; returns `rollout_points`. About 0.5-2 s a proposal.",
     )
+
+    @model_validator(mode="after")
+    def _enough_within_proposals(self) -> SynthesisOptions:
+        if self.stop_after_verified is not None and self.stop_after_verified > self.num_proposals:
+            raise ValueError(f"stop_after_verified: {self.stop_after_verified} is more than num_proposals "
+                             f"({self.num_proposals}): it could never stop early")
+        return self
 
 
 class ContactsIn(WireModel):

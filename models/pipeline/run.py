@@ -165,47 +165,26 @@ def _finish(
             report("initialisation", (k + 1) / len(sets))
     timings["initialisation"] = time.perf_counter() - t0
     _check(should_cancel)
-    proposals, t0 = [], time.perf_counter()
     config = RefineConfig(max_iterations=inp.max_iterations, history=inp.return_history)
-    results: list[Any] = []
     total = max(1, len(starts) * inp.max_iterations)
-    for k, start in enumerate(starts):
-        if not inp.refine or (inp.method == "direct_grasp" and inp.initial_pose is None):
-            results.append(None)
-            continue
-        if inp.deadline is not None and time.monotonic() >= inp.deadline:
-            results.append(_expired(start))
-            continue
-        def step_done(it: int, cap: int, k: int = k) -> None:
-            report("refinement", (k * inp.max_iterations + it) / total)
-
-        res = refine(
-            hand, prep.cloud, prep.task, start, prep.mu, config, tip_field=prep.tip_field, deadline=inp.deadline,
-            should_cancel=should_cancel, progress=step_done,
-        )
-        left = inp.max_iterations - res.iterations
-        restart = inp.method != "contacts" and inp.initial_pose is None
-        if not res.converged and res.reason != "deadline" and restart and left >= 10:
-            # the initial pose led to a local minimum: restart from approach alignments (models.refine.strategy)
-            again = refine_from_start(
-                hand, prep.cloud, prep.task, start, prep.mu, replace(config, max_iterations=left),
-                seed=inp.seed + k, tip_field=prep.tip_field, deadline=inp.deadline, should_cancel=should_cancel,
-            )
-            again.iterations += res.iterations
-            if again.converged:
-                res = again
-        results.append(res)
-    timings["refinement"] = time.perf_counter() - t0
-    _check(should_cancel)
-    seconds: dict[str, float] = {}
     chosen += [None] * (len(starts) - len(chosen))
-    for k, (start, res, source) in enumerate(zip(starts, results, sources, strict=True)):
+    proposals: list[ProposalOutput] = []
+    seconds: dict[str, float] = {"refinement": 0.0}
+    for k, (start, source) in enumerate(zip(starts, sources, strict=True)):
+        enough = inp.stop_after_verified
+        if enough is not None and sum(p.quality.success for p in proposals) >= enough:
+            break  # enough verified proposals: the rest are neither refined nor returned
+        t0 = time.perf_counter()
+        res = _refined(prep, start, k, config, total, report, should_cancel)
+        seconds["refinement"] += time.perf_counter() - t0
+        _check(should_cancel)
         proposal = _proposal(prep, res.pose if res is not None else start, res, seconds, source)
         if (picked := chosen[k]) is not None:
             proposal.network_forces, proposal.network_sample = picked.forces, picked.sample
         proposals.append(proposal)
         report("verification", (k + 1) / len(starts))
         _check(should_cancel)
+    timings["refinement"] = seconds["refinement"]
     timings["verification"] = seconds.get("verification", 0.0)
     proposals.sort(key=lambda p: not p.quality.success)
     heat = force = None
@@ -215,6 +194,39 @@ def _finish(
     every = None if net_out is None else np.asarray(net_out.heatmaps, dtype=np.float64)
     return SynthesisOutput(hand=hand.name, proposals=proposals, heatmap=heat, force_map=force, heatmaps=every,
                            timings=timings)  # fmt: skip
+
+
+def _refined(
+    prep: Prepared, start: HandPose, k: int, config: RefineConfig, total: int, report: Progress,
+    should_cancel: CancelCheck | None,
+) -> Any:
+    """Proposal ``k``'s refinement from ``start`` (restarted from approach alignments when it stalls), or None
+    when the request asks for no refinement."""
+    inp, hand = prep.inp, prep.inp.hand
+    if not inp.refine or (inp.method == "direct_grasp" and inp.initial_pose is None):
+        return None
+    if inp.deadline is not None and time.monotonic() >= inp.deadline:
+        return _expired(start)
+
+    def step_done(it: int, cap: int) -> None:
+        report("refinement", (k * inp.max_iterations + it) / total)
+
+    res = refine(
+        hand, prep.cloud, prep.task, start, prep.mu, config, tip_field=prep.tip_field, deadline=inp.deadline,
+        should_cancel=should_cancel, progress=step_done,
+    )
+    left = inp.max_iterations - res.iterations
+    restart = inp.method != "contacts" and inp.initial_pose is None
+    if not res.converged and res.reason != "deadline" and restart and left >= 10:
+        # the initial pose led to a local minimum: restart from approach alignments (models.refine.strategy)
+        again = refine_from_start(
+            hand, prep.cloud, prep.task, start, prep.mu, replace(config, max_iterations=left),
+            seed=inp.seed + k, tip_field=prep.tip_field, deadline=inp.deadline, should_cancel=should_cancel,
+        )
+        again.iterations += res.iterations
+        if again.converged:
+            res = again
+    return res
 
 
 def _expired(start: HandPose) -> Any:

@@ -94,6 +94,8 @@ class SynthesisInput:
         initial_pose: a caller's start for the refinement (e.g. a planner's grasp carried from its previous step):
             with it the pipeline refines this one pose (one proposal, source "initial_pose"), finds no contacts
             of its own and never restarts from other approaches.
+        stop_after_verified: stop once this many proposals are verified: the later ones are neither refined
+            nor returned (None: all ``num_proposals``).
     """
 
     points: np.ndarray
@@ -119,6 +121,7 @@ class SynthesisInput:
     num_contacts: int | None = None  # contacts per proposal when handless (default 2)
     hand_key: str | None = None
     initial_pose: HandPose | None = None
+    stop_after_verified: int | None = None
 
 
 @dataclass

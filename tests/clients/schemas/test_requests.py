@@ -107,3 +107,12 @@ def test_given_contacts_carry_points_only() -> None:
     contacts = {"points": POINTS[:2], "forces": np.ones((2, 3))}
     assert [f for f, _ in _errors(_body(contacts=contacts))] == ["contacts.forces"]
     assert SynthesisRequest.model_validate(_body(contacts={"points": POINTS[:2]})).contacts is not None
+
+
+def test_stop_after_verified_within_the_proposals() -> None:
+    assert _errors(_body(options={"num_proposals": 2, "stop_after_verified": 3})) == [
+        ("options.stop_after_verified", "3 is more than num_proposals (2): it could never stop early")
+    ]
+    assert _errors(_body(options={"stop_after_verified": 0}))[0][0] == "options.stop_after_verified"
+    request = SynthesisRequest.model_validate(_body(options={"num_proposals": 4, "stop_after_verified": 1}))
+    assert request.options.stop_after_verified == 1

@@ -182,3 +182,12 @@ def test_bench_dispatches_to_installed_benchmarks(capsys: pytest.CaptureFixture[
         build_parser().parse_args(["bench", "--help"])
     out = capsys.readouterr().out
     assert all(name in out for name in installed)
+
+
+def test_stop_after_asks_for_stop_after_verified(object_file: Path) -> None:
+    from clients.cli.synthesize import build_request
+
+    args = build_parser().parse_args(["synthesize", str(object_file), "--proposals", "4", "--stop-after", "1"])
+    assert build_request(args).options.stop_after_verified == 1
+    args = build_parser().parse_args(["synthesize", str(object_file), "--proposals", "4"])
+    assert build_request(args).options.stop_after_verified is None
