@@ -6,9 +6,9 @@ Nothing here is judged on the optimiser's proxies (collision spheres, the sample
 - contacts: each fingertip's contact sample (`models.refine.contact`) gives the place; the contact point is the
   object's surface point nearest to it — on the sent mesh (exact closest point) or, without a mesh, on the oriented
   points' surface (`PointCloudField`, which keeps concavities; never a convex hull);
-- tip distance: the exact distance from each contact point to the posed fingertip body's collision mesh (trimesh
-  closest point): the contact lies on the object by construction and must lie on the finger within 5 mm; with a
-  region mask it must also lie within 5 mm of an allowed point;
+- tip distance: the exact distance from each contact point to the posed fingertip body's collision mesh
+  (`models.geometry.closest`): the contact lies on the object by construction and must lie on the finger within
+  5 mm; with a region mask it must also lie within 5 mm of an allowed point;
 - friction cones and the wrench use the object's normals as given: the caller's normal of the point nearest the
   contact (as the refinement has them; an outside check uses the same) — never a re-estimated or smoothed one;
   forces solve Eq. (6-8) (normal components ≥ 0 by the cones),
@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import torch
 
+from models.geometry.closest import TriangleSet, mesh_triangles
 from models.refine.closure import ferrari_canny
 from models.refine.contact import surface_contacts
 from models.refine.field import PointCloudField
@@ -120,12 +121,7 @@ def verify(
     region = cloud.region_distance if cloud.mask is not None else None
     found = surface_contacts(hand, pose.tensors(), cloud, region, jacobian=False, guards=False)
     samples = found.points
-    if mesh is not None:
-        import trimesh
-
-        contacts = trimesh.proximity.closest_point(mesh, samples)[0]
-    else:
-        contacts = found.object_points(cloud)
+    contacts = mesh_triangles(mesh).closest(samples)[0] if mesh is not None else found.object_points(cloud)
     contacts = np.asarray(contacts, dtype=np.float64)
     normals = cloud.given_normal(contacts)
     finger = finger_surface_distances(hand, pose, contacts)
@@ -182,16 +178,15 @@ def finger_surface_distances(hand: Hand, pose: HandPose, points: np.ndarray) -> 
     for i, body in enumerate(hand.fingertip_bodies):
         T = poses[body][0].numpy()
         local = (points[i] - T[:3, 3]) @ T[:3, :3]
-        query = _proximity(hand, body)
-        out[i] = float(query.on_surface(local[None])[1][0]) if query is not None else np.inf
+        faces = _body_triangles(hand, body)
+        out[i] = float(faces.closest(local[None])[1][0]) if faces is not None else np.inf
     return out
 
 
-def _proximity(hand: Hand, body: str) -> Any:
-    import trimesh
-
-    cache = hand.__dict__.setdefault("_proximity_cache", {})
+def _body_triangles(hand: Hand, body: str) -> TriangleSet | None:
+    cache = hand.__dict__.setdefault("_triangle_cache", {})
     if body not in cache:
         mesh = hand.collision_meshes.get(body)
-        cache[body] = trimesh.proximity.ProximityQuery(mesh) if mesh is not None and len(mesh.faces) else None
-    return cache[body]
+        cache[body] = TriangleSet.of(mesh) if mesh is not None and len(mesh.faces) else None
+    found: TriangleSet | None = cache[body]
+    return found
