@@ -236,12 +236,15 @@ def initialise(
     # score on the fitted (not yet backed-off) pose: where the fingertips land (one batched ball query)
     all_tips = (np.einsum("fab,kb->fka", rots, rest.tips) + ts[:, None]).reshape(-1, 3)
     balls = field.ball_indices(all_tips, radius)
-    target_set = set(np.flatnonzero(target).tolist())
+    touched = np.zeros((len(fits), len(field.points)), dtype=bool)  # (F, N): the points each fit's tips touch
+    sizes = np.fromiter((len(b) for b in balls), dtype=np.int64, count=len(balls))
+    if sizes.sum():
+        touched[np.repeat(np.arange(len(balls)) // m, sizes), np.concatenate([b for b in balls if len(b)])] = True
+    union = (touched | target[None]).sum(axis=1)
+    inter = (touched & target[None]).sum(axis=1)
     scored = []
     for f, (rot, t, err, assign) in enumerate(fits):
-        touched: set[int] = set().union(*balls[f * m : (f + 1) * m])
-        union = len(touched | target_set)
-        score = len(touched & target_set) / union if union else 0.0
+        score = int(inter[f]) / int(union[f]) if union[f] else 0.0
         scored.append((score, -err, rot, t, assign, None))
     scored.sort(key=lambda s: (s[0], s[1]), reverse=True)
     out = []
