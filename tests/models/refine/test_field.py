@@ -110,3 +110,22 @@ def test_points_surface_keeps_concavities(index):
     clear = np.abs(exact) > 0.0015
     assert np.mean(np.sign(phi[clear]) == np.sign(exact[clear])) > 0.995, name
     assert np.percentile(np.abs(phi - exact), 99) < 2.5e-3, name
+
+
+def test_the_hull_test_with_probe_facets_agrees_with_every_facet():
+    from scipy.spatial import ConvexHull
+
+    from models.refine.field import HULL_MARGIN
+
+    rng = np.random.default_rng(3)
+    pts = rng.normal(size=(2048, 3)) * [0.05, 0.03, 0.02]
+    pts /= np.linalg.norm(pts / [0.05, 0.03, 0.02], axis=1, keepdims=True)  # an ellipsoid's surface
+    field = PointCloudField(pts, pts / np.linalg.norm(pts, axis=1, keepdims=True))
+    x = rng.uniform(-0.07, 0.07, size=(5000, 3))
+    hull = ConvexHull(pts).equations
+    grow = HULL_MARGIN * field.disc_radius
+    in_box = np.all((x >= pts.min(0) - grow) & (x <= pts.max(0) + grow), axis=1)
+    expected = in_box & (np.max(x @ hull[:, :3].T + hull[:, 3], axis=1) <= grow)
+    got = field.within_hull(x)
+    np.testing.assert_array_equal(got, expected)
+    assert 0 < got.sum() < len(x)  # both answers occur
