@@ -28,9 +28,9 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import torch
 
 from models.geometry.closest import TriangleSet, mesh_triangles
+from models.geometry.collision import link_poses_at
 from models.refine.closure import ferrari_canny
 from models.refine.contact import surface_contacts
 from models.refine.field import PointCloudField
@@ -172,11 +172,10 @@ def verify(
 
 def finger_surface_distances(hand: Hand, pose: HandPose, points: np.ndarray) -> np.ndarray:
     """Exact distance (m,) from each contact point (m, 3) to its posed fingertip body's collision mesh."""
-    with torch.no_grad():
-        poses = hand.link_poses(*pose.tensors())
+    poses = link_poses_at(hand, pose.palm_pos, pose.palm_quat, pose.q)
     out = np.zeros(len(points))
     for i, body in enumerate(hand.fingertip_bodies):
-        T = poses[body][0].numpy()
+        T = poses[body]
         local = (points[i] - T[:3, 3]) @ T[:3, :3]
         faces = _body_triangles(hand, body)
         out[i] = float(faces.closest(local[None])[1][0]) if faces is not None else np.inf

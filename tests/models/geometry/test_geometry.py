@@ -184,3 +184,24 @@ def test_builtin_hand_penetration_and_rigid_motion_invariance() -> None:
     assert depth2 == pytest.approx(depth, abs=1e-6)
     far = _sphere_cloud(r=0.04, n=2000, centre=(0.5, 0.5, 0.5))
     assert hand_object_penetration(hand, far, np.zeros(3), quat, hand.rest) == 0.0
+
+
+def test_link_poses_at_one_pose_are_computed_once_and_match_the_kinematics():
+    import torch
+
+    from models.geometry.collision import link_poses_at
+    from models.robots import get_hand
+
+    hand = get_hand("allegro")
+    pos, quat = np.array([0.01, -0.02, 0.3]), np.array([0.9, 0.1, -0.3, 0.2]) / np.linalg.norm([0.9, 0.1, -0.3, 0.2])
+    q = np.asarray(hand.rest, dtype=np.float64) + 0.1
+    first = link_poses_at(hand, pos, quat, q)
+    assert link_poses_at(hand, pos.copy(), quat.copy(), q.copy()) is first  # the same pose: no second FK
+    with torch.no_grad():
+        exact = hand.link_poses(*(torch.as_tensor(a[None]) for a in (pos, quat, q)))
+    for name, pose in first.items():
+        np.testing.assert_array_equal(pose, exact[name][0].numpy())
+    other = link_poses_at(hand, pos + [0.0, 0.0, 0.01], quat, q)
+    assert other is not first
+    np.testing.assert_allclose(other[hand.fingertip_bodies[0]][:3, 3] - first[hand.fingertip_bodies[0]][:3, 3],
+                               [0.0, 0.0, 0.01], atol=1e-12)
