@@ -219,6 +219,7 @@ def refine(
             reason, it = "deadline", it - 1
             break
         ti = time.perf_counter()
+        used_scale = scale
         params = StepParams(
             trust=base * scale, trust_force=cfg.trust_force * scale, tip_weight=cfg.tip_weight, penalty=cfg.penalty
         )
@@ -243,6 +244,11 @@ def refine(
                 elif ratio > 0.75:
                     scale = min(scale * cfg.trust_grow, cfg.trust_max_scale)
             if not accepted and scale <= cfg.trust_min_scale and predicted <= 1e-12:
+                reason = "stalled"
+                break
+            if not accepted and scale == used_scale:
+                # the next step would be this one again (same linearisation, same trust region, a deterministic
+                # solver) and be refused again: 3.5-5 % of all iterations were such repeats
                 reason = "stalled"
                 break
         merits.append(value)

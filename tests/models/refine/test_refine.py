@@ -98,3 +98,24 @@ def test_a_hand_stuck_in_the_object_stops_early_with_the_same_iterates():
     final = patient.history[kept].merit  # the iterate it stopped at: the same one
     assert stuck.penetration > cfg.stuck_penetration
     assert final > (1 - cfg.stuck_tolerance) * stuck.history[kept - cfg.stuck_window].merit
+
+
+def test_a_refused_step_that_would_repeat_ends_the_attempt(setup, gripper):
+    """With the trust region unchanged after a refusal (here: fixed), the next step is the same step (same
+    linearisation, deterministic solver) and would be refused again, so the attempt ends there."""
+    from models.refine.state import linearise
+    from models.refine.step import StepParams, solve_step
+
+    _, field, start = setup
+    task = rigid_task(np.array([1.0, 0, 0, 0, 0, 0]), np.zeros(3), 0.05)
+    cfg = RefineConfig(max_iterations=40, max_normal_force=0.05, adaptive=False, history=True)
+    res = refine(gripper, field, task, start.pose, 0.5, cfg)
+    assert res.reason == "stalled" and res.iterations == len(res.history) + 1 < cfg.max_iterations
+    assert all(r.accepted for r in res.history)  # it ended at the first refusal, not after repeating it
+    n = 6 + len(res.pose.q)
+    trust = np.concatenate([np.full(3, cfg.trust_translation), np.full(3, cfg.trust_rotation),
+                            np.full(n - 6, cfg.trust_joint)])  # fmt: skip
+    params = StepParams(trust=trust, trust_force=cfg.trust_force, tip_weight=cfg.tip_weight, penalty=cfg.penalty)
+    lin = linearise(gripper, res.pose, field, task, 0.5, cfg.max_normal_force)
+    first, again = solve_step(lin, params), solve_step(lin, params)
+    np.testing.assert_array_equal(first.delta, again.delta)  # the step it would have tried next
