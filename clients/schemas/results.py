@@ -17,7 +17,7 @@ class Quality(WireModel):
     success: bool = Field(..., description="All criteria below met.")
     converged: bool
     reason: str = Field(..., description="Why refinement stopped: converged, max_iterations, deadline, ...")
-    iterations: int = Field(..., ge=0)
+    iterations: int = Field(..., ge=0, description="Refinement iterations spent on this proposal, restarts included.")
     wrench_residual: float = Field(..., ge=0, description="‖Σ G f − w‖² for the normalised target.")
     max_tip_distance: float = Field(..., ge=0, description="Largest |Φ(p_tip)| of a contact fingertip, m.")
     penetration_depth: float = Field(..., ge=0, description="Deepest hand–object penetration (exact), m.")

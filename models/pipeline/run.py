@@ -226,6 +226,8 @@ def _refined(
         again.iterations += res.iterations
         if again.converged:
             res = again
+        else:  # the first attempt's answer stands, but the request spent every attempt's iterations
+            res.iterations = again.iterations
     return res
 
 

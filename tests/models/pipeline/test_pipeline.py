@@ -199,3 +199,26 @@ def test_stop_after_verified_refines_no_proposal_after_enough_verified(box, grip
     np.testing.assert_array_equal(only.joint_values, first.joint_values)
     enough = run_pipeline(_inp(box, gripper, num_proposals=3, stop_after_verified=3))
     assert [p.quality.success for p in enough.proposals] == [p.quality.success for p in full.proposals]
+
+
+def test_a_proposal_whose_restarts_fail_reports_every_iteration_spent(box, gripper, monkeypatch):
+    """Two point contacts cannot make a pure torque about their own axis: every attempt fails, and the
+    proposal's iterations count the restarts, not only the first attempt's."""
+    import models.pipeline.run as run_module
+
+    spent: list[int] = []
+    refine = run_module.refine
+
+    def counted(*args, **kwargs):
+        res = refine(*args, **kwargs)
+        spent.append(res.iterations)
+        return res
+
+    monkeypatch.setattr(run_module, "refine", counted)
+    strategy = __import__("importlib").import_module("models.refine.strategy")
+    monkeypatch.setattr(strategy, "refine", counted)
+    task = TaskInput("wrench", wrench=np.array([0.0, 0.0, 0.0, 1.0, 0.0, 0.0]))
+    out = run_pipeline(_inp(box, gripper, method="random_contacts", contacts=None, task=task, max_iterations=40))
+    [proposal] = out.proposals
+    assert not proposal.quality.converged and len(spent) > 1  # restarted, and no attempt converged
+    assert proposal.quality.iterations == sum(spent)
