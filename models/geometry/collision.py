@@ -24,9 +24,9 @@ from typing import Any, Protocol
 
 import fcl
 import numpy as np
-import torch
 import trimesh
 
+from models.geometry.link_poses import link_poses_at
 from models.geometry.object import ObjectGeometry
 from models.robots.hand import ADJACENT_HOPS, Hand
 from models.robots.pads import convex_parts
@@ -103,29 +103,6 @@ def _bodies(hand: Hand) -> list[_BodyGeom]:
 
 def _poses(hand: Hand, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
     return link_poses_at(hand, palm_pos, palm_quat, q)
-
-
-def link_poses_at(hand: Hand, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
-    """World pose (4, 4) of every link at one hand pose. The last pose's are kept on the hand: a verification
-    asks three times for the same pose (fingertip distances, penetration, self-collision), and forward
-    kinematics costs ≈ 1.7 ms a call for LEAP."""
-    pos = np.asarray(palm_pos, dtype=np.float64).reshape(3)
-    quat = np.asarray(palm_quat, dtype=np.float64).reshape(4)
-    joints = np.asarray(q, dtype=np.float64).reshape(hand.dof)
-    key = (pos.tobytes(), quat.tobytes(), joints.tobytes())
-    last = hand.__dict__.get("_last_link_poses")
-    if last is not None and last[0] == key:
-        cached: dict[str, np.ndarray] = last[1]
-        return cached
-    d = torch.float64
-    with torch.no_grad():
-        poses = hand.link_poses(torch.as_tensor(pos[None], dtype=d), torch.as_tensor(quat[None], dtype=d),
-                                torch.as_tensor(joints[None], dtype=d))  # fmt: skip
-    out = {k: v[0].numpy() for k, v in poses.items()}
-    for pose in out.values():
-        pose.flags.writeable = False  # shared by the callers of the same pose
-    hand.__dict__["_last_link_poses"] = (key, out)
-    return out
 
 
 def _obj(geom: fcl.CollisionGeometry, T: np.ndarray) -> fcl.CollisionObject:

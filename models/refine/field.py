@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from models.refine.hull import GrownHull
 from models.refine.winding_cells import SampleCells
 
 WINDING_FROM = 0.5
@@ -30,22 +31,6 @@ HULL_MARGIN = 2.0
 """Disc radii: points farther than this outside the points' convex hull are outside (no winding number needed)."""
 
 WINDING_FAR = 2.0
-
-HULL_PROBE_FACETS = 32
-"""Hull facets with spread normals tested first in `PointCloudField.within_hull` (a 2 048-point cloud's hull has
-1 000-4 000)."""
-
-
-def _spread_facets(normals: np.ndarray, count: int) -> np.ndarray:
-    """Indices of up to ``count`` facets whose unit normals (F, 3) are spread over the sphere (greedy farthest
-    point: each next one is the facet least aligned with those chosen)."""
-    chosen = [0]
-    closest = normals @ normals[0]
-    for _ in range(min(count, len(normals)) - 1):
-        nxt = int(np.argmin(closest))
-        chosen.append(nxt)
-        closest = np.maximum(closest, normals @ normals[nxt])
-    return np.asarray(chosen)
 
 
 @dataclass(frozen=True)
@@ -168,33 +153,13 @@ class PointCloudField:
         """(M,) bool: x lies within the convex hull of the points grown by ``HULL_MARGIN`` disc radii (False: x
         is outside the object; the true surface reaches at most about a disc radius beyond its points)."""
         if not hasattr(self, "_hull"):
-            from scipy.spatial import ConvexHull, QhullError
-
-            try:
-                hull_points = self.points if self.surface is None else np.concatenate(
-                    [self.points, self.surface.vertices])  # the samples lie on the surface's faces
-                self._hull: np.ndarray | None = np.asarray(ConvexHull(hull_points).equations)
-            except (QhullError, ValueError):  # flat or degenerate points: no hull to rule anything out
-                self._hull = None
-            if self._hull is not None:
-                self._hull_probe = self._hull[_spread_facets(self._hull[:, :3], HULL_PROBE_FACETS)]
-                grow = HULL_MARGIN * self.disc_radius
-                self._hull_box = (self._dist_points.min(0) - grow, self._dist_points.max(0) + grow)
+            hull_points = self.points if self.surface is None else np.concatenate(
+                [self.points, self.surface.vertices])  # the samples lie on the surface's faces
+            self._hull = GrownHull.of(hull_points, self._dist_points, HULL_MARGIN * self.disc_radius)
         x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
         if self._hull is None or not len(x):
             return np.ones(len(x), dtype=bool)
-        grow = HULL_MARGIN * self.disc_radius
-        lo, hi = self._hull_box
-        inside = np.all((x >= lo) & (x <= hi), axis=1)
-        near = np.flatnonzero(inside)
-        # a point outside any facet is outside the hull: a few spread facets settle most points (95 % of those
-        # the refinement asks about lie outside), the rest are tested on every facet
-        probe = self._hull_probe
-        near = near[np.max(x[near] @ probe[:, :3].T + probe[:, 3], axis=1) <= grow]
-        inside[:] = False
-        inside[near] = np.max(x[near] @ self._hull[:, :3].T + self._hull[:, 3], axis=1) <= grow
-        result: np.ndarray = inside
-        return result
+        return self._hull.contains(x)
 
     def winding_number_exact(self, x: np.ndarray, chunk: int = 512) -> np.ndarray:
         """The winding number of `winding_number` summed over every sample (M × N work)."""

@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from models.geometry.closest import TriangleSet, mesh_triangles
-from models.geometry.collision import link_poses_at
+from models.geometry.link_poses import link_poses_at
 from models.refine.closure import ferrari_canny
 from models.refine.contact import surface_contacts
 from models.refine.field import PointCloudField

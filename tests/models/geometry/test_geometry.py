@@ -189,7 +189,7 @@ def test_builtin_hand_penetration_and_rigid_motion_invariance() -> None:
 def test_link_poses_at_one_pose_are_computed_once_and_match_the_kinematics():
     import torch
 
-    from models.geometry.collision import link_poses_at
+    from models.geometry.link_poses import link_poses_at
     from models.robots import get_hand
 
     hand = get_hand("allegro")
@@ -201,7 +201,7 @@ def test_link_poses_at_one_pose_are_computed_once_and_match_the_kinematics():
         exact = hand.link_poses(*(torch.as_tensor(a[None]) for a in (pos, quat, q)))
     for name, pose in first.items():
         np.testing.assert_array_equal(pose, exact[name][0].numpy())
-    other = link_poses_at(hand, pos + [0.0, 0.0, 0.01], quat, q)
+    other = link_poses_at(hand, pos + np.array([0.0, 0.0, 0.01]), quat, q)
     assert other is not first
     np.testing.assert_allclose(other[hand.fingertip_bodies[0]][:3, 3] - first[hand.fingertip_bodies[0]][:3, 3],
                                [0.0, 0.0, 0.01], atol=1e-12)
