@@ -50,7 +50,8 @@ class TriangleSet:
 
 
 def mesh_triangles(mesh: trimesh.Trimesh) -> TriangleSet:
-    """``mesh``'s `TriangleSet`, built once per object mesh (K proposals are verified against the same one)."""
+    """``mesh``'s `TriangleSet`, built once per mesh and kept on it (K proposals are verified against the same
+    object mesh; a hand's fingertip meshes are met at every verification)."""
     from models.geometry.collision import _per_mesh
 
     faces: TriangleSet = _per_mesh(mesh, "triangles", lambda: TriangleSet.of(mesh))

@@ -101,10 +101,6 @@ def _bodies(hand: Hand) -> list[_BodyGeom]:
     return bodies
 
 
-def _poses(hand: Hand, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray) -> dict[str, np.ndarray]:
-    return link_poses_at(hand, palm_pos, palm_quat, q)
-
-
 def _obj(geom: fcl.CollisionGeometry, T: np.ndarray) -> fcl.CollisionObject:
     return fcl.CollisionObject(geom, fcl.Transform(T[:3, :3], T[:3, 3]))
 
@@ -128,7 +124,7 @@ def _mesh_depth(
 ) -> float:  # fmt: skip
     """The depth test of the module doc against a watertight ``mesh``; ``rank`` orders hand samples by estimated
     depth (the exact signed distance is taken on the deepest), ``points`` (N, 3) are tested inside the hand."""
-    poses = _poses(hand, palm_pos, palm_quat, q)
+    poses = link_poses_at(hand, palm_pos, palm_quat, q)
     obj = _obj(_per_mesh(mesh, "bvh", lambda: _bvh(mesh)), np.eye(4))
     obj_pts = np.vstack([np.asarray(points, dtype=np.float64), np.asarray(mesh.vertices), sharp_edge_points(mesh)])
     depth = 0.0
@@ -195,7 +191,7 @@ def hand_field_penetration(
     confirmed by the winding number; it keeps concavities, unlike a convex hull), and the deepest object point
     inside a body's convex parts — both against the surface grown by ``inflate`` (m): the points' resolution, how
     far the true surface may reach beyond them."""
-    poses = _poses(hand, palm_pos, palm_quat, q)
+    poses = link_poses_at(hand, palm_pos, palm_quat, q)
     obj_pts = np.asarray(field.points, dtype=np.float64)
     depth = 0.0
     for body in _bodies(hand):
@@ -241,7 +237,7 @@ def self_collision_body_pairs(hand: Hand) -> list[tuple[int, int]]:
         tree = hand.tree
         idx = [tree.body_names.index(b.name) for b in bodies]
         depth = tree.ancestors.sum(1)
-        rest = _poses(hand, np.zeros(3), np.array([1.0, 0, 0, 0]), hand.rest)
+        rest = link_poses_at(hand, np.zeros(3), np.array([1.0, 0, 0, 0]), hand.rest)
         pairs = []
         for i in range(len(bodies)):
             for j in range(i + 1, len(bodies)):
@@ -277,7 +273,7 @@ def _pair_depth(
 def hand_self_collision(hand: Hand, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray) -> float:
     """Self-collision depth (m, 0 if none) over the checked body pairs."""
     bodies = _bodies(hand)
-    poses = _poses(hand, palm_pos, palm_quat, q)
+    poses = link_poses_at(hand, palm_pos, palm_quat, q)
     pairs = self_collision_body_pairs(hand)
     used = {k for pair in pairs for k in pair}
     objects = {bodies[k].name: _obj(bodies[k].bvh, poses[bodies[k].name]) for k in used}

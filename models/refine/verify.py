@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from models.geometry.closest import TriangleSet, mesh_triangles
+from models.geometry.closest import mesh_triangles
 from models.geometry.link_poses import link_poses_at
 from models.refine.closure import ferrari_canny
 from models.refine.contact import surface_contacts
@@ -177,15 +177,9 @@ def finger_surface_distances(hand: Hand, pose: HandPose, points: np.ndarray) -> 
     for i, body in enumerate(hand.fingertip_bodies):
         T = poses[body]
         local = (points[i] - T[:3, 3]) @ T[:3, :3]
-        faces = _body_triangles(hand, body)
-        out[i] = float(faces.closest(local[None])[1][0]) if faces is not None else np.inf
-    return out
-
-
-def _body_triangles(hand: Hand, body: str) -> TriangleSet | None:
-    cache = hand.__dict__.setdefault("_triangle_cache", {})
-    if body not in cache:
         mesh = hand.collision_meshes.get(body)
-        cache[body] = TriangleSet.of(mesh) if mesh is not None and len(mesh.faces) else None
-    found: TriangleSet | None = cache[body]
-    return found
+        if mesh is not None and len(mesh.faces):
+            out[i] = float(mesh_triangles(mesh).closest(local[None])[1][0])
+        else:
+            out[i] = np.inf
+    return out
