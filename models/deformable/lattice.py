@@ -5,7 +5,9 @@ split this way share their face diagonals, so the tetrahedra conform. Split the 
 leans along that diagonal: a straight press on a symmetric block slides it 1.4-4.5 mm sideways (measured,
 docs/deformables.md). `mirrored_kuhn` reflects the split in every odd cube along each axis, so each cube is the
 mirror image of its neighbours across their shared face (which keeps the face diagonals shared) and the lattice
-has the cube grid's mirror symmetries. The boundary of a tetrahedral mesh is the
+has the cube grid's mirror symmetries. `cube_tetrahedra` counts the parity from the body's own lowest cube, so the
+same cubes give the same tetrahedra wherever the lattice they were cut from began (a body rebuilt from its cloud,
+`models.deformable.lattice_fit`, is then the generator's mesh). The boundary of a tetrahedral mesh is the
 faces used by one tetrahedron only; a boundary vertex's normal is the area-weighted sum of its faces' outward
 normals.
 """
@@ -30,6 +32,27 @@ def mirrored_kuhn(cubes: np.ndarray, corner_ids: np.ndarray) -> np.ndarray:
     local = KUHN[None] ^ mask[:, None, None]  # reflecting axis a maps corner c to c XOR (1 << a)
     tets: np.ndarray = np.take_along_axis(np.repeat(corner_ids[:, None, :], 6, axis=1), local, axis=2)
     return tets.reshape(-1, 4)
+
+
+def cube_tetrahedra(cubes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The mirrored Kuhn tetrahedra of a set of lattice cubes, parity counted from their lowest index per axis.
+
+    Args:
+        cubes: (C, 3) integer lattice index of each cube's corner 0.
+
+    Returns:
+        The used lattice vertices (V, 3) as integer indices, in lexicographic order, and the tetrahedra (6C, 4)
+        over them.
+    """
+    cubes = np.asarray(cubes, dtype=np.int64).reshape(-1, 3)
+    base = cubes.min(axis=0)
+    rel = cubes - base
+    dims = tuple(int(d) for d in rel.max(axis=0) + 2)
+    corners = (rel[:, None, :] + CORNERS[None]).reshape(-1, 3)
+    ids = np.ravel_multi_index(tuple(corners.T), dims).reshape(-1, 8)
+    used, tets = np.unique(mirrored_kuhn(rel, ids), return_inverse=True)
+    ijk = np.stack(np.unravel_index(used, dims), axis=1) + base
+    return ijk, tets.reshape(-1, 4)
 
 
 def boundary(vertices: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -15,7 +15,7 @@ from collections.abc import Callable
 import numpy as np
 
 from models.deformable.body import DeformableBody
-from models.deformable.lattice import CORNERS, boundary, mirrored_kuhn
+from models.deformable.lattice import CORNERS, boundary, cube_tetrahedra
 from models.deformable.materials import sample_properties
 
 PLASTICINE_SIZE = (0.04, 0.1)  # m
@@ -79,10 +79,8 @@ def tetrahedralise(inside: Inside, cells: int, keep: str = "corners") -> tuple[n
                                     for c in CORNERS], axis=0))  # fmt: skip
     if len(cubes) == 0:
         raise ValueError("shape holds no lattice cube; use more cells")
-    corner_ids = np.ravel_multi_index((cubes[:, None, :] + CORNERS[None]).reshape(-1, 3).T, (n, n, n))
-    tets = mirrored_kuhn(cubes, corner_ids.reshape(-1, 8))
-    used, tets = np.unique(tets, return_inverse=True)
-    return ticks[np.stack(np.unravel_index(used, (n, n, n)), axis=1)], tets.reshape(-1, 4)
+    vertex_ijk, tets = cube_tetrahedra(cubes)
+    return ticks[vertex_ijk], tets
 
 
 def make_plasticine(kind: str, seed: int, properties: dict[str, float] | None = None, size: float | None = None,

@@ -9,9 +9,11 @@ simulation mesh. Per material:
 - **Rope**: the centre line is recovered from the cloud (the geodesic parameter along a k-nearest-neighbour
   graph from one end to the other, binned into stations) and rebuilt as the same square rod of tetrahedra the
   generator makes (`models.deformable.rope.rod`), its thickness the cloud's.
-- **Plasticine**: the volume inside the oriented cloud (generalised winding number ≥ ½) is filled with lattice
-  tetrahedra (`models.deformable.plasticine.tetrahedralise`, the cubes whose centre is inside, so that the body's
-  volume is about the cloud's), refined until it holds enough cubes.
+- **Plasticine**: a cloud that is the boundary of a body cut from an axis-aligned cubic lattice (the generator's
+  bodies) is rebuilt as exactly that body (`models.deformable.lattice_fit`); any other cloud's volume (generalised
+  winding number ≥ ½) is filled with lattice tetrahedra of its own
+  (`models.deformable.plasticine.tetrahedralise`, the cubes whose centre is inside, so that the body's volume is
+  about the cloud's), refined until it holds enough cubes.
 
 For rope and plasticine the caller's points are not the mesh's vertices: each point is embedded in its nearest
 tetrahedron by barycentric (affine) weights, and its rollout position is the same weights over the moved
@@ -160,9 +162,15 @@ def _rope(points: np.ndarray, properties: dict[str, float]) -> DeformableBody:
 
 def _plasticine(points: np.ndarray, normals: np.ndarray, properties: dict[str, float]) -> DeformableBody:
     from models.deformable.lattice import boundary
+    from models.deformable.lattice_fit import lattice_body
     from models.deformable.plasticine import tetrahedralise
     from models.refine.field import PointCloudField
 
+    exact = lattice_body(points, normals)
+    if exact is not None:  # the cloud is a lattice body's boundary: that body
+        verts, tets, _ = exact
+        surface, surface_normals = boundary(verts, tets)
+        return DeformableBody("plasticine", "cloud", verts, tets, surface, surface_normals, dict(properties))
     field = PointCloudField(points, normals)
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre, side = 0.5 * (lo + hi), float((hi - lo).max()) * 1.02

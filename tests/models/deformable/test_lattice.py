@@ -45,3 +45,15 @@ def test_a_straight_press_on_a_mirrored_box_moves_it_as_its_mirror_image() -> No
     assert np.allclose(drift[0] * np.array([-1.0, 1.0, 1.0]), drift[1], atol=1e-4)
     dent = simulate(body, pressed, press).vertices[body.surface[pressed], 2] - body.points[pressed, 2]
     assert np.all(dent < -0.008)  # the pressed points keep most of the 1.5 cm
+
+
+def test_the_split_depends_on_the_cubes_not_on_where_their_lattice_began() -> None:
+    from models.deformable.lattice import cube_tetrahedra
+
+    cubes = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [1, 1, 1]])
+    ijk, tets = cube_tetrahedra(cubes)
+    shift = np.array([3, 1, 2])  # odd and even shifts
+    shifted_ijk, shifted_tets = cube_tetrahedra(cubes + shift)
+    np.testing.assert_array_equal(shifted_ijk, ijk + shift)
+    np.testing.assert_array_equal(shifted_tets, tets)
+    assert np.all(np.diff(ijk @ [100, 10, 1]) > 0)  # vertices in lexicographic order

@@ -1,0 +1,36 @@
+"""A plasticine cloud that is a lattice body's boundary is rebuilt as exactly that body; other clouds are not."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from models.deformable.lattice_fit import lattice_body
+from models.deformable.plasticine import PLASTICINE_KINDS, make_plasticine
+
+
+@pytest.mark.parametrize("kind", PLASTICINE_KINDS)
+def test_the_generators_bodies_are_recovered_vertex_for_vertex(kind: str) -> None:
+    for seed in (0, 1):
+        body = make_plasticine(kind, seed)
+        fit = lattice_body(body.points, body.normals)
+        assert fit is not None
+        vertices, tets, owner = fit
+        np.testing.assert_allclose(vertices, body.vertices, atol=1e-12)
+        np.testing.assert_array_equal(tets, body.elements)
+        np.testing.assert_array_equal(owner, body.surface)  # each point is its own vertex
+
+
+def test_a_cloud_off_the_lattice_or_rotated_is_not_a_lattice_body() -> None:
+    body = make_plasticine("box", 1)
+    rng = np.random.default_rng(0)
+    jittered = body.points + rng.normal(scale=1e-4, size=body.points.shape)
+    assert lattice_body(jittered, body.normals) is None
+    c, s = np.cos(0.3), np.sin(0.3)
+    turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    assert lattice_body(body.points @ turn.T, body.normals @ turn.T) is None
+
+
+def test_missing_boundary_points_leave_no_exact_body() -> None:
+    body = make_plasticine("sphere", 0)
+    assert lattice_body(body.points[5:], body.normals[5:]) is None
