@@ -79,6 +79,7 @@ def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = Non
         num_contacts=options.num_contacts,
         hand_key=hand.name,
         stop_after_verified=options.stop_after_verified,
+        rollout_corrections=options.rollout_corrections,
     )
 
 

@@ -53,6 +53,9 @@ def add_request_args(parser: argparse.ArgumentParser) -> None:
                      "'none' for a deformable's contacts and motions for any gripper")
     req.add_argument("--rollout", action="store_true",
                      help="deformables: simulate the answer and judge it by the shape metric (simulate_rollout)")
+    req.add_argument("--corrections", type=int, default=0, metavar="C",
+                     help="with --rollout: up to C more rollouts correcting a missing answer's motions "
+                     "(rollout_corrections)")
     req.add_argument("--urdf", type=Path, help="an inline URDF hand instead of --hand (needs --fingertips)")
     req.add_argument("--fingertips", help="comma-separated fingertip links of the --urdf hand")
     req.add_argument("--task", default="force_closure", help=TASK_HELP)
@@ -144,6 +147,7 @@ def build_request(args: argparse.Namespace, path: Path | None = None) -> Any:
         return_heatmap=args.heatmap,
         return_hand_mesh=getattr(args, "view", None) is not None,  # --view draws the posed hand's meshes
         simulate_rollout=args.rollout,
+        rollout_corrections=args.corrections,
     )
 
 

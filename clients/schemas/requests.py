@@ -60,12 +60,21 @@ class SynthesisOptions(WireModel):
         "rebuilt from the points, resting on a table under its lowest point) and judge success by the paper's "
         "shape metric against the target; returns `rollout_points`. About 0.5-2 s a proposal.",
     )
+    rollout_corrections: int = Field(
+        0, ge=0, le=8, description="Deformables with `simulate_rollout`: a proposal whose rollout misses the "
+        "target may spend up to this many more rollouts correcting its post-contact motions (closed loop through "
+        "the simulator: a plasticine press springs back, so pushing by the target's displacement stops short); "
+        "the best rollout's motions are returned and `quality.iterations` counts the rollouts spent.",
+    )
 
     @model_validator(mode="after")
     def _enough_within_proposals(self) -> SynthesisOptions:
         if self.stop_after_verified is not None and self.stop_after_verified > self.num_proposals:
             raise ValueError(f"stop_after_verified: {self.stop_after_verified} is more than num_proposals "
                              f"({self.num_proposals}): it could never stop early")
+        if self.rollout_corrections and not self.simulate_rollout:
+            raise ValueError(f"rollout_corrections: {self.rollout_corrections} needs simulate_rollout: the "
+                             "corrections are rollouts")
         return self
 
 

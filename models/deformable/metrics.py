@@ -51,3 +51,11 @@ def shape_score(material: str, start: np.ndarray, target: np.ndarray, rollout: n
     over = float(np.mean(top > CLOTH_HALF))
     ok = float(top.max()) <= CLOTH_ANY and over <= 0.5
     return ShapeScore(bool(ok), float(err.mean()), float(top.mean()), float(top.max()), over)
+
+
+def shortfall(material: str, score: ShapeScore) -> float:
+    """How far ``score`` is from the metric's thresholds: its largest error over the threshold that bounds it
+    (below 1 on every bound is close to passing; used to rank candidate answers, not to judge them)."""
+    if material == "plasticine":
+        return max(score.mean_error / SOLID_ALL, score.top_mean_error / SOLID_MOVING)
+    return max(score.top_max_error / CLOTH_ANY, 2.0 * score.top_fraction_over)

@@ -148,7 +148,8 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
         from models.pipeline.deformable_rollout import judge_by_rollout
 
         t0 = time.perf_counter()
-        proposals = judge_by_rollout(inp.material, p.points, p.normals, p.motion, inp.properties, proposals)
+        proposals = judge_by_rollout(inp.material, p.points, p.normals, p.motion, inp.properties, proposals,
+                                     inp.rollout_corrections)  # fmt: skip
         proposals = proposals[: inp.num_proposals]  # the best by the rollout (a competing candidate may drop)
         timings["rollout"] = time.perf_counter() - t0
     heat = force = None

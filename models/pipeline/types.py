@@ -96,6 +96,8 @@ class SynthesisInput:
             of its own and never restarts from other approaches.
         stop_after_verified: stop once this many proposals are verified: the later ones are neither refined
             nor returned (None: all ``num_proposals``).
+        rollout_corrections: deformables with ``simulate_rollout``: rollouts a proposal that misses its target
+            may spend correcting its motions (`models.pipeline.deformable_rollout`; 0: none).
     """
 
     points: np.ndarray
@@ -122,6 +124,7 @@ class SynthesisInput:
     hand_key: str | None = None
     initial_pose: HandPose | None = None
     stop_after_verified: int | None = None
+    rollout_corrections: int = 0
 
 
 @dataclass

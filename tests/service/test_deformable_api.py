@@ -139,3 +139,29 @@ def test_a_rigid_request_without_a_robot_is_a_422_naming_the_robot(base: str) ->
     response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=30)
     assert response.status_code == 422, response.text[:500]
     assert "robot: required" in response.text
+
+
+def test_plasticine_press_corrected_by_rollouts_reaches_the_target(base: str) -> None:
+    """The pressed cluster given as contacts, the target as per-point motion: the answer's motions, corrected
+    through the service's simulator, press the generator's own mesh onto the target (the 3D metric)."""
+    from models.deformable.plasticine import make_plasticine
+    from models.deformable.procedures import plasticine_push
+
+    blob = make_plasticine("box", 0)
+    press = plasticine_push(blob, np.random.default_rng(0))
+    target = simulate(blob, press.contacts, press.motions).cloud
+    body = {
+        "object": {"points": blob.points.tolist(), "normals": blob.normals.tolist(), "material": "plasticine",
+                   "properties": blob.properties},
+        "task": {"kind": "point_motion", "motion": (target - blob.points).tolist()},
+        "contacts": {"points": blob.points[press.contacts].tolist()},
+        "options": {"method": "contacts", "num_contacts": len(press.contacts), "timeout": 60,
+                    "simulate_rollout": True, "rollout_corrections": 6},
+    }  # fmt: skip
+    response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=120)
+    assert response.status_code == 200, response.text[:2000]
+    [proposal] = SynthesisResult.model_validate(response.json()).proposals
+    assert proposal.quality.success and proposal.quality.reason == "rollout_reached_target"
+    assert proposal.contact_motions is not None and 1 <= proposal.quality.iterations <= 6
+    rollout = simulate(blob, proposal.contact_points, proposal.contact_motions).cloud
+    assert shape_score("plasticine", blob.points, target, rollout).success

@@ -191,3 +191,12 @@ def test_stop_after_asks_for_stop_after_verified(object_file: Path) -> None:
     assert build_request(args).options.stop_after_verified == 1
     args = build_parser().parse_args(["synthesize", str(object_file), "--proposals", "4"])
     assert build_request(args).options.stop_after_verified is None
+
+
+def test_corrections_ask_for_rollout_corrections(object_file: Path) -> None:
+    from clients.cli.synthesize import build_request
+
+    args = build_parser().parse_args(["synthesize", str(object_file), "--rollout", "--corrections", "4"])
+    assert build_request(args).options.rollout_corrections == 4
+    args = build_parser().parse_args(["synthesize", str(object_file), "--rollout"])
+    assert build_request(args).options.rollout_corrections == 0

@@ -139,7 +139,7 @@ class RobotIn(_message.Message):
     def __init__(self, name: _Optional[str] = ..., urdf: _Optional[str] = ..., fingertips: _Optional[_Iterable[str]] = ..., tip_offsets: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class SynthesisOptions(_message.Message):
-    __slots__ = ("method", "num_proposals", "refine", "max_iterations", "seed", "timeout", "return_heatmap", "return_force_map", "return_history", "return_hand_mesh", "simulate_rollout", "num_contacts", "return_all_heatmaps", "stop_after_verified")
+    __slots__ = ("method", "num_proposals", "refine", "max_iterations", "seed", "timeout", "return_heatmap", "return_force_map", "return_history", "return_hand_mesh", "simulate_rollout", "num_contacts", "return_all_heatmaps", "stop_after_verified", "rollout_corrections")
     METHOD_FIELD_NUMBER: _ClassVar[int]
     NUM_PROPOSALS_FIELD_NUMBER: _ClassVar[int]
     REFINE_FIELD_NUMBER: _ClassVar[int]
@@ -154,6 +154,7 @@ class SynthesisOptions(_message.Message):
     NUM_CONTACTS_FIELD_NUMBER: _ClassVar[int]
     RETURN_ALL_HEATMAPS_FIELD_NUMBER: _ClassVar[int]
     STOP_AFTER_VERIFIED_FIELD_NUMBER: _ClassVar[int]
+    ROLLOUT_CORRECTIONS_FIELD_NUMBER: _ClassVar[int]
     method: str
     num_proposals: int
     refine: bool
@@ -168,7 +169,8 @@ class SynthesisOptions(_message.Message):
     num_contacts: int
     return_all_heatmaps: bool
     stop_after_verified: int
-    def __init__(self, method: _Optional[str] = ..., num_proposals: _Optional[int] = ..., refine: _Optional[bool] = ..., max_iterations: _Optional[int] = ..., seed: _Optional[int] = ..., timeout: _Optional[float] = ..., return_heatmap: _Optional[bool] = ..., return_force_map: _Optional[bool] = ..., return_history: _Optional[bool] = ..., return_hand_mesh: _Optional[bool] = ..., simulate_rollout: _Optional[bool] = ..., num_contacts: _Optional[int] = ..., return_all_heatmaps: _Optional[bool] = ..., stop_after_verified: _Optional[int] = ...) -> None: ...
+    rollout_corrections: int
+    def __init__(self, method: _Optional[str] = ..., num_proposals: _Optional[int] = ..., refine: _Optional[bool] = ..., max_iterations: _Optional[int] = ..., seed: _Optional[int] = ..., timeout: _Optional[float] = ..., return_heatmap: _Optional[bool] = ..., return_force_map: _Optional[bool] = ..., return_history: _Optional[bool] = ..., return_hand_mesh: _Optional[bool] = ..., simulate_rollout: _Optional[bool] = ..., num_contacts: _Optional[int] = ..., return_all_heatmaps: _Optional[bool] = ..., stop_after_verified: _Optional[int] = ..., rollout_corrections: _Optional[int] = ...) -> None: ...
 
 class ContactsIn(_message.Message):
     __slots__ = ("points",)
