@@ -169,7 +169,7 @@ def test_a_sparse_cloud_with_its_mesh_gives_a_grasp_that_touches(gripper):
     """256 points on a 7 × 7 × 25 cm box (disc radius ≈ 7 mm, above the 4 mm contact tolerance): the mesh's samples
     let the refinement bring the jaws onto the faces, and the outside audit (its own kinematics, meshes and
     cones) confirms the contact. Four clouds: every answer touches (the claim); one may end in a local minimum of
-    the wrench (trimesh 5.2's samples for seed 1 start the jaws at the box's edge), the others verify."""
+    the wrench (the seed-1 cloud starts the jaws at the box's edge), the others verify."""
     from models.audit import AuditedGrasp, audit_grasp
 
     mesh = trimesh.creation.box(extents=[0.07, 0.07, 0.25])
