@@ -152,7 +152,11 @@ def add_deformable(sub: Any) -> None:
     d = sub.add_parser("deformable", help="cloth / rope / plasticine: simulated rollout vs target, with baselines")
     d.add_argument("--materials", default="cloth,rope,plasticine", help="comma-separated materials")
     d.add_argument("--splits", default="test_so,test_uo", help="test_so (seen objects), test_uo (unseen objects)")
-    d.add_argument("--methods", default="random_motion,random_target_motion,moving_target_motion,ground_truth,network")
+    d.add_argument("--methods", default="random_motion,random_target_motion,moving_target_motion,ground_truth,network",
+                   help="comma-separated, of random_motion, random_target_motion, moving_target_motion, "
+                   "moving_corrected, ground_truth, network")
+    d.add_argument("--corrections", type=int, default=4,
+                   help="rollouts moving_corrected may spend correcting its motions (default 4)")
     d.add_argument("--cases", type=int, default=10, help="cases per (material, split)")
     d.add_argument("--contacts", type=int, default=2, help="contacts of the random baselines (default 2)")
     d.add_argument("--hand", default="panda_gripper", help="hand the network is conditioned on (H ≤ fingertips)")
@@ -206,7 +210,7 @@ def run_deformable(args: argparse.Namespace) -> int:
         for split in splits:
             for case in build_cases(material, split, args.cases, args.seed, data):
                 report.cases.append(case)
-                report.results.append(evaluate_case(case, methods, args.contacts, rng, network))
+                report.results.append(evaluate_case(case, methods, args.contacts, rng, network, args.corrections))
                 bar.update(1)
     bar.close()
     table = Table(title=f"deformables: simulated rollout vs target (paper metric), {args.cases} cases per row "

@@ -14,6 +14,9 @@ Methods (all in one run, on the same cases):
 - ``random_target_motion``: the same points, each with the target's displacement at it.
 - ``moving_target_motion``: the points the target moves most, spread apart (`models.deformable.answer.
   moving_indices`, the service's fallback when the heatmap is flat), each with the target's displacement.
+- ``moving_corrected``: the same points as ``moving_target_motion``, their motions corrected through the
+  service's simulator (`models.pipeline.run_pipeline` with ``simulate_rollout`` and ``rollout_corrections``:
+  closed loop on the body rebuilt from the cloud), then simulated on the case's own body like every method.
 - ``ground_truth``: the procedure's own contacts and motions — the ceiling the simulator allows (the target was
   made by them, so it measures the simulator's repeatability: 100 % when deterministic).
 - ``network``: `models.pipeline.run_pipeline` with method "network" (what the service answers: NMS contacts on
@@ -40,7 +43,8 @@ if TYPE_CHECKING:
     from models.network.inference import ContactPredictor
     from models.robots import Hand
 
-METHODS = ("random_motion", "random_target_motion", "moving_target_motion", "ground_truth", "network")
+METHODS = ("random_motion", "random_target_motion", "moving_target_motion", "moving_corrected", "ground_truth",
+           "network")  # fmt: skip
 SPLITS = ("test_so", "test_uo")
 MOTION_TRIES = 60
 
@@ -138,9 +142,10 @@ def _score(case: DeformableCase, contacts: np.ndarray, motions: np.ndarray) -> S
 
 
 def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int, rng: np.random.Generator,
-                  network: Answer | None = None,
+                  network: Answer | None = None, corrections: int = 4,
                   ) -> list[MethodResult]:  # fmt: skip
-    """Every method of ``methods`` on one case (``network`` needs the callable: case → contacts, motions, source)."""
+    """Every method of ``methods`` on one case (``network`` needs the callable: case → contacts, motions, source;
+    ``corrections``: the rollouts ``moving_corrected`` may spend)."""
     target_motion = case.target - case.body.points
     rand = _random_points(case.body, contacts, rng)
     out = []
@@ -157,6 +162,12 @@ def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int,
 
             moving = moving_indices(case.body.points, np.arange(len(case.body.points)), target_motion, contacts)
             out.append(MethodResult(method, _score(case, moving, target_motion[moving]), len(moving)))
+        elif method == "moving_corrected":
+            from models.deformable.answer import moving_indices
+
+            moving = moving_indices(case.body.points, np.arange(len(case.body.points)), target_motion, contacts)
+            points, motions = corrected_answer(case, moving, corrections)
+            out.append(MethodResult(method, _score(case, points, motions), len(moving)))
         elif method == "ground_truth":
             m = case.manipulation
             out.append(MethodResult(method, _score(case, m.contacts, m.motions), len(m.contacts)))
@@ -171,6 +182,24 @@ def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int,
 
 
 Answer = Callable[[DeformableCase], tuple[np.ndarray, np.ndarray, str]]
+
+
+def corrected_answer(case: DeformableCase, contacts: np.ndarray, corrections: int) -> tuple[np.ndarray, np.ndarray]:
+    """The service's answer for given contact indices (H,): their points (H, 3) and motions (H, 3), corrected by
+    up to ``corrections`` rollouts on the body it rebuilds from the case's cloud."""
+    from models.pipeline import SynthesisInput, TaskInput, run_pipeline
+    from models.robots import get_hand
+
+    body = case.body
+    inp = SynthesisInput(
+        points=body.points, hand=get_hand("panda_gripper"),
+        task=TaskInput("point_motion", motion=case.target - body.points), normals=body.normals,
+        material=body.material, properties=dict(body.properties), method="contacts", contacts=body.points[contacts],
+        handless=True, num_contacts=len(contacts), simulate_rollout=True, rollout_corrections=corrections,
+    )  # fmt: skip
+    p = run_pipeline(inp).proposals[0]
+    assert p.contact_motions is not None
+    return np.asarray(p.contact_points), np.asarray(p.contact_motions)
 
 
 def pipeline_network(predictor: ContactPredictor, hand: Hand, seed: int) -> Answer:
