@@ -2,7 +2,7 @@
 
 The plasticine generator (`models.deformable.plasticine`) cuts a body from an axis-aligned cubic lattice and shows
 its boundary vertices as the cloud. When a caller's cloud is such a boundary — every point on one axis-aligned
-lattice of spacing h, up to rounding — the body is determined: the cubes whose centre the oriented cloud encloses
+lattice of spacing h, to 1 % of a cell — the body is determined: the cubes whose centre the oriented cloud encloses
 (generalised winding number ≥ ½; a cube centre lies half a cell from the nearest boundary face, where the points'
 winding number is unambiguous), split by `models.deformable.lattice.cube_tetrahedra` with the parity counted from
 the body's own lowest cube, as the generator counts it. The fit is accepted only when the rebuilt body's
@@ -21,7 +21,8 @@ from scipy.spatial import cKDTree
 
 from models.deformable.lattice import boundary, cube_tetrahedra
 
-ON_LATTICE = 1e-4  # largest offset from a lattice node, in cells, for a point to count as on it
+ON_LATTICE = 0.01  # largest offset from a lattice node, in cells, for a point to count as on it (a cloud sent
+# rounded to 10 µm is still the lattice: the nodes are the vertices, the points are embedded where they are)
 
 
 def lattice_body(points: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -44,6 +45,11 @@ def lattice_body(points: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, n
     if not h > 0:
         return None
     origin = p.min(axis=0)
+    for _ in range(2):  # the nodes, then the spacing and origin that fit them best (least squares)
+        nodes = np.rint((p - origin) / h).astype(np.int64)
+        h, origin = _fitted_lattice(p, nodes)
+        if not h > 0:
+            return None
     cell = (p - origin) / h
     nodes = np.rint(cell).astype(np.int64)
     if np.abs(cell - nodes).max() > ON_LATTICE or len(np.unique(nodes, axis=0)) != len(p):
@@ -65,3 +71,13 @@ def lattice_body(points: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, n
         return None
     return vertices, tets, owner
 
+
+def _fitted_lattice(points: np.ndarray, nodes: np.ndarray) -> tuple[float, np.ndarray]:
+    """The spacing h and origin (3,) minimising Σ ‖points − origin − h·nodes‖² (nodes (N, 3) integers)."""
+    n = len(points)
+    design = np.zeros((3 * n, 4))
+    design[:, 0] = nodes.T.reshape(-1)
+    for axis in range(3):
+        design[axis * n:(axis + 1) * n, 1 + axis] = 1.0
+    solution = np.linalg.lstsq(design, points.T.reshape(-1), rcond=None)[0]
+    return float(solution[0]), solution[1:]
