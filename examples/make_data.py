@@ -81,7 +81,8 @@ def _make(kind: str, size: float, seed: int):  # type: ignore[no-untyped-def]
 
 
 def _deformable_request(material: str, kind: str, seed: int) -> dict[str, object]:
-    """A request body: the body's cloud, the motion its procedure gives every point, simulated rollout asked."""
+    """A request body: the body's cloud, the motion its procedure gives every point, simulated rollout asked (the
+    press: its pushed cluster as given contacts, the motions corrected by up to 6 rollouts)."""
     from models.deformable.procedures import cloth_fold, plasticine_push, rope_drag
     from models.deformable.shapes import make_body
     from models.deformable.simulate import simulate
@@ -90,12 +91,17 @@ def _deformable_request(material: str, kind: str, seed: int) -> dict[str, object
     procedure = {"cloth": cloth_fold, "rope": rope_drag, "plasticine": plasticine_push}[material]
     manipulation = procedure(body, np.random.default_rng(seed))
     target = simulate(body, manipulation.contacts, manipulation.motions).cloud
-    return {
+    request: dict[str, object] = {
         "object": {"points": body.points.round(5).tolist(), "normals": body.normals.round(4).tolist(),
                    "material": material, "properties": body.properties},
         "task": {"kind": "point_motion", "motion": (target - body.points).round(5).tolist()},
         "options": {"num_proposals": 2, "seed": seed, "simulate_rollout": True, "timeout": 60},
     }  # fmt: skip
+    if material == "plasticine":
+        request["contacts"] = {"points": body.points[manipulation.contacts].round(5).tolist()}
+        request["options"] = {"method": "contacts", "num_contacts": len(manipulation.contacts), "seed": seed,
+                              "simulate_rollout": True, "rollout_corrections": 6, "timeout": 60}  # fmt: skip
+    return request
 
 
 def main() -> None:
