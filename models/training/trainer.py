@@ -66,12 +66,17 @@ def data_summary(train: Examples, val: Examples | None) -> dict[str, Any]:
 
     def counts(ex: Examples) -> dict[str, Any]:
         hands, n = np.unique(ex.hand, return_counts=True)
-        return {
+        out: dict[str, Any] = {
             "examples": len(ex),
             "objects": len(np.unique(ex.obj_index)),
-            "articulated": int(np.asarray(ex.extra["articulated"]).sum()),
             "hands": {str(h): int(c) for h, c in zip(hands, n, strict=True)},
         }
+        if "articulated" in ex.extra:
+            out["articulated"] = int(np.asarray(ex.extra["articulated"]).sum())
+        if "material" in ex.extra:
+            kinds, m = np.unique(ex.extra["material"], return_counts=True)
+            out["materials"] = {str(k): int(c) for k, c in zip(kinds, m, strict=True)}
+        return out
 
     out = {"train": counts(train)}
     if val is not None:
@@ -167,7 +172,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         final = {f"train_{k}": v for k, v in train_m.items()}
         if val_m is not None:
             final.update({f"val_{k}": v for k, v in val_m.items()})
-        card = _card(model, cfg, summary, epoch, wall, final, device)
+        card = _card(model, cfg, summary, epoch, wall, final, device, _materials(train_ex))
         save_checkpoint(model, out / "last", card)
         score = val_m["loss"] if val_m is not None else train_m["loss"]
         if score < best:
@@ -194,12 +199,56 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
 
 
 def _load(cfg: TrainConfig) -> tuple[Examples, Examples | None]:
+    """The training and validation examples of ``cfg.data``: rigid shard directories, or one deformable data
+    directory (``mani data generate --materials cloth,rope,plasticine``; its clouds resampled to the network's
+    point count). Mixing the two kinds is refused: their label sets differ (grasp sets vs single labels)."""
+    deformable = [d for d in cfg.data if _is_deformable(d)]
+    if deformable:
+        if len(deformable) != len(cfg.data) or len(deformable) > 1:
+            raise ValueError("data: one deformable data directory, alone (rigid and deformable examples are not "
+                             f"mixed in one run yet): {list(cfg.data)}")
+        from models.data.deformable_dataset import load_deformable_examples
+        from models.network.config import get_config
+
+        n = get_config(cfg.network).num_points
+        train_ex = load_deformable_examples(deformable[0], ("train",), num_points=n)
+        try:
+            val_ex: Examples | None = load_deformable_examples(deformable[0], tuple(cfg.val_splits), num_points=n)
+        except ValueError:
+            val_ex = None
+        return train_ex, _first(val_ex, cfg.val_limit)
     train_ex = load_examples(list(cfg.data), ("train",), limit=cfg.limit)
     try:
-        val_ex: Examples | None = load_examples(list(cfg.data), tuple(cfg.val_splits), limit=cfg.val_limit)
+        val_ex = load_examples(list(cfg.data), tuple(cfg.val_splits), limit=cfg.val_limit)
     except ValueError:
         val_ex = None
     return train_ex, val_ex
+
+
+def _materials(ex: Examples) -> list[str] | None:
+    """The deformable materials ``ex`` holds (None: rigid shards, which carry no material)."""
+    if "material" not in ex.extra:
+        return None
+    return sorted({str(m) for m in ex.extra["material"]})
+
+
+def _is_deformable(data_dir: str) -> bool:
+    from models.data.deformable_generate import MANIFEST, SUBDIR
+
+    return (Path(data_dir) / SUBDIR / MANIFEST).is_file() and not (Path(data_dir) / "manifest.json").is_file()
+
+
+def _first(ex: Examples | None, limit: int | None) -> Examples | None:
+    """The first ``limit`` examples of ``ex`` (validation sets are capped like the rigid loader caps them)."""
+    if ex is None or limit is None or len(ex) <= limit:
+        return ex
+    from dataclasses import replace
+
+    keep = slice(0, limit)
+    return replace(ex, obj_index=ex.obj_index[keep], hand=ex.hand[keep], split=ex.split[keep],
+                   friction=ex.friction[keep], motion=ex.motion[keep], heat=ex.heat[keep],
+                   force_map=ex.force_map[keep], mask=ex.mask[keep],
+                   extra={k: v[keep] for k, v in ex.extra.items()})  # fmt: skip
 
 
 def _card(
@@ -210,7 +259,13 @@ def _card(
     wall: float,
     metrics: dict[str, float],
     device: torch.device,
+    materials: list[str] | None = None,
 ) -> ModelCard:
+    materials = materials or ["rigid", "articulated"]
+    note = ("Trained on rigid and articulated (revolute/prismatic) examples only; requests for deformable "
+            "materials are out of its training distribution.") if "rigid" in materials else (
+            f"Trained on deformable examples only ({', '.join(materials)}); rigid requests are out of its "
+            "training distribution.")  # fmt: skip
     return ModelCard.for_model(
         model,  # type: ignore[arg-type]
         trained=True,
@@ -229,7 +284,6 @@ def _card(
             },
         },
         metrics={k: float(v) for k, v in metrics.items()},
-        materials=["rigid", "articulated"],
-        notes="Trained on rigid and articulated (revolute/prismatic) examples only; requests for deformable "
-        "materials are out of its training distribution.",
+        materials=materials,
+        notes=note,
     )

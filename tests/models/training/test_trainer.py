@@ -58,3 +58,21 @@ def test_train_writes_curves_checkpoints_and_resumes(data_dir: Path, tmp_path: P
     assert resumed.epochs == 2 and [r["epoch"] for r in rows] == ["1", "1", "2", "2"]
     _model, card2 = load_checkpoint(run / "last", "cpu")
     assert card2.training_data["training"]["epochs"] == 2
+
+
+def test_a_deformable_data_directory_trains_and_its_card_names_its_materials(tmp_path: Path) -> None:
+    from models.data.deformable_generate import DeformableDataConfig
+    from models.data.deformable_generate import generate as generate_deformable
+
+    data = tmp_path / "d"
+    generate_deformable(DeformableDataConfig(materials=("rope", "plasticine"), bodies=2, examples_per_body=2,
+                                             test_fraction=0.0), data, progress=False)  # fmt: skip
+    cfg = TrainConfig(data=[str(data)], out=str(tmp_path / "run"), network="cpu1k", epochs=1, batch_size=2,
+                      threads=1, warmup_steps=1, val_splits=("test_so",))  # fmt: skip
+    result = train(cfg, progress=False)
+    card = json.loads((Path(result.out) / "last" / "model_card.json").read_text())
+    assert card["materials"] == ["plasticine", "rope"]
+    counts = card["training_data"]["train"]["materials"]  # seen-motion examples train, the others validate
+    assert set(counts) == {"plasticine", "rope"} and sum(counts.values()) == card["training_data"]["train"]["examples"]
+    with pytest.raises(ValueError, match="not mixed"):
+        train(TrainConfig(data=[str(data), str(data)], out=str(tmp_path / "mixed")), progress=False)
