@@ -31,9 +31,13 @@ MAX_ROLLOUT_CORRECTIONS = 8
 
 @dataclass
 class _Trial:
+    """One rollout of a proposal's contacts: its motions (H, 3), the cloud it leaves (N, 3), whether the metric
+    accepts it (``reached``) and the simulation stayed stable (``success``: both), its rank and shape error."""
+
     motions: np.ndarray
     rollout: np.ndarray
     stable: bool
+    reached: bool
     success: bool
     rank: float
     shape_error: float
@@ -70,7 +74,8 @@ def judge_by_rollout(
         rollout = rebuilt.cloud(run.vertices)
         score = shape_score(material, points, target, rollout)
         rank = shortfall(material, score) if run.stable else float("inf")
-        return _Trial(motions, rollout, run.stable, score.success and run.stable, rank, score.top_mean_error)
+        return _Trial(motions, rollout, run.stable, score.success, score.success and run.stable, rank,
+                      score.top_mean_error)  # fmt: skip
 
     judged = []
     for p in proposals:
@@ -80,7 +85,7 @@ def judge_by_rollout(
         if corrections > 0 and not best.success:
             at = np.asarray(tree.query(contacts)[1], dtype=np.int64)
             best, used = _corrected(trial, best, target, at, contacts, corrections)
-        failures = [] if best.success or not best.stable else ["rollout_target"]
+        failures = [] if best.reached else ["rollout_target"]
         if not best.stable:
             failures.append("rollout_unstable")
         quality = replace(p.quality, success=best.success, converged=best.stable,
