@@ -107,6 +107,19 @@ def test_direct_grasp_on_a_deformable_is_a_422_naming_the_method(base: str) -> N
     assert "method" in response.text
 
 
+def _given_contacts_request(body: DeformableBody, contacts: np.ndarray, target: np.ndarray,
+                            **options: object) -> dict[str, object]:  # fmt: skip
+    """A request without a robot: the body's cloud, its points ``contacts`` as given contacts, the motion to
+    ``target`` (N, 3), the rollout asked, and ``options``."""
+    return {
+        "object": {"points": body.points.tolist(), "normals": body.normals.tolist(), "material": body.material,
+                   "properties": body.properties},
+        "task": {"kind": "point_motion", "motion": (target - body.points).tolist()},
+        "contacts": {"points": body.points[contacts].tolist()},
+        "options": {"method": "contacts", "timeout": 60, "simulate_rollout": True, **options},
+    }  # fmt: skip
+
+
 def test_cloth_fold_without_a_robot_is_contacts_and_motions_that_reach_the_target(base: str) -> None:
     from models.deformable.cloth import make_cloth
     from models.deformable.procedures import cloth_fold
@@ -114,13 +127,7 @@ def test_cloth_fold_without_a_robot_is_contacts_and_motions_that_reach_the_targe
     cloth = make_cloth("tshirt", seed=1)
     fold = cloth_fold(cloth, np.random.default_rng(0))
     target = simulate(cloth, fold.contacts, fold.motions).cloud
-    body = {
-        "object": {"points": cloth.points.tolist(), "normals": cloth.normals.tolist(), "material": "cloth",
-                   "properties": cloth.properties},
-        "task": {"kind": "point_motion", "motion": (target - cloth.points).tolist()},
-        "contacts": {"points": cloth.points[fold.contacts].tolist()},
-        "options": {"method": "contacts", "timeout": 60, "simulate_rollout": True},
-    }  # fmt: skip
+    body = _given_contacts_request(cloth, fold.contacts, target)
     response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=120)
     assert response.status_code == 200, response.text[:2000]
     result = SynthesisResult.model_validate(response.json())
@@ -150,14 +157,8 @@ def test_plasticine_press_corrected_by_rollouts_reaches_the_target(base: str) ->
     blob = make_plasticine("box", 0)
     press = plasticine_push(blob, np.random.default_rng(0))
     target = simulate(blob, press.contacts, press.motions).cloud
-    body = {
-        "object": {"points": blob.points.tolist(), "normals": blob.normals.tolist(), "material": "plasticine",
-                   "properties": blob.properties},
-        "task": {"kind": "point_motion", "motion": (target - blob.points).tolist()},
-        "contacts": {"points": blob.points[press.contacts].tolist()},
-        "options": {"method": "contacts", "num_contacts": len(press.contacts), "timeout": 60,
-                    "simulate_rollout": True, "rollout_corrections": 6},
-    }  # fmt: skip
+    body = _given_contacts_request(blob, press.contacts, target, num_contacts=len(press.contacts),
+                                   rollout_corrections=6)  # fmt: skip
     response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=120)
     assert response.status_code == 200, response.text[:2000]
     [proposal] = SynthesisResult.model_validate(response.json()).proposals
