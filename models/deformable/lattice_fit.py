@@ -16,6 +16,8 @@ so a rollout could not judge a plasticine answer on the caller's object.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -25,15 +27,26 @@ ON_LATTICE = 0.01  # largest offset from a lattice node, in cells, for a point t
 # rounded to 10 µm is still the lattice: the nodes are the vertices, the points are embedded where they are)
 
 
-def lattice_body(points: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+class LatticeBody(NamedTuple):
+    """vertices (V, 3) m, tetrahedra (T, 4), the boundary vertices (N,) with their outward normals (N, 3), and each
+    caller's point's vertex (N,)."""
+
+    vertices: np.ndarray
+    tetrahedra: np.ndarray
+    surface: np.ndarray
+    surface_normals: np.ndarray
+    point_vertex: np.ndarray
+
+
+def lattice_body(points: np.ndarray, normals: np.ndarray) -> LatticeBody | None:
     """The lattice body whose boundary vertices are ``points``, or None when there is none.
 
     Args:
         points: (N, 3) the cloud, m. normals: (N, 3) its outward unit normals.
 
     Returns:
-        vertices (V, 3), tetrahedra (T, 4) and, for each point, its vertex index (N,); None when the points are
-        not one axis-aligned lattice's nodes or the cubes their winding number encloses have another boundary.
+        The body; None when the points are not one axis-aligned lattice's nodes or the cubes their winding number
+        encloses have another boundary.
     """
     from models.refine.field import PointCloudField
 
@@ -64,12 +77,12 @@ def lattice_body(points: np.ndarray, normals: np.ndarray) -> tuple[np.ndarray, n
         return None
     ijk, tets = cube_tetrahedra(cubes)
     vertices = origin + ijk * h
-    surface, _ = boundary(vertices, tets)
+    surface, surface_normals = boundary(vertices, tets)
     index = {tuple(v): i for i, v in enumerate(ijk.tolist())}
     owner = np.array([index.get(tuple(v), -1) for v in nodes.tolist()])
     if np.any(owner < 0) or len(surface) != len(p) or not np.array_equal(np.sort(owner), surface):
         return None
-    return vertices, tets, owner
+    return LatticeBody(vertices, tets, surface, surface_normals, owner)
 
 
 def _fitted_lattice(points: np.ndarray, nodes: np.ndarray) -> tuple[float, np.ndarray]:

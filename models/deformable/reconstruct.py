@@ -168,9 +168,8 @@ def _plasticine(points: np.ndarray, normals: np.ndarray, properties: dict[str, f
 
     exact = lattice_body(points, normals)
     if exact is not None:  # the cloud is a lattice body's boundary: that body
-        verts, tets, _ = exact
-        surface, surface_normals = boundary(verts, tets)
-        return DeformableBody("plasticine", "cloud", verts, tets, surface, surface_normals, dict(properties))
+        return DeformableBody("plasticine", "cloud", exact.vertices, exact.tetrahedra, exact.surface,
+                              exact.surface_normals, dict(properties))  # fmt: skip
     field = PointCloudField(points, normals)
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre, side = 0.5 * (lo + hi), float((hi - lo).max()) * 1.02

@@ -146,8 +146,11 @@ def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int,
                   ) -> list[MethodResult]:  # fmt: skip
     """Every method of ``methods`` on one case (``network`` needs the callable: case → contacts, motions, source;
     ``corrections``: the rollouts ``moving_corrected`` may spend)."""
+    from models.deformable.answer import moving_indices
+
     target_motion = case.target - case.body.points
     rand = _random_points(case.body, contacts, rng)
+    moving = moving_indices(case.body.points, np.arange(len(case.body.points)), target_motion, contacts)
     out = []
     for method in methods:
         if method == "random_motion":
@@ -158,14 +161,8 @@ def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int,
         elif method == "random_target_motion":
             out.append(MethodResult(method, _score(case, rand, target_motion[rand]), len(rand)))
         elif method == "moving_target_motion":
-            from models.deformable.answer import moving_indices
-
-            moving = moving_indices(case.body.points, np.arange(len(case.body.points)), target_motion, contacts)
             out.append(MethodResult(method, _score(case, moving, target_motion[moving]), len(moving)))
         elif method == "moving_corrected":
-            from models.deformable.answer import moving_indices
-
-            moving = moving_indices(case.body.points, np.arange(len(case.body.points)), target_motion, contacts)
             points, motions = corrected_answer(case, moving, corrections)
             out.append(MethodResult(method, _score(case, points, motions), len(moving)))
         elif method == "ground_truth":

@@ -26,8 +26,6 @@ from scipy.spatial import cKDTree
 
 from models.pipeline.types import ProposalOutput
 
-MAX_ROLLOUT_CORRECTIONS = 8
-
 
 @dataclass
 class _Trial:
@@ -67,7 +65,6 @@ def judge_by_rollout(
 
     rebuilt = body_from_cloud(material, points, normals, with_defaults(material, properties))
     target = points + motion
-    tree = cKDTree(points)
 
     def trial(contacts: np.ndarray, motions: np.ndarray) -> _Trial:
         run = simulate(rebuilt.body, rebuilt.to_simulator(contacts), motions)
@@ -83,7 +80,7 @@ def judge_by_rollout(
         contacts = np.asarray(p.contact_points, dtype=np.float64)
         best, used = trial(contacts, np.asarray(p.contact_motions, dtype=np.float64)), 0
         if corrections > 0 and not best.success:
-            at = np.asarray(tree.query(contacts)[1], dtype=np.int64)
+            at = np.asarray(cKDTree(points).query(contacts)[1], dtype=np.int64)
             best, used = _corrected(trial, best, target, at, contacts, corrections)
         failures = [] if best.reached else ["rollout_target"]
         if not best.stable:

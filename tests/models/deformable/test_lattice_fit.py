@@ -15,10 +15,9 @@ def test_the_generators_bodies_are_recovered_vertex_for_vertex(kind: str) -> Non
         body = make_plasticine(kind, seed)
         fit = lattice_body(body.points, body.normals)
         assert fit is not None
-        vertices, tets, owner = fit
-        np.testing.assert_allclose(vertices, body.vertices, atol=1e-12)
-        np.testing.assert_array_equal(tets, body.elements)
-        np.testing.assert_array_equal(owner, body.surface)  # each point is its own vertex
+        np.testing.assert_allclose(fit.vertices, body.vertices, atol=1e-12)
+        np.testing.assert_array_equal(fit.tetrahedra, body.elements)
+        np.testing.assert_array_equal(fit.point_vertex, body.surface)  # each point is its own vertex
 
 
 def test_a_cloud_off_the_lattice_or_rotated_is_not_a_lattice_body() -> None:
@@ -35,8 +34,8 @@ def test_a_cloud_sent_rounded_to_10_um_is_still_its_lattice_body() -> None:
     body = make_plasticine("ellipsoid", 2)
     fit = lattice_body(body.points.round(5), body.normals.round(4))
     assert fit is not None
-    np.testing.assert_allclose(fit[0], body.vertices, atol=2e-5)
-    np.testing.assert_array_equal(fit[1], body.elements)
+    np.testing.assert_allclose(fit.vertices, body.vertices, atol=2e-5)
+    np.testing.assert_array_equal(fit.tetrahedra, body.elements)
 
 
 def test_missing_boundary_points_leave_no_exact_body() -> None:
