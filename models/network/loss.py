@@ -4,6 +4,13 @@ Optionally the heatmap MSE is weighted towards the contact regions: w_j = 1 + α
 mean(w) (α = 0 is the paper's plain MSE). Contacts cover only a few per cent of the points, so with plain MSE a
 network that predicts a low, flat heatmap is already close to the optimum and learns the peaks slowly.
 
+With ``heat_loss="bce"`` (ours) the heat term is the same weighting over a binary cross-entropy on the logits,
+the target heat read as a per-point probability. The sigmoid then no longer damps the error: MSE through a
+sigmoid has the gradient (p − t)·p(1 − p), about 50× weaker at the 0.02 where every point starts than at 0.5, so a
+network trained with it sits at a low flat map for many epochs; the cross-entropy's gradient is (p − t). Both
+are minimised by the conditional mean of the target, so where the place of the contact is uncertain they still
+mark every plausible place, not none.
+
 :func:`set_heat_loss` is ours: a motion can usually be produced by several grasps (`models.data.grasp_sets`), and
 a heatmap decoded from a *prior* sample should be one of them, whichever. Each prior sample pays the (weighted)
 heat error of the valid grasp nearest it, so no sample is pulled towards the average of several.
@@ -22,6 +29,9 @@ def kl_to_standard_normal(mu: torch.Tensor, logvar: torch.Tensor) -> torch.Tenso
     return (0.5 * (mu.square() + logvar.exp() - 1.0 - logvar).sum(dim=-1)).mean()
 
 
+HEAT_LOSSES = ("mse", "bce")
+
+
 def cvae_loss(
     out: dict[str, torch.Tensor],
     heat_gt: torch.Tensor,
@@ -32,6 +42,7 @@ def cvae_loss(
     lambda_s: float | None = None,
     lambda_kl: float | None = None,
     heat_contact_weight: float = 0.0,
+    heat_loss: str = "mse",
 ) -> dict[str, torch.Tensor]:
     """Eq. (3) with the configuration's weights (overridable per call).
 
@@ -40,7 +51,8 @@ def cvae_loss(
         heat_gt: (B, N) ground-truth heatmap.
         force_gt: (B, N, 3) ground-truth force/motion map (normalised units).
         config: supplies the default λ_C, λ_S, λ_KL.
-        heat_contact_weight: α of the module docstring (0: plain MSE).
+        heat_contact_weight: α of the module docstring (0: unweighted).
+        heat_loss: ``"mse"`` (Eq. 3) or ``"bce"`` on ``out["heat_logit"]`` (module docstring).
 
     Returns:
         ``loss`` (the weighted sum, differentiable) and its terms ``heat``, ``force``, ``kl``.
@@ -48,7 +60,9 @@ def cvae_loss(
     lc = config.lambda_c if lambda_c is None else lambda_c
     ls = config.lambda_s if lambda_s is None else lambda_s
     lk = config.lambda_kl if lambda_kl is None else lambda_kl
-    if heat_contact_weight > 0.0:
+    if heat_loss == "bce":
+        heat = weighted_heat_bce(out["heat_logit"], heat_gt, heat_contact_weight).mean()
+    elif heat_contact_weight > 0.0:
         w = 1.0 + heat_contact_weight * heat_gt
         heat = (w * (out["heat"] - heat_gt).square()).mean() / w.mean()
     else:
@@ -64,17 +78,28 @@ def weighted_heat_error(heat: torch.Tensor, target: torch.Tensor, alpha: float) 
     return (w * (heat - target).square()).mean(dim=-1) / w.mean(dim=-1)
 
 
+def weighted_heat_bce(logit: torch.Tensor, target: torch.Tensor, alpha: float) -> torch.Tensor:
+    """Per-map weighted cross-entropy over the last axis: mean_j w_j BCE(logit_j, t_j) / mean_j w_j (broadcasting)."""
+    w = 1.0 + alpha * target
+    logit, target = torch.broadcast_tensors(logit, target)
+    bce = F.binary_cross_entropy_with_logits(logit, target, reduction="none")
+    return (w * bce).mean(dim=-1) / w.mean(dim=-1)
+
+
 def set_heat_loss(
-    prior_heat: torch.Tensor, set_heat: torch.Tensor, set_valid: torch.Tensor, alpha: float = 0.0
-) -> torch.Tensor:
+    prior_heat: torch.Tensor, set_heat: torch.Tensor, set_valid: torch.Tensor, alpha: float = 0.0,
+    heat_loss: str = "mse",
+) -> torch.Tensor:  # fmt: skip
     """Mean over prior samples of the heat error to the nearest valid grasp.
 
     Args:
-        prior_heat: (B, K, N) heatmaps decoded from prior samples z ~ N(0, I).
+        prior_heat: (B, K, N) heatmaps decoded from prior samples z ~ N(0, I) (their logits for ``"bce"``).
         set_heat: (B, G, N) heatmaps of each example's valid grasps (padding rows arbitrary).
         set_valid: (B, G) bool, which rows are valid grasps (at least one per example).
         alpha: contact weighting of :func:`weighted_heat_error`.
+        heat_loss: ``"mse"`` or ``"bce"``, as in :func:`cvae_loss`.
     """
-    err = weighted_heat_error(prior_heat.unsqueeze(2), set_heat.unsqueeze(1), alpha)  # (B, K, G)
+    error = weighted_heat_bce if heat_loss == "bce" else weighted_heat_error
+    err = error(prior_heat.unsqueeze(2), set_heat.unsqueeze(1), alpha)  # (B, K, G)
     err = err.masked_fill(~set_valid.unsqueeze(1), float("inf"))
     return err.min(dim=2).values.mean()

@@ -104,9 +104,14 @@ class ManiFoundationNet(nn.Module):
 
     def decode(self, enc: Encoded, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """φ_c then φ_f (fed the heatmap) for z (B, K, latent) → heatmap (B, K, N) in [0, 1], force (B, K, N, 3)."""
-        heat = torch.sigmoid(self.contact_decoder(enc.eo, enc.eh, z).squeeze(-1))
-        force = self.force_decoder(enc.eo, enc.eh, z, heat)
+        _, heat, force = self.decode_logits(enc, z)
         return heat, force
+
+    def decode_logits(self, enc: Encoded, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+        """:meth:`decode` with the heatmap's logits (B, K, N) first (a cross-entropy loss needs them)."""
+        logit = self.contact_decoder(enc.eo, enc.eh, z).squeeze(-1)
+        heat = torch.sigmoid(logit)
+        return logit, heat, self.force_decoder(enc.eo, enc.eh, z, heat)
 
     def forward(
         self,
@@ -130,21 +135,20 @@ class ManiFoundationNet(nn.Module):
             prior_z: (B, K, latent) prior samples to decode as well, on the same encoding.
 
         Returns:
-            ``heat`` (B, N), ``force`` (B, N, 3), ``mu`` and ``logvar`` (B, latent); with ``prior_z`` also
-            ``prior_heat`` (B, K, N) and ``prior_force`` (B, K, N, 3).
+            ``heat`` and its logits ``heat_logit`` (B, N), ``force`` (B, N, 3), ``mu`` and ``logvar``
+            (B, latent); with ``prior_z`` also ``prior_heat``, ``prior_heat_logit`` (B, K, N) and ``prior_force``
+            (B, K, N, 3).
         """
         enc = self.encode(obj, self.encode_hand(hand), hierarchy)
         mu, logvar = self.posterior(enc.hierarchy, enc.eo, enc.eh, heat_gt, force_gt)
         eps = torch.randn(mu.shape, generator=generator, device=mu.device, dtype=mu.dtype)
         z = mu + eps * torch.exp(0.5 * logvar)
-        if prior_z is None:
-            heat, force = self.decode(enc, z.unsqueeze(1))
-            return {"heat": heat[:, 0], "force": force[:, 0], "mu": mu, "logvar": logvar}
-        heat, force = self.decode(enc, torch.cat([z.unsqueeze(1), prior_z], dim=1))
-        return {
-            "heat": heat[:, 0], "force": force[:, 0], "mu": mu, "logvar": logvar,
-            "prior_heat": heat[:, 1:], "prior_force": force[:, 1:],
-        }  # fmt: skip
+        zs = z.unsqueeze(1) if prior_z is None else torch.cat([z.unsqueeze(1), prior_z], dim=1)
+        logit, heat, force = self.decode_logits(enc, zs)
+        out = {"heat": heat[:, 0], "heat_logit": logit[:, 0], "force": force[:, 0], "mu": mu, "logvar": logvar}
+        if prior_z is not None:
+            out.update(prior_heat=heat[:, 1:], prior_heat_logit=logit[:, 1:], prior_force=force[:, 1:])
+        return out
 
 
 def count_parameters(model: nn.Module) -> int:

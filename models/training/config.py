@@ -35,6 +35,7 @@ class TrainConfig:
     lambda_s: float | None = None
     lambda_kl: float | None = None
     heat_contact_weight: float = 0.0  # α: heat MSE weighted by 1 + α·heat_gt (0: the paper's plain MSE)
+    heat_loss: str = "mse"  # "mse" (Eq. 3) or "bce": cross-entropy on the logits (models.network.loss)
     prior_samples: int = 0  # K prior samples per example for the grasp-set loss (0: Eq. 3 alone)
     lambda_set: float = 1.0  # weight of the grasp-set loss (models.network.loss.set_heat_loss)
     precompute: bool = True  # per-object point subsets and hierarchies computed once (models.data.prepare)
@@ -80,4 +81,8 @@ def load_config(path: str | Path | None = None, overrides: list[str] | None = No
     unknown = set(data) - names
     if unknown:
         raise ValueError(f"unknown training settings {sorted(unknown)}; known: {sorted(names)}")
+    from models.network.loss import HEAT_LOSSES
+
+    if data.get("heat_loss", cfg.heat_loss) not in HEAT_LOSSES:
+        raise ValueError(f"heat_loss must be one of {HEAT_LOSSES}, got {data['heat_loss']!r}")
     return dataclasses.replace(cfg, **data)

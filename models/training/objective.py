@@ -33,9 +33,11 @@ def batch_loss(
         lambda_s=cfg.lambda_s,
         lambda_kl=cfg.lambda_kl,
         heat_contact_weight=cfg.heat_contact_weight,
+        heat_loss=cfg.heat_loss,
     )
     if prior_z is not None:
-        terms["set"] = set_heat_loss(res["prior_heat"], b.set_heat, b.set_valid, cfg.heat_contact_weight)
+        prior = res["prior_heat_logit"] if cfg.heat_loss == "bce" else res["prior_heat"]
+        terms["set"] = set_heat_loss(prior, b.set_heat, b.set_valid, cfg.heat_contact_weight, cfg.heat_loss)
         terms["loss"] = terms["loss"] + cfg.lambda_set * terms["set"]
     return terms
 

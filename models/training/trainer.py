@@ -32,7 +32,8 @@ from models.training.objective import batch_loss, prepare
 from models.training.validation import evaluate, plot_curves
 
 CSV_FIELDS = (
-    "epoch", "split", "loss", "heat", "force", "kl", "set", "peak", "hit", "flat", "lr", "seconds", "examples",
+    "epoch", "split", "loss", "heat", "force", "kl", "set", "peak", "hit", "flat", "hit_open", "flat_open", "lr",
+    "seconds", "examples",
 )  # fmt: skip
 
 
@@ -191,7 +192,8 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         msg = f"epoch {epoch}: train {train_m['loss']:.4f}"
         if val_m is not None:
             msg += f"  val {val_m['loss']:.4f} (heat {val_m['heat']:.4f}, force {val_m['force']:.4f}"
-            msg += f", peak {val_m['peak']:.2f}, hit {val_m['hit']:.2f}, flat {val_m['flat']:.2f})"
+            msg += f", peak {val_m['peak']:.2f}, hit {val_m['hit']:.2f}, flat {val_m['flat']:.2f}"
+            msg += f"; unmasked: hit {val_m['hit_open']:.2f}, flat {val_m['flat_open']:.2f})"
         print(msg + f"  [{secs:.0f} s]", flush=True)
         if cfg.max_minutes is not None and wall > cfg.max_minutes * 60:
             break

@@ -32,13 +32,15 @@ def evaluate(
         are at inference, decoded from one prior sample z ~ N(0, I) as the service does: ``peak``, the mean
         over examples of the highest predicted heat, ``hit``, the fraction of examples whose highest-heat
         point lies in the contact region (ground-truth heat ≥ 0.5) of any valid grasp of the example, and
-        ``flat``, the fraction whose peak stands less than :data:`FLAT_CONTRAST` above the median.
+        ``flat``, the fraction whose peak stands less than :data:`FLAT_CONTRAST` above the median; ``hit_open``
+        and ``flat_open`` the same over the examples without a partial region mask (the mask alone tells a
+        network where the label's contacts are: these are the figures that say it has learnt more).
     """
     model.eval()
     gen = torch.Generator(device="cpu").manual_seed(cfg.seed)
     prior_gen = torch.Generator(device="cpu").manual_seed(cfg.seed + 1)
-    sums = dict.fromkeys(("loss", "heat", "force", "kl", "set", "peak", "hit", "flat"), 0.0)
-    n = 0
+    sums = dict.fromkeys(("loss", "heat", "force", "kl", "set", "peak", "hit", "flat", "hit_open", "flat_open"), 0.0)
+    n = n_open = 0
     with torch.no_grad():
         for start in range(0, len(ex), cfg.batch_size):
             idx = np.arange(start, min(len(ex), start + cfg.batch_size))
@@ -51,11 +53,18 @@ def evaluate(
             heat = model.decode(enc, z)[0][:, 0]  # (B, N)
             union = b.set_heat.masked_fill(~b.set_valid.unsqueeze(-1), 0.0).amax(dim=1)  # (B, N)
             sums["peak"] += float(heat.max(dim=1).values.sum())
-            sums["hit"] += float((union.gather(1, heat.argmax(dim=1, keepdim=True)) >= 0.5).sum())
-            contrast = heat.max(dim=1).values - heat.median(dim=1).values
-            sums["flat"] += float((contrast < FLAT_CONTRAST).sum())
+            hit = union.gather(1, heat.argmax(dim=1, keepdim=True))[:, 0] >= 0.5
+            flat = heat.max(dim=1).values - heat.median(dim=1).values < FLAT_CONTRAST
+            open_ = (b.obj.mask > 0.5).all(dim=1)
+            sums["hit"] += float(hit.sum())
+            sums["flat"] += float(flat.sum())
+            sums["hit_open"] += float((hit & open_).sum())
+            sums["flat_open"] += float((flat & open_).sum())
             n += len(idx)
-    return {k: v / max(n, 1) for k, v in sums.items()}
+            n_open += int(open_.sum())
+    out = {k: v / max(n, 1) for k, v in sums.items()}
+    out.update(hit_open=sums["hit_open"] / max(n_open, 1), flat_open=sums["flat_open"] / max(n_open, 1))
+    return out
 
 
 def plot_curves(csv_path: Path, png_path: Path) -> None:

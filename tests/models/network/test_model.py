@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 import torch
@@ -109,6 +111,36 @@ def test_contact_weighted_heat_loss() -> None:
     wc = cvae_loss(miss_contact, gt, force, cfg, heat_contact_weight=4.0)["heat"].item()
     we = cvae_loss(miss_empty, gt, force, cfg, heat_contact_weight=4.0)["heat"].item()
     assert wc == pytest.approx(5.0 / 8.0) and we == pytest.approx(1.0 / 8.0)
+
+
+def test_cross_entropy_heat_loss_keeps_its_gradient_where_the_sigmoid_saturates() -> None:
+    gt = torch.tensor([[1.0, 0.0, 0.0, 0.0]])
+    cfg, force = get_config("cpu"), torch.zeros(1, 4, 3)
+    prior = math.log(0.02 / 0.98)
+    grads = {}
+    for kind in ("mse", "bce"):
+        logit = torch.full((1, 4), prior, requires_grad=True)
+        out = {"heat": torch.sigmoid(logit), "heat_logit": logit, "force": force, "mu": torch.zeros(1, 64),
+               "logvar": torch.zeros(1, 64)}  # fmt: skip
+        cvae_loss(out, gt, force, cfg, heat_loss=kind)["heat"].backward()
+        assert logit.grad is not None
+        grads[kind] = float(logit.grad[0, 0])
+    # d/dlogit at p = 0.02 towards a contact (t = 1): MSE (p − t)·p(1 − p)·2/N, cross-entropy (p − t)/N
+    assert grads["mse"] == pytest.approx(2 * (0.02 - 1.0) * 0.02 * 0.98 / 4, rel=1e-4)
+    assert grads["bce"] == pytest.approx((0.02 - 1.0) / 4, rel=1e-4)
+    assert abs(grads["bce"]) > 20 * abs(grads["mse"])
+
+
+def test_set_heat_loss_with_cross_entropy_pays_the_nearest_valid_grasp() -> None:
+    grasps = torch.tensor([[[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0]]])  # (1, G=2, N=4)
+    valid = torch.tensor([[True, True]])
+    sure = 8.0
+    on_second = torch.tensor([[[-sure, -sure, sure, -sure]]])  # logits of the second grasp
+    on_neither = torch.tensor([[[-sure, sure, -sure, -sure]]])
+    near = set_heat_loss(on_second, grasps, valid, heat_loss="bce").item()
+    far = set_heat_loss(on_neither, grasps, valid, heat_loss="bce").item()
+    assert near == pytest.approx(math.log1p(math.exp(-sure)), rel=1e-2)  # the loss of a sure, right logit
+    assert far > 3.0
 
 
 def test_untrained_heatmap_starts_at_the_prior() -> None:
