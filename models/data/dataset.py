@@ -87,7 +87,7 @@ def cached_grasp_sets(shard: Path, z: Any) -> GraspSets:
         c = np.load(side)
         return GraspSets(c["contacts"], c["normals"], c["forces"], c["count"])
     sets = shard_grasp_sets({k: z[k] for k in z.files})
-    tmp = side.with_name(side.name + ".tmp.npz")
+    tmp = side.with_name(f"{side.name}.{os.getpid()}.tmp.npz")  # two readers of one shard must not share it
     np.savez(tmp, contacts=sets.contacts, normals=sets.normals, forces=sets.forces, count=sets.count)
     os.replace(tmp, side)
     return sets

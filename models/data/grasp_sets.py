@@ -27,7 +27,7 @@ from models.refine.grasp import grasp_maps, tangents
 from models.refine.wrench import articulated_task
 
 PYRAMID_EDGES = 8
-MAX_SET = 8  # grasps kept per example (its own first, then the feasible ones by grasp index)
+MAX_SET = 32  # grasps kept per example (its own first, then the feasible ones by grasp index)
 
 
 def pyramid_edges(normals: np.ndarray, mu: float) -> np.ndarray:

@@ -138,7 +138,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
                 break  # time budget spent: validate and save what we have
             idx = perm[step * cfg.batch_size : (step + 1) * cfg.batch_size]
             b = make_batch(train_ex, idx, hand_scale, rng if cfg.augment else None, train_prep,
-                           mask_dropout=cfg.mask_dropout).to(device)  # fmt: skip
+                           max_set=cfg.max_set, mask_dropout=cfg.mask_dropout).to(device)  # fmt: skip
             terms = batch_loss(model, b, cfg, gen, device)
             frac = (epoch - 1 + step / steps_per_epoch) / cfg.epochs
             if cfg.max_minutes is not None:  # a time budget: decay by whichever runs out first

@@ -44,7 +44,7 @@ def evaluate(
     with torch.no_grad():
         for start in range(0, len(ex), cfg.batch_size):
             idx = np.arange(start, min(len(ex), start + cfg.batch_size))
-            b = make_batch(ex, idx, hand_scale, prepared=prepared).to(device)
+            b = make_batch(ex, idx, hand_scale, prepared=prepared, max_set=cfg.max_set).to(device)
             terms = batch_loss(model, b, cfg, gen, device)
             for k in ("loss", "heat", "force", "kl", "set"):
                 sums[k] += float(terms[k].detach()) * len(idx) if k in terms else 0.0
