@@ -93,7 +93,7 @@ def _run(args: argparse.Namespace) -> int:
           "| contacts inside the mask | inference p50 (batch 1, K = 1) |\n|---|--:|--:|--:|--:|--:|")  # fmt: skip
     for w, p in props.items():
         print(f"| {w} | {p['empty_selections']:.0%}; {p['empty_unmasked']:.0%} | "
-              f"{p['top_in_region']:.0%} ({p['top_cases']}) | "
+              f"{p['top_in_region']:.0%} ({p['top_cases']}; a random point {p['region_share']:.0%}) | "
               f"{p['mean_modes']:.2f} | {p['mask_compliance']:.0%} ({p['mask_cases']} masked cases) | "
               f"{p['inference_ms_p50']:.0f} ms |")
     if args.json:

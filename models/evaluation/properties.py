@@ -7,7 +7,9 @@
 - Flat heatmaps: fraction of samples whose selection is empty (the pipeline then falls back to random contacts).
 - Top point: fraction of samples whose highest point lies in the case's valid region (any grasp that can produce
   the motion, `models.evaluation.testset`), on cases without a region mask (a partial mask is drawn around the
-  label's contacts, so inside it almost any point is near one); inference: p50 of one batch-1, K = 1 prediction.
+  label's contacts, so inside it almost any point is near one), beside the share of the points the valid region
+  covers there (what a random point scores: the region is as large as the grasps sampled per object make it);
+  inference: p50 of one batch-1, K = 1 prediction.
 - Property sensitivity: the same case with friction 0.2 and 1.0; mean |Δ heatmap| and the fraction of cases
   whose selected contact sets differ.
 """
@@ -72,6 +74,7 @@ class PropertyReport:
     top_in_region: float = 0.0  # unmasked cases: fraction of samples whose top point is in a valid contact region
     top_cases: int = 0  # unmasked cases with a valid region
     empty_unmasked: float = 0.0  # flat (empty selection) share of the samples of cases without a region mask
+    region_share: float = 0.0  # unmasked cases: mean share of the points in the valid region (a random point's hit)
     inference_ms_p50: float = 0.0  # one prediction, batch 1, K = 1
 
 
@@ -79,6 +82,7 @@ def evaluate_properties(cases: list[TestCase], hand: Hand, predictor: Any, k: in
     """The three checks of the module docstring on ``cases`` with ``hand``."""
     modes, inside, total, empty, mask_cases = [], 0, 0, 0, 0
     deltas, changed, tops, top_total, times, empty_full, full_cases = [], 0, 0, 0, [], 0, 0
+    shares: list[float] = []
     for i, case in enumerate(cases):
         out = predictor.predict([_inputs(case, hand)], num_samples=k, seed=seed + i)[0]
         t0 = time.perf_counter()
@@ -87,6 +91,7 @@ def evaluate_properties(cases: list[TestCase], hand: Hand, predictor: Any, k: in
         if case.valid_region is not None and case.mask.all():  # a partial mask lies around the label's contacts
             tops += int(case.valid_region[out.heatmaps.argmax(axis=1)].sum())
             top_total += k
+            shares.append(float(case.valid_region.mean()))
         scale = float(np.ptp(case.points, axis=0).max())
         sets = [_select(case, out.heatmaps[j], out.force_maps[j], hand) for j in range(k)]
         empty += sum(len(s) == 0 for s in sets)
@@ -121,5 +126,6 @@ def evaluate_properties(cases: list[TestCase], hand: Hand, predictor: Any, k: in
         top_in_region=tops / top_total if top_total else 0.0,
         top_cases=top_total // k,
         empty_unmasked=empty_full / max(full_cases * k, 1),
+        region_share=float(np.mean(shares)) if shares else 0.0,
         inference_ms_p50=1e3 * float(np.median(times)) if times else 0.0,
     )

@@ -72,3 +72,19 @@ def test_an_input_that_is_not_a_case_is_refused() -> None:
     other = dataclasses.replace(case, motion=-case.motion)
     with pytest.raises(KeyError):
         OraclePredictor([case]).predict([_inputs(other, get_hand("panda_gripper"))])
+
+
+def test_the_oracle_tops_its_region_where_a_random_point_rarely_would() -> None:
+    from models.data.grasp_sets import set_maps
+    from models.evaluation.properties import evaluate_properties
+
+    obj = make_object("box", 0.1, 0, num_points=1024)
+    case = _case(_opposite_pairs(obj.points, obj.normals, 2))
+    assert case.grasp_contacts is not None and case.grasp_normals is not None and case.grasp_forces is not None
+    heat, _ = set_maps(case.points, case.normals, case.grasp_contacts, case.grasp_normals, case.grasp_forces,
+                       float(np.ptp(case.points, axis=0).max()))  # fmt: skip
+    case.valid_region = (heat >= 0.5).any(axis=0)
+    report = evaluate_properties([case], get_hand("panda_gripper"), OraclePredictor([case]), k=4)
+    assert report.top_in_region == 1.0 and report.top_cases == 1
+    assert report.region_share == pytest.approx(float(case.valid_region.mean()))
+    assert 0.0 < report.region_share < 0.2 and report.empty_unmasked == 0.0
