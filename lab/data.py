@@ -1,4 +1,5 @@
-"""`mani data generate`: labelled training data for rigid and articulated objects (see models/data)."""
+"""`mani data generate`: labelled training data for rigid and articulated objects (see models/data);
+`mani data labels`: how dense those labels are (`models.data.label_density`)."""
 
 from __future__ import annotations
 
@@ -39,6 +40,12 @@ def register(subparsers: Any) -> None:
     g.add_argument("--examples-per-body", type=int, default=4, help="simulated manipulations per deformable body")
     g.add_argument("--no-progress", action="store_true")
     g.set_defaults(func=_generate)
+    lab = sub.add_parser("labels", help="how much of each object its valid grasps cover, and simple rules' hits")
+    lab.add_argument("data", nargs="+", help="generated data directories")
+    lab.add_argument("--splits", default="train,test_so,test_uo", help="comma-separated splits")
+    lab.add_argument("--limit", type=int, default=2000, help="examples read (evenly spaced), at most")
+    lab.add_argument("--seed", type=int, default=0)
+    lab.set_defaults(func=_labels)
 
 
 def _generate(args: argparse.Namespace) -> int:
@@ -76,4 +83,31 @@ def _generate(args: argparse.Namespace) -> int:
     )
     manifest = generate(cfg, args.out, workers=args.workers, progress=not args.no_progress)
     print(json.dumps(manifest["totals"], indent=1))
+    return 0
+
+
+def _labels(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from models.data.dataset import example_sets, load_examples
+    from models.data.label_density import label_density
+
+    print("| data | split | examples | valid grasps an example | points in the valid region | in its own grasp's "
+          "| hit: random point | hit: most-opposed normal | hit: farthest point |")
+    print("|---|---|--:|--:|--:|--:|--:|--:|--:|")
+    for d in args.data:
+        for split in args.splits.split(","):
+            try:
+                ex = load_examples(d, (split,))
+            except ValueError:
+                continue
+            pick = np.unique(np.linspace(0, len(ex) - 1, min(args.limit, len(ex))).astype(int))
+            rows = []
+            for i in pick:
+                o = ex.obj_index[i]
+                set_heat, _ = example_sets(ex, int(i), slice(None))
+                rows.append((ex.points[o], ex.normals[o], ex.motion[i], set_heat, ex.heat[i]))
+            r = label_density(rows, args.seed)
+            print(f"| {d} | {split} | {r.examples} | {r.set_size:.1f} | {r.coverage:.1%} | {r.own:.1%} | "
+                  f"{r.hit_random:.1%} | {r.hit_push:.1%} | {r.hit_far:.1%} |")
     return 0
