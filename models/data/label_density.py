@@ -66,7 +66,7 @@ def label_density(
     rng = np.random.default_rng(seed)
     sizes, cover, own, hits = [], [], [], []
     for pts, nrm, mot, set_heat, own_heat in rows:
-        region: np.ndarray = np.asarray(set_heat >= VALID_HEAT).any(axis=0)
+        region = np.asarray((np.asarray(set_heat) >= VALID_HEAT).any(axis=0), dtype=bool)
         sizes.append(len(set_heat))
         cover.append(float(region.mean()))
         own.append(float((own_heat >= VALID_HEAT).mean()))
