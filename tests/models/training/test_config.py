@@ -24,6 +24,13 @@ def test_yaml_and_overrides(tmp_path: Path) -> None:
 def test_shipped_config_loads() -> None:
     cfg = load_config(Path(__file__).parents[3] / "configs" / "train_cpu.yaml")
     assert cfg.network == "cpu"
+    dense = load_config(Path(__file__).parents[3] / "configs" / "train_dense.yaml")
+    assert dense.network == "cpu1k" and dense.heat_loss == "bce" and dense.max_set == 32
+
+
+def test_an_unknown_heat_loss_is_refused_by_name(tmp_path: Path) -> None:
+    with pytest.raises(ValueError, match="heat_loss must be one of"):
+        load_config(None, ["heat_loss=l1"])
 
 
 def test_schedule_warms_up_then_decays() -> None:
