@@ -28,7 +28,7 @@ def test_shipped_config_loads() -> None:
     assert dense.network == "cpu1k" and dense.heat_loss == "bce" and dense.max_set == 32
 
 
-def test_an_unknown_heat_loss_is_refused_by_name(tmp_path: Path) -> None:
+def test_an_unknown_heat_loss_is_refused_by_name() -> None:
     with pytest.raises(ValueError, match="heat_loss must be one of"):
         load_config(None, ["heat_loss=l1"])
 
