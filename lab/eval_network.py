@@ -16,7 +16,7 @@ from typing import Any
 def add_network_parser(eval_subparsers: Any) -> None:
     """Add ``network`` under ``mani eval``."""
     p = eval_subparsers.add_parser("network", help="network + refinement vs random contacts + refinement")
-    p.add_argument("--weights", default="models/weights/cpu", help="checkpoint directories, comma-separated")
+    p.add_argument("--weights", default="models/weights/cpu1k", help="checkpoint directories, comma-separated")
     p.add_argument("--data", default="data/v4", help="generated data directory (its test split)")
     p.add_argument("--split", default="test_uo", help="test_uo: unseen objects and motions; test_so: seen objects")
     p.add_argument("--hand", default="allegro")

@@ -160,7 +160,7 @@ def add_deformable(sub: Any) -> None:
     d.add_argument("--cases", type=int, default=10, help="cases per (material, split)")
     d.add_argument("--contacts", type=int, default=2, help="contacts of the random baselines (default 2)")
     d.add_argument("--hand", default="panda_gripper", help="hand the network is conditioned on (H ≤ fingertips)")
-    d.add_argument("--weights", default="models/weights/cpu", help="checkpoint directory of the network")
+    d.add_argument("--weights", default="models/weights/cpu1k", help="checkpoint directory of the network")
     d.add_argument("--seed", type=int, default=0, help="seed of the cases and the baselines")
     d.add_argument("--data-seed", type=int, default=0, help="seed of the data set whose bodies are used")
     d.add_argument("--sensitivity", type=int, default=0,

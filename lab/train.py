@@ -12,7 +12,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--config", default="configs/train_cpu.yaml", help="YAML training config")
     p.add_argument("--resume", action="store_true", help="continue the run in the config's `out` directory")
     p.add_argument(
-        "--export", default=None, help="after training, copy the best checkpoint here (e.g. models/weights/cpu)"
+        "--export", default=None, help="after training, copy the best checkpoint here (e.g. models/weights/cpu1k)"
     )
     p.add_argument(
         "--export-checkpoint",
