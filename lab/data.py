@@ -81,6 +81,12 @@ def _generate(args: argparse.Namespace) -> int:
         palms=args.palms,
         test_objects_only=args.test_objects_only,
     )
+    from models.robots import list_hands
+
+    unknown_hands = sorted({h for h in (*cfg.hands, *cfg.held_out_hands) if h} - set(list_hands(aliases=True)))
+    if unknown_hands:
+        raise SystemExit(f"--hands / --held-out-hands: unknown {', '.join(unknown_hands)} "
+                         f"(built-in: {', '.join(list_hands(aliases=True))})")  # fmt: skip
     manifest = generate(cfg, args.out, workers=args.workers, progress=not args.no_progress)
     print(json.dumps(manifest["totals"], indent=1))
     return 0

@@ -79,10 +79,11 @@ def make_dataset_object(cfg: DataConfig, i: int) -> ProceduralObject:
 
 
 def available_hands(names: tuple[str, ...]) -> list[str]:
-    """The names in ``names`` that the hand registry knows (others are skipped with a note)."""
+    """The names in ``names`` that the hand registry knows, old names (aliases) included; others are skipped
+    (``mani data generate`` refuses them by name first)."""
     from models.robots import list_hands
 
-    known = set(list_hands())
+    known = set(list_hands(aliases=True))
     return [n for n in names if n in known]
 
 
