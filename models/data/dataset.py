@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import json
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -80,13 +81,14 @@ OBJECT_EXTRA = ("ids", "kinds", "scale", "centre", "mass", "inertia", "length", 
 SET_KEYS = ("set_contacts", "set_normals", "set_forces", "set_count")
 
 
-def cached_grasp_sets(shard: Path, z: Any) -> GraspSets:
-    """The shard's grasp sets, from ``shard-*.sets.npz`` beside it when that is newer, else computed and cached."""
+def cached_grasp_sets(shard: Path, z: Mapping[str, np.ndarray]) -> GraspSets:
+    """The shard's grasp sets, from ``shard-*.sets.npz`` beside it when that is newer, else computed from ``z``
+    (the shard's arrays: its open ``np.load`` or the dict it was written from) and cached."""
     side = shard.with_name(shard.name.removesuffix(".npz") + ".sets.npz")
     if side.is_file() and side.stat().st_mtime >= shard.stat().st_mtime:
         c = np.load(side)
         return GraspSets(c["contacts"], c["normals"], c["forces"], c["count"])
-    sets = shard_grasp_sets({k: z[k] for k in z.files})
+    sets = shard_grasp_sets({k: z[k] for k in z})
     tmp = side.with_name(f"{side.name}.{os.getpid()}.tmp.npz")  # two readers of one shard must not share it
     np.savez(tmp, contacts=sets.contacts, normals=sets.normals, forces=sets.forces, count=sets.count)
     os.replace(tmp, side)

@@ -207,8 +207,7 @@ def run_shard(cfg: DataConfig, index: int, out_dir: str) -> ShardResult:
     if n_ex:  # the grasp sets (one linear programme per example and grasp) in this worker, not at training time
         from models.data.dataset import cached_grasp_sets
 
-        with np.load(Path(out_dir) / name, allow_pickle=False) as z:
-            cached_grasp_sets(Path(out_dir) / name, z)
+        cached_grasp_sets(Path(out_dir) / name, arrays)
     return ShardResult(index, name, last - first, n_ex, dict(counts), time.perf_counter() - t0)
 
 
