@@ -28,6 +28,7 @@ from models.refine.wrench import articulated_task
 
 PYRAMID_EDGES = 8
 MAX_SET = 32  # grasps kept per example (its own first, then the feasible ones by grasp index)
+REGION_HEAT = 0.5  # a point is in a grasp's contact region where the grasp's heat there is at least this
 
 
 def pyramid_edges(normals: np.ndarray, mu: float) -> np.ndarray:

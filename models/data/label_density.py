@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-VALID_HEAT = 0.5  # a point is in a grasp's contact region where its heat is at least this (the evaluation's rule)
+from models.data.grasp_sets import REGION_HEAT
 
 
 @dataclass(frozen=True)
@@ -66,10 +66,10 @@ def label_density(
     rng = np.random.default_rng(seed)
     sizes, cover, own, hits = [], [], [], []
     for pts, nrm, mot, set_heat, own_heat in rows:
-        region = np.asarray((np.asarray(set_heat) >= VALID_HEAT).any(axis=0), dtype=bool)
+        region = np.asarray((np.asarray(set_heat) >= REGION_HEAT).any(axis=0), dtype=bool)
         sizes.append(len(set_heat))
         cover.append(float(region.mean()))
-        own.append(float((own_heat >= VALID_HEAT).mean()))
+        own.append(float((own_heat >= REGION_HEAT).mean()))
         hits.append(example_hits(pts, nrm, mot, region, rng))
     h = np.asarray(hits, dtype=np.float64).mean(axis=0)
     return LabelDensity(len(rows), float(np.mean(sizes)), float(np.mean(cover)), float(np.mean(own)),

@@ -13,7 +13,7 @@ import numpy as np
 
 from models.data.dataset import cached_grasp_sets
 from models.data.generate import DataConfig, make_dataset_object
-from models.data.grasp_sets import GraspSets, set_maps
+from models.data.grasp_sets import REGION_HEAT, GraspSets, set_maps
 
 
 @dataclass
@@ -112,11 +112,11 @@ def load_cases(
 
 def _grasp_set(sets: GraspSets, e: int, points: np.ndarray, normals: np.ndarray) -> dict[str, np.ndarray]:
     """Example ``e``'s valid grasps (``grasp_contacts``, ``grasp_normals``, ``grasp_forces`` (G, C, 3)) and its
-    ``valid_region`` (N,): the points where any of them has heat ≥ 0.5."""
+    ``valid_region`` (N,): the points where any of them has heat ≥ ``REGION_HEAT`` (0.5)."""
     g = int(sets.count[e])
     contacts, grasp_normals, forces = sets.contacts[e, :g], sets.normals[e, :g], sets.forces[e, :g]
     heats, _ = set_maps(points, normals, contacts, grasp_normals, forces, float(np.ptp(points, axis=0).max()))
-    region = np.asarray((heats >= 0.5).any(axis=0))
+    region = np.asarray((heats >= REGION_HEAT).any(axis=0))
     return {"grasp_contacts": contacts, "grasp_normals": grasp_normals, "grasp_forces": forces,
             "valid_region": region}  # fmt: skip
 

@@ -9,6 +9,7 @@ import numpy as np
 import torch
 
 from models.data.dataset import Examples, make_batch
+from models.data.grasp_sets import REGION_HEAT
 from models.data.prepare import PreparedObjects
 from models.network import ManiFoundationNet
 from models.training.config import TrainConfig
@@ -53,7 +54,7 @@ def evaluate(
             heat = model.decode(enc, z)[0][:, 0]  # (B, N)
             union = b.set_heat.masked_fill(~b.set_valid.unsqueeze(-1), 0.0).amax(dim=1)  # (B, N)
             sums["peak"] += float(heat.max(dim=1).values.sum())
-            hit = union.gather(1, heat.argmax(dim=1, keepdim=True))[:, 0] >= 0.5
+            hit = union.gather(1, heat.argmax(dim=1, keepdim=True))[:, 0] >= REGION_HEAT
             flat = heat.max(dim=1).values - heat.median(dim=1).values < FLAT_CONTRAST
             open_ = (b.obj.mask > 0.5).all(dim=1)
             sums["hit"] += float(hit.sum())
