@@ -23,7 +23,11 @@ def register(subparsers: Any) -> None:
     g.add_argument("--held-out-hands", default=None, help="comma-separated held-out hands (default: shadow,barrett)")
     g.add_argument("--palms", type=int, default=16, help="palm poses sampled per (object, hand)")
     g.add_argument("--grasps-per-job", type=int, default=6)
-    g.add_argument("--examples-per-grasp", type=int, default=4)
+    g.add_argument("--examples-per-grasp", type=int, default=4, help="examples with random forces per grasp")
+    g.add_argument(
+        "--targeted-per-grasp", type=int, default=0,
+        help="examples of a chosen task per grasp (a lift most often, else a push or a turn; firm forces)",
+    )  # fmt: skip
     g.add_argument("--articulated-fraction", type=float, default=0.2)
     g.add_argument("--test-fraction", type=float, default=0.15)
     g.add_argument(
@@ -78,6 +82,7 @@ def _generate(args: argparse.Namespace) -> int:
         held_out_hands=tuple(args.held_out_hands.split(",")) if args.held_out_hands is not None else HELD_OUT_HANDS,
         grasps_per_job=args.grasps_per_job,
         examples_per_grasp=args.examples_per_grasp,
+        targeted_per_grasp=args.targeted_per_grasp,
         palms=args.palms,
         test_objects_only=args.test_objects_only,
     )

@@ -132,24 +132,42 @@ def make_example(
         break
     else:
         return None
-    size = float(np.exp(rng.uniform(*np.log(MOTION_SCALE)))) * info.scale
-    out: dict[str, Any] = {"friction": mu, "forces": forces, "articulated": joint is not None}
     if joint is None:
-        dx, dth = motion_from_wrench(contact_wrench(contacts, forces, info.centre), info.mass, info.inertia)
-        dx, dth = scale_motion(info.points, info.centre, dx, dth, size)
-        out["motion"] = rigid_point_motion(info.points, info.centre, dx, dth)
-        out["delta_x"], out["delta_theta"] = dx, dth
-        out["joint_type"], out["joint_axis"], out["joint_origin"] = "", np.zeros(3), np.zeros(3)
+        return rigid_labels(info, contacts, normals, forces, mu, rng)
+    jt, axis, origin = joint
+    rng.uniform()  # the motion size a rigid example draws here: kept, so a seed's data set is what it was
+    if jt == "revolute":
+        amount = sign * float(rng.uniform(*REVOLUTE_ANGLE))
     else:
-        jt, axis, origin = joint
-        if jt == "revolute":
-            amount = sign * float(rng.uniform(*REVOLUTE_ANGLE))
-        else:
-            amount = sign * float(rng.uniform(*PRISMATIC_SHIFT)) * info.scale
-        out["motion"] = joint_point_motion(info.points, jt, axis, origin, amount)
-        out["delta_x"], out["delta_theta"] = np.zeros(3), np.zeros(3)
-        out["joint_type"], out["joint_axis"], out["joint_origin"] = jt, axis, origin
-        out["joint_amount"] = amount
+        amount = sign * float(rng.uniform(*PRISMATIC_SHIFT)) * info.scale
+    out: dict[str, Any] = {"friction": mu, "forces": forces, "articulated": True}
+    out["motion"] = joint_point_motion(info.points, jt, axis, origin, amount)
+    out["delta_x"], out["delta_theta"] = np.zeros(3), np.zeros(3)
+    out["joint_type"], out["joint_axis"], out["joint_origin"] = jt, axis, origin
+    out["joint_amount"] = amount
+    return _with_maps(out, info, contacts, normals, forces, rng)
+
+
+def rigid_labels(
+    info: ObjectInfo, contacts: np.ndarray, normals: np.ndarray, forces: np.ndarray, mu: float,
+    rng: np.random.Generator,
+) -> dict[str, Any]:  # fmt: skip
+    """A rigid example's labels for a grasp and its forces (m, 3): the motion of their wrench (inverse of Eq. 4,
+    scaled to a random size), heatmap, force map, region mask."""
+    size = float(np.exp(rng.uniform(*np.log(MOTION_SCALE)))) * info.scale
+    out: dict[str, Any] = {"friction": mu, "forces": forces, "articulated": False}
+    dx, dth = motion_from_wrench(contact_wrench(contacts, forces, info.centre), info.mass, info.inertia)
+    dx, dth = scale_motion(info.points, info.centre, dx, dth, size)
+    out["motion"] = rigid_point_motion(info.points, info.centre, dx, dth)
+    out["delta_x"], out["delta_theta"] = dx, dth
+    out["joint_type"], out["joint_axis"], out["joint_origin"] = "", np.zeros(3), np.zeros(3)
+    return _with_maps(out, info, contacts, normals, forces, rng)
+
+
+def _with_maps(
+    out: dict[str, Any], info: ObjectInfo, contacts: np.ndarray, normals: np.ndarray, forces: np.ndarray,
+    rng: np.random.Generator,
+) -> dict[str, Any]:  # fmt: skip
     heat, force_map = heat_and_force(info.points, info.normals, contacts, normals, forces, info.scale)
     out["heat"], out["force_map"] = heat, force_map
     out["mask"] = region_mask(info.points, contacts, info.scale, rng)

@@ -53,6 +53,7 @@ class DataConfig:
     held_out_hands: tuple[str, ...] = HELD_OUT_HANDS
     grasps_per_job: int = 6
     examples_per_grasp: int = 4
+    targeted_per_grasp: int = 0  # examples of a chosen task (lift, push, turn: `models.data.targeted`) per grasp
     palms: int = 16
     num_points: int = 2048
     kinds: tuple[str, ...] = ()  # empty: every kind of models.objects
@@ -104,6 +105,7 @@ def run_shard(cfg: DataConfig, index: int, out_dir: str) -> ShardResult:
     from models.data.checks import ObjectField
     from models.data.examples import ObjectInfo, make_example
     from models.data.sampling import sample_grasps
+    from models.data.targeted import make_targeted_example
     from models.robots import get_hand
 
     torch.set_num_threads(1)
@@ -147,21 +149,18 @@ def run_shard(cfg: DataConfig, index: int, out_dir: str) -> ShardResult:
                 counts[f"errors/{hand_name}/{type(exc).__name__}"] += 1
                 continue
             for g in grasps:
-                for _ in range(cfg.examples_per_grasp):
+                for k in range(cfg.examples_per_grasp + cfg.targeted_per_grasp):
                     if hand_name in held or split == "test":
                         which, unseen = "test_uo" if split == "test" else "test_so", True
                     elif rng.random() < cfg.unseen_motion_fraction:
                         which, unseen = "test_so", True
                     else:
                         which, unseen = "train", False
-                    e = make_example(
-                        info,
-                        g.contacts,
-                        g.normals,
-                        rng,
-                        want_unseen=unseen,
-                        articulated=bool(rng.random() < cfg.articulated_fraction),
-                    )
+                    if k < cfg.examples_per_grasp:
+                        articulated = bool(rng.random() < cfg.articulated_fraction)
+                        e = make_example(info, g.contacts, g.normals, rng, want_unseen=unseen, articulated=articulated)
+                    else:
+                        e = make_targeted_example(info, g.contacts, g.normals, rng, want_unseen=unseen)
                     if e is None:
                         continue
                     m = len(g.contacts)
