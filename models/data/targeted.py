@@ -7,7 +7,10 @@ A targeted example picks the task first — a unit scaled wrench near one of the
 the grasp for it: a linear programme over 8-sided friction pyramids (`models.data.grasp_sets.pyramid_edges`,
 inside the cones) with every normal force ≤ 1 (the refinement's bound) and the smallest normal force as large
 as it can be, so every finger presses (the grasp a person would call firm), not only the few a vertex of the
-programme would pick. An infeasible programme means this grasp cannot do that task: no example.
+programme would pick. An infeasible programme means this grasp cannot do that task, and another task is drawn.
+Measured on the dense data's Allegro and LEAP grasps (μ = 0.65, 259 grasps of four objects): a force along one
+axis is feasible for 0-26 % of the grasps, a pure torque for almost none (the ≤ 1 bound against the levers a
+fingertip grasp has), so the tasks that make it into the data are mostly lifts and pushes.
 
 The labels are made as for a random-force example (`models.data.examples.rigid_labels`), so a targeted example
 is an ordinary rigid example to the data set and the grasp sets.
@@ -27,7 +30,7 @@ from models.refine.grasp import grasp_maps
 FORCE_SHARE = 0.7  # of targeted examples, a force (translation); the rest a torque (turn in place)
 LIFT_SHARE = 0.5  # of the forces, +z (the lift); the other five force directions share the rest
 JITTER = 0.25  # size of the random part added to the axis direction, before normalising
-TARGET_TRIES = 6
+TARGET_TRIES = 24  # tasks drawn per example; one linear programme (≈ 1 ms) each
 
 # the 12 axis directions of the scaled wrench: +x, −x, +y, −y, +z, −z forces, then the same torques
 AXIS_DIRECTIONS = np.kron(np.eye(6), [[1.0], [-1.0]])
