@@ -10,7 +10,9 @@ grasps per second (one core, requests one after the other).
 ``--compare REF`` runs the same requests through a second checkout (``git worktree add /tmp/ref main``) in its own
 worker process (``PYTHONPATH=REF``, same interpreter), interleaved request by request (A B A B: both see the same
 machine load), and prints both, the ratios, and how many answers are identical (same success, joints and palm
-within 1e-9). Both workers run this file as a script, so the reference needs no copy of it.
+within 1e-9). Both workers run this file as a script, so the reference needs no copy of it. ``--compare-method
+M`` does the same with this checkout and another method: ``--method network --compare-method random_contacts``
+is the network's starts against random ones on the same requests (``--weights`` picks the network).
 
 Objects: ``third_party`` (the audit's meshes that installed packages ship, `models.audit.third_party_objects`;
 there are 43, the first 18 the original set; ``--seeds`` repeats each with other samples and contacts; each spec
@@ -60,6 +62,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--points", type=int, default=2048, help="surface points sent (third_party)")
     p.add_argument("--audit", type=int, default=0, help="audit the proposals of the first N requests per hand")
     p.add_argument("--compare", default=None, help="a reference checkout's root, run side by side")
+    p.add_argument("--compare-method", default=None,
+                   help="run the same requests through this checkout with this method too, side by side (e.g. "
+                        "--method network --compare-method random_contacts)")
+    p.add_argument("--weights", default=str(ROOT / "models/weights/cpu1k"), help="network weights (method network)")
     p.add_argument("--json", default=None, help="also write every request's record here")
     p.add_argument("--workers", type=int, default=1,
                    help="N > 1: the batch mode, every request through N worker processes at once (one thread "
@@ -88,6 +94,7 @@ def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
                 out.append({"hand": hand, "set": args.set, "object": obj, "name": name, "path": path,
                             "seed": seed, "task": args.task,
                             "geometry": args.geometry, "proposals": args.proposals, "method": args.method,
+                            "weights": str(Path(args.weights).resolve()),
                             "points": args.points, "audit": n < args.audit and args.set != "box",
                             "box": str(ROOT / "examples/data/box.npz")})
                 n += 1
@@ -98,11 +105,16 @@ def run(args: argparse.Namespace) -> int:
     """Run every request in the worker(s), interleaved, and print the tables."""
     specs = requests(args)
     trees = {"current": str(ROOT)}
+    changes: dict[str, dict[str, Any]] = {"current": {}}
     if args.compare:
         trees["reference"] = str(Path(args.compare).resolve())
+        changes["reference"] = {}
+    if args.compare_method:
+        trees[args.compare_method] = str(ROOT)
+        changes[args.compare_method] = {"method": args.compare_method}
     if args.workers > 1:
-        return _batch(args, specs, trees)
-    workers = {name: _Worker(tree) for name, tree in trees.items()}
+        return _batch(args, specs, trees, changes)
+    workers = {name: _Worker(tree, changes[name]) for name, tree in trees.items()}
     records: dict[str, list[dict[str, Any]]] = {name: [] for name in trees}
     try:
         from tqdm import tqdm
@@ -127,7 +139,8 @@ def run(args: argparse.Namespace) -> int:
     return EXIT_OK
 
 
-def _batch(args: argparse.Namespace, specs: list[dict[str, Any]], trees: dict[str, str]) -> int:
+def _batch(args: argparse.Namespace, specs: list[dict[str, Any]], trees: dict[str, str],
+           changes: dict[str, dict[str, Any]]) -> int:  # fmt: skip
     """The batch mode: each checkout's N workers take the requests from one queue; checkouts in turn, twice."""
     from rich.console import Console
 
@@ -135,7 +148,7 @@ def _batch(args: argparse.Namespace, specs: list[dict[str, Any]], trees: dict[st
     rounds: dict[str, list[tuple[float, list[dict[str, Any]]]]] = {name: [] for name in trees}
     for _ in range(2):
         for name, tree in trees.items():
-            rounds[name].append(_pool_run(tree, specs, args.workers))
+            rounds[name].append(_pool_run(tree, specs, args.workers, changes[name]))
     load = os.getloadavg()
     for name, runs in rounds.items():
         for k, (wall, recs) in enumerate(runs):
@@ -153,13 +166,14 @@ def _batch(args: argparse.Namespace, specs: list[dict[str, Any]], trees: dict[st
     return EXIT_OK
 
 
-def _pool_run(tree: str, specs: list[dict[str, Any]], count: int) -> tuple[float, list[dict[str, Any]]]:
+def _pool_run(tree: str, specs: list[dict[str, Any]], count: int,
+              change: dict[str, Any]) -> tuple[float, list[dict[str, Any]]]:  # fmt: skip
     """Every spec through ``count`` workers of ``tree`` (each takes the next request when done): wall seconds
     (warm-up excluded) and the records in spec order."""
     import queue
     from concurrent.futures import ThreadPoolExecutor
 
-    pool = [_Worker(tree) for _ in range(count)]
+    pool = [_Worker(tree, change) for _ in range(count)]
     free: queue.Queue[_Worker] = queue.Queue()
     first = [dict(s, audit=False) for s in {s["hand"]: s for s in reversed(specs)}.values()]
 
@@ -185,16 +199,18 @@ def _pool_run(tree: str, specs: list[dict[str, Any]], count: int) -> tuple[float
 
 
 class _Worker:
-    """A worker process running this file against one checkout (``PYTHONPATH=tree``), one request per line."""
+    """A worker process running this file against one checkout (``PYTHONPATH=tree``), one request per line;
+    ``change`` replaces fields of every spec it is asked (another method)."""
 
-    def __init__(self, tree: str) -> None:
+    def __init__(self, tree: str, change: dict[str, Any] | None = None) -> None:
+        self.change = dict(change or {})
         env = dict(os.environ, PYTHONPATH=tree, OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
         self.proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker"], env=env,
                                      stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=tree)
 
     def ask(self, spec: dict[str, Any]) -> dict[str, Any]:
         assert self.proc.stdin is not None and self.proc.stdout is not None
-        self.proc.stdin.write(json.dumps(spec) + "\n")
+        self.proc.stdin.write(json.dumps(dict(spec, **self.change)) + "\n")
         self.proc.stdin.flush()
         line = self.proc.stdout.readline()
         if not line:

@@ -29,6 +29,8 @@ def summary(records: list[dict[str, Any]]) -> dict[str, float]:
         out[f"{part}_ms"] = 1e3 * sum(r[part] for r in records) / max(lin_calls, 1)
     out["solve_ms"] = 1e3 * sum(r["solve"] for r in records) / max(sum(r["solve_calls"] for r in records), 1)
     out["iterations"] = float(np.mean([r["iterations"] for r in records]))
+    sources = [src for r in records for src in r.get("sources", [])]
+    out["fallback"] = float(np.mean([src == "random_fallback" for src in sources])) if sources else float("nan")
     audited = [r for r in records if r["audit"] is not None]
     out["audited"] = float(len(audited))
     out["audit_best"] = float(np.mean([r["audit"][0] for r in audited])) if audited else float("nan")
@@ -56,7 +58,8 @@ def largest_difference(a: dict[str, Any], b: dict[str, Any]) -> float:
 
 def print_report(specs: list[dict[str, Any]], records: dict[str, list[dict[str, Any]]],
                  load: tuple[float, float, float]) -> None:  # fmt: skip
-    """Print one table row per (hand, checkout), and with two checkouts the ratios and the identical answers."""
+    """Print one table row per (hand, checkout or method), and with two of them the ratios and the identical
+    answers (the second against the first)."""
     from rich.console import Console
     from rich.table import Table
 
@@ -66,7 +69,8 @@ def print_report(specs: list[dict[str, Any]], records: dict[str, list[dict[str, 
     table = Table(title=f"one request through run_pipeline: set {spec0['set']}, task {spec0['task']}, "
                         f"{spec0['proposals']} proposal(s), method {spec0['method']}, one thread per worker")
     cols = ("hand", "tree", "req", "p50 s", "p90 s", "mean s", "ok/s", "ok %", "prep", "init", "refine",
-            "verify", "iters", "lin ms", "contact", "guards", "solve ms", "audited", "audit %", "false")  # fmt: skip
+            "verify", "iters", "lin ms", "contact", "guards", "solve ms", "audited", "audit %", "false",
+            "fallback %")  # fmt: skip
     for c in cols:
         table.add_column(c, justify="left" if c in ("hand", "tree") else "right")
     stats: dict[tuple[str, str], dict[str, float]] = {}
@@ -79,22 +83,25 @@ def print_report(specs: list[dict[str, Any]], records: dict[str, list[dict[str, 
                           f"{s['initialisation']:.3f}", f"{s['refinement']:.3f}", f"{s['verification']:.3f}",
                           f"{s['iterations']:.1f}", f"{s['linearise_ms']:.1f}", f"{s['contacts_ms']:.1f}",
                           f"{s['guards_ms']:.1f}", f"{s['solve_ms']:.1f}", f"{s['audited']:.0f}",
-                          f"{100 * s['audit_best']:.0f}", f"{s['false_claims']:.0f}")  # fmt: skip
+                          f"{100 * s['audit_best']:.0f}", f"{s['false_claims']:.0f}",
+                          f"{100 * s['fallback']:.0f}")  # fmt: skip
     console.print(table)
     console.print(f"load average during the run (1, 5, 15 min): {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
     console.print("ok/s: verified grasps per second; ok %: best proposal verified; prep .. verify: mean s per "
                   "request; lin ms: per linearisation, of which contact (real-surface model) and guards (its "
                   "object-point rows); solve ms: per SCP solve; audit %: best proposal passes the outside audit; "
-                  "false: claimed successes the audit rejects")
-    if set(records) == {"current", "reference"}:
+                  "false: claimed successes the audit rejects; fallback %: proposals whose network heatmap was flat "
+                  "(random contacts instead)")
+    if len(records) == 2:
+        current, reference = list(records)
         for hand in hands:
-            a, b = stats[hand, "current"], stats[hand, "reference"]
+            a, b = stats[hand, current], stats[hand, reference]
             idx = [i for i, s in enumerate(specs) if s["hand"] == hand]
-            cur, ref = records["current"], records["reference"]
+            cur, ref = records[current], records[reference]
             same = sum(identical(cur[i], ref[i]) for i in idx)
             verdicts = sum(cur[i]["success"] == ref[i]["success"] for i in idx)
             gap = max(largest_difference(cur[i], ref[i]) for i in idx)
-            console.print(f"{hand}: reference / current  p50 ×{b['p50'] / a['p50']:.2f}, "
+            console.print(f"{hand}: {reference} / {current}  p50 ×{b['p50'] / a['p50']:.2f}, "
                           f"p90 ×{b['p90'] / a['p90']:.2f}, "
                           f"mean ×{b['mean'] / a['mean']:.2f}; verified/s {a['verified_per_s']:.2f} vs "
                           f"{b['verified_per_s']:.2f}; identical answers {same}/{len(idx)} (same verdicts "

@@ -151,14 +151,31 @@ def _audit(spec: dict[str, Any], out: Any, mesh: Any, points: np.ndarray, normal
     return passed
 
 
+_PREDICTORS: dict[str, Any] = {}
+
+
+def _predictor(spec: dict[str, Any]) -> Any:
+    """The network of a "network" request (``spec["weights"]``, loaded once per worker), else None."""
+    if spec["method"] != "network":
+        return None
+    path = str(spec["weights"])
+    if path not in _PREDICTORS:
+        from models.network import ContactPredictor
+
+        _PREDICTORS[path] = ContactPredictor.from_checkpoint(path)
+    return _PREDICTORS[path]
+
+
 def run_one(spec: dict[str, Any], objects: _Objects, timers: _Timers) -> dict[str, Any]:
-    """Run one request; its record: wall seconds, stage and part seconds, iterations, claims, audit, answers."""
+    """Run one request; its record: wall seconds, stage and part seconds, iterations, claims, audit, answers,
+    where each proposal's contacts came from."""
     from models.pipeline import run_pipeline
 
     inp, mesh, points, normals = _request(spec, objects)
+    predictor = _predictor(spec)
     timers.take()
     t0 = time.perf_counter()
-    out = run_pipeline(inp)
+    out = run_pipeline(inp, predictor=predictor)
     wall = time.perf_counter() - t0
     record: dict[str, Any] = {"wall": wall, "stages": {k: float(v) for k, v in out.timings.items()}}
     record.update(timers.take())
@@ -166,6 +183,7 @@ def run_one(spec: dict[str, Any], objects: _Objects, timers: _Timers) -> dict[st
     record["success"] = [bool(p.quality.success) for p in out.proposals]
     record["answers"] = [np.concatenate([p.palm_position, p.palm_quaternion, p.joint_values]).tolist()
                          for p in out.proposals]  # fmt: skip
+    record["sources"] = [str(getattr(p, "contact_source", "")) for p in out.proposals]
     record["audit"] = _audit(spec, out, mesh, points, normals) if spec["audit"] and mesh is not None else None
     return record
 

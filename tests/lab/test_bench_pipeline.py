@@ -68,6 +68,24 @@ def test_worker_times_a_real_request() -> None:
     assert np.isfinite(rec["answers"][0]).all() and len(rec["answers"][0]) == 7 + get_hand("panda_gripper").dof
 
 
+def test_worker_runs_the_network_of_the_named_weights_and_says_where_contacts_came_from() -> None:
+    spec = {"hand": "allegro", "set": "box", "object": 0, "seed": 0, "task": "lift", "geometry": "mesh",
+            "proposals": 2, "method": "network", "weights": "models/weights/cpu1k", "points": 1024, "audit": False,
+            "box": "examples/data/box.npz"}  # fmt: skip
+    timers = _Timers()
+    rec = run_one(spec, _Objects(), timers)
+    assert rec["stages"]["network"] > 0
+    assert len(rec["sources"]) == 2 and set(rec["sources"]) <= {"network", "random_fallback"}
+    rec = run_one(dict(spec, method="random_contacts"), _Objects(), timers)
+    assert rec["sources"] == ["random", "random"]
+
+
+def test_summary_counts_flat_heatmaps() -> None:
+    recs = [dict(_record(0.1, [True, True]), sources=["network", "random_fallback"]),
+            dict(_record(0.1, [True]), sources=["random_fallback"])]  # fmt: skip
+    assert summary(recs)["fallback"] == pytest.approx(2 / 3)
+
+
 def test_largest_difference() -> None:
     from lab.bench_pipeline_report import largest_difference
 
