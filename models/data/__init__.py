@@ -2,7 +2,8 @@
 
 Pipeline per (object, hand): `sampling` (palm poses facing the object → per-finger damped-least-squares IK
 onto surface points (`ik`) → combinations → exact rejection tests (`checks`)) → `examples` (forces in friction
-cones, summed wrench, inverse of Eq. 4 → target motion; articulated joints from the joint-space residual) →
+cones, summed wrench, inverse of Eq. 4 → target motion; articulated joints from the joint-space residual; and
+`targeted`: a chosen task — a lift, a push, a turn — with firm forces that produce it, when the grasp can) →
 `labels` (documented heat kernel, force map, region masks). `generate` writes seeded, resumable shards with a
 manifest using worker processes (`mani data generate`); `dataset` reads them for training, with each example's
 grasp set (`grasp_sets`: the grasps of the same object and hand that can produce its motion, cached beside each
