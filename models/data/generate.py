@@ -149,14 +149,14 @@ def run_shard(cfg: DataConfig, index: int, out_dir: str) -> ShardResult:
                 counts[f"errors/{hand_name}/{type(exc).__name__}"] += 1
                 continue
             for g in grasps:
-                for k in range(cfg.examples_per_grasp + cfg.targeted_per_grasp):
+                for nth in range(cfg.examples_per_grasp + cfg.targeted_per_grasp):
                     if hand_name in held or split == "test":
                         which, unseen = "test_uo" if split == "test" else "test_so", True
                     elif rng.random() < cfg.unseen_motion_fraction:
                         which, unseen = "test_so", True
                     else:
                         which, unseen = "train", False
-                    if k < cfg.examples_per_grasp:
+                    if nth < cfg.examples_per_grasp:
                         articulated = bool(rng.random() < cfg.articulated_fraction)
                         e = make_example(info, g.contacts, g.normals, rng, want_unseen=unseen, articulated=articulated)
                     else:
