@@ -40,6 +40,29 @@ def pyramid_edges(normals: np.ndarray, mu: float) -> np.ndarray:
     return result
 
 
+def pyramid_programme(
+    contacts: np.ndarray, normals: np.ndarray, mu: float, centre: np.ndarray, length: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The parts of a linear programme over the friction pyramids' edge weights λ (m·E of them, ≥ 0).
+
+    Returns:
+        edges: (m, E, 3) the pyramids' edges (:func:`pyramid_edges`).
+        wrench: (6, m·E) the scaled wrench ``Σ G_i f_i`` of unit weights (``wrench @ λ``).
+        normal: (m, m·E) each contact's normal force (``normal @ λ``: the edges' normal parts are 1).
+    """
+    m = len(contacts)
+    edges = pyramid_edges(normals, mu)
+    g = grasp_maps(contacts, centre, length)  # (m, 6, 3)
+    wrench = np.einsum("mij,mej->ime", g, edges).reshape(6, m * PYRAMID_EDGES)
+    return edges, wrench, np.kron(np.eye(m), np.ones((1, PYRAMID_EDGES)))
+
+
+def pyramid_forces(weights: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """Forces (m, 3) of edge weights (m·E,) on ``edges`` (m, E, 3)."""
+    forces: np.ndarray = np.einsum("me,mej->mj", weights.reshape(edges.shape[:2]), edges)
+    return forces
+
+
 def feasible_forces(
     contacts: np.ndarray, normals: np.ndarray, mu: float, rows: np.ndarray, target: np.ndarray, centre: np.ndarray,
     length: float,
@@ -54,19 +77,14 @@ def feasible_forces(
         centre, length: the object's centre of mass and characteristic length (the scaled wrench's).
     """
     m = len(contacts)
-    edges = pyramid_edges(normals, mu)  # (m, E, 3)
-    g = grasp_maps(contacts, centre, length)  # (m, 6, 3)
-    a_eq = rows @ np.einsum("mij,mej->ime", g, edges).reshape(6, m * PYRAMID_EDGES)
-    a_ub = np.kron(np.eye(m), np.ones((1, PYRAMID_EDGES)))
+    edges, wrench, normal = pyramid_programme(contacts, normals, mu, centre, length)
     res = linprog(
-        np.ones(m * PYRAMID_EDGES), A_ub=a_ub, b_ub=np.ones(m), A_eq=a_eq, b_eq=target, bounds=(0, None),
+        np.ones(m * PYRAMID_EDGES), A_ub=normal, b_ub=np.ones(m), A_eq=rows @ wrench, b_eq=target, bounds=(0, None),
         method="highs",
     )  # fmt: skip
     if res.status != 0:
         return None
-    lam = res.x.reshape(m, PYRAMID_EDGES)
-    result: np.ndarray = np.einsum("me,mej->mj", lam, edges)
-    return result
+    return pyramid_forces(res.x, edges)
 
 
 @dataclass

@@ -24,8 +24,7 @@ import numpy as np
 from scipy.optimize import linprog
 
 from models.data.examples import FRICTION, ObjectInfo, is_unseen_motion, rigid_labels
-from models.data.grasp_sets import PYRAMID_EDGES, pyramid_edges
-from models.refine.grasp import grasp_maps
+from models.data.grasp_sets import pyramid_forces, pyramid_programme
 
 FORCE_SHARE = 0.7  # of targeted examples, a force (translation); the rest a torque (turn in place)
 LIFT_SHARE = 0.5  # of the forces, +z (the lift); the other five force directions share the rest
@@ -59,21 +58,17 @@ def firm_forces(
         centre, length: the object's centre of mass and characteristic length.
     """
     m = len(contacts)
-    edges = pyramid_edges(normals, mu)  # (m, E, 3), unit normal part each
-    g = grasp_maps(contacts, centre, length)  # (m, 6, 3)
-    n_var = m * PYRAMID_EDGES
-    a_eq = np.hstack([np.einsum("mij,mej->ime", g, edges).reshape(6, n_var), np.zeros((6, 1))])
-    per_contact = np.kron(np.eye(m), np.ones((1, PYRAMID_EDGES)))  # (m, n_var): normal force of each contact
-    a_ub = np.vstack([np.hstack([per_contact, np.zeros((m, 1))]), np.hstack([-per_contact, np.ones((m, 1))])])
+    edges, wrench, normal = pyramid_programme(contacts, normals, mu, centre, length)
+    t_column = np.zeros((m, 1))  # one more variable, t, the smallest normal force: normal ≤ 1 and ≥ t
+    a_ub = np.vstack([np.hstack([normal, t_column]), np.hstack([-normal, t_column + 1.0])])
     b_ub = np.concatenate([np.ones(m), np.zeros(m)])
-    cost = np.zeros(n_var + 1)
-    cost[-1] = -1.0  # maximise t, the smallest normal force
+    cost = np.zeros(wrench.shape[1] + 1)
+    cost[-1] = -1.0  # maximise t
+    a_eq = np.hstack([wrench, np.zeros((6, 1))])
     res = linprog(cost, A_ub=a_ub, b_ub=b_ub, A_eq=a_eq, b_eq=target, bounds=(0, None), method="highs")
     if res.status != 0:
         return None
-    lam = res.x[:n_var].reshape(m, PYRAMID_EDGES)
-    forces: np.ndarray = np.einsum("me,mej->mj", lam, edges)
-    return forces
+    return pyramid_forces(res.x[:-1], edges)
 
 
 def make_targeted_example(
