@@ -4,7 +4,8 @@ CSV + PNG curves, a checkpoint every epoch, resume.
 Run directory layout (``cfg.out``)::
 
     config.json            the resolved TrainConfig
-    metrics.csv            epoch, split, loss terms, validation figures (peak, hit, flat), lr, seconds
+    metrics.csv            epoch, split, loss terms, validation figures (peak, hit, flat), lr, seconds; with
+                           rigid and deformable data, ``val`` over both and ``val_rigid`` / ``val_deformable``
     curves.png             train/val loss curves
     last/                  checkpoint of the latest epoch (model.safetensors + model_card.json)
     best/                  checkpoint with the lowest validation loss
@@ -25,11 +26,23 @@ from typing import Any
 import numpy as np
 import torch
 
-from models.data.dataset import Examples, load_examples, make_batch
-from models.network import ModelCard, create_model, load_checkpoint, save_checkpoint
+from models.data.dataset import Examples, make_batch
+from models.data.prepare import PreparedObjects
+from models.network import ManiFoundationNet, ModelCard, create_model, load_checkpoint, save_checkpoint
 from models.training.config import TrainConfig
 from models.training.objective import batch_loss, prepare
+from models.training.sources import (
+    RIGID,
+    RIGID_MATERIALS,
+    Source,
+    epoch_batches,
+    load_deformable,
+    load_rigid,
+    split_dirs,
+)
 from models.training.validation import evaluate, plot_curves
+
+Prepared = tuple[PreparedObjects | None, PreparedObjects | None]  # a source's (train, val) precomputation
 
 CSV_FIELDS = (
     "epoch", "split", "loss", "heat", "force", "kl", "set", "peak", "hit", "flat", "hit_open", "flat_open", "lr",
@@ -62,26 +75,34 @@ class TrainResult:
     best_val: float
 
 
-def data_summary(train: Examples, val: Examples | None) -> dict[str, Any]:
-    """Counts for the model card."""
+def data_summary(sources: list[Source]) -> dict[str, Any]:
+    """Counts for the model card: ``train`` and ``val`` over all sources (each by hand, material), and with
+    several sources the same per source under ``sources``."""
 
-    def counts(ex: Examples) -> dict[str, Any]:
-        hands, n = np.unique(ex.hand, return_counts=True)
-        out: dict[str, Any] = {
-            "examples": len(ex),
-            "objects": len(np.unique(ex.obj_index)),
-            "hands": {str(h): int(c) for h, c in zip(hands, n, strict=True)},
-        }
-        if "articulated" in ex.extra:
-            out["articulated"] = int(np.asarray(ex.extra["articulated"]).sum())
-        if "material" in ex.extra:
-            kinds, m = np.unique(ex.extra["material"], return_counts=True)
-            out["materials"] = {str(k): int(c) for k, c in zip(kinds, m, strict=True)}
+    def counts(parts: list[Examples]) -> dict[str, Any]:
+        hands: dict[str, int] = {}
+        kinds: dict[str, int] = {}
+        out: dict[str, Any] = {"examples": sum(len(ex) for ex in parts),
+                               "objects": sum(len(np.unique(ex.obj_index)) for ex in parts)}  # fmt: skip
+        for ex in parts:
+            for h, c in zip(*np.unique(ex.hand, return_counts=True), strict=True):
+                hands[str(h)] = hands.get(str(h), 0) + int(c)
+            if "articulated" in ex.extra:
+                out["articulated"] = out.get("articulated", 0) + int(np.asarray(ex.extra["articulated"]).sum())
+            if "material" in ex.extra:
+                for k, c in zip(*np.unique(ex.extra["material"], return_counts=True), strict=True):
+                    kinds[str(k)] = kinds.get(str(k), 0) + int(c)
+        out["hands"] = hands
+        if kinds:
+            out["materials"] = kinds
         return out
 
-    out = {"train": counts(train)}
-    if val is not None:
-        out["val"] = counts(val)
+    vals = [s.val for s in sources if s.val is not None]
+    out: dict[str, Any] = {"train": counts([s.train for s in sources])}
+    if vals:
+        out["val"] = counts(vals)
+    if len(sources) > 1:
+        out["sources"] = {s.kind: {"dirs": list(s.dirs), "train": counts([s.train])} for s in sources}
     return out
 
 
@@ -93,11 +114,11 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
     device = pick_device(cfg.device)
     out = Path(cfg.out)
     out.mkdir(parents=True, exist_ok=True)
-    train_ex, val_ex = _load(cfg)
+    sources = _load(cfg)
     model = create_model(cfg.network, seed=cfg.seed).to(device)
     if cfg.init_from is not None and not resume:
         model.load_state_dict(load_checkpoint(cfg.init_from, cfg.network)[0].state_dict())
-    train_prep, val_prep = prepare(train_ex, model, cfg), prepare(val_ex, model, cfg)
+    preps = _prepare(sources, model, cfg)
     hand_scale = model.config.hand_scale_m
     opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
     start_epoch, wall0, best, global_step = 0, 0.0, float("inf"), 0
@@ -113,7 +134,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         with csv_path.open("w", newline="") as fh:
             csv.DictWriter(fh, CSV_FIELDS).writeheader()
     (out / "config.json").write_text(json.dumps(cfg.to_dict(), indent=2))
-    summary = data_summary(train_ex, val_ex)
+    summary = data_summary(sources)
     rng = np.random.default_rng([cfg.seed, start_epoch])
     gen = torch.Generator(device="cpu").manual_seed(cfg.seed + start_epoch)
     t_start = time.perf_counter() - wall0
@@ -122,25 +143,22 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
     lr = cfg.lr
     for epoch in range(start_epoch + 1, cfg.epochs + 1):
         if cfg.reload_each_epoch and epoch > start_epoch + 1:
-            train_ex, val_ex = _load(cfg)
-            train_prep, val_prep = prepare(train_ex, model, cfg), prepare(val_ex, model, cfg)
-            summary = data_summary(train_ex, val_ex)
-        # drop the last partial batch: BatchNorm cannot train on one example, and a tiny batch is a noisy step
-        steps_per_epoch = max(1, len(train_ex) // cfg.batch_size)
+            sources = _reload_rigid(sources, cfg)
+            preps = _prepare(sources, model, cfg)
+            summary = data_summary(sources)
         model.train()
         t0 = time.perf_counter()
-        perm = rng.permutation(len(train_ex))
+        batches = epoch_batches([len(s.train) for s in sources], cfg.batch_size, rng)
         sums = dict.fromkeys(("loss", "heat", "force", "kl", "set"), 0.0)
         seen = 0
-        bar = tqdm(range(steps_per_epoch), desc=f"epoch {epoch}/{cfg.epochs}", disable=not progress, leave=False)
-        for step in bar:
+        bar = tqdm(batches, desc=f"epoch {epoch}/{cfg.epochs}", disable=not progress, leave=False)
+        for step, (s, idx) in enumerate(bar):
             if cfg.max_minutes is not None and time.perf_counter() - t_start > cfg.max_minutes * 60:
                 break  # time budget spent: validate and save what we have
-            idx = perm[step * cfg.batch_size : (step + 1) * cfg.batch_size]
-            b = make_batch(train_ex, idx, hand_scale, rng if cfg.augment else None, train_prep,
+            b = make_batch(sources[s].train, idx, hand_scale, rng if cfg.augment else None, preps[s][0],
                            max_set=cfg.max_set, mask_dropout=cfg.mask_dropout).to(device)  # fmt: skip
             terms = batch_loss(model, b, cfg, gen, device)
-            frac = (epoch - 1 + step / steps_per_epoch) / cfg.epochs
+            frac = (epoch - 1 + step / len(batches)) / cfg.epochs
             if cfg.max_minutes is not None:  # a time budget: decay by whichever runs out first
                 frac = max(frac, (time.perf_counter() - t_start) / (cfg.max_minutes * 60))
             lr = cfg.lr * lr_factor(global_step, frac, cfg.warmup_steps, cfg.min_lr_ratio)
@@ -159,10 +177,10 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         if seen == 0:
             break
         train_m = {k: v / seen for k, v in sums.items()}
-        rows = [{"split": "train", **train_m, "examples": seen}]
-        val_m = evaluate(model, val_ex, cfg, device, hand_scale, val_prep) if val_ex is not None else None
-        if val_m is not None and val_ex is not None:
-            rows.append({"split": "val", **val_m, "examples": len(val_ex)})
+        rows: list[dict[str, Any]] = [{"split": "train", **train_m, "examples": seen}]
+        val_rows = _validate(model, sources, preps, cfg, device, hand_scale)
+        rows += val_rows
+        val_m = next((r for r in val_rows if r["split"] == "val"), None)
         secs = time.perf_counter() - t0
         with csv_path.open("a", newline="") as fh:
             w = csv.DictWriter(fh, CSV_FIELDS)
@@ -171,11 +189,12 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         plot_curves(csv_path, out / "curves.png")
         wall = time.perf_counter() - t_start
         final = {f"train_{k}": v for k, v in train_m.items()}
-        if val_m is not None:
-            final.update({f"val_{k}": v for k, v in val_m.items()})
-        card = _card(model, cfg, summary, epoch, wall, final, device, _materials(train_ex))
+        for r in val_rows:
+            final.update({f"{r['split']}_{k}": float(v) for k, v in r.items() if k not in ("split", "examples")})
+        materials = sorted({m for src in sources for m in src.materials()})
+        card = _card(model, cfg, summary, epoch, wall, final, device, materials)
         save_checkpoint(model, out / "last", card)
-        score = val_m["loss"] if val_m is not None else train_m["loss"]
+        score = float(val_m["loss"]) if val_m is not None else train_m["loss"]
         if score < best:
             best = score
             save_checkpoint(model, out / "best", card)
@@ -190,67 +209,62 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             out / "state.pt",
         )
         msg = f"epoch {epoch}: train {train_m['loss']:.4f}"
-        if val_m is not None:
-            msg += f"  val {val_m['loss']:.4f} (heat {val_m['heat']:.4f}, force {val_m['force']:.4f}"
-            msg += f", peak {val_m['peak']:.2f}, hit {val_m['hit']:.2f}, flat {val_m['flat']:.2f}"
-            msg += f"; unmasked: hit {val_m['hit_open']:.2f}, flat {val_m['flat_open']:.2f})"
+        for r in val_rows:
+            msg += f"  {r['split']} {r['loss']:.4f} (heat {r['heat']:.4f}, force {r['force']:.4f}"
+            msg += f", peak {r['peak']:.2f}, hit {r['hit']:.2f}, flat {r['flat']:.2f}"
+            msg += f"; unmasked: hit {r['hit_open']:.2f}, flat {r['flat_open']:.2f})"
         print(msg + f"  [{secs:.0f} s]", flush=True)
         if cfg.max_minutes is not None and wall > cfg.max_minutes * 60:
             break
     return TrainResult(out, epoch, time.perf_counter() - t_start, final, best)
 
 
-def _load(cfg: TrainConfig) -> tuple[Examples, Examples | None]:
-    """The training and validation examples of ``cfg.data``: rigid shard directories, or one deformable data
-    directory (``mani data generate --materials cloth,rope,plasticine``; its clouds resampled to the network's
-    point count). Mixing the two kinds is refused: their label sets differ (grasp sets vs single labels)."""
-    deformable = [d for d in cfg.data if _is_deformable(d)]
+def _load(cfg: TrainConfig) -> list[Source]:
+    """The sources of ``cfg.data``: its rigid shard directories as one source, its deformable data directories
+    (``mani data generate --materials cloth,rope,plasticine``; clouds resampled to the network's point count)
+    as another; a run mixes them batch by batch (`models.training.sources`).
+
+    Raises:
+        ValueError: a directory holds no generated data, or no source has training examples.
+    """
+    from models.network.config import get_config
+
+    rigid, deformable = split_dirs(list(cfg.data))
+    sources = []
+    if rigid:
+        sources.append(load_rigid(rigid, tuple(cfg.val_splits), cfg.limit, cfg.val_limit))
     if deformable:
-        if len(deformable) != len(cfg.data) or len(deformable) > 1:
-            raise ValueError("data: one deformable data directory, alone (rigid and deformable examples are not "
-                             f"mixed in one run yet): {list(cfg.data)}")
-        from models.data.deformable_dataset import load_deformable_examples
-        from models.network.config import get_config
-
         n = get_config(cfg.network).num_points
-        train_ex = load_deformable_examples(deformable[0], ("train",), num_points=n)
-        try:
-            val_ex: Examples | None = load_deformable_examples(deformable[0], tuple(cfg.val_splits), num_points=n)
-        except ValueError:
-            val_ex = None
-        return train_ex, _first(val_ex, cfg.val_limit)
-    train_ex = load_examples(list(cfg.data), ("train",), limit=cfg.limit)
-    try:
-        val_ex = load_examples(list(cfg.data), tuple(cfg.val_splits), limit=cfg.val_limit)
-    except ValueError:
-        val_ex = None
-    return train_ex, val_ex
+        sources.append(load_deformable(deformable, tuple(cfg.val_splits), n, cfg.val_limit))
+    return sources
 
 
-def _materials(ex: Examples) -> list[str] | None:
-    """The deformable materials ``ex`` holds (None: rigid shards, which carry no material)."""
-    if "material" not in ex.extra:
-        return None
-    return sorted({str(m) for m in ex.extra["material"]})
+def _reload_rigid(sources: list[Source], cfg: TrainConfig) -> list[Source]:
+    """``sources`` with the rigid one re-read (shards written since; deformable data is read once)."""
+    return [load_rigid(list(s.dirs), tuple(cfg.val_splits), cfg.limit, cfg.val_limit) if s.kind == RIGID else s
+            for s in sources]  # fmt: skip
 
 
-def _is_deformable(data_dir: str) -> bool:
-    from models.data.deformable_generate import MANIFEST, SUBDIR
+def _prepare(sources: list[Source], model: ManiFoundationNet, cfg: TrainConfig) -> list[Prepared]:
+    """Each source's precomputed point subsets and hierarchies (train, val)."""
+    return [(prepare(s.train, model, cfg), prepare(s.val, model, cfg)) for s in sources]
 
-    return (Path(data_dir) / SUBDIR / MANIFEST).is_file() and not (Path(data_dir) / "manifest.json").is_file()
 
-
-def _first(ex: Examples | None, limit: int | None) -> Examples | None:
-    """The first ``limit`` examples of ``ex`` (validation sets are capped like the rigid loader caps them)."""
-    if ex is None or limit is None or len(ex) <= limit:
-        return ex
-    from dataclasses import replace
-
-    keep = slice(0, limit)
-    return replace(ex, obj_index=ex.obj_index[keep], hand=ex.hand[keep], split=ex.split[keep],
-                   friction=ex.friction[keep], motion=ex.motion[keep], heat=ex.heat[keep],
-                   force_map=ex.force_map[keep], mask=ex.mask[keep],
-                   extra={k: v[keep] for k, v in ex.extra.items()})  # fmt: skip
+def _validate(model: ManiFoundationNet, sources: list[Source], preps: list[Prepared], cfg: TrainConfig,
+              device: torch.device, hand_scale: float) -> list[dict[str, Any]]:  # fmt: skip
+    """Validation rows for metrics.csv: ``val`` over every source's validation examples (the example-weighted
+    mean of each figure) and, with several sources, ``val_<kind>`` for each."""
+    per: list[dict[str, Any]] = []
+    for s, (_, val_prep) in zip(sources, preps, strict=True):
+        if s.val is not None:
+            m = evaluate(model, s.val, cfg, device, hand_scale, val_prep)
+            per.append({"split": f"val_{s.kind}", **m, "examples": len(s.val)})
+    if not per:
+        return []
+    n = sum(r["examples"] for r in per)
+    total: dict[str, Any] = {"split": "val", "examples": n}
+    total.update({k: sum(r[k] * r["examples"] for r in per) / n for k in per[0] if k not in ("split", "examples")})
+    return [total, *per] if len(per) > 1 else [total]
 
 
 def _card(
@@ -263,11 +277,20 @@ def _card(
     device: torch.device,
     materials: list[str] | None = None,
 ) -> ModelCard:
-    materials = materials or ["rigid", "articulated"]
-    note = ("Trained on rigid and articulated (revolute/prismatic) examples only; requests for deformable "
-            "materials are out of its training distribution.") if "rigid" in materials else (
-            f"Trained on deformable examples only ({', '.join(materials)}); rigid requests are out of its "
-            "training distribution.")  # fmt: skip
+    materials = materials or list(RIGID_MATERIALS)
+    deformable = [m for m in materials if m not in RIGID_MATERIALS]
+    if not deformable:
+        note = (
+            "Trained on rigid and articulated (revolute/prismatic) examples only; requests for deformable "
+            "materials are out of its training distribution."
+        )
+    elif "rigid" in materials:
+        note = f"Trained on rigid and articulated objects and on deformables ({', '.join(deformable)}) in one run."
+    else:
+        note = (
+            f"Trained on deformable examples only ({', '.join(deformable)}); rigid requests are out of its "
+            "training distribution."
+        )
     return ModelCard.for_model(
         model,  # type: ignore[arg-type]
         trained=True,

@@ -74,5 +74,38 @@ def test_a_deformable_data_directory_trains_and_its_card_names_its_materials(tmp
     assert card["materials"] == ["plasticine", "rope"]
     counts = card["training_data"]["train"]["materials"]  # seen-motion examples train, the others validate
     assert set(counts) == {"plasticine", "rope"} and sum(counts.values()) == card["training_data"]["train"]["examples"]
-    with pytest.raises(ValueError, match="not mixed"):
-        train(TrainConfig(data=[str(data), str(data)], out=str(tmp_path / "mixed")), progress=False)
+
+
+def test_rigid_and_deformable_data_train_in_one_run(data_dir: Path, tmp_path: Path) -> None:
+    from models.data.deformable_generate import DeformableDataConfig
+    from models.data.deformable_generate import generate as generate_deformable
+
+    soft = tmp_path / "soft"
+    generate_deformable(DeformableDataConfig(materials=("rope",), bodies=2, examples_per_body=3, test_fraction=0.0),
+                        soft, progress=False)  # fmt: skip
+    cfg = TrainConfig(data=[str(data_dir), str(soft)], out=str(tmp_path / "run"), network="cpu1k", epochs=1,
+                      batch_size=2, limit=6, threads=1, warmup_steps=1, val_limit=4, max_set=4)  # fmt: skip
+    result = train(cfg, progress=False)
+    card = json.loads((Path(result.out) / "last" / "model_card.json").read_text())
+    assert card["materials"] == ["articulated", "rigid", "rope"]
+    sources = card["training_data"]["sources"]
+    assert set(sources) == {"rigid", "deformable"}
+    assert card["training_data"]["train"]["examples"] == sum(s["train"]["examples"] for s in sources.values())
+    rows = list(csv.DictReader((Path(result.out) / "metrics.csv").open()))
+    splits = [r["split"] for r in rows]
+    assert splits == ["train", "val", "val_rigid", "val_deformable"]
+    val, per = rows[1], rows[2:]
+    # `val` is the example-weighted mean of the two sources' figures
+    n = [float(r["examples"]) for r in per]
+    assert float(val["examples"]) == sum(n)
+    expected = sum(float(r["loss"]) * k for r, k in zip(per, n, strict=True)) / sum(n)
+    assert float(val["loss"]) == pytest.approx(expected, rel=1e-6)
+    # every training example of both sources was seen once (batches of 2, none partial here)
+    rigid_n, soft_n = sources["rigid"]["train"]["examples"], sources["deformable"]["train"]["examples"]
+    assert float(rows[0]["examples"]) == 2 * (rigid_n // 2) + 2 * (soft_n // 2)
+
+
+def test_a_directory_without_generated_data_is_refused_by_name(tmp_path: Path) -> None:
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ValueError, match="empty holds no generated data"):
+        train(TrainConfig(data=[str(tmp_path / "empty")], out=str(tmp_path / "run")), progress=False)

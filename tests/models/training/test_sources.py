@@ -1,0 +1,31 @@
+"""Batches of several sources: every example once an epoch, one source a batch, the single-source order kept."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from models.training.sources import epoch_batches
+
+
+def test_one_source_keeps_the_single_source_order() -> None:
+    batches = epoch_batches([10], 4, np.random.default_rng(3))
+    perm = np.random.default_rng(3).permutation(10)
+    assert [s for s, _ in batches] == [0, 0]
+    assert [list(i) for _, i in batches] == [list(perm[:4]), list(perm[4:8])]
+
+
+def test_a_source_smaller_than_a_batch_still_trains_alone() -> None:
+    (only,) = epoch_batches([3], 4, np.random.default_rng(0))
+    assert only[0] == 0 and sorted(only[1]) == [0, 1, 2]
+
+
+def test_several_sources_visit_each_example_once_in_whole_batches_of_one_source() -> None:
+    sizes = [37, 21, 8]
+    batches = epoch_batches(sizes, 4, np.random.default_rng(1))
+    assert len(batches) == sum(n // 4 for n in sizes)
+    for s, n in enumerate(sizes):
+        seen = np.concatenate([i for src, i in batches if src == s])
+        assert len(seen) == 4 * (n // 4) and len(np.unique(seen)) == len(seen) and seen.max() < n
+    assert all(len(i) == 4 for _, i in batches)
+    order = [s for s, _ in batches]
+    assert order != sorted(order)  # the sources' batches are interleaved, not one source after the other
