@@ -73,15 +73,20 @@ def load_deformable(dirs: list[str], val_splits: tuple[str, ...], num_points: in
     """The deformable examples of ``dirs``, clouds resampled to ``num_points``."""
     from models.data.deformable_dataset import load_deformable_examples
 
-    train = concat_examples([load_deformable_examples(d, ("train",), num_points=num_points) for d in dirs])
-    vals = []
-    for d in dirs:
-        try:
-            vals.append(load_deformable_examples(d, val_splits, num_points=num_points))
-        except ValueError:
-            continue
+    def read(splits: tuple[str, ...]) -> list[Examples]:
+        parts = []
+        for d in dirs:  # a directory still being generated may not hold every split yet
+            try:
+                parts.append(load_deformable_examples(d, splits, num_points=num_points))
+            except ValueError:
+                continue
+        return parts
+
+    train, vals = read(("train",)), read(val_splits)
+    if not train:
+        raise ValueError(f"no deformable training examples in {list(dirs)}")
     val = first_examples(concat_examples(vals), val_limit) if vals else None
-    return Source(DEFORMABLE, tuple(dirs), train, val)
+    return Source(DEFORMABLE, tuple(dirs), concat_examples(train), val)
 
 
 def concat_examples(parts: list[Examples]) -> Examples:

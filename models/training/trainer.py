@@ -32,7 +32,6 @@ from models.network import ManiFoundationNet, ModelCard, create_model, load_chec
 from models.training.config import TrainConfig
 from models.training.objective import batch_loss, prepare
 from models.training.sources import (
-    RIGID,
     RIGID_MATERIALS,
     Source,
     epoch_batches,
@@ -143,7 +142,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
     lr = cfg.lr
     for epoch in range(start_epoch + 1, cfg.epochs + 1):
         if cfg.reload_each_epoch and epoch > start_epoch + 1:
-            sources = _reload_rigid(sources, cfg)
+            sources = _load(cfg)
             preps = _prepare(sources, model, cfg)
             summary = data_summary(sources)
         model.train()
@@ -237,12 +236,6 @@ def _load(cfg: TrainConfig) -> list[Source]:
         n = get_config(cfg.network).num_points
         sources.append(load_deformable(deformable, tuple(cfg.val_splits), n, cfg.val_limit))
     return sources
-
-
-def _reload_rigid(sources: list[Source], cfg: TrainConfig) -> list[Source]:
-    """``sources`` with the rigid one re-read (shards written since; deformable data is read once)."""
-    return [load_rigid(list(s.dirs), tuple(cfg.val_splits), cfg.limit, cfg.val_limit) if s.kind == RIGID else s
-            for s in sources]  # fmt: skip
 
 
 def _prepare(sources: list[Source], model: ManiFoundationNet, cfg: TrainConfig) -> list[Prepared]:
