@@ -45,7 +45,7 @@ Prepared = tuple[PreparedObjects | None, PreparedObjects | None]  # a source's (
 
 CSV_FIELDS = (
     "epoch", "split", "loss", "heat", "force", "kl", "set", "peak", "hit", "flat", "hit_open", "flat_open", "lr",
-    "seconds", "examples",
+    "seconds", "examples", "open_examples",
 )  # fmt: skip
 
 
@@ -189,7 +189,8 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         wall = time.perf_counter() - t_start
         final = {f"train_{k}": v for k, v in train_m.items()}
         for r in val_rows:
-            final.update({f"{r['split']}_{k}": float(v) for k, v in r.items() if k not in ("split", "examples")})
+            skip = ("split", "examples", "open_examples")
+            final.update({f"{r['split']}_{k}": float(v) for k, v in r.items() if k not in skip})
         materials = sorted({m for src in sources for m in src.materials()})
         card = _card(model, cfg, summary, epoch, wall, final, device, materials)
         save_checkpoint(model, out / "last", card)
@@ -246,7 +247,8 @@ def _prepare(sources: list[Source], model: ManiFoundationNet, cfg: TrainConfig) 
 def _validate(model: ManiFoundationNet, sources: list[Source], preps: list[Prepared], cfg: TrainConfig,
               device: torch.device, hand_scale: float) -> list[dict[str, Any]]:  # fmt: skip
     """Validation rows for metrics.csv: ``val`` over every source's validation examples (the example-weighted
-    mean of each figure) and, with several sources, ``val_<kind>`` for each."""
+    mean of each figure, the unmasked ones weighted by unmasked examples) and, with several sources,
+    ``val_<kind>`` for each."""
     per: list[dict[str, Any]] = []
     for s, (_, val_prep) in zip(sources, preps, strict=True):
         if s.val is not None:
@@ -254,9 +256,12 @@ def _validate(model: ManiFoundationNet, sources: list[Source], preps: list[Prepa
             per.append({"split": f"val_{s.kind}", **m, "examples": len(s.val)})
     if not per:
         return []
-    n = sum(r["examples"] for r in per)
-    total: dict[str, Any] = {"split": "val", "examples": n}
-    total.update({k: sum(r[k] * r["examples"] for r in per) / n for k in per[0] if k not in ("split", "examples")})
+    n, n_open = sum(r["examples"] for r in per), sum(r["open_examples"] for r in per)
+    total: dict[str, Any] = {"split": "val", "examples": n, "open_examples": n_open}
+    for k in per[0]:
+        if k not in total:  # the unmasked figures are means over the unmasked examples, the others over all
+            w, den = ("open_examples", n_open) if k.endswith("_open") else ("examples", n)
+            total[k] = sum(r[k] * r[w] for r in per) / max(den, 1)
     return [total, *per] if len(per) > 1 else [total]
 
 

@@ -35,7 +35,8 @@ def evaluate(
         point lies in the contact region (ground-truth heat ≥ 0.5) of any valid grasp of the example, and
         ``flat``, the fraction whose peak stands less than :data:`FLAT_CONTRAST` above the median; ``hit_open``
         and ``flat_open`` the same over the examples without a partial region mask (the mask alone tells a
-        network where the label's contacts are: these are the figures that say it has learnt more).
+        network where the label's contacts are: these are the figures that say it has learnt more), and
+        ``open_examples`` their count.
     """
     model.eval()
     gen = torch.Generator(device="cpu").manual_seed(cfg.seed)
@@ -65,6 +66,7 @@ def evaluate(
             n_open += int(open_.sum())
     out = {k: v / max(n, 1) for k, v in sums.items()}
     out.update(hit_open=sums["hit_open"] / max(n_open, 1), flat_open=sums["flat_open"] / max(n_open, 1))
+    out["open_examples"] = float(n_open)
     return out
 
 

@@ -100,6 +100,9 @@ def test_rigid_and_deformable_data_train_in_one_run(data_dir: Path, tmp_path: Pa
     assert float(val["examples"]) == sum(n)
     expected = sum(float(r["loss"]) * k for r, k in zip(per, n, strict=True)) / sum(n)
     assert float(val["loss"]) == pytest.approx(expected, rel=1e-6)
+    n_open = [float(r["open_examples"]) for r in per]  # the unmasked figures: over the unmasked examples
+    expected_open = sum(float(r["hit_open"]) * k for r, k in zip(per, n_open, strict=True)) / max(sum(n_open), 1)
+    assert float(val["hit_open"]) == pytest.approx(expected_open, rel=1e-6, abs=1e-12)
     # every training example of both sources was seen once (batches of 2, none partial here)
     rigid_n, soft_n = sources["rigid"]["train"]["examples"], sources["deformable"]["train"]["examples"]
     assert float(rows[0]["examples"]) == 2 * (rigid_n // 2) + 2 * (soft_n // 2)
