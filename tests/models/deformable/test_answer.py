@@ -47,3 +47,21 @@ def test_a_flat_heatmap_falls_back_to_the_moving_points_with_their_motion() -> N
     assert answer.source == "motion_fallback"
     assert answer.indices[0] >= 95
     np.testing.assert_array_equal(answer.motions, motion[answer.indices])
+
+
+def test_a_network_unsure_of_the_place_still_gives_the_contacts_motion() -> None:
+    """Heat and motion labels share one kernel (models.data.labels): a map that is the expected label under a
+    blurred contact, E[k] and E[k]·m, reads m back at the peak, not the shrunk E[k]·m."""
+    from models.data.labels import heat_and_force
+
+    points = _line()
+    normals = np.tile([0.0, 0.0, 1.0], (len(points), 1))
+    m = np.array([[0.0, 0.05, 0.02]])
+    places = (47, 50, 53)  # where the contact might be, equally likely
+    labels = [heat_and_force(points, normals, points[[i]], normals[[i]], m, 1.0) for i in places]
+    heat = np.mean([h for h, _ in labels], axis=0)
+    motion_map = np.mean([f for _, f in labels], axis=0)
+    answer = deformable_contacts(points, heat, motion_map, np.zeros_like(points), None, 1)
+    assert answer.source == "network" and answer.indices[0] == 50 and heat[50] < 0.9
+    np.testing.assert_allclose(answer.motions[0], m[0], rtol=1e-9)
+    assert np.linalg.norm(motion_map[50]) < 0.9 * np.linalg.norm(m)  # the map's own value is shrunk
