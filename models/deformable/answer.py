@@ -2,10 +2,10 @@
 
 For each latent sample k: NMS on the heatmap (`models.network.selection.select_contacts`, the region mask hard)
 picks H ≤ ``max_contacts`` contacts; the motion of each is the motion map's vector there (the network's φ_f map,
-which for deformables is the post-contact motion map) divided by the heat there (`motion_at`). No hand refinement: a deformable is moved by grasping
-its points, not by balancing a wrench. A heatmap with no peak gives no network contacts; the answer then takes
-the H allowed points that the target moves most, spread apart (`moving_indices`), with the target motion at
-them, and says ``motion_fallback``.
+which for deformables is the post-contact motion map) divided by the heat there (`motion_at`). No hand
+refinement: a deformable is moved by grasping its points, not by balancing a wrench. A heatmap with no peak
+gives no network contacts; the answer then takes the H allowed points that the target moves most, spread apart
+(`moving_indices`), with the target motion at them, and says ``motion_fallback``.
 """
 
 from __future__ import annotations
