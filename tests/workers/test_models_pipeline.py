@@ -4,6 +4,8 @@ The conversion (`workers.convert`) runs inside the worker processes here, on the
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -77,11 +79,22 @@ async def _exercise(queue: object) -> None:
         await queue.close()
 
 
-def test_shipped_model_refuses_materials_it_was_not_trained_on() -> None:
+def test_a_model_refuses_materials_it_was_not_trained_on(tmp_path: Path) -> None:
+    import json
+    import shutil
+
+    import models
     from workers.models_pipeline import ModelsPipeline
     from workers.pipeline import JobInput
 
-    pipeline = ModelsPipeline(hands=["panda_gripper"])  # the shipped weights in models/weights
+    # the shipped weights with a card that says rigid and articulated objects only
+    shipped = next(p.parent for p in (Path(models.__file__).parent / "weights").glob("*/model_card.json"))
+    rigid_only = tmp_path / "rigid_only"
+    shutil.copytree(shipped, rigid_only)
+    card = json.loads((rigid_only / "model_card.json").read_text())
+    card["materials"] = ["rigid", "articulated"]
+    (rigid_only / "model_card.json").write_text(json.dumps(card))
+    pipeline = ModelsPipeline(hands=["panda_gripper"], weights_dir=str(rigid_only))
     assert pipeline.model_loaded and pipeline.predictor is not None
     trained_on = pipeline.predictor.card.materials
     cloth = make_request("network", object={
