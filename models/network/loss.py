@@ -43,6 +43,7 @@ def cvae_loss(
     lambda_kl: float | None = None,
     heat_contact_weight: float = 0.0,
     heat_loss: str = "mse",
+    force_contact_weight: float = 0.0,
 ) -> dict[str, torch.Tensor]:
     """Eq. (3) with the configuration's weights (overridable per call).
 
@@ -53,6 +54,9 @@ def cvae_loss(
         config: supplies the default λ_C, λ_S, λ_KL.
         heat_contact_weight: α of the module docstring (0: unweighted).
         heat_loss: ``"mse"`` (Eq. 3) or ``"bce"`` on ``out["heat_logit"]`` (module docstring).
+        force_contact_weight: β, the force map's MSE weighted by 1 + β·heat_gt per point (0: unweighted). The
+            map is zero away from the contacts, so unweighted its value at a contact — the one an answer reads —
+            is a few per cent of the term.
 
     Returns:
         ``loss`` (the weighted sum, differentiable) and its terms ``heat``, ``force``, ``kl``.
@@ -67,7 +71,11 @@ def cvae_loss(
         heat = (w * (out["heat"] - heat_gt).square()).mean() / w.mean()
     else:
         heat = F.mse_loss(out["heat"], heat_gt)
-    force = F.mse_loss(out["force"], force_gt)
+    if force_contact_weight > 0.0:
+        w = 1.0 + force_contact_weight * heat_gt.unsqueeze(-1)  # (B, N, 1)
+        force = (w * (out["force"] - force_gt).square()).mean() / w.mean()
+    else:
+        force = F.mse_loss(out["force"], force_gt)
     kl = kl_to_standard_normal(out["mu"], out["logvar"])
     return {"loss": lc * heat + ls * force + lk * kl, "heat": heat, "force": force, "kl": kl}
 

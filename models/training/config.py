@@ -35,6 +35,7 @@ class TrainConfig:
     lambda_s: float | None = None
     lambda_kl: float | None = None
     heat_contact_weight: float = 0.0  # α: heat MSE weighted by 1 + α·heat_gt (0: the paper's plain MSE)
+    force_contact_weight: float = 0.0  # β: force/motion map MSE weighted by 1 + β·heat_gt (0: plain MSE)
     heat_loss: str = "mse"  # "mse" (Eq. 3) or "bce": cross-entropy on the logits (models.network.loss)
     prior_samples: int = 0  # K prior samples per example for the grasp-set loss (0: Eq. 3 alone)
     lambda_set: float = 1.0  # weight of the grasp-set loss (models.network.loss.set_heat_loss)

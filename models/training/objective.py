@@ -34,6 +34,7 @@ def batch_loss(
         lambda_kl=cfg.lambda_kl,
         heat_contact_weight=cfg.heat_contact_weight,
         heat_loss=cfg.heat_loss,
+        force_contact_weight=cfg.force_contact_weight,
     )
     if prior_z is not None:
         prior = res["prior_heat_logit"] if cfg.heat_loss == "bce" else res["prior_heat"]

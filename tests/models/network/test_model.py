@@ -113,6 +113,23 @@ def test_contact_weighted_heat_loss() -> None:
     assert wc == pytest.approx(5.0 / 8.0) and we == pytest.approx(1.0 / 8.0)
 
 
+def test_contact_weighted_force_loss_pays_the_map_at_the_contacts() -> None:
+    heat_gt = torch.tensor([[1.0, 0.0, 0.0, 0.0]])
+    force_gt = torch.zeros(1, 4, 3)
+    force_gt[0, 0] = torch.tensor([0.3, 0.0, 0.0])  # the contact's motion; zero elsewhere, as the labels are
+    shrunk = force_gt * 0.2  # the contact's vector at a fifth of its length
+    spill = force_gt.clone()
+    spill[0, 1] = torch.tensor([0.24, 0.0, 0.0])  # right at the contact, the same error spilt on an empty point
+    base = {"heat": heat_gt, "mu": torch.zeros(1, 64), "logvar": torch.zeros(1, 64)}
+    cfg = get_config("cpu")
+    plain = [cvae_loss({**base, "force": f}, heat_gt, force_gt, cfg)["force"].item() for f in (shrunk, spill)]
+    assert plain[0] == pytest.approx(plain[1])  # β = 0: both errors cost the same
+    weighted = [cvae_loss({**base, "force": f}, heat_gt, force_gt, cfg, force_contact_weight=4.0)["force"].item()
+                for f in (shrunk, spill)]  # fmt: skip
+    assert weighted[0] == pytest.approx(5.0 * weighted[1])  # β = 4: the contact's error costs 5×
+    assert weighted[0] == pytest.approx(5.0 * 0.24**2 / 12 / (8.0 / 4))
+
+
 def test_cross_entropy_heat_loss_keeps_its_gradient_where_the_sigmoid_saturates() -> None:
     gt = torch.tensor([[1.0, 0.0, 0.0, 0.0]])
     cfg, force = get_config("cpu"), torch.zeros(1, 4, 3)
