@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -133,3 +134,34 @@ def epoch_batches(sizes: list[int], batch_size: int, rng: np.random.Generator) -
     if len(sizes) > 1:
         batches = [batches[i] for i in rng.permutation(len(batches))]
     return batches
+
+
+def data_summary(sources: list[Source]) -> dict[str, Any]:
+    """Counts for the model card: ``train`` and ``val`` over all sources (each by hand, material), and with
+    several sources the same per source under ``sources``."""
+
+    def counts(parts: list[Examples]) -> dict[str, Any]:
+        hands: dict[str, int] = {}
+        kinds: dict[str, int] = {}
+        out: dict[str, Any] = {"examples": sum(len(ex) for ex in parts),
+                               "objects": sum(len(np.unique(ex.obj_index)) for ex in parts)}  # fmt: skip
+        for ex in parts:
+            for h, c in zip(*np.unique(ex.hand, return_counts=True), strict=True):
+                hands[str(h)] = hands.get(str(h), 0) + int(c)
+            if "articulated" in ex.extra:
+                out["articulated"] = out.get("articulated", 0) + int(np.asarray(ex.extra["articulated"]).sum())
+            if "material" in ex.extra:
+                for k, c in zip(*np.unique(ex.extra["material"], return_counts=True), strict=True):
+                    kinds[str(k)] = kinds.get(str(k), 0) + int(c)
+        out["hands"] = hands
+        if kinds:
+            out["materials"] = kinds
+        return out
+
+    vals = [s.val for s in sources if s.val is not None]
+    out: dict[str, Any] = {"train": counts([s.train for s in sources])}
+    if vals:
+        out["val"] = counts(vals)
+    if len(sources) > 1:
+        out["sources"] = {s.kind: {"dirs": list(s.dirs), "train": counts([s.train])} for s in sources}
+    return out

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 import torch
 
-from models.data.dataset import Examples, make_batch
+from models.data.dataset import make_batch
 from models.data.prepare import PreparedObjects
 from models.network import ManiFoundationNet, ModelCard, create_model, load_checkpoint, save_checkpoint
 from models.training.config import TrainConfig
@@ -34,6 +34,7 @@ from models.training.objective import batch_loss, prepare
 from models.training.sources import (
     RIGID_MATERIALS,
     Source,
+    data_summary,
     epoch_batches,
     load_deformable,
     load_rigid,
@@ -72,37 +73,6 @@ class TrainResult:
     wall_seconds: float
     final: dict[str, float]
     best_val: float
-
-
-def data_summary(sources: list[Source]) -> dict[str, Any]:
-    """Counts for the model card: ``train`` and ``val`` over all sources (each by hand, material), and with
-    several sources the same per source under ``sources``."""
-
-    def counts(parts: list[Examples]) -> dict[str, Any]:
-        hands: dict[str, int] = {}
-        kinds: dict[str, int] = {}
-        out: dict[str, Any] = {"examples": sum(len(ex) for ex in parts),
-                               "objects": sum(len(np.unique(ex.obj_index)) for ex in parts)}  # fmt: skip
-        for ex in parts:
-            for h, c in zip(*np.unique(ex.hand, return_counts=True), strict=True):
-                hands[str(h)] = hands.get(str(h), 0) + int(c)
-            if "articulated" in ex.extra:
-                out["articulated"] = out.get("articulated", 0) + int(np.asarray(ex.extra["articulated"]).sum())
-            if "material" in ex.extra:
-                for k, c in zip(*np.unique(ex.extra["material"], return_counts=True), strict=True):
-                    kinds[str(k)] = kinds.get(str(k), 0) + int(c)
-        out["hands"] = hands
-        if kinds:
-            out["materials"] = kinds
-        return out
-
-    vals = [s.val for s in sources if s.val is not None]
-    out: dict[str, Any] = {"train": counts([s.train for s in sources])}
-    if vals:
-        out["val"] = counts(vals)
-    if len(sources) > 1:
-        out["sources"] = {s.kind: {"dirs": list(s.dirs), "train": counts([s.train])} for s in sources}
-    return out
 
 
 def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> TrainResult:
