@@ -27,7 +27,8 @@ def motion_at(heatmap: np.ndarray, motion_map: np.ndarray, indices: np.ndarray) 
     contact's motion m, so a network unsure where the contact lies predicts about E[k_j] and E[k_j] · m, and the
     ratio reads m back. The map's own value is shrunk by the heat: measured on the held-out cloth and rope cases
     (the mixed-data network, its own contacts), it was 0.17-0.40 of the target's displacement at the contact
-    with the direction right (cosine 0.8-1.0); divided by the heat, 0.6-1.3.
+    with the direction right (cosine 0.8-1.0); divided by the heat, 0.6-1.3 (docs/deformables.md has the
+    evaluation with and without it).
 
     Args:
         heatmap: (N,) predicted heat. motion_map: (N, 3) predicted motion map. indices: (H,) contact indices.
