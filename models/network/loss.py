@@ -66,18 +66,23 @@ def cvae_loss(
     lk = config.lambda_kl if lambda_kl is None else lambda_kl
     if heat_loss == "bce":
         heat = weighted_heat_bce(out["heat_logit"], heat_gt, heat_contact_weight).mean()
-    elif heat_contact_weight > 0.0:
-        w = 1.0 + heat_contact_weight * heat_gt
-        heat = (w * (out["heat"] - heat_gt).square()).mean() / w.mean()
     else:
-        heat = F.mse_loss(out["heat"], heat_gt)
-    if force_contact_weight > 0.0:
-        w = 1.0 + force_contact_weight * heat_gt.unsqueeze(-1)  # (B, N, 1)
-        force = (w * (out["force"] - force_gt).square()).mean() / w.mean()
-    else:
-        force = F.mse_loss(out["force"], force_gt)
+        heat = contact_weighted_mse(out["heat"], heat_gt, heat_gt, heat_contact_weight)
+    force = contact_weighted_mse(out["force"], force_gt, heat_gt, force_contact_weight)
     kl = kl_to_standard_normal(out["mu"], out["logvar"])
     return {"loss": lc * heat + ls * force + lk * kl, "heat": heat, "force": force, "kl": kl}
+
+
+def contact_weighted_mse(pred: torch.Tensor, target: torch.Tensor, heat_gt: torch.Tensor, alpha: float) -> torch.Tensor:
+    """MSE with each point weighted by 1 + α·heat_gt, normalised by the weights' mean (α = 0: the plain MSE).
+
+    Args:
+        pred, target: (B, N) or (B, N, C). heat_gt: (B, N) ground-truth heat of the same points.
+    """
+    if alpha <= 0.0:
+        return F.mse_loss(pred, target)
+    w = 1.0 + alpha * heat_gt.reshape(*heat_gt.shape, *([1] * (pred.dim() - heat_gt.dim())))
+    return (w * (pred - target).square()).mean() / w.mean()
 
 
 def weighted_heat_error(heat: torch.Tensor, target: torch.Tensor, alpha: float) -> torch.Tensor:
