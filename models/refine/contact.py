@@ -112,27 +112,30 @@ OBJECT_GUARD_MARGIN = 0.005
 
 def _object_guards(
     field: ObjectField, parts: list[tuple[np.ndarray, np.ndarray]], T: np.ndarray, centre: np.ndarray,
-    radius: float, grids: list[PartGrid] | None = None,
+    radius: float, grids: list[PartGrid] | None = None, ball: np.ndarray | None = None,
+    boxes: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
     """Object points within ``radius`` of a fingertip body's ``centre`` against its convex parts (half-spaces
     (f, 4) ``n·x ≤ d`` and bounds, body frame; the body's pose ``T`` (4, 4)): each point's clearance to the part
     it is deepest in (max_f n_f·p − d_f: minus the depth inside, a lower bound on the distance outside), the world
     direction −n of the active face (moving the face's points that way increases it) and the point's foot on
     that face (world; a point fixed to the body whose Jacobian the rows use) — for the points nearest inside.
+    ``ball``: the indices of the object points within ``radius`` of ``centre`` when the caller has them (sorted);
+    ``boxes``: `part_boxes` of ``parts`` when the caller has them.
 
     With the parts' ``grids`` (`models.refine.part_bounds`), only the points whose clearance bounds let them be
     among the nearest are measured against every face: the same rows."""
     empty = np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3))
     if not hasattr(field, "points") or not parts:  # an analytic field (tests): no object points to test
         return empty
-    pts = np.asarray(field.points)[_ball(field, centre, radius)]
+    pts = np.asarray(field.points)[_ball(field, centre, radius) if ball is None else ball]
     if not len(pts):
         return empty
     R, t = T[:3, :3], T[:3, 3]
     local = (pts - t) @ R
-    near_parts = [np.flatnonzero(np.all((local > bounds[0] - OBJECT_GUARD_MARGIN)
-                                        & (local < bounds[1] + OBJECT_GUARD_MARGIN), axis=1))
-                  for _, bounds in parts]  # fmt: skip
+    box = part_boxes(parts) if boxes is None else boxes  # (2, P, 3): one comparison for every part
+    within = np.all((local[:, None, :] > box[0][None]) & (local[:, None, :] < box[1][None]), axis=2)  # (M, P)
+    near_parts = [np.flatnonzero(column) for column in within.T]
     if grids is not None:
         pts, local, near_parts = _prune(local, pts, near_parts, grids)
     best = np.full(len(pts), np.inf)
@@ -199,12 +202,50 @@ def contact_jacobians(
     return full[:m], full[m : 2 * m], full[2 * m :]
 
 
+def part_boxes(parts: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """(2, P, 3) the parts' bounds (2, 3) grown by ``OBJECT_GUARD_MARGIN``, stacked."""
+    lo = np.stack([bounds[0] - OBJECT_GUARD_MARGIN for _, bounds in parts])
+    hi = np.stack([bounds[1] + OBJECT_GUARD_MARGIN for _, bounds in parts])
+    return np.stack([lo, hi])
+
+
+def part_boxes_of(hand: Any) -> list[np.ndarray]:
+    """Per fingertip, `part_boxes` of its parts (cached on the hand)."""
+    cache = hand.__dict__.setdefault("_part_grids", {})
+    if "boxes" not in cache:
+        cache["boxes"] = [part_boxes(parts) if parts else np.zeros((2, 0, 3)) for parts in hand.fingertip_parts]
+    result: list[np.ndarray] = cache["boxes"]
+    return result
+
+
+def _fingertip_members(hand: object, surf: Any) -> list[np.ndarray | slice]:
+    """Per fingertip, its samples in ``surf``: a slice where they are contiguous (they are, for the built-in
+    hands), else their indices; cached on the hand (the boolean mask cost 0.3 ms an iterate)."""
+    cache = hand.__dict__.setdefault("_fingertip_members", {})
+    if id(surf) not in cache:
+        members: list[np.ndarray | slice] = []
+        for i in range(len(surf.bound_radius)):
+            idx = np.flatnonzero(surf.fingertip == i)
+            contiguous = len(idx) and idx[-1] - idx[0] + 1 == len(idx)
+            members.append(slice(int(idx[0]), int(idx[-1]) + 1) if contiguous else idx)
+        cache[id(surf)] = (surf, members)  # the surface kept with its id, so the id cannot be reused
+    result: list[np.ndarray | slice] = cache[id(surf)][1]
+    return result
+
+
 def _ball(field: ObjectField, centre: np.ndarray, radius: float) -> np.ndarray:
+    return _balls(field, centre[None], np.array([radius]))[0]
+
+
+def _balls(field: ObjectField, centres: np.ndarray, radii: np.ndarray) -> list[np.ndarray]:
+    """Per centre (k, 3), the sorted indices of the object points within its radius (k,): one tree query."""
+    if not hasattr(field, "points"):  # an analytic field (tests): no object points
+        return [np.zeros(0, dtype=np.int64) for _ in centres]
     ball = getattr(field, "ball_indices", None)
     if ball is not None:
-        return np.asarray(ball(centre[None], radius)[0], dtype=np.int64)
+        return [np.asarray(b, dtype=np.int64) for b in ball(centres, radii)]
     pts = np.asarray(field.points)
-    return np.flatnonzero(np.linalg.norm(pts - centre, axis=1) <= radius)
+    return [np.flatnonzero(np.linalg.norm(pts - c, axis=1) <= r) for c, r in zip(centres, radii, strict=True)]
 
 
 def surface_contacts(
@@ -235,7 +276,7 @@ def surface_contacts(
     tip_body = hand.fingertip_body_index  # type: ignore[attr-defined]
     m = len(surf.bound_radius)
     # cull: the bodies whose bounding sphere is far from the object only need their pads measured
-    centres = np.stack([world[surf.fingertip == i].mean(0) for i in range(m)])
+    centres = np.stack([world[members].mean(0) for members in _fingertip_members(hand, surf)])
     centre_phi = field.signed_distance(centres)[0]
     near_body = (centre_phi < surf.bound_radius * 2.0 + margin) & guards
     asked = surf.pad | near_body[surf.fingertip]
@@ -255,6 +296,9 @@ def surface_contacts(
     extra: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
     body_T = T_all[0, torch.as_tensor(tip_body)].numpy()
     grids = part_grids_of(hand) if near_body.any() else [None] * m
+    boxes = part_boxes_of(hand) if near_body.any() else [None] * m
+    near_tips = np.flatnonzero(near_body)
+    balls = dict(zip(near_tips.tolist(), _balls(field, centres[near_tips], surf.bound_radius[near_tips]), strict=True))
     for i in range(m):
         mine = np.flatnonzero((owner == i) & pad)
         nearest[i] = measure[mine[np.argmin(score[mine])]]
@@ -264,7 +308,7 @@ def surface_contacts(
             body = np.flatnonzero((owner == i) & (phi_all < margin))
             rows.append(body[np.argsort(phi_all[body])[:GUARD_ROWS_PER_FINGERTIP]])
             extra.append(_object_guards(field, hand.fingertip_parts[i], body_T[i], centres[i],  # type: ignore[attr-defined]
-                                        float(surf.bound_radius[i]), grids[i]))  # fmt: skip
+                                        float(surf.bound_radius[i]), grids[i], balls[i], boxes[i]))  # fmt: skip
     at = np.searchsorted(measure, nearest)  # ``measure`` is sorted (np.flatnonzero)
     points = world[sample]
     gap = phi_all[at]

@@ -274,9 +274,9 @@ class PointCloudField:
             return result
         return np.asarray(self._region_tree.query(x)[0], dtype=np.float64)
 
-    def ball_indices(self, x: np.ndarray, radius: float) -> list[list[int]]:
-        """For each x, the indices of the cloud points within ``radius``."""
-        return list(self._tree.query_ball_point(np.asarray(x, dtype=np.float64), radius))
+    def ball_indices(self, x: np.ndarray, radius: float | np.ndarray) -> list[list[int]]:
+        """For each x (M, 3), the indices (ascending) of the cloud points within ``radius`` (one, or (M,))."""
+        return list(self._tree.query_ball_point(np.asarray(x, dtype=np.float64), radius, return_sorted=True))
 
     def nearest_index(self, x: np.ndarray) -> np.ndarray:
         """Index of the nearest cloud point for each x."""

@@ -11,6 +11,7 @@ import torch
 
 from models.refine.contact import ObjectField, contact_jacobians, surface_contacts
 from models.refine.forces import ForceSolution, solve_forces
+from models.refine.self_pairs import BodyPairBounds
 from models.refine.wrench import WrenchTask
 
 if TYPE_CHECKING:
@@ -68,7 +69,9 @@ class Linearisation:
             the fingertip bodies' surface samples nearest the object (radius 0) and the other bodies' collision
             spheres (Φ(centre) − r) — with their gradients and Jacobians.
         sph, sph_jac, sph_radius: every collision sphere (S) and its Jacobian (self-collision pairs).
-        pair_idx, pair_dist, pair_dir: self-collision pairs (P, 2), their centre distances and unit directions.
+        pair_idx, pair_dist, pair_dir: self-collision pairs (P, 2), their centre distances and unit directions: the
+            hand's pairs that can be within `models.refine.self_pairs.PAIR_REACH` (the others cannot overlap nor
+            enter the step's rows).
         q, lower, upper: joint values and limits (D,).
         region_point: with a region mask, each contact point's distance to the nearest allowed sample (m,) — the
             verification's region test, which the convergence test also applies (Φ^R is to the samples' discs).
@@ -223,6 +226,8 @@ def linearise(
     point_distance = getattr(field, "region_point_distance", None) if tip_field is not None else None
     solution = solve_forces(task, on_object, normals, mu, max_normal_force)  # where verification applies them
     pairs = np.asarray(hand.self_collision_pairs, dtype=np.int64).reshape(-1, 2)
+    if len(pairs) and contacts.body_poses is not None:  # only the pairs that can be near (`self_pairs`)
+        pairs = pairs[BodyPairBounds.of(hand).near(contacts.body_poses[0].numpy())]
     diff = sph[pairs[:, 0]] - sph[pairs[:, 1]] if len(pairs) else np.zeros((0, 3))
     dist = np.linalg.norm(diff, axis=1)
     return Linearisation(

@@ -118,6 +118,8 @@ class Hand:
         self._tip_body = np.asarray(tip_body, dtype=np.int64)
         self._tip_local = np.asarray(tip_local)
         self._cache: dict[tuple[str, torch.dtype, torch.device], torch.Tensor] = {}
+        self._tensor_cache: dict[tuple[str, torch.dtype, torch.device], tuple[np.ndarray, torch.Tensor, torch.Tensor,
+                                                                              torch.Tensor]] = {}  # fmt: skip
         self._fit_spheres()
 
     # ------------------------------------------------------------------ construction helpers
@@ -225,12 +227,23 @@ class Hand:
         ``tree.body_poses`` of this pose when the caller has them already."""
         self._check(palm_pos, palm_quat, q)
         surf = self.contact_surface
-        idx = np.arange(len(surf)) if index is None else np.asarray(index, dtype=np.int64)
         T = self.tree.body_poses(palm_pos, palm_quat, q) if body_poses is None else body_poses
-        bodies = surf.body[idx]
-        Tb = T[:, torch.as_tensor(bodies, device=q.device)]
-        local = torch.as_tensor(surf.local[idx], dtype=q.dtype, device=q.device)
-        nrm = torch.as_tensor(surf.normals[idx], dtype=q.dtype, device=q.device)
+        if index is None:  # every sample (the contact model's every iterate): the constant tensors made once
+            key = ("surface_samples", q.dtype, q.device)
+            if key not in self._tensor_cache:
+                self._tensor_cache[key] = (
+                    surf.body, torch.as_tensor(surf.body, device=q.device),
+                    torch.as_tensor(surf.local, dtype=q.dtype, device=q.device),
+                    torch.as_tensor(surf.normals, dtype=q.dtype, device=q.device),
+                )  # fmt: skip
+            bodies, body_index, local, nrm = self._tensor_cache[key]
+        else:
+            idx = np.asarray(index, dtype=np.int64)
+            bodies = surf.body[idx]
+            body_index = torch.as_tensor(bodies, device=q.device)
+            local = torch.as_tensor(surf.local[idx], dtype=q.dtype, device=q.device)
+            nrm = torch.as_tensor(surf.normals[idx], dtype=q.dtype, device=q.device)
+        Tb = T[:, body_index]
         pts = (Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]
         normals = (Tb[..., :3, :3] @ nrm[..., None])[..., 0]
         if not jacobian:
