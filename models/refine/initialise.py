@@ -184,11 +184,22 @@ def back_off(
     if not body.any():
         return t
     centres = rest.spheres[body] @ rot.T + t
+    r = radii[body]
+    blocking = np.zeros(0, dtype=np.int64)  # the spheres that penetrated at the last shift
     for k in range(int(max_distance / step) + 1):
         shift = -direction * step * k
-        phi, _, _ = field.signed_distance(centres + shift)
-        if np.all(phi >= radii[body]):
+        # the spheres that penetrated last time are measured first: while one of them still does, the others
+        # need not be (Φ of each point is independent of the others: the same shift is found)
+        if len(blocking):
+            phi = field.signed_distance(centres[blocking] + shift)[0]
+            if np.any(phi < r[blocking]):
+                blocking = blocking[phi < r[blocking]]
+                continue
+        others = np.setdiff1d(np.arange(len(centres)), blocking, assume_unique=True)
+        phi = field.signed_distance(centres[others] + shift)[0]
+        if np.all(phi >= r[others]):
             return t + shift
+        blocking = others[phi < r[others]]
     return t - direction * max_distance
 
 
