@@ -29,3 +29,34 @@ def test_initialise_ranks_assignments_by_heatmap_iou(box):
     assert cands[0].iou >= cands[1].iou >= cands[2].iou
     assert sorted(cands[0].assignment) == sorted(set(cands[0].assignment))
     assert iou(np.array([1, 1, 0], bool), np.array([1, 0, 0], bool)) == 0.5
+
+
+def test_back_off_finds_the_first_clear_shift(box):
+    """The back-off (which measures the spheres that blocked last time first) stops at the shift the plain rule
+    gives: the first step at which every non-fingertip sphere is clear of the object."""
+    from models.refine.initialise import back_off
+    from models.robots import get_hand
+
+    hand = get_hand("leap")
+    _, pts, nrm = box
+    field = PointCloudField(pts, nrm)
+    rest = rest_geometry(hand)
+    radii = np.asarray(hand.sphere_radii)
+    body = ~rest.tip_sphere
+    centre = pts.mean(axis=0)
+    rng = np.random.default_rng(3)
+    moved = 0
+    for _ in range(6):
+        rot = Rotation.random(random_state=rng).as_matrix()
+        direction = rot @ np.asarray(hand.approach_axis, dtype=np.float64)
+        t = centre - rot @ rest.tips.mean(axis=0)  # the hand's fingertips centred on the box: the palm is inside
+        expected = t - direction * 0.1
+        for k in range(int(0.1 / 0.005) + 1):  # the plain rule: every sphere measured at every shift
+            shift = -direction * 0.005 * k
+            if np.all(field.signed_distance(rest.spheres[body] @ rot.T + t + shift)[0] >= radii[body]):
+                expected = t + shift
+                break
+        found = back_off(rot, t, rest, radii, field, direction)
+        np.testing.assert_array_equal(found, expected)
+        moved += int(np.linalg.norm(found - t) > 0)
+    assert moved >= 3  # most starts needed backing off, so the shortcut was exercised
