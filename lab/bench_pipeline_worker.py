@@ -4,7 +4,8 @@ It reads one JSON spec per line on stdin and writes one JSON record per line on 
 every checkout has (`models.pipeline`, `models.audit`, `models.objects`, `models.robots`), so the same file runs
 against a reference checkout (``PYTHONPATH=REF``). The refinement's parts are timed by wrapping, in the modules
 that call them, ``linearise`` (the local model), ``surface_contacts`` (its real-surface contact model),
-``_object_guards`` (that model's object-point guard rows) and ``solve_step`` (the SCP solve); a checkout without
+``object_guards`` (that model's object-point guard rows; ``_object_guards`` in checkouts before it had its own
+module) and ``solve_step`` (the SCP solve); a checkout without
 one of them reports it as missing (NaN).
 """
 
@@ -22,10 +23,11 @@ import numpy as np
 WRAPPED = {
     "linearise": ("models.refine.refine", "linearise"),
     "contacts": ("models.refine.state", "surface_contacts"),
-    "guards": ("models.refine.contact", "_object_guards"),
+    "guards": ("models.refine.contact", "object_guards|_object_guards"),
     "solve": ("models.refine.refine", "solve_step"),
 }
-"""part → (module, attribute) wrapped with a timer (the attribute the caller looks up at call time)."""
+"""part → (module, attribute) wrapped with a timer (the attribute the caller looks up at call time; ``a|b``: the
+first of the names the module has)."""
 
 
 class _Timers:
@@ -43,7 +45,8 @@ class _Timers:
 
         for part, (module, name) in WRAPPED.items():
             mod = importlib.import_module(module)
-            fn = getattr(mod, name, None)
+            name = next((n for n in name.split("|") if hasattr(mod, n)), "")  # the first name this checkout has
+            fn = getattr(mod, name, None) if name else None
             if fn is None:
                 continue
             self.originals.append((mod, name, fn))

@@ -1,6 +1,6 @@
 """Cheap bounds on a convex part's clearance, so that only a few object points are measured against all its faces.
 
-The object-point guards (`models.refine.contact._object_guards`) measure each object point near a fingertip
+The object-point guards (`models.refine.object_guards`) measure each object point near a fingertip
 against every face of the convex parts of its body: ``c(x) = max_f n_f·x − d_f`` (minus the depth inside, a lower
 bound on the distance outside). LEAP's fingertip hulls have up to 4 800 faces, so ≈ 200 object points cost ≈ 1 M
 products a part and an iterate. Only the 8 smallest clearances below a margin enter the step's rows.
@@ -87,3 +87,12 @@ class PartGrid:
 def part_grids(parts: list[tuple[np.ndarray, np.ndarray]], margin: float) -> list[PartGrid]:
     """One `PartGrid` per convex part (planes (f, 4), bounds (2, 3)) of a fingertip body."""
     return [PartGrid.build(planes, bounds, margin) for planes, bounds in parts]
+
+
+def part_boxes(parts: list[tuple[np.ndarray, np.ndarray]], margin: float) -> np.ndarray:
+    """(2, P, 3): the bounds (2, 3) of each convex part (planes, bounds) grown by ``margin``, stacked (one
+    comparison tests a point against every part's box)."""
+    if not parts:
+        return np.zeros((2, 0, 3))
+    return np.stack([np.stack([bounds[0] - margin for _, bounds in parts]),
+                     np.stack([bounds[1] + margin for _, bounds in parts])])  # fmt: skip

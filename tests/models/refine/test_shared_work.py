@@ -85,7 +85,7 @@ def test_cell_members_are_each_cells_samples(box):
 def test_part_grid_bounds_hold_and_the_pruned_guards_are_the_same_rows(box):
     """A convex part's clearance lies between its grid's bounds everywhere the guards look, and the object-point
     guards measured on the pruned points are the rows measured on every point (LEAP: hulls of up to 4 800 faces)."""
-    from models.refine.contact import OBJECT_GUARD_MARGIN, _object_guards, part_grids_of
+    from models.refine.object_guards import OBJECT_GUARD_MARGIN, object_guards, part_grids_of
     from models.refine.part_bounds import clearance
     from models.robots import get_hand
 
@@ -107,8 +107,8 @@ def test_part_grid_bounds_hold_and_the_pruned_guards_are_the_same_rows(box):
         for i, body in enumerate(hand.fingertip_body_index):
             centre = T_all[body, :3, :3] @ hand.contact_surface.bound_centre[i] + T_all[body, :3, 3]
             radius = float(hand.contact_surface.bound_radius[i])
-            want = _object_guards(cloud, hand.fingertip_parts[i], T_all[body], centre, radius)
-            got = _object_guards(cloud, hand.fingertip_parts[i], T_all[body], centre, radius, part_grids_of(hand)[i])
+            want = object_guards(cloud, hand.fingertip_parts[i], T_all[body], centre, radius)
+            got = object_guards(cloud, hand.fingertip_parts[i], T_all[body], centre, radius, part_grids_of(hand)[i])
             for a, b in zip(want, got, strict=True):
                 np.testing.assert_allclose(b, a, rtol=0, atol=1e-15)
             compared += len(want[0])
