@@ -38,6 +38,7 @@ class StepParams:
         active_margin: guards farther than this from the object are left out (m).
         pair_margin: self-collision pairs with a larger gap are left out (m).
         regularisation: ε on (δq_j / s_j)².
+        residual_weight: the wrench residual's weight (1; less while the fingers close, `RefineConfig`).
     """
 
     trust: np.ndarray
@@ -47,6 +48,7 @@ class StepParams:
     active_margin: float = 0.02
     pair_margin: float = 0.01
     regularisation: float = 1e-6
+    residual_weight: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -122,7 +124,7 @@ def solve_step(lin: Linearisation, params: StepParams) -> StepSolution:
     nx = isl + a + b
     prob = ConicProblem(nx)
     prob.p_diag[iq:iff] = 2 * params.regularisation / np.maximum(params.trust, 1e-9) ** 2
-    prob.p_diag[ir:ip] = 2.0
+    prob.p_diag[ir:ip] = 2.0 * params.residual_weight
     prob.p_diag[ip:isl] = 2.0 * params.tip_weight
     prob.q[isl:] = params.penalty
     # t_r = r0 + B δq + G f
@@ -184,7 +186,7 @@ def solve_step_cvxpy(lin: Linearisation, params: StepParams) -> StepSolution:
     residual = t["r0"] + t["B"] @ dq + t["G"] @ f
     tip = lin.tip_phi + t["tip_rows"] @ dq
     obj = (
-        cp.sum_squares(residual)
+        params.residual_weight * cp.sum_squares(residual)
         + params.tip_weight * cp.sum_squares(tip)
         + params.regularisation * cp.sum_squares(cp.multiply(1 / np.maximum(params.trust, 1e-9), dq))
         + params.penalty * (cp.sum(sig_s) + cp.sum(sig_p))

@@ -87,9 +87,11 @@ def test_a_hand_stuck_in_the_object_stops_early_with_the_same_iterates():
     inward = -start.palm_pos / np.linalg.norm(start.palm_pos)
     pushed = HandPose(start.palm_pos + 0.04 * inward, start.palm_quat, start.q)
     task = rigid_task(np.array([0, 0, 1.0, 0, 0, 0]), np.zeros(3), 0.05)
-    cfg = RefineConfig(history=True)
+    cfg = RefineConfig(history=True, touch_weight=1.0)  # the full merit from the start: the rule alone (below:
+    # closing the fingers first frees this hand)
     stuck = refine(hand, field, task, pushed, 0.8, cfg)
-    patient = refine(hand, field, task, pushed, 0.8, RefineConfig(history=True, stuck_penetration=np.inf))
+    patient = refine(hand, field, task, pushed, 0.8, RefineConfig(history=True, touch_weight=1.0,
+                                                                  stuck_penetration=np.inf))  # fmt: skip
     assert stuck.reason == "stalled" and not patient.converged
     assert stuck.iterations < patient.iterations
     kept = len(stuck.history)  # the stopping iteration is not recorded
@@ -119,3 +121,31 @@ def test_a_refused_step_that_would_repeat_ends_the_attempt(setup, gripper):
     lin = linearise(gripper, res.pose, field, task, 0.5, cfg.max_normal_force)
     first, again = solve_step(lin, params), solve_step(lin, params)
     np.testing.assert_array_equal(first.delta, again.delta)  # the step it would have tried next
+
+
+def test_closing_the_fingers_first_frees_the_hand_stuck_in_the_box():
+    """The same pushed LEAP hand: with the wrench residual weighed down while a tip is more than 3 mm off, the
+    fingers close first and the refinement ends in a grasp that the exact mesh verifies; with the full residual
+    from the start it stays stuck."""
+    import trimesh
+
+    from models.refine.state import HandPose
+    from models.robots import get_hand
+
+    hand = get_hand("leap")
+    mesh = trimesh.creation.box((0.06, 0.06, 0.06))
+    pts, faces = trimesh.sample.sample_surface_even(mesh, 1500, seed=0)
+    field = PointCloudField(pts, mesh.face_normals[faces])
+    idx = [1093, 263, 1269, 1145]
+    start = initialise(hand, field, pts[idx], mesh.face_normals[faces][idx])[0].pose
+    inward = -start.palm_pos / np.linalg.norm(start.palm_pos)
+    pushed = HandPose(start.palm_pos + 0.04 * inward, start.palm_quat, start.q)
+    task = rigid_task(np.array([0, 0, 1.0, 0, 0, 0]), np.zeros(3), 0.05)
+    closing = refine(hand, field, task, pushed, 0.8, RefineConfig(history=True))
+    full = refine(hand, field, task, pushed, 0.8, RefineConfig(touch_weight=1.0))
+    assert RefineConfig().touch_weight < 1.0
+    assert not full.converged
+    assert closing.converged
+    assert verify(hand, closing.pose, field, task, 0.8, mesh).success
+    tips = [r.max_tip_distance for r in closing.history]
+    assert min(tips) < RefineConfig().touch_distance  # the fingers did close
