@@ -70,7 +70,8 @@ class RefineConfig:
             weigh the wrench residual by ``touch_weight``; once every tip is that near, or that phase stalls, by 1.
             A far finger's contact hops between faces as it moves and the residual jumps with it (0 ↔ 0.3-0.45 on
             LEAP's stalled attempts): the fingers close first. 0.03 measured on 4 × 258 lifts: LEAP iterations
-            −13 %, Allegro −2 %, verified 933 vs 935 (`docs/performance.md`); 1 is the earlier refinement.
+            −13 %, Allegro −2 %, verified 933 vs 935, audited 490 vs 491 of 516 (`docs/performance.md`); 1 is
+            the earlier refinement.
         solver: ``"clarabel"`` (native, default) or ``"cvxpy"`` (the reference, slow).
         history: keep per-iteration records.
     """
