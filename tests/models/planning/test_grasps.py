@@ -77,7 +77,9 @@ def test_no_hand_fits_through_a_tight_tunnel_and_the_steps_say_so(block):
                     waypoints=[Pose(np.array([0.1, 0, 0]))], obstacles=walls,
                     mesh_vertices=np.asarray(mesh.vertices), mesh_faces=np.asarray(mesh.faces),
                     options=PlanOptions(translation_step=0.05, method="random_contacts", num_proposals=2,
-                                        new_grasp_attempts=1, max_iterations=40, seed=1))  # fmt: skip
+                                        new_grasp_attempts=1, max_iterations=40, seed=4))  # fmt: skip
+    # (the seed picks random contacts whose grasp at the start clears the tube's mouth: seed 1's reached into it
+    # once the refinement closed the fingers first — a verified grasp the planner rightly refused there)
     out = plan_manipulation(inp)
     assert out.segments[0].straight  # the object itself fits
     inside = [s for s, p in zip(out.steps, out.poses, strict=False) if p.position[0] > 0.0]
