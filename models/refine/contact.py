@@ -117,18 +117,18 @@ def contact_jacobians(
     return full[:m], full[m : 2 * m], full[2 * m :]
 
 
-def _fingertip_members(hand: object, surf: Any) -> list[np.ndarray | slice]:
-    """Per fingertip, its samples in ``surf``: a slice where they are contiguous (they are, for the built-in
-    hands), else their indices; cached on the hand (the boolean mask cost 0.3 ms an iterate)."""
-    cache = hand.__dict__.setdefault("_fingertip_members", {})
-    if id(surf) not in cache:
+def _fingertip_members(hand: Any, surf: Any) -> list[np.ndarray | slice]:
+    """Per fingertip, its samples in ``surf`` (the hand's contact surface, a cached property): a slice where they
+    are contiguous (they are, for the built-in hands), else their indices; cached on the hand (the boolean mask
+    cost 0.3 ms an iterate)."""
+    if "_fingertip_members" not in hand.__dict__:
         members: list[np.ndarray | slice] = []
         for i in range(len(surf.bound_radius)):
             idx = np.flatnonzero(surf.fingertip == i)
             contiguous = len(idx) and idx[-1] - idx[0] + 1 == len(idx)
             members.append(slice(int(idx[0]), int(idx[-1]) + 1) if contiguous else idx)
-        cache[id(surf)] = (surf, members)  # the surface kept with its id, so the id cannot be reused
-    result: list[np.ndarray | slice] = cache[id(surf)][1]
+        hand.__dict__["_fingertip_members"] = members
+    result: list[np.ndarray | slice] = hand.__dict__["_fingertip_members"]
     return result
 
 

@@ -121,6 +121,8 @@ def _ball(field: PointsField, centre: np.ndarray, radius: float) -> np.ndarray:
 
 def object_balls(field: PointsField, centres: np.ndarray, radii: np.ndarray) -> list[np.ndarray]:
     """Per centre (k, 3), the sorted indices of the object points within its radius (k,): one tree query."""
+    if not len(centres):
+        return []
     if not hasattr(field, "points"):  # an analytic field (tests): no object points
         return [np.zeros(0, dtype=np.int64) for _ in centres]
     ball = getattr(field, "ball_indices", None)
@@ -128,5 +130,3 @@ def object_balls(field: PointsField, centres: np.ndarray, radii: np.ndarray) -> 
         return [np.asarray(b, dtype=np.int64) for b in ball(centres, radii)]
     pts = np.asarray(field.points)
     return [np.flatnonzero(np.linalg.norm(pts - c, axis=1) <= r) for c, r in zip(centres, radii, strict=True)]
-
-

@@ -38,8 +38,9 @@ class BodyPairBounds:
         """The bounds of ``hand`` (cached on it)."""
         cached = hand.__dict__.get("_body_pair_bounds")
         if cached is None:
+            sphere_body = np.asarray([hand.tree.body_names.index(link) for link in hand.sphere_links], dtype=np.int64)
             cached = hand.__dict__["_body_pair_bounds"] = cls.build(
-                np.asarray(hand._sphere_body), np.asarray(hand.sphere_centres, dtype=np.float64),
+                sphere_body, np.asarray(hand.sphere_centres, dtype=np.float64),
                 np.asarray(hand.sphere_radii, dtype=np.float64), np.asarray(hand.self_collision_pairs).reshape(-1, 2),
             )  # fmt: skip
         result: BodyPairBounds = cached

@@ -118,8 +118,6 @@ class Hand:
         self._tip_body = np.asarray(tip_body, dtype=np.int64)
         self._tip_local = np.asarray(tip_local)
         self._cache: dict[tuple[str, torch.dtype, torch.device], torch.Tensor] = {}
-        self._tensor_cache: dict[tuple[str, torch.dtype, torch.device], tuple[np.ndarray, torch.Tensor, torch.Tensor,
-                                                                              torch.Tensor]] = {}  # fmt: skip
         self._fit_spheres()
 
     # ------------------------------------------------------------------ construction helpers
@@ -229,14 +227,9 @@ class Hand:
         surf = self.contact_surface
         T = self.tree.body_poses(palm_pos, palm_quat, q) if body_poses is None else body_poses
         if index is None:  # every sample (the contact model's every iterate): the constant tensors made once
-            key = ("surface_samples", q.dtype, q.device)
-            if key not in self._tensor_cache:
-                self._tensor_cache[key] = (
-                    surf.body, torch.as_tensor(surf.body, device=q.device),
-                    torch.as_tensor(surf.local, dtype=q.dtype, device=q.device),
-                    torch.as_tensor(surf.normals, dtype=q.dtype, device=q.device),
-                )  # fmt: skip
-            bodies, body_index, local, nrm = self._tensor_cache[key]
+            bodies = surf.body
+            body_index = self._const("surface_body", q)
+            local, nrm = self._const("surface_local", q), self._const("surface_normals", q)
         else:
             idx = np.asarray(index, dtype=np.int64)
             bodies = surf.body[idx]
@@ -280,6 +273,12 @@ class Hand:
                 v = torch.as_tensor(self._tip_local, dtype=like.dtype, device=like.device)
             elif key == "sphere_local":
                 v = torch.as_tensor(self.sphere_centres, dtype=like.dtype, device=like.device)
+            elif key == "surface_body":  # an index: its own integer dtype
+                v = torch.as_tensor(self.contact_surface.body, device=like.device)
+            elif key == "surface_local":
+                v = torch.as_tensor(self.contact_surface.local, dtype=like.dtype, device=like.device)
+            elif key == "surface_normals":
+                v = torch.as_tensor(self.contact_surface.normals, dtype=like.dtype, device=like.device)
             else:
                 raise KeyError(key)
             self._cache[k] = v
