@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from models.refine.conic import ConicProblem
+from models.refine.conic import ConicProblem, Rows
 from models.refine.forces import cone_mu, min_normal_force, wrench_matrix
 from models.refine.grasp import cone_rows, grasp_maps, skew
 from models.refine.state import Linearisation
@@ -128,43 +128,31 @@ def solve_step(lin: Linearisation, params: StepParams) -> StepSolution:
     prob.p_diag[ip:isl] = 2.0 * params.tip_weight
     prob.q[isl:] = params.penalty
     # t_r = r0 + B δq + G f
-    eq = np.zeros((k, nx))
-    eq[:, iq:iff], eq[:, iff:ir], eq[:, ir:ip] = -t["B"], -t["G"], np.eye(k)
-    prob.zero(eq, t["r0"])
+    prob.zero(Rows.beside(Rows.dense(-t["B"], iq), Rows.dense(-t["G"], iff), Rows.eye(k, ir)), t["r0"])
     # t_φ = Φ + ∇Φᵀ J δq
-    eq = np.zeros((m, nx))
-    eq[:, iq:iff], eq[:, ip:isl] = -t["tip_rows"], np.eye(m)
-    prob.zero(eq, lin.tip_phi)
-    nrow = np.zeros((m, nx))
-    for i in range(m):
-        nrow[i, iff + 3 * i : iff + 3 * i + 3] = -lin.normals[i]
+    prob.zero(Rows.beside(Rows.dense(-t["tip_rows"], iq), Rows.eye(m, ip)), lin.tip_phi)
+    # row i: −n_i · f_i (the normal force of contact i)
+    nrow = Rows(m, np.repeat(np.arange(m), 3), iff + np.arange(3 * m), -lin.normals.reshape(-1))
     if lin.task.closure:
-        prob.zero(nrow.sum(axis=0, keepdims=True), np.ones(1))
-        prob.leq(-nrow, np.full(m, -min_normal_force(lin.task, m)))
+        prob.zero(Rows(1, np.zeros(3 * m, dtype=np.int64), nrow.col, nrow.val), np.ones(1))
+        prob.leq(Rows(m, nrow.row, nrow.col, -nrow.val), np.full(m, -min_normal_force(lin.task, m)))
     prob.leq(nrow, np.full(m, lin.max_normal_force))
     # box: lo ≤ δq ≤ hi, |f − f*| ≤ s_f
-    eye = np.eye(nx)
-    prob.leq(eye[iq:iff], t["hi"])
-    prob.leq(-eye[iq:iff], -t["lo"])
+    prob.leq(Rows.eye(n, iq), t["hi"])
+    prob.leq(Rows.eye(n, iq, -1.0), -t["lo"])
     f0 = lin.forces.reshape(-1)
-    prob.leq(eye[iff:ir], f0 + params.trust_force)
-    prob.leq(-eye[iff:ir], -(f0 - params.trust_force))
+    prob.leq(Rows.eye(3 * m, iff), f0 + params.trust_force)
+    prob.leq(Rows.eye(3 * m, iff, -1.0), -(f0 - params.trust_force))
     # spheres: −row δq − σ ≤ rhs ; pairs likewise ; σ ≥ 0
     if a:
-        rows = np.zeros((a, nx))
-        rows[:, iq:iff], rows[:, isl : isl + a] = -t["sph_rows"], -np.eye(a)
-        prob.leq(rows, t["sph_rhs"])
+        prob.leq(Rows.beside(Rows.dense(-t["sph_rows"], iq), Rows.eye(a, isl, -1.0)), t["sph_rhs"])
     if b:
-        rows = np.zeros((b, nx))
-        rows[:, iq:iff], rows[:, isl + a :] = -t["pair_rows"], -np.eye(b)
-        prob.leq(rows, t["pair_rhs"])
+        prob.leq(Rows.beside(Rows.dense(-t["pair_rows"], iq), Rows.eye(b, isl + a, -1.0)), t["pair_rhs"])
     if a + b:
-        prob.leq(-eye[isl:], np.zeros(a + b))
+        prob.leq(Rows.eye(a + b, isl, -1.0), np.zeros(a + b))
     cones = cone_rows(lin.normals, cone_mu(lin.task, lin.mu))
     for i in range(m):
-        rows = np.zeros((3, nx))
-        rows[:, iff + 3 * i : iff + 3 * i + 3] = -cones[i]
-        prob.soc(rows, np.zeros(3))
+        prob.soc(Rows.dense(-cones[i], iff + 3 * i), np.zeros(3))
     x, status = prob.solve()
     if x is None:
         return StepSolution(None, None, float("inf"), status)

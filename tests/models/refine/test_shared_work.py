@@ -4,21 +4,36 @@ import numpy as np
 import scipy.sparse as sp
 import torch
 
-from models.refine.conic import dense_to_csc
+from models.refine.conic import ConicProblem, Rows
 from models.refine.contact import surface_contacts
 from models.refine.field import PointCloudField
 from models.refine.state import HandPose, sphere_kinematics
 
 
-def test_dense_to_csc_is_scipys_matrix():
+def test_the_problems_matrix_is_scipys_of_the_dense_stack():
+    """Blocks given dense and as `Rows` (identities, blocks side by side) stack, kind by kind, into the matrix
+    scipy makes of the same rows written out densely."""
     rng = np.random.default_rng(0)
-    a = rng.normal(size=(60, 25)) * (rng.random((60, 25)) < 0.2)
-    a[3], a[:, 4] = 0.0, 0.0  # an empty row and column
-    x, y = sp.csc_matrix(a), dense_to_csc(a)
-    assert y.shape == x.shape
-    np.testing.assert_array_equal(y.indptr, x.indptr)
-    np.testing.assert_array_equal(y.indices, x.indices)
-    np.testing.assert_array_equal(y.data, x.data)
+    n = 25
+    dense = rng.normal(size=(6, n)) * (rng.random((6, n)) < 0.3)
+    dense[2], dense[:, 4] = 0.0, 0.0  # an empty row and column
+    side = rng.normal(size=(4, 10))
+    side[1, 3] = 0.0  # an explicit zero in a sparse block is left out
+    prob = ConicProblem(n)
+    prob.leq(Rows.beside(Rows.dense(side, 2), Rows.eye(4, 20, -1.0)), np.zeros(4))
+    prob.soc(Rows.dense(np.eye(3), 12), np.zeros(3))
+    prob.zero(dense, np.ones(6))
+    prob.leq(Rows.eye(n, 0), np.ones(n))
+    written = np.zeros((4, n))
+    written[:, 2:12], written[:, 20:24] = side, -np.eye(4)
+    cone = np.zeros((3, n))
+    cone[:, 12:15] = np.eye(3)
+    expected = sp.csc_matrix(np.vstack([dense, written, np.eye(n), cone]))  # zero, nonneg (in order), soc
+    a, b, cones = prob.constraints()
+    assert a.shape == expected.shape and len(b) == expected.shape[0] and len(cones) == 3
+    np.testing.assert_array_equal(a.indptr, expected.indptr)
+    np.testing.assert_array_equal(a.indices, expected.indices)
+    np.testing.assert_array_equal(a.data, expected.data)
 
 
 def _near_pose(hand, cloud, seed):
