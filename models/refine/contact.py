@@ -95,9 +95,13 @@ class SurfaceContacts:
     body_poses: torch.Tensor | None = None
     jacobian_request: tuple[np.ndarray, np.ndarray] | None = None
 
-    def object_points(self, field: ObjectField) -> np.ndarray:
+    def object_points(self, field: ObjectField, exact: bool = False) -> np.ndarray:
         """(m, 3) the contacts projected onto the object's surface (measured with the samples when they were:
-        ``projected``; the field is asked again only without them)."""
+        ``projected``; the field is asked again only without them); ``exact``: the closest points on the
+        object's mesh where the field has one (``field.exact``, what verification measures)."""
+        surface = getattr(field, "exact", None) if exact else None
+        if surface is not None:
+            return np.asarray(surface.closest(self.points)[0])
         if self.projected is not None:
             return self.projected
         phi, grad, _ = field.signed_distance(self.points)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from models.geometry.closest import TriangleSet
 from models.refine.hull import GrownHull
 from models.refine.winding_cells import SampleCells
 
@@ -58,8 +59,9 @@ class PointCloudField:
     """
 
     def __init__(self, points: np.ndarray, normals: np.ndarray, mask: np.ndarray | None = None,
-                 surface: SurfaceSamples | None = None) -> None:  # fmt: skip
+                 surface: SurfaceSamples | None = None, exact: TriangleSet | None = None) -> None:  # fmt: skip
         self.points = np.asarray(points, dtype=np.float64)
+        self.exact = exact
         n = np.asarray(normals, dtype=np.float64)
         self.normals = n / np.linalg.norm(n, axis=1, keepdims=True)
         self._tree = cKDTree(self.points)

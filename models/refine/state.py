@@ -79,6 +79,7 @@ class Linearisation:
             measures, up to ``CONTACT_TIE`` farther than the pad's nearest sample); the convergence test asks it.
         pending: without Jacobians (``linearise(..., jacobian=False)``: tip_jac, gap_jac, normal_jac, clear_jac
             and sph_jac are empty), what computes them (`completed`).
+        samples: (m, 3) the contact samples on the fingers that ``tips`` are projected from.
     """
 
     task: WrenchTask
@@ -107,6 +108,7 @@ class Linearisation:
     region_point: np.ndarray | None = None
     contact_gap: np.ndarray | None = None
     pending: Callable[[], Jacobians] | None = None
+    samples: np.ndarray | None = None
 
     def completed(self) -> Linearisation:
         """This linearisation with its Jacobians: itself, or (``linearise(..., jacobian=False)``) a copy with them
@@ -176,6 +178,7 @@ def linearise(
     max_normal_force: float,
     tip_field: Any | None = None,
     jacobian: bool = True,
+    exact: bool = False,
 ) -> Linearisation:
     """Kinematics, distances and optimal forces at ``pose``.
 
@@ -188,6 +191,7 @@ def linearise(
         tip_field: optional callable ``x -> (Φ^R, ∇Φ^R)`` used instead of Φ for the tip objective (masks).
         jacobian: False leaves the Jacobians to `Linearisation.completed` (a candidate's merit needs none of them:
             the refinement completes only the accepted ones).
+        exact: the contacts on the object's mesh (where the field has one), not projected on the points' surface.
     """
     tensors = pose.tensors()
     contacts = surface_contacts(hand, tensors, field, tip_field, jacobian=jacobian)
@@ -198,7 +202,7 @@ def linearise(
     guard = body_spheres(hand)
     sph_phi, sph_grad, _ = field.signed_distance(sph[guard])
     tips = contacts.points
-    on_object = contacts.object_points(field)
+    on_object = contacts.object_points(field, exact)
     normals = field.given_normal(on_object)
 
     def jacobians() -> Jacobians:
@@ -235,6 +239,7 @@ def linearise(
         mu=mu,
         max_normal_force=max_normal_force,
         tips=on_object,
+        samples=tips,
         tip_jac=done.tip_jac,
         tip_phi=contacts.phi,
         tip_grad=contacts.grad,

@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from models.geometry.closest import mesh_triangles
 from models.refine.field import PointCloudField, SurfaceSamples
 
 TARGET_SPACING = 2.1e-3
@@ -53,6 +54,7 @@ def object_field(points: np.ndarray, normals: np.ndarray, mask: np.ndarray | Non
                  seed: int = 0) -> PointCloudField:  # fmt: skip
     """The `PointCloudField` of an object's points (N, 3) and normals (N, 3), its distances also on the samples
     of ``mesh`` when the points are sparse and the mesh watertight (`mesh_surface_samples`)."""
-    field = PointCloudField(points, normals, mask)
+    exact = mesh_triangles(mesh) if mesh is not None else None
+    field = PointCloudField(points, normals, mask, exact=exact)
     samples = mesh_surface_samples(mesh, field.disc_radius, seed) if mesh is not None else None
-    return field if samples is None else PointCloudField(points, normals, mask, samples)
+    return field if samples is None else PointCloudField(points, normals, mask, samples, exact)
