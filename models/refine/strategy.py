@@ -110,8 +110,11 @@ def refine_from_start(
     tip_field: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None,
     deadline: float | None = None,
     should_cancel: Callable[[], bool] | None = None,
+    accept: Callable[[RefineResult], bool] | None = None,
 ) -> RefineResult:
-    """Align, refine, restart (module doc); ``iterations`` and ``seconds`` of the result are the totals."""
+    """Align, refine, restart (module doc); ``iterations`` and ``seconds`` of the result are the totals.
+    ``accept``: a test of an attempt that did not converge (the pipeline's verification); one it accepts ends
+    the restarts and is the result."""
     cfg = config or RefineConfig()
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
@@ -128,6 +131,9 @@ def refine_from_start(
         if best is None or res.converged or _score(res) < _score(best):
             best = res
         if res.converged or res.reason == "deadline":
+            break
+        if accept is not None and accept(res):
+            best = res
             break
     assert best is not None
     best.iterations, best.seconds = total, time.perf_counter() - t0
