@@ -229,21 +229,24 @@ def _refined(
     def step_done(it: int, cap: int) -> None:
         report("refinement", (k * inp.max_iterations + it) / total)
 
+    def accept(pose: HandPose) -> bool:
+        return verified(pose).success
+
     res = refine(
         hand, prep.cloud, prep.task, start, prep.mu, config, tip_field=prep.tip_field, deadline=inp.deadline,
-        should_cancel=should_cancel, progress=step_done,
+        should_cancel=should_cancel, progress=step_done, accept=accept,
     )
     left = inp.max_iterations - res.iterations
     restart = inp.method != "contacts" and inp.initial_pose is None
-    if not res.converged and res.reason != "deadline" and restart and left >= 10 and not verified(res.pose).success:
+    if not res.converged and res.reason != "deadline" and restart and left >= 10 and not accept(res.pose):
         # the initial pose led to a local minimum: restart from approach alignments (models.refine.strategy)
         again = refine_from_start(
             hand, prep.cloud, prep.task, start, prep.mu, replace(config, max_iterations=left),
             seed=inp.seed + k, tip_field=prep.tip_field, deadline=inp.deadline, should_cancel=should_cancel,
-            accept=lambda attempt: verified(attempt.pose).success,
+            accept=accept,
         )
         again.iterations += res.iterations
-        if again.converged or verified(again.pose).success:
+        if again.converged or accept(again.pose):
             res = again
         else:  # the first attempt's answer stands, but the request spent every attempt's iterations
             res.iterations = again.iterations

@@ -8,7 +8,7 @@ after a rejection or poor agreement (ratio < 0.25). Adaptive steps are measured 
 `mani bench refine` (fewer iterations, more successes). Convergence (paper): ‖r*‖ < 1e-6 and every |Φ(p_i)|
 < 5 mm, and in addition no sphere penetration or self-overlap beyond 1 mm (the step's constraints are only
 linearised, so we check them). Where the object's mesh is known, a convergence must also hold on the mesh's
-contacts (`mesh_agrees`); when it does not, the attempt goes on with its contacts on the mesh.
+contacts, and a caller's verification can end an attempt that nearly converged (`models.refine.ending`).
 """
 
 from __future__ import annotations
@@ -22,12 +22,12 @@ import numpy as np
 
 from models.errors import Cancelled
 from models.refine.contact import ObjectField
-from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE, solve_forces
+from models.refine.ending import Endings
+from models.refine.forces import DEFAULT_MAX_NORMAL_FORCE
 from models.refine.result import IterationRecord as IterationRecord
 from models.refine.result import RefineResult as RefineResult
 from models.refine.state import HandPose, Linearisation, linearise
 from models.refine.step import StepParams, solve_step, solve_step_cvxpy
-from models.refine.verify import RESIDUAL_SQ_TOL
 from models.refine.wrench import WrenchTask
 
 if TYPE_CHECKING:
@@ -74,6 +74,8 @@ class RefineConfig:
             LEAP's stalled attempts): the fingers close first. 0.03 measured on 4 × 258 lifts: LEAP iterations
             −13 %, Allegro −2 %, verified 933 vs 935, audited 490 vs 491 of 516 (`docs/performance.md`); 1 is
             the earlier refinement.
+        verify_within: with an ``accept`` test (verification), it is asked once an iterate meets the convergence
+            test with this tip tolerance instead of ``tip_tol`` (`models.refine.ending`).
         solver: ``"clarabel"`` (native, default) or ``"cvxpy"`` (the reference, slow).
         history: keep per-iteration records.
     """
@@ -103,6 +105,7 @@ class RefineConfig:
     merit_slack: float = 5e-5
     touch_weight: float = 0.03
     touch_distance: float = 3e-3
+    verify_within: float = 4e-3
     solver: str = "clarabel"
     history: bool = False
 
@@ -136,36 +139,16 @@ def _touching(lin: Linearisation, cfg: RefineConfig) -> bool:
     return bool(np.max(np.abs(lin.tip_phi)) < cfg.touch_distance)
 
 
-def _converged(lin: Linearisation, cfg: RefineConfig) -> bool:
+def _converged(lin: Linearisation, cfg: RefineConfig, tip_tol: float | None = None) -> bool:
+    tip_tol = cfg.tip_tol if tip_tol is None else tip_tol
     return bool(
         lin.residual_norm < cfg.residual_tol
-        and np.max(np.abs(lin.tip_phi)) < cfg.tip_tol
+        and np.max(np.abs(lin.tip_phi)) < tip_tol
         and (lin.region_point is None or np.max(lin.region_point) < cfg.region_point_tol)
-        and (lin.contact_gap is None or np.max(np.abs(lin.contact_gap)) < cfg.tip_tol)
+        and (lin.contact_gap is None or np.max(np.abs(lin.contact_gap)) < tip_tol)
         and lin.penetration().max(initial=0.0) <= cfg.penetration_tol
         and lin.self_overlap().max(initial=0.0) <= cfg.penetration_tol
     )
-
-
-def mesh_agrees(lin: Linearisation, field_: ObjectField) -> bool:
-    """Whether the contacts on the object's mesh — the closest points to the contact samples, with the caller's
-    normals there: what verification measures — produce the task's wrench within verification's tolerance; True
-    where the field has no mesh (``field_.exact``). The refinement's contacts are projected on the points' surface:
-    near an edge the projection and the mesh's closest point can lie on different faces, whose normals differ
-    (26 of 27 converged-but-unverified LEAP and Allegro lifts on 258 third-party requests failed on the wrench)."""
-    surface = getattr(field_, "exact", None)
-    if surface is None or lin.samples is None:
-        return True
-    on = surface.closest(lin.samples)[0]
-    sol = solve_forces(lin.task, on, field_.given_normal(on), lin.mu, lin.max_normal_force)
-    return bool(sol.residual_norm**2 < RESIDUAL_SQ_TOL)
-
-
-def _final_reason(reason: str, lin: Linearisation, cfg: RefineConfig, field_: ObjectField, exact: bool) -> str:
-    """"converged" when the last iterate converged (and the mesh agrees) though the loop ended otherwise."""
-    if reason == "converged" or reason.startswith("solver_failed") or not _converged(lin, cfg):
-        return reason
-    return "converged" if exact or mesh_agrees(lin, field_) else reason
 
 
 def refine(
@@ -179,6 +162,7 @@ def refine(
     deadline: float | None = None,
     should_cancel: Callable[[], bool] | None = None,
     progress: Callable[[int, int], None] | None = None,
+    accept: Callable[[HandPose], bool] | None = None,
 ) -> RefineResult:
     """Refine a hand pose so that its fingertips produce ``task`` (paper Eq. 9-16).
 
@@ -193,6 +177,8 @@ def refine(
         deadline: `time.monotonic()` value; when passed, the best iterate is returned, not converged.
         should_cancel: checked before every iteration; raises `Cancelled` when it returns true.
         progress: called with (iteration, max_iterations).
+        accept: verification of a pose, asked once an iterate nearly converges (`models.refine.ending`); a pose
+            it accepts ends the refinement with reason "verified" (not ``converged``).
 
     Returns:
         The result (never raises for an infeasible task: it reports not converged and why).
@@ -205,11 +191,12 @@ def refine(
     )
     step_fn = solve_step if cfg.solver == "clarabel" else solve_step_cvxpy
 
-    exact = False  # contacts on the object's mesh: from the first convergence that the mesh contradicts
+    ends = Endings(field_, lambda lin: _converged(lin, cfg), lambda lin: _converged(lin, cfg, cfg.verify_within),
+                   accept)  # fmt: skip
 
     def lin_at(pose: HandPose, jacobian: bool = True) -> Linearisation:
         return linearise(hand, pose, field_, task, mu, cfg.max_normal_force, tip_field, jacobian=jacobian,
-                         exact=exact)  # fmt: skip
+                         exact=ends.exact)  # fmt: skip
 
     pose, lin = start, lin_at(start)
     weight = 1.0 if _touching(lin, cfg) else cfg.touch_weight
@@ -217,11 +204,11 @@ def refine(
     scale, history, reason, it = 1.0, [], "max_iterations", 0
     merits = [value]
     for it in range(1, cfg.max_iterations + 1):
-        if _converged(lin, cfg):
-            if exact or mesh_agrees(lin, field_):
-                reason, it = "converged", it - 1
-                break
-            exact = True  # converged on projected contacts whose mesh contacts cannot hold the wrench
+        ending = ends.at(lin, pose)
+        if ending in ("converged", "verified"):
+            reason, it = ending, it - 1
+            break
+        if ending == "exact":  # converged on projected contacts whose mesh contacts cannot hold the wrench
             lin = lin_at(pose)
             weight, value = 1.0, merit(lin, cfg)
             merits = [value]
@@ -295,7 +282,7 @@ def refine(
             )
         if progress is not None:
             progress(it, cfg.max_iterations)
-    reason = _final_reason(reason, lin, cfg, field_, exact)
+    reason = ends.final(reason, lin)
     return RefineResult(
         pose=pose,
         forces=lin.forces.copy(),

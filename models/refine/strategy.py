@@ -110,11 +110,11 @@ def refine_from_start(
     tip_field: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]] | None = None,
     deadline: float | None = None,
     should_cancel: Callable[[], bool] | None = None,
-    accept: Callable[[RefineResult], bool] | None = None,
+    accept: Callable[[HandPose], bool] | None = None,
 ) -> RefineResult:
     """Align, refine, restart (module doc); ``iterations`` and ``seconds`` of the result are the totals.
-    ``accept``: a test of an attempt that did not converge (the pipeline's verification); one it accepts ends
-    the restarts and is the result."""
+    ``accept``: verification of a pose (`refine`'s); an attempt whose pose it accepts, converged or not, ends the
+    restarts and is the result."""
     cfg = config or RefineConfig()
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
@@ -125,14 +125,14 @@ def refine_from_start(
             break
         pose = align(hand, cloud, start, task.centre, roll, tilt)
         res = refine(hand, cloud, task, pose, mu, replace(cfg, max_iterations=budget), tip_field=tip_field,
-                     deadline=deadline, should_cancel=should_cancel)
+                     deadline=deadline, should_cancel=should_cancel, accept=accept)
         total += res.iterations
         budget -= max(res.iterations, 1)
         if best is None or res.converged or _score(res) < _score(best):
             best = res
         if res.converged or res.reason == "deadline":
             break
-        if accept is not None and accept(res):
+        if accept is not None and accept(res.pose):
             best = res
             break
     assert best is not None
