@@ -4,8 +4,8 @@ fcl answers *whether* two BVH meshes intersect (its distance query returns 0 for
 gives no depth). We use it as the narrow-phase test per hand body, then measure depth on the bodies that hit:
 
 - hand → object: the largest depth of the hand body's surface samples (its vertices + ``BODY_SAMPLES`` area
-  samples, seed 0) inside the object's watertight mesh (exact mesh signed distance, trimesh, evaluated only on
-  the ``EXACT_CANDIDATES`` samples per body that the KD-tree Φ ranks deepest, if below ``PREFILTER``);
+  samples, seed 0) inside the object's watertight mesh (exact mesh signed distance, `closest.mesh_signed_distance`,
+  evaluated only on the ``EXACT_CANDIDATES`` samples per body that the KD-tree Φ ranks deepest, if below ``PREFILTER``);
 - object → hand: the largest depth of object points (cloud + mesh vertices + points along its sharp edges) inside
   the convex hulls of the body's connected parts (half-space distance, exact for convex parts, an over-estimate
   for a non-convex one).
@@ -26,6 +26,7 @@ import fcl
 import numpy as np
 import trimesh
 
+from models.geometry.closest import mesh_signed_distance
 from models.geometry.link_poses import link_poses_at
 from models.geometry.object import ObjectGeometry
 from models.robots.hand import ADJACENT_HOPS, Hand
@@ -137,7 +138,7 @@ def _mesh_depth(
         order = np.argsort(phi)[:EXACT_CANDIDATES]
         near = world[order[phi[order] < PREFILTER]]  # ... then exact distances for the deepest candidates
         if len(near):
-            sd = trimesh.proximity.signed_distance(mesh, near)  # exact, positive inside
+            sd = mesh_signed_distance(mesh, near)  # exact, positive inside
             depth = max(depth, float(max(sd.max(), 0.0)))
         local = (obj_pts - T[:3, 3]) @ T[:3, :3]
         depth = max(depth, _parts_depth(body.parts, local))

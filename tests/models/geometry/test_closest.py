@@ -46,3 +46,37 @@ def test_a_fingertip_mesh_agrees_with_every_face_and_unused_vertices_are_ignored
 def test_the_object_set_is_built_once_per_mesh():
     mesh = trimesh.creation.box(extents=[0.04, 0.04, 0.04])
     assert mesh_triangles(mesh) is mesh_triangles(mesh)
+
+
+def test_signed_distances_match_the_analytic_box_inside_and_out():
+    from models.geometry.closest import mesh_signed_distance
+
+    half = np.array([0.02, 0.03, 0.05])
+    mesh = trimesh.creation.box(extents=2 * half)
+    x = np.random.default_rng(2).uniform(-0.07, 0.07, size=(400, 3))
+    x = np.concatenate([x, mesh.vertices + 1e-4, mesh.vertices - 1e-4])  # beside the corners: vertex features
+    np.testing.assert_allclose(mesh_signed_distance(mesh, x), -_box_distance(x, half) * np.where(
+        np.all(np.abs(x) <= half, axis=1), -1.0, 1.0), atol=1e-12)  # fmt: skip
+
+
+def test_signed_distances_on_curved_and_long_faced_meshes_agree_with_every_face_and_the_ray_test():
+    """An icosphere (edges and vertices between curved faces) and a capsule stretched into a pen (long faces that
+    every point must box-test): magnitudes against every face, sides against trimesh's ray-parity test."""
+    from models.geometry.closest import mesh_signed_distance
+
+    pen = trimesh.creation.capsule(height=0.14, radius=0.005, count=[48, 48])
+    assert len(TriangleSet.of(pen).large) > 0
+    for mesh in (trimesh.creation.icosphere(3, 0.04), pen):
+        rng = np.random.default_rng(3)
+        x = mesh.vertices[rng.integers(0, len(mesh.vertices), 60)] + rng.normal(scale=0.003, size=(60, 3))
+        sd = mesh_signed_distance(mesh, x)
+        every = np.array([
+            np.linalg.norm(trimesh.triangles.closest_point(mesh.triangles, np.repeat(p[None], len(mesh.faces), 0)) - p,
+                           axis=1).min()
+            for p in x
+        ])  # fmt: skip
+        np.testing.assert_allclose(np.abs(sd), every, atol=1e-12)
+        inside = mesh.contains(x)
+        clear = every > 1e-6
+        assert np.array_equal((sd > 0)[clear], inside[clear])
+        assert inside.any() and (~inside).any()
