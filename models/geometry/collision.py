@@ -70,6 +70,11 @@ def _bvh(mesh: trimesh.Trimesh) -> fcl.BVHModel:
     return m
 
 
+PLANE_CHUNK = 16
+"""Half-spaces a point set meets at a time in `_inside_depth`: the points outside any of them are dropped before
+the next (sharp-edge points in a finger part's box cost 22 ms a test against all its facets at once)."""
+
+
 def _parts_depth(parts: list[tuple[np.ndarray, np.ndarray]], x: np.ndarray, grow: float = 0.0) -> float:
     """Largest depth (≥ 0) of points x (k, 3) inside any of the convex ``parts`` grown by ``grow`` (m)."""
     return max((_inside_depth(planes, x, bounds, grow) for planes, bounds in parts), default=0.0)
@@ -80,11 +85,16 @@ def _inside_depth(planes: np.ndarray, x: np.ndarray, bounds: np.ndarray | None =
     lo, hi = bounds if bounds is not None else (x.min(0), x.max(0))
     lo, hi = lo - grow, hi + grow
     x = x[np.all((x >= lo) & (x <= hi), axis=1)]  # cheap box cull first
-    if len(x) == 0:
-        return 0.0
-    slack = planes[:, 3][None] + grow - x @ planes[:, :3].T  # (k, f) > 0 inside each half-space
-    depth = slack.min(axis=1)
-    return float(max(depth.max(), 0.0))
+    depth = np.full(len(x), np.inf)
+    for start in range(0, len(planes), PLANE_CHUNK):  # a point outside one half-space is out: drop it at once
+        if len(x) == 0:
+            return 0.0
+        chunk = planes[start : start + PLANE_CHUNK]
+        slack = chunk[:, 3][None] + grow - x @ chunk[:, :3].T  # (k, c) > 0 inside each half-space
+        depth = np.minimum(depth, slack.min(axis=1))
+        inside = depth > 0.0
+        x, depth = x[inside], depth[inside]
+    return float(depth.max()) if len(depth) else 0.0
 
 
 def _bodies(hand: Hand) -> list[_BodyGeom]:

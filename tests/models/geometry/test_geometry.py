@@ -205,3 +205,17 @@ def test_link_poses_at_one_pose_are_computed_once_and_match_the_kinematics():
     assert other is not first
     np.testing.assert_allclose(other[hand.fingertip_bodies[0]][:3, 3] - first[hand.fingertip_bodies[0]][:3, 3],
                                [0.0, 0.0, 0.01], atol=1e-12)
+
+
+def test_depth_inside_a_convex_part_by_chunks_of_half_spaces_is_the_depth_against_all_at_once() -> None:
+    """An icosphere's 320 facets as half-spaces: points dropped chunk by chunk leave the deepest point's depth
+    (its distance to the nearest facet plane) as measuring every point against every plane does."""
+    from models.geometry.collision import _inside_depth
+
+    hull = trimesh.creation.icosphere(2, 0.01)
+    planes = np.column_stack([hull.face_normals, np.einsum("fa,fa->f", hull.face_normals, hull.triangles_center)])
+    rng = np.random.default_rng(5)
+    for grow in (0.0, 0.002):
+        for x in (rng.uniform(-0.015, 0.015, size=(3000, 3)), rng.uniform(0.011, 0.02, size=(50, 3))):
+            every = (planes[:, 3][None] + grow - x @ planes[:, :3].T).min(axis=1)
+            assert _inside_depth(planes, x, None, grow) == pytest.approx(max(float(every.max()), 0.0), abs=1e-15)
