@@ -22,6 +22,8 @@ import trimesh
 from scipy.spatial import cKDTree
 from trimesh.triangles import closest_point as closest_on_triangles
 
+from models.geometry.per_mesh import per_mesh
+
 LARGE_FACE = 4.0
 """A face whose centroid-to-corner distance exceeds this many times the mesh's median is box-tested by every
 point instead of being found by its centroid (one such face would widen every point's ball query)."""
@@ -130,11 +132,9 @@ def mesh_signed_distance(mesh: trimesh.Trimesh, x: np.ndarray) -> np.ndarray:
     """Exact signed distance (M,) of points ``x`` (M, 3) to a watertight ``mesh``, positive inside (trimesh's
     convention): `TriangleSet`'s closest points, the side from the pseudo-normals. trimesh's own took 46 ms a call
     of ≤ 48 points in verification (an R-tree of the object, ray tests for the side)."""
-    from models.geometry.collision import _per_mesh
-
     x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
     tri = mesh_triangles(mesh)
-    pseudo: PseudoNormals = _per_mesh(mesh, "pseudo-normals", lambda: PseudoNormals.of(mesh))
+    pseudo: PseudoNormals = per_mesh(mesh, "pseudo-normals", lambda: PseudoNormals.of(mesh))
     closest, dist, face = tri.closest_faces(x)
     return np.asarray(-pseudo.side(x, closest, face, tri.triangles) * dist)
 
@@ -142,7 +142,5 @@ def mesh_signed_distance(mesh: trimesh.Trimesh, x: np.ndarray) -> np.ndarray:
 def mesh_triangles(mesh: trimesh.Trimesh) -> TriangleSet:
     """``mesh``'s `TriangleSet`, built once per mesh and kept on it (K proposals are verified against the same
     object mesh; a hand's fingertip meshes are met at every verification)."""
-    from models.geometry.collision import _per_mesh
-
-    faces: TriangleSet = _per_mesh(mesh, "triangles", lambda: TriangleSet.of(mesh))
+    faces: TriangleSet = per_mesh(mesh, "triangles", lambda: TriangleSet.of(mesh))
     return faces

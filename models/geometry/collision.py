@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Protocol
 
 import fcl
 import numpy as np
@@ -29,6 +29,7 @@ import trimesh
 from models.geometry.closest import mesh_signed_distance
 from models.geometry.link_poses import link_poses_at
 from models.geometry.object import ObjectGeometry
+from models.geometry.per_mesh import per_mesh
 from models.robots.hand import ADJACENT_HOPS, Hand
 from models.robots.pads import convex_parts
 
@@ -136,7 +137,7 @@ def _mesh_depth(
     """The depth test of the module doc against a watertight ``mesh``; ``rank`` orders hand samples by estimated
     depth (the exact signed distance is taken on the deepest), ``points`` (N, 3) are tested inside the hand."""
     poses = link_poses_at(hand, palm_pos, palm_quat, q)
-    obj = _obj(_per_mesh(mesh, "bvh", lambda: _bvh(mesh)), np.eye(4))
+    obj = _obj(per_mesh(mesh, "bvh", lambda: _bvh(mesh)), np.eye(4))
     obj_pts = np.vstack([np.asarray(points, dtype=np.float64), np.asarray(mesh.vertices), sharp_edge_points(mesh)])
     depth = 0.0
     for body in _bodies(hand):
@@ -171,17 +172,9 @@ def sharp_edge_points(mesh: trimesh.Trimesh, spacing: float = EDGE_SPACING) -> n
         owner = np.repeat(np.arange(len(edges)), counts - 1)
         return a[owner] + t[:, None] * (b - a)[owner] if len(owner) else np.zeros((0, 3))
 
-    return np.asarray(_per_mesh(mesh, f"edges-{spacing}", build))
+    return np.asarray(per_mesh(mesh, f"edges-{spacing}", build))
 
 
-def _per_mesh(mesh: trimesh.Trimesh, key: str, build: Callable[[], Any]) -> Any:
-    """``build()`` once per object mesh (verification of K proposals meets the same mesh K times), kept on the
-    mesh and rebuilt when its data changes (trimesh's hash of it)."""
-    cache = mesh.__dict__.setdefault("_mani_cache", {})
-    stamp = hash(mesh)
-    if key not in cache or cache[key][0] != stamp:
-        cache[key] = (stamp, build())
-    return cache[key][1]
 
 
 def hand_mesh_penetration(
@@ -229,7 +222,7 @@ def _mesh_rank(mesh: trimesh.Trimesh) -> Callable[[np.ndarray], np.ndarray]:
 
     verts = np.asarray(mesh.vertices)
     vnorm = np.asarray(mesh.vertex_normals)
-    tree = _per_mesh(mesh, "vertex_tree", lambda: cKDTree(verts))
+    tree = per_mesh(mesh, "vertex_tree", lambda: cKDTree(verts))
 
     def rank(x: np.ndarray) -> np.ndarray:
         dist, idx = tree.query(x)

@@ -1,6 +1,5 @@
 """The iterative SOCP refinement loop (paper §III-B) with an adaptive trust region.
 
-
 Each iteration: linearise at q (kinematics, Φ, optimal forces f* → r*), solve the step of `models.refine.step`,
 evaluate the true merit ``‖r*‖² + λ Σ Φ(p_i)² + ρ (Σ penetration + Σ self-overlap)`` at q + δq, accept the step
 if it lowers the merit, grow the trust region after good agreement with the model (ratio > 0.75) and shrink it
@@ -186,11 +185,9 @@ def refine(
     cfg = config or RefineConfig()
     t0 = time.perf_counter()
     n = 6 + len(start.q)
-    base = np.concatenate(
-        [np.full(3, cfg.trust_translation), np.full(3, cfg.trust_rotation), np.full(n - 6, cfg.trust_joint)]
-    )
+    base = np.concatenate([np.full(3, cfg.trust_translation), np.full(3, cfg.trust_rotation),
+                           np.full(n - 6, cfg.trust_joint)])  # fmt: skip
     step_fn = solve_step if cfg.solver == "clarabel" else solve_step_cvxpy
-
     ends = Endings(field_, lambda lin: _converged(lin, cfg), lambda lin: _converged(lin, cfg, cfg.verify_within),
                    accept)  # fmt: skip
 

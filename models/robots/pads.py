@@ -134,9 +134,7 @@ def build_contact_surface(
         parts = link_meshes[i] if link_meshes is not None else {}
         names = list(parts) or [""]
         if len(names) > 1:
-            from models.geometry.closest import TriangleSet  # not at import: models.geometry imports the hand
-
-            gaps = np.stack([TriangleSet.of(m).closest(pts)[1] for m in parts.values()])  # exact, 20× trimesh's
+            gaps = np.stack([np.abs(trimesh.proximity.ProximityQuery(m).signed_distance(pts)) for m in parts.values()])
             which = np.argmin(gaps, axis=0)
         else:
             which = np.zeros(len(pts), dtype=np.int64)
