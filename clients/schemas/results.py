@@ -14,9 +14,11 @@ from clients.schemas.common import PerPoint, Points, Quaternion, Rows3, Vec3, Ve
 class Quality(WireModel):
     """Verification figures of one proposal (docs/evaluation.md)."""
 
-    success: bool = Field(..., description="All criteria below met.")
-    converged: bool
-    reason: str = Field(..., description="Why refinement stopped: converged, max_iterations, deadline, ...")
+    success: bool = Field(..., description="All criteria below met (verification on the exact geometry).")
+    converged: bool = Field(..., description="The refinement's own, stricter stopping test held (fingertips within "
+                            "2 mm on the points' surface); a proposal can succeed without it.")
+    reason: str = Field(..., description="Why refinement stopped: converged, verified (verification accepted a "
+                        "nearly converged pose), stalled, max_iterations, deadline, ...")
     iterations: int = Field(..., ge=0, description="Refinement iterations spent on this proposal, restarts included.")
     wrench_residual: float = Field(..., ge=0, description="‖Σ G f − w‖² for the normalised target.")
     max_tip_distance: float = Field(..., ge=0, description="Largest |Φ(p_tip)| of a contact fingertip, m.")
