@@ -243,7 +243,7 @@ def _refined(
         again = refine_from_start(
             hand, prep.cloud, prep.task, start, prep.mu, replace(config, max_iterations=left),
             seed=inp.seed + k, tip_field=prep.tip_field, deadline=inp.deadline, should_cancel=should_cancel,
-            accept=accept,
+            accept=accept, tilts_first=True,
         )
         again.iterations += res.iterations
         if again.converged or accept(again.pose):

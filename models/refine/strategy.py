@@ -89,14 +89,16 @@ def pinch_roll(hand: Hand, cloud: PointCloudField, start: HandPose, centre: np.n
     return float(np.arctan2(minor[1], minor[0]))
 
 
-def _attempts(rng: np.random.Generator, roll0: float = 0.0) -> list[tuple[float, np.ndarray | None]]:
-    out: list[tuple[float, np.ndarray | None]] = [
-        (roll0 + r, None) for r in (0.0, np.pi, np.pi / 2, -np.pi / 2)
-    ]
+def _attempts(rng: np.random.Generator, roll0: float = 0.0, tilts_first: bool = False
+              ) -> list[tuple[float, np.ndarray | None]]:  # fmt: skip
+    """(roll, tilt) of each attempt: the four rolls about the aligned approach, then eight approaches tilted by
+    30° (random axes, seeded), or (``tilts_first``) the tilted ones first."""
+    rolls: list[tuple[float, np.ndarray | None]] = [(roll0 + r, None) for r in (0.0, np.pi, np.pi / 2, -np.pi / 2)]
+    tilts: list[tuple[float, np.ndarray | None]] = []
     for _ in range(8):
         v = rng.normal(size=3)
-        out.append((float(rng.uniform(0, 2 * np.pi)), v / np.linalg.norm(v) * np.deg2rad(30)))
-    return out
+        tilts.append((float(rng.uniform(0, 2 * np.pi)), v / np.linalg.norm(v) * np.deg2rad(30)))
+    return tilts + rolls if tilts_first else rolls + tilts
 
 
 def refine_from_start(
@@ -111,16 +113,19 @@ def refine_from_start(
     deadline: float | None = None,
     should_cancel: Callable[[], bool] | None = None,
     accept: Callable[[HandPose], bool] | None = None,
+    tilts_first: bool = False,
 ) -> RefineResult:
     """Align, refine, restart (module doc); ``iterations`` and ``seconds`` of the result are the totals.
     ``accept``: verification of a pose (`refine`'s); an attempt whose pose it accepts, converged or not, ends the
-    restarts and is the result."""
+    restarts and is the result. ``tilts_first``: the tilted approaches before the rolls — the pipeline's restarts
+    after a first attempt from fitted contacts, whose approach has already failed once (516 lifts: 6 % fewer
+    iterations, 515 vs 512 verified; force closure 4-7 % fewer)."""
     cfg = config or RefineConfig()
     t0 = time.perf_counter()
     rng = np.random.default_rng(seed)
     budget, best, total = cfg.max_iterations, None, 0
     roll0 = pinch_roll(hand, cloud, start, task.centre) if task.closure else 0.0
-    for roll, tilt in _attempts(rng, roll0):
+    for roll, tilt in _attempts(rng, roll0, tilts_first):
         if budget < MIN_ATTEMPT_ITERATIONS and best is not None:
             break
         pose = align(hand, cloud, start, task.centre, roll, tilt)
