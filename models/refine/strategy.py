@@ -14,8 +14,9 @@ minimum. `refine_from_start` therefore
    refinement evaluation blind rolls left allegro closure grasps in local minima with the fingers on one face).
    Task wrenches start at roll 0 (the pinch roll measured worse there: barrett task 80.6 % vs 88.9 %, median
    iterations 45 vs 14). A run that stalls or fails is restarted from the aligned pose turned about the approach
-   axis (180°, ±90° from the first roll, then tilted approach directions) with the remaining iterations, at
-   most ``max_iterations`` in total;
+   axis (180°, ±90° from the first roll, then tilted approach directions; the pipeline's restarts after a first
+   attempt from fitted contacts take the tilted ones first) with the remaining iterations, at most
+   ``max_iterations`` in total;
 3. returns the first converged result, else the one with the lowest merit.
 """
 
