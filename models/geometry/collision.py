@@ -175,8 +175,6 @@ def sharp_edge_points(mesh: trimesh.Trimesh, spacing: float = EDGE_SPACING) -> n
     return np.asarray(per_mesh(mesh, f"edges-{spacing}", build))
 
 
-
-
 def hand_mesh_penetration(
     hand: Hand, mesh: trimesh.Trimesh, points: np.ndarray, palm_pos: np.ndarray, palm_quat: np.ndarray,
     q: np.ndarray,

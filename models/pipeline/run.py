@@ -218,7 +218,7 @@ def _refined(
 ) -> Any:
     """Proposal ``k``'s refinement from ``start`` (restarted from approach alignments when it stalls), or None
     when the request asks for no refinement. An attempt that stalls but whose pose verification accepts (the
-    SCP's own test is stricter: fingertips within 2 mm on the points' surface, verification's 5 mm on the exact
+    SCP's own test is stricter: fingertips within 2 mm on the points' surface, verification's 4 mm on the exact
     geometry) ends the search: a restart would cost 15-30 iterations for a grasp already verified."""
     inp, hand = prep.inp, prep.inp.hand
     if not inp.refine or (inp.method == "direct_grasp" and inp.initial_pose is None):

@@ -132,8 +132,9 @@ class QualityOutput:
     """Verification figures of one proposal (see `models.refine.verify`).
 
     ``success`` is verification's verdict on the exact geometry; ``converged`` and ``reason`` are the refinement's
-    own, stricter test (fingertips within 2 mm on the points' surface): a stalled attempt whose pose verification
-    accepts is returned as it is (success, not converged, reason "stalled") instead of being restarted.
+    own, stricter test (fingertips within 2 mm on the points' surface): a nearly converged or stalled attempt
+    whose pose verification accepts is returned as it is (success, not converged, reason "verified" or
+    "stalled") instead of being refined on or restarted.
     """
 
     success: bool
