@@ -112,3 +112,24 @@ def test_a_directory_without_generated_data_is_refused_by_name(tmp_path: Path) -
     (tmp_path / "empty").mkdir()
     with pytest.raises(ValueError, match="empty holds no generated data"):
         train(TrainConfig(data=[str(tmp_path / "empty")], out=str(tmp_path / "run")), progress=False)
+
+
+def test_best_is_chosen_among_epochs_measured_on_the_same_validation_examples(data_dir: Path, tmp_path: Path) -> None:
+    """A run whose validation set grows (trained while its data is generated) makes the first epoch measured on
+    the larger set the best, whatever its loss: losses on different examples do not compare."""
+    import dataclasses
+
+    from models.training.trainer import is_best
+
+    cfg = TrainConfig(
+        data=[str(data_dir)], out=str(tmp_path / "run"), epochs=1, batch_size=2, limit=4, val_limit=1,
+        threads=1, warmup_steps=1,
+    )
+    train(cfg, progress=False)
+    run = Path(cfg.out)
+    train(dataclasses.replace(cfg, epochs=2, val_limit=4), resume=True, progress=False)
+    rows = [r for r in csv.DictReader((run / "metrics.csv").open()) if r["split"] == "val"]
+    assert int(rows[0]["examples"]) == 1 < int(rows[1]["examples"])
+    _model, best = load_checkpoint(run / "best", "cpu")
+    assert best.training_data["training"]["epochs"] == 2
+    assert is_best(0.5, "a", 0.4, "b") and is_best(0.3, "a", 0.4, "a") and not is_best(0.5, "a", 0.4, "a")
