@@ -16,7 +16,6 @@ Run directory layout (``cfg.out``)::
 from __future__ import annotations
 
 import csv
-import hashlib
 import json
 import math
 import platform
@@ -31,6 +30,7 @@ import torch
 from models.data.dataset import make_batch
 from models.data.prepare import PreparedObjects
 from models.network import ManiFoundationNet, ModelCard, create_model, load_checkpoint, save_checkpoint
+from models.training.best import is_best, validation_fingerprint
 from models.training.config import TrainConfig
 from models.training.objective import batch_loss, prepare
 from models.training.sources import (
@@ -194,26 +194,6 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             break
     return TrainResult(out, epoch, time.perf_counter() - t_start, final, best)
 
-
-def validation_fingerprint(sources: list[Source]) -> str:
-    """Which validation examples an epoch is measured on: a digest of every source's validation labels (motions
-    and heat); "" without any."""
-    vals = [src.val for src in sources if src.val is not None]
-    if not vals:
-        return ""
-    digest = hashlib.sha1()
-    for val in vals:
-        digest.update(np.ascontiguousarray(val.motion).tobytes())
-        digest.update(np.ascontiguousarray(val.heat).tobytes())
-    return digest.hexdigest()
-
-
-def is_best(score: float, measured_on: str, best: float, best_on: str) -> bool:
-    """Whether an epoch's validation loss ``score`` on the examples ``measured_on`` makes it the best checkpoint:
-    lower than ``best`` on the same examples, or measured on other examples (losses on different examples do not
-    compare: a run trained while its data was generated chose an epoch measured on 37 examples over the last one,
-    measured on 256)."""
-    return measured_on != best_on or score < best
 
 
 def _load(cfg: TrainConfig) -> list[Source]:

@@ -119,8 +119,6 @@ def test_best_is_chosen_among_epochs_measured_on_the_same_validation_examples(da
     the larger set the best, whatever its loss: losses on different examples do not compare."""
     import dataclasses
 
-    from models.training.trainer import is_best
-
     cfg = TrainConfig(
         data=[str(data_dir)], out=str(tmp_path / "run"), epochs=1, batch_size=2, limit=4, val_limit=1,
         threads=1, warmup_steps=1,
@@ -132,4 +130,3 @@ def test_best_is_chosen_among_epochs_measured_on_the_same_validation_examples(da
     assert int(rows[0]["examples"]) == 1 < int(rows[1]["examples"])
     _model, best = load_checkpoint(run / "best", "cpu")
     assert best.training_data["training"]["epochs"] == 2
-    assert is_best(0.5, "a", 0.4, "b") and is_best(0.3, "a", 0.4, "a") and not is_best(0.5, "a", 0.4, "a")
