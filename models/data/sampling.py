@@ -280,7 +280,7 @@ def _closure_rows(
     """(R,) bool: rows (of ``rows``) whose pad contacts (R, m, 3) pass the verification's closure tests at ``mu``
     (`models.refine.verify`: forces with Gf = 0 under the closure normalisation, and Ferrari–Canny ε above
     ``CLOSURE_MIN_EPSILON``), on the dense cloud's normals."""
-    from models.refine.verify import RESIDUAL_SQ_TOL, contact_quality
+    from models.refine.verify import RESIDUAL_SQ_TOL, contact_quality, produces_wrench
     from models.refine.wrench import closure_task
 
     centre = obj.points.mean(axis=0)
@@ -298,7 +298,7 @@ def _closure_rows(
         if on_edge[i].any():
             continue
         sol, eps = contact_quality(hand, contacts[i], normals[i], task, mu, epsilon_below=RESIDUAL_SQ_TOL)
-        out[r] = sol.residual_norm**2 < RESIDUAL_SQ_TOL and eps >= CLOSURE_MIN_EPSILON
+        out[r] = produces_wrench(sol) and eps >= CLOSURE_MIN_EPSILON
     return out
 
 

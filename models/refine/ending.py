@@ -24,7 +24,7 @@ import numpy as np
 from models.refine.contact import ObjectField
 from models.refine.forces import solve_forces
 from models.refine.state import HandPose, Linearisation
-from models.refine.verify import RESIDUAL_SQ_TOL
+from models.refine.verify import produces_wrench
 
 
 def mesh_agrees(lin: Linearisation, field_: ObjectField) -> bool:
@@ -36,7 +36,7 @@ def mesh_agrees(lin: Linearisation, field_: ObjectField) -> bool:
         return True
     on = surface.closest(lin.samples)[0]
     sol = solve_forces(lin.task, on, field_.given_normal(on), lin.mu, lin.max_normal_force)
-    return bool(sol.residual_norm**2 < RESIDUAL_SQ_TOL)
+    return produces_wrench(sol)
 
 
 @dataclass

@@ -81,6 +81,11 @@ def torsion_for(hand: Hand) -> float:
     return PAD_TORSION if hand.num_fingertips == 2 else 0.0
 
 
+def produces_wrench(sol: ForceSolution) -> bool:
+    """Verification's wrench test of optimal forces: their squared residual below `RESIDUAL_SQ_TOL`."""
+    return bool(sol.residual_norm**2 < RESIDUAL_SQ_TOL)
+
+
 def contact_quality(
     hand: Hand, contacts: np.ndarray, normals: np.ndarray, task: WrenchTask, mu: float | np.ndarray,
     max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE, epsilon_below: float | None = None,
@@ -143,7 +148,7 @@ def verify(
                                          inflate=cloud.resolution)  # fmt: skip
         selfc = hand_self_collision(hand, pose.palm_pos, pose.palm_quat, pose.q)
     failures = []
-    if not sol.residual_norm**2 < RESIDUAL_SQ_TOL:
+    if not produces_wrench(sol):
         failures.append("wrench_residual")
     if not float(np.max(tip_dist)) <= TIP_TOL:
         failures.append("tip_distance")
