@@ -16,6 +16,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from models.geometry.closest import TriangleSet
+from models.refine.field_kernels import disc_distances, winding_sum
 from models.refine.hull import GrownHull
 from models.refine.winding_cells import SampleCells
 
@@ -96,33 +97,17 @@ class PointCloudField:
         k = min(8, len(self._dist_points))
         _, idx = self._dist_tree.query(x, k=k)
         idx = np.asarray(idx).reshape(len(x), k)
-        p, n = self._dist_points[idx], self._dist_normals[idx]  # (M, k, 3)
-        d = x[:, None, :] - p
-        a = np.einsum("mka,mka->mk", d, n)
-        tang = d - a[..., None] * n
-        b = np.linalg.norm(tang, axis=2)
-        excess = np.maximum(b - self.disc_radius, 0.0)
-        value = np.sqrt(a**2 + excess**2)
-        best = np.argmin(value, axis=1)
-        rows = np.arange(len(x))
-        nearest = value[rows, best]
-        w = np.exp(-(((value - nearest[:, None]) / self.disc_radius) ** 2))
-        cos = a / np.maximum(value, 1e-12)  # 1: x faces the disc squarely, 0: x lies beside its rim
-        side = np.sum(w * cos * np.abs(cos), axis=1)
+        nearest, best, side, total, grad = disc_distances(
+            x, idx, self._dist_points, self._dist_normals, self.disc_radius
+        )
         sign = np.where(side < 0, -1.0, 1.0)
-        confident = np.abs(side) > WINDING_BELOW * np.sum(w, axis=1)  # every near disc agrees and faces x
+        confident = np.abs(side) > WINDING_BELOW * total  # every near disc agrees and faces x
         off = np.flatnonzero(~confident & (nearest > WINDING_FROM * self.disc_radius))
         if len(off):  # off the surface the discs' side can flip (a finger 5 mm inside near an edge read outside)
             sign[off] = 1.0
             off = off[self.within_hull(x[off])]  # outside the points' hull: outside, as the winding number says
             sign[off] = np.where(self.winding_number(x[off]) > 0.5, -1.0, 1.0)
-        a_b, e_b, n_b = a[rows, best], excess[rows, best], n[rows, best]
-        t_hat = tang[rows, best] / np.maximum(b[rows, best], 1e-12)[:, None]
-        inside_disc = e_b <= 0
-        phi = sign * nearest
-        far = sign[:, None] * (a_b[:, None] * n_b + e_b[:, None] * t_hat) / np.maximum(nearest, 1e-12)[:, None]
-        grad = np.where(inside_disc[:, None], sign[:, None] * np.sign(a_b + 1e-300)[:, None] * n_b, far)
-        return phi, grad, p[rows, best]
+        return sign * nearest, sign[:, None] * grad, self._dist_points[best]
 
     def winding_number(self, x: np.ndarray) -> np.ndarray:
         """Generalised winding number (M,) of the oriented points around x (Barill et al. 2018, for clouds):
@@ -136,18 +121,8 @@ class PointCloudField:
         """
         x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
         cells = self._cells()
-        diff = cells.centre[None] - x[:, None]  # (M, C, 3)
-        dist = np.linalg.norm(diff, axis=2)
-        far = dist > WINDING_FAR * cells.radius[None] + 1e-9
-        out = np.einsum("mca,ca->mc", diff, cells.moment) / np.maximum(dist, 1e-12) ** 3
-        out = np.where(far, out, 0.0).sum(axis=1)
-        qi, ci = np.nonzero(~far)
-        if len(qi):  # the near cells' samples one by one (unpadded: a cell holds 1-55 samples, 23 on average)
-            j, pair = cells.members(ci)
-            row = qi[pair]
-            d = cells.points[j] - x[row]  # (T, 3)
-            r = np.maximum(np.linalg.norm(d, axis=1), 0.5 * self.disc_radius)
-            out += np.bincount(row, np.einsum("ta,ta->t", d, cells.weighted[j]) / r**3, minlength=len(x))
+        out = winding_sum(x, cells.centre, cells.radius, cells.moment, cells.start, cells.count, cells.points,
+                          cells.weighted, WINDING_FAR, 0.5 * self.disc_radius)  # fmt: skip
         result: np.ndarray = out / (4.0 * np.pi)
         return result
 

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from models.refine.field_kernels import within_facets
+
 PROBE_FACETS = 32
 """Facets with spread normals tested first."""
 
@@ -43,12 +45,8 @@ class GrownHull:
 
     def contains(self, x: np.ndarray) -> np.ndarray:
         """(M,) bool: points ``x`` (M, 3) within the grown box and within every grown facet."""
-        inside = np.all((x >= self.lo) & (x <= self.hi), axis=1)
-        near = np.flatnonzero(inside)
-        near = near[np.max(x[near] @ self.probe[:, :3].T + self.probe[:, 3], axis=1) <= self.grow]
-        inside[:] = False
-        inside[near] = np.max(x[near] @ self.equations[:, :3].T + self.equations[:, 3], axis=1) <= self.grow
-        result: np.ndarray = inside
+        result: np.ndarray = within_facets(np.ascontiguousarray(x, dtype=np.float64), self.lo, self.hi,
+                                           self.probe, self.equations, self.grow)  # fmt: skip
         return result
 
 

@@ -42,10 +42,3 @@ class SampleCells:
         np.maximum.at(radius, cell, np.linalg.norm(points - centre[cell], axis=1))
         moment = np.stack([np.bincount(cell, weighted[:, k]) for k in range(3)], 1)
         return cls(centre, radius, moment, points[order], weighted[order], np.cumsum(count) - count, count)
-
-    def members(self, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """For cell indices (P,), the sorted-sample indices of every member (T,) and which entry each is of (T,)."""
-        counts = self.count[cells]
-        owner = np.repeat(np.arange(len(cells)), counts)
-        first = np.cumsum(counts) - counts  # where each entry's run starts in the output
-        return self.start[cells][owner] + np.arange(len(owner)) - first[owner], owner
