@@ -20,20 +20,38 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 GRID_STEP = 1.5e-3
 """m: node spacing (a finer grid prunes more points but costs nodes × faces to build once per hand)."""
 BLOCK = 4
 """Nodes per block side: the build measures each block's nodes only on the faces that can be the largest there."""
-_CORNERS = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=np.int64)  # (8, 3)
 
 
 def clearance(planes: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A convex part's clearance ``max_f n_f·x − d_f`` (M,) at body-frame points (M, 3) and the face attaining it
     (M,); planes (f, 4) rows ``(n, d)``."""
-    excess = x @ planes[:, :3].T - planes[:, 3][None]  # (M, f) > 0 outside a face
-    face = np.argmax(excess, axis=1)
-    return excess[np.arange(len(x)), face], face
+    result: tuple[np.ndarray, np.ndarray] = _clearance(
+        np.ascontiguousarray(planes, dtype=np.float64), np.ascontiguousarray(x, dtype=np.float64)
+    )
+    return result
+
+
+@njit(cache=True)
+def _clearance(planes: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`clearance` as a loop over the faces per point (compiled; no (M, f) array): the first face attaining the
+    maximum, as argmax gives."""
+    m = x.shape[0]
+    value, face = np.empty(m), np.zeros(m, dtype=np.int64)
+    for i in range(m):
+        x0, x1, x2 = x[i, 0], x[i, 1], x[i, 2]
+        best = -np.inf
+        for f in range(planes.shape[0]):
+            e = x0 * planes[f, 0] + x1 * planes[f, 1] + x2 * planes[f, 2] - planes[f, 3]
+            if e > best:
+                best, face[i] = e, f
+        value[i] = best
+    return value, face
 
 
 @dataclass(frozen=True)
@@ -71,17 +89,38 @@ class PartGrid:
 
     def bounds(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lower and upper bounds (M,), (M,) of the clearance at body-frame points (M, 3) within the grid."""
-        rel = (x - self.origin) / self.step
-        shape = np.asarray(self.values.shape)
-        cell = np.clip(np.floor(rel).astype(np.int64), 0, shape - 2)  # (M, 3)
-        frac = rel - cell  # (M, 3) in [0, 1] inside the grid
-        corner = cell[:, None, :] + _CORNERS[None]  # (M, 8, 3)
-        v = self.values[corner[..., 0], corner[..., 1], corner[..., 2]]  # (M, 8)
-        weight = np.prod(np.where(_CORNERS[None] == 1, frac[:, None, :], 1.0 - frac[:, None, :]), axis=2)
-        upper = np.einsum("mc,mc->m", weight, v)
-        gap = np.linalg.norm((frac[:, None, :] - _CORNERS[None]) * self.step, axis=2)  # |x − corner|
-        lower = np.max(v - gap, axis=1)
-        return lower, upper
+        result: tuple[np.ndarray, np.ndarray] = _grid_bounds(
+            np.ascontiguousarray(x, dtype=np.float64), self.origin, self.step, self.values
+        )
+        return result
+
+
+@njit(cache=True)
+def _grid_bounds(x: np.ndarray, origin: np.ndarray, step: float, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """`PartGrid.bounds` as one loop per point (compiled): the cell's 8 corner values, their trilinear
+    interpolation (upper) and max_i v_i − |x − corner_i| (lower)."""
+    m = x.shape[0]
+    lower, upper = np.empty(m), np.empty(m)
+    top = (values.shape[0] - 2, values.shape[1] - 2, values.shape[2] - 2)
+    for i in range(m):
+        cell = np.empty(3, dtype=np.int64)
+        frac = np.empty(3)
+        for a in range(3):
+            rel = (x[i, a] - origin[a]) / step
+            c = min(max(int(np.floor(rel)), 0), top[a])
+            cell[a], frac[a] = c, rel - c
+        up, low = 0.0, -np.inf
+        for ci in range(2):
+            for cj in range(2):
+                for ck in range(2):
+                    v = values[cell[0] + ci, cell[1] + cj, cell[2] + ck]
+                    w = ((frac[0] if ci else 1.0 - frac[0]) * (frac[1] if cj else 1.0 - frac[1])
+                         * (frac[2] if ck else 1.0 - frac[2]))  # fmt: skip
+                    up += w * v
+                    d0, d1, d2 = (frac[0] - ci) * step, (frac[1] - cj) * step, (frac[2] - ck) * step
+                    low = max(low, v - np.sqrt(d0 * d0 + d1 * d1 + d2 * d2))
+        lower[i], upper[i] = low, up
+    return lower, upper
 
 
 def part_grids(parts: list[tuple[np.ndarray, np.ndarray]], margin: float) -> list[PartGrid]:
