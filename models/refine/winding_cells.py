@@ -29,8 +29,10 @@ class SampleCells:
     def build(cls, points: np.ndarray, weighted: np.ndarray) -> SampleCells:
         lo, hi = points.min(0), points.max(0)
         size = max(float((hi - lo).max()) / WINDING_CELLS, 1e-6)
-        key = np.floor((points - lo) / size).astype(np.int64)
-        _, cell = np.unique(key, axis=0, return_inverse=True)
+        ijk = np.floor((points - lo) / size).astype(np.int64)  # 0 .. WINDING_CELLS per axis
+        side = WINDING_CELLS + 1
+        # one integer per cell, in the rows' lexicographic order (np.unique(axis=0) took ≈ 1 ms a request)
+        _, cell = np.unique((ijk[:, 0] * side + ijk[:, 1]) * side + ijk[:, 2], return_inverse=True)
         cell = cell.reshape(-1)
         count = np.bincount(cell)
         order = np.argsort(cell, kind="stable")
