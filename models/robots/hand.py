@@ -24,7 +24,8 @@ import trimesh
 
 from models.errors import HandLoadError
 from models.robots.description import RobotDescription
-from models.robots.kinematics import KinematicTree, quat_exp, quat_multiply
+from models.robots.kinematics import KinematicTree, one_cpu_pose, one_pose_values, quat_exp, quat_multiply
+from models.robots.kinematics_kernels import apply_delta_one
 from models.robots.pads import ContactSurface, build_contact_surface
 from models.robots.spheres import fit_spheres, sample_surface
 
@@ -345,6 +346,10 @@ class Hand:
         self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor, delta: torch.Tensor
     ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """One step (B, 6 + D) in Jacobian-column order; returns the new (palm_pos, palm_quat, q), no clamping."""
+        if one_cpu_pose(palm_pos, palm_quat, q, delta):
+            at = one_pose_values
+            pos, quat, joints = apply_delta_one(at(palm_pos), at(palm_quat), at(q), at(delta))
+            return torch.from_numpy(pos)[None], torch.from_numpy(quat)[None], torch.from_numpy(joints)[None]
         new_quat = quat_multiply(quat_exp(delta[:, 3:6]), palm_quat)
         new_quat = new_quat / new_quat.norm(dim=-1, keepdim=True)
         return palm_pos + delta[:, :3], new_quat, q + delta[:, 6:]

@@ -65,7 +65,7 @@ def quat_exp(omega: torch.Tensor) -> torch.Tensor:
     return torch.cat([torch.cos(half), omega * k], dim=-1)
 
 
-def _one_cpu_pose(*tensors: torch.Tensor) -> bool:
+def one_cpu_pose(*tensors: torch.Tensor) -> bool:
     """Whether the compiled path applies: a batch of one, float64 on the CPU, no gradient asked."""
     return all(
         t.shape[0] == 1 and t.dtype == torch.float64 and t.device.type == "cpu" and not t.requires_grad
@@ -73,7 +73,7 @@ def _one_cpu_pose(*tensors: torch.Tensor) -> bool:
     )
 
 
-def _flat(t: torch.Tensor) -> np.ndarray:
+def one_pose_values(t: torch.Tensor) -> np.ndarray:
     """The tensor's values as a contiguous float64 array, without its batch axis of one."""
     return np.ascontiguousarray(t[0].numpy())
 
@@ -203,11 +203,12 @@ class KinematicTree:
 
     def body_poses(self, palm_pos: torch.Tensor, palm_quat: torch.Tensor, q: torch.Tensor) -> torch.Tensor:
         """World poses of every body: (B, 3), (B, 4) wxyz, (B, D) -> (B, nb, 4, 4)."""
-        if _one_cpu_pose(q, palm_pos, palm_quat):
+        if one_cpu_pose(q, palm_pos, palm_quat):
             k = self._np
+            at = one_pose_values
             return torch.from_numpy(body_poses_one(
-                _flat(palm_pos), _flat(palm_quat), _flat(q), self._src, k["mult"], k["offset"], k["rev"], k["pris"],
-                k["axis"], k["origin"], self.parent,
+                at(palm_pos), at(palm_quat), at(q), self._src, k["mult"], k["offset"], k["rev"], k["pris"], k["axis"],
+                k["origin"], self.parent,
             ))[None]  # fmt: skip
         c = self.consts(q.dtype, q.device)
         B, nb = q.shape[0], len(self.body_names)
@@ -252,11 +253,11 @@ class KinematicTree:
         Σ_k W[j,k,d] a_k for prismatic ancestors k (world axis a_k through o_k, W the coupling-weighted ancestor
         table): = A_j × p − C_j with A_j, C_j per body, so the cost grows with bodies, not points.
         """
-        if _one_cpu_pose(T, points, palm_pos):
+        if one_cpu_pose(T, points, palm_pos):
             k = self._np
             return torch.from_numpy(point_jacobian_one(
-                np.ascontiguousarray(T[0].numpy()), np.asarray(bodies, dtype=np.int64), _flat(points).reshape(-1, 3),
-                _flat(palm_pos), k["axis"], k["rev"], k["pris"], k["body_weights"],
+                one_pose_values(T), np.asarray(bodies, dtype=np.int64), one_pose_values(points).reshape(-1, 3),
+                one_pose_values(palm_pos), k["axis"], k["rev"], k["pris"], k["body_weights"],
             ))[None]  # fmt: skip
         c = self.consts(points.dtype, points.device)
         B, n = points.shape[:2]

@@ -118,3 +118,25 @@ def point_jacobian_one(
             J[i, 1, 6 + d] = (a2 * p0 - a0 * p2) - C[j, d, 1]
             J[i, 2, 6 + d] = (a0 * p1 - a1 * p0) - C[j, d, 2]
     return J
+
+
+@njit(cache=True)
+def apply_delta_one(
+    palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray, delta: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """`Hand.apply_delta` for one pose: the palm moved by δ[0:3], turned by exp(δ[3:6]) (world frame, wxyz
+    quaternions), the joints by δ[6:]; (3,), (4,), (D,)."""
+    w0, w1, w2 = delta[3], delta[4], delta[5]
+    angle = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+    half = 0.5 * angle
+    k = 0.5 - angle * angle / 48.0 if angle < 1e-8 else math.sin(half) / angle
+    aw, ax, ay, az = math.cos(half), w0 * k, w1 * k, w2 * k
+    bw, bx, by, bz = palm_quat[0], palm_quat[1], palm_quat[2], palm_quat[3]
+    quat = np.array([
+        aw * bw - ax * bx - ay * by - az * bz,
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+    ])  # fmt: skip
+    quat /= math.sqrt(quat[0] ** 2 + quat[1] ** 2 + quat[2] ** 2 + quat[3] ** 2)
+    return palm_pos + delta[:3], quat, q + delta[6:]

@@ -64,3 +64,19 @@ def test_gradients_keep_the_torch_code() -> None:
     poses = hand.tree.body_poses(pos, quat, q)
     poses[..., :3, 3].sum().backward()
     assert q.grad is not None and float(q.grad.abs().sum()) > 0
+
+
+@pytest.mark.parametrize("name", ["leap", "allegro"])
+def test_one_pose_step_matches_the_batched_torch_code(name: str) -> None:
+    hand = get_hand(name)
+    pos, quat, q = _poses(hand, seed=11)
+    quat = quat / quat.norm(dim=-1, keepdim=True)
+    g = np.random.default_rng(12)
+    delta = torch.as_tensor(g.normal(scale=0.05, size=(2, 6 + hand.dof)), dtype=D64)
+    delta[1, 3:6] = 1e-10  # the rotation's series branch
+    batched = hand.apply_delta(pos, quat, q, delta)
+    for b in range(2):
+        one = hand.apply_delta(pos[b : b + 1], quat[b : b + 1], q[b : b + 1], delta[b : b + 1])
+        for got, want in zip(one, batched, strict=True):
+            assert got.shape == (1, *want.shape[1:])
+            np.testing.assert_allclose(got[0].numpy(), want[b].numpy(), rtol=0, atol=1e-15)
