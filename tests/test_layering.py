@@ -16,10 +16,11 @@ ROOT = Path(__file__).resolve().parents[1]
 FORBIDDEN: dict[str, set[str]] = {
     "models": {"service", "workers", "clients", "lab", "fastapi", "starlette", "redis", "pydantic_settings", "uvicorn",
                "rich"},
-    "clients": {"models", "workers", "service", "lab", "torch", "fastapi", "uvicorn"},
+    "clients": {"models", "workers", "service", "lab", "torch", "numba", "fastapi", "uvicorn"},
     "lab": {"service", "workers", "clients", "fastapi", "starlette", "redis", "uvicorn"},
     "service": {
-        "models", "lab", "torch", "pytorch_kinematics", "cvxpy", "clarabel", "fcl", "trimesh", "ompl", "mujoco",
+        "models", "lab", "torch", "numba", "pytorch_kinematics", "cvxpy", "clarabel", "fcl", "trimesh", "ompl",
+        "mujoco",
     },
     "workers/queue": {"service", "models", "torch"},
     "workers": {"service", "lab"},
