@@ -37,6 +37,7 @@ from clients.schemas import (
     SynthesisResult,
     WorkerPublic,
 )
+from workers.heap import HeapTrimmer
 from workers.logs import job_context
 from workers.pipeline import CancelFn, JobInput, Pipeline, PlanJob, error_from_exception
 from workers.queue.records import state_for_error
@@ -87,6 +88,7 @@ class WorkerCore:
 
     def __init__(self, pipeline: Pipeline) -> None:
         self.pipeline = pipeline
+        self.heap = HeapTrimmer()
 
     def info(self, worker_id: str) -> WorkerPublic:
         """What this worker publishes about itself."""
@@ -137,6 +139,7 @@ class WorkerCore:
             with job_context(s.job.id, s.job.request_id):
                 finished[s.job.id] = _encoded(s.job.id, outcome, timings)
                 log.info("job finished", extra={"state": finished[s.job.id].state.value})
+        self.heap.maybe_trim()
         return [finished[raw.id] for raw in raw_jobs]
 
     @staticmethod
