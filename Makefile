@@ -23,6 +23,8 @@ $(STAMP): pyproject.toml distributions/client/pyproject.toml
 	# test data: third-party hands (pyproject's `third-party-hands`); only their description files are read,
 	# so their own dependencies (numba, pinocchio, ...) are not installed.
 	$(BIN)/python -m pip install -q --no-deps 'robosuite>=1.5,<1.6' 'orca-sim>=0.1,<0.2' 'robot-properties-fingers>=2,<3'
+	# the science's compiled loops (numba), compiled once here rather than by the first request
+	$(BIN)/python -m models.compiled
 	touch $(STAMP)
 
 install: $(STAMP)

@@ -71,6 +71,9 @@ class ModelsPipeline:
         self.model_version: str | None = f"{card.config_name}-{card.version}" if card else None
         self._hands: OrderedDict[str, Any] = OrderedDict()
         self._builtin = {name: get_hand(name) for name in (hands if hands is not None else list_hands(aliases=True))}
+        from models.compiled import warm_up
+
+        log.info("compiled loops ready in %.2f s", warm_up())
 
     @staticmethod
     def _load(path: Path) -> Any | None:
