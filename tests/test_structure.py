@@ -11,7 +11,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("clients", "service", "workers", "models", "lab")
 
 MODELS_ORDER = (
-    "errors", "objects", "robots", "geometry", "network", "audit", "refine", "deformable", "pipeline", "planning",
+    "errors", "objects", "robots", "geometry", "network", "audit", "refine", "compiled", "deformable", "pipeline", "planning",
     "data", "training", "evaluation",
 )  # fmt: skip
 """Bottom to top: a subpackage of `models` imports only from those before it (and itself). ``audit`` imports none:
