@@ -11,8 +11,8 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("clients", "service", "workers", "models", "lab")
 
 MODELS_ORDER = (
-    "errors", "objects", "robots", "geometry", "network", "audit", "refine", "compiled", "deformable", "pipeline", "planning",
-    "data", "training", "evaluation",
+    "errors", "objects", "robots", "geometry", "network", "audit", "refine", "compiled", "deformable", "pipeline",
+    "planning", "data", "training", "evaluation",
 )  # fmt: skip
 """Bottom to top: a subpackage of `models` imports only from those before it (and itself). ``audit`` imports none:
 it is the outside check and shares no code with what it checks."""
