@@ -16,6 +16,7 @@ def warm_up() -> float:
     """Call each compiled loop once on a tiny input; returns the seconds it took."""
     from models.refine.field_kernels import disc_distances, winding_sum, within_facets
     from models.refine.part_bounds import _clearance, _grid_bounds
+    from models.refine.self_pairs import near_pairs
     from models.robots.kinematics_kernels import apply_delta_one, body_poses_one, point_jacobian_one
 
     t0 = time.perf_counter()
@@ -26,6 +27,7 @@ def warm_up() -> float:
     within_facets(point, -np.ones(3), np.ones(3), np.zeros((1, 4)), np.zeros((1, 4)), 0.1)
     _clearance(np.zeros((1, 4)), point)
     _grid_bounds(point, np.zeros(3), 0.1, np.zeros((2, 2, 2)))
+    near_pairs(np.zeros((2, 3)), np.ones(2), np.array([[0, 1]]))
     poses = body_poses_one(np.zeros(3), np.array([1.0, 0, 0, 0]), np.zeros(1), first, one, np.zeros(1), one,
                            np.zeros(1), np.ones((1, 3)), np.eye(4)[None], np.array([-1]))  # fmt: skip
     point_jacobian_one(poses, first, point, np.zeros(3), np.ones((1, 3)), one, np.zeros(1), np.ones((1, 1, 1)))

@@ -11,7 +11,7 @@ import torch
 
 from models.refine.contact import ObjectField, contact_jacobians, surface_contacts
 from models.refine.forces import ForceSolution, solve_forces
-from models.refine.self_pairs import BodyPairBounds
+from models.refine.self_pairs import near_pairs
 from models.refine.wrench import WrenchTask
 
 if TYPE_CHECKING:
@@ -70,7 +70,7 @@ class Linearisation:
             spheres (Φ(centre) − r) — with their gradients and Jacobians.
         sph, sph_jac, sph_radius: every collision sphere (S) and its Jacobian (self-collision pairs).
         pair_idx, pair_dist, pair_dir: self-collision pairs (P, 2), their centre distances and unit directions: the
-            hand's pairs that can be within `models.refine.self_pairs.PAIR_REACH` (the others cannot overlap nor
+            hand's pairs within `models.refine.self_pairs.PAIR_REACH` of touching (the others cannot overlap nor
             enter the step's rows).
         q, lower, upper: joint values and limits (D,).
         region_point: with a region mask, each contact point's distance to the nearest allowed sample (m,) — the
@@ -229,11 +229,8 @@ def linearise(
     done = jacobians() if jacobian else Jacobians(empty, empty, np.zeros((0, 3, 3)), empty, empty)
     point_distance = getattr(field, "region_point_distance", None) if tip_field is not None else None
     solution = solve_forces(task, on_object, normals, mu, max_normal_force)  # where verification applies them
-    pairs = np.asarray(hand.self_collision_pairs, dtype=np.int64).reshape(-1, 2)
-    if len(pairs) and contacts.body_poses is not None:  # only the pairs that can be near (`self_pairs`)
-        pairs = pairs[BodyPairBounds.of(hand).near(contacts.body_poses[0].numpy())]
-    diff = sph[pairs[:, 0]] - sph[pairs[:, 1]] if len(pairs) else np.zeros((0, 3))
-    dist = np.linalg.norm(diff, axis=1)
+    every_pair = np.asarray(hand.self_collision_pairs, dtype=np.int64).reshape(-1, 2)
+    near, dist, direction = near_pairs(sph, radius, every_pair)  # only the pairs within reach (`self_pairs`)
     return Linearisation(
         task=task,
         mu=mu,
@@ -253,9 +250,9 @@ def linearise(
         sph=sph,
         sph_jac=done.sph_jac,
         sph_radius=radius,
-        pair_idx=pairs,
+        pair_idx=every_pair[near],
         pair_dist=dist,
-        pair_dir=diff / np.maximum(dist, 1e-12)[:, None],
+        pair_dir=direction,
         q=pose.q,
         lower=np.asarray(hand.lower, dtype=np.float64),
         upper=np.asarray(hand.upper, dtype=np.float64),
