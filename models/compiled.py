@@ -17,7 +17,7 @@ def warm_up() -> float:
     from models.refine.field_kernels import disc_distances, winding_sum, within_facets
     from models.refine.part_bounds import _clearance, _grid_bounds
     from models.refine.self_pairs import near_pairs
-    from models.robots.kinematics_kernels import apply_delta_one, body_poses_one, point_jacobian_one
+    from models.robots.kinematics_kernels import apply_delta_one, body_poses_one, on_bodies_one, point_jacobian_one
 
     t0 = time.perf_counter()
     point, one = np.zeros((1, 3)), np.ones(1)
@@ -32,6 +32,7 @@ def warm_up() -> float:
                            np.zeros(1), np.ones((1, 3)), np.eye(4)[None], np.array([-1]))  # fmt: skip
     point_jacobian_one(poses, first, point, np.zeros(3), np.ones((1, 3)), one, np.zeros(1), np.ones((1, 1, 1)))
     apply_delta_one(np.zeros(3), np.array([1.0, 0, 0, 0]), np.zeros(1), np.zeros(7))
+    on_bodies_one(poses, first, point, True)
     return time.perf_counter() - t0
 
 

@@ -25,7 +25,7 @@ import trimesh
 from models.errors import HandLoadError
 from models.robots.description import RobotDescription
 from models.robots.kinematics import KinematicTree, one_cpu_pose, one_pose_values, quat_exp, quat_multiply
-from models.robots.kinematics_kernels import apply_delta_one
+from models.robots.kinematics_kernels import apply_delta_one, on_bodies_one
 from models.robots.pads import ContactSurface, build_contact_surface
 from models.robots.spheres import fit_spheres, sample_surface
 
@@ -237,9 +237,14 @@ class Hand:
             body_index = torch.as_tensor(bodies, device=q.device)
             local = torch.as_tensor(surf.local[idx], dtype=q.dtype, device=q.device)
             nrm = torch.as_tensor(surf.normals[idx], dtype=q.dtype, device=q.device)
-        Tb = T[:, body_index]
-        pts = (Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]
-        normals = (Tb[..., :3, :3] @ nrm[..., None])[..., 0]
+        if one_cpu_pose(T, q):  # the constants below are made like q
+            at, where = one_pose_values(T), np.asarray(bodies, dtype=np.int64)
+            pts = torch.from_numpy(on_bodies_one(at, where, local.numpy(), True))[None]
+            normals = torch.from_numpy(on_bodies_one(at, where, nrm.numpy(), False))[None]
+        else:
+            Tb = T[:, body_index]
+            pts = (Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]
+            normals = (Tb[..., :3, :3] @ nrm[..., None])[..., 0]
         if not jacobian:
             return pts, normals, None
         return pts, normals, self.tree.point_jacobian(T, bodies, pts, palm_pos)

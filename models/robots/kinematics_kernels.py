@@ -140,3 +140,17 @@ def apply_delta_one(
     ])  # fmt: skip
     quat /= math.sqrt(quat[0] ** 2 + quat[1] ** 2 + quat[2] ** 2 + quat[3] ** 2)
     return palm_pos + delta[:3], quat, q + delta[6:]
+
+
+@njit(cache=True)
+def on_bodies_one(T: np.ndarray, bodies: np.ndarray, local: np.ndarray, translate: bool) -> np.ndarray:
+    """Body-frame points or directions (K, 3) on ``bodies`` (K,) in the world at body poses T (nb, 4, 4): R p + t
+    (``translate``) or R p."""
+    out = np.empty((local.shape[0], 3))
+    for k in range(local.shape[0]):
+        b = bodies[k]
+        p0, p1, p2 = local[k, 0], local[k, 1], local[k, 2]
+        for r in range(3):
+            v = T[b, r, 0] * p0 + T[b, r, 1] * p1 + T[b, r, 2] * p2
+            out[k, r] = v + T[b, r, 3] if translate else v
+    return out

@@ -14,7 +14,7 @@ from models.robots import get_hand, kinematics_kernels
 LOOPS = [
     field_kernels.disc_distances, field_kernels.winding_sum, field_kernels.within_facets, part_bounds._clearance,
     part_bounds._grid_bounds, kinematics_kernels.body_poses_one, kinematics_kernels.point_jacobian_one,
-    kinematics_kernels.apply_delta_one, self_pairs._near_pairs,
+    kinematics_kernels.apply_delta_one, kinematics_kernels.on_bodies_one, self_pairs._near_pairs,
 ]  # fmt: skip
 
 

@@ -80,3 +80,18 @@ def test_one_pose_step_matches_the_batched_torch_code(name: str) -> None:
         for got, want in zip(one, batched, strict=True):
             assert got.shape == (1, *want.shape[1:])
             np.testing.assert_allclose(got[0].numpy(), want[b].numpy(), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("name", ["leap", "allegro"])
+def test_one_pose_surface_samples_match_the_batched_torch_code(name: str) -> None:
+    hand = get_hand(name)
+    pos, quat, q = _poses(hand, seed=13)
+    batched = hand.surface_samples(pos, quat, q, jacobian=False)
+    some = np.arange(0, len(hand.contact_surface.body), 7)
+    picked = hand.surface_samples(pos, quat, q, index=some, jacobian=False)
+    for b in range(2):
+        one = hand.surface_samples(pos[b : b + 1], quat[b : b + 1], q[b : b + 1], jacobian=False)
+        for got, want in zip(one[:2], batched[:2], strict=True):
+            np.testing.assert_allclose(got[0].numpy(), want[b].numpy(), rtol=0, atol=1e-15)
+        one_picked = hand.surface_samples(pos[b : b + 1], quat[b : b + 1], q[b : b + 1], index=some, jacobian=False)
+        np.testing.assert_allclose(one_picked[0][0].numpy(), picked[0][b].numpy(), rtol=0, atol=1e-15)
