@@ -13,6 +13,8 @@ from models.refine.contact import ObjectField, contact_jacobians, surface_contac
 from models.refine.forces import ForceSolution, solve_forces
 from models.refine.self_pairs import near_pairs
 from models.refine.wrench import WrenchTask
+from models.robots.kinematics import one_cpu_pose, one_pose_values
+from models.robots.kinematics_kernels import on_bodies_one
 
 if TYPE_CHECKING:
     from models.robots.hand import Hand
@@ -164,8 +166,11 @@ def sphere_kinematics(
         local = torch.as_tensor(hand.sphere_centres, dtype=body_poses.dtype, device=body_poses.device)
         cache[key] = (bodies, torch.as_tensor(bodies, device=body_poses.device), local)
     bodies, index, local = cache[key]
-    Tb = body_poses[:, index]
-    pts = (Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]
+    if one_cpu_pose(body_poses):
+        pts = torch.from_numpy(on_bodies_one(one_pose_values(body_poses), bodies, local.numpy(), True))[None]
+    else:
+        Tb = body_poses[:, index]
+        pts = (Tb[..., :3, :3] @ local[..., None])[..., 0] + Tb[..., :3, 3]
     return pts, hand.tree.point_jacobian(body_poses, bodies, pts, pose[0]) if jacobian else None
 
 
