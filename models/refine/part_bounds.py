@@ -102,9 +102,9 @@ def _grid_bounds(x: np.ndarray, origin: np.ndarray, step: float, values: np.ndar
     m = x.shape[0]
     lower, upper = np.empty(m), np.empty(m)
     top = (values.shape[0] - 2, values.shape[1] - 2, values.shape[2] - 2)
+    cell = np.empty(3, dtype=np.int64)
+    frac = np.empty(3)
     for i in range(m):
-        cell = np.empty(3, dtype=np.int64)
-        frac = np.empty(3)
         for a in range(3):
             rel = (x[i, a] - origin[a]) / step
             c = min(max(int(np.floor(rel)), 0), top[a])
