@@ -192,7 +192,8 @@ def run_one(spec: dict[str, Any], objects: _Objects, timers: _Timers) -> dict[st
 
 
 def serve() -> int:
-    """The worker loop: a spec per stdin line → a record per stdout line."""
+    """The worker loop: a spec per stdin line → a record per stdout line (a spec with ``load_only`` only loads
+    its object and answers ``{}``)."""
     import torch
 
     torch.set_num_threads(1)
@@ -201,6 +202,11 @@ def serve() -> int:
     answer, sys.stdout = sys.stdout, sys.stderr  # stdout carries the records only
     for line in sys.stdin:
         if line.strip():
-            answer.write(json.dumps(run_one(json.loads(line), objects, timers)) + "\n")
+            spec = json.loads(line)
+            if spec.get("load_only"):  # the batch mode's preload: the object's file read and sampled, no request
+                objects.get(spec)
+                answer.write("{}\n")
+            else:
+                answer.write(json.dumps(run_one(spec, objects, timers)) + "\n")
             answer.flush()
     return 0
