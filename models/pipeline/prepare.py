@@ -9,8 +9,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from models.geometry.object import DEFAULT_DENSITY, DEFAULT_FRICTION
+from models.geometry.object import DEFAULT_DENSITY, DEFAULT_FRICTION, ObjectGeometry
 from models.geometry.spread import spread_contacts
+from models.pipeline.object_cache import ObjectCache, PreparedObject, default_cache, digest
 from models.pipeline.tasks import build_task, network_motion
 from models.pipeline.types import MATERIALS, METHODS, InvalidInput, SynthesisInput
 from models.refine.field import PointCloudField
@@ -44,11 +45,12 @@ def _array(name: str, value: Any, shape: tuple[int | None, ...]) -> np.ndarray:
     return arr
 
 
-def prepare(inp: SynthesisInput) -> Prepared:
-    """Check shapes and options, estimate normals if missing, compute mass properties and the task residual."""
-    t0 = time.perf_counter()
-    from models.geometry import ObjectGeometry
+def prepare(inp: SynthesisInput, cache: ObjectCache | None = None) -> Prepared:
+    """Check shapes and options, estimate normals if missing, compute mass properties and the task residual.
 
+    What the object alone determines (mesh structures, point field, normals, mass) comes from ``cache``
+    (`models.pipeline.object_cache`; default: the process's) when the same bytes were prepared before."""
+    t0 = time.perf_counter()
     points = _array("points", inp.points, (None, 3))
     n = len(points)
     if n < 16:
@@ -64,24 +66,18 @@ def prepare(inp: SynthesisInput) -> Prepared:
         mask = np.asarray(inp.mask).astype(bool).reshape(-1)
         if mask.shape != (n,) or not mask.any():
             raise InvalidInput(f"mask: expected ({n},) with at least one allowed point")
-    mesh = None
+    vertices = faces = None
     if inp.mesh_vertices is not None and inp.mesh_faces is not None:
-        import trimesh
-
-        mesh = trimesh.Trimesh(
-            vertices=_array("mesh.vertices", inp.mesh_vertices, (None, 3)),
-            faces=np.asarray(inp.mesh_faces, dtype=np.int64),
-            process=True,
-        )
+        vertices = _array("mesh.vertices", inp.mesh_vertices, (None, 3))
+        faces = np.asarray(inp.mesh_faces, dtype=np.int64)
     normals = None if inp.normals is None else _array("normals", inp.normals, (n, 3))
-    try:
-        geom = ObjectGeometry.from_points(points, normals, mesh)
-    except ValueError as exc:
-        raise InvalidInput(str(exc)) from exc
     density = float(inp.properties.get("density", DEFAULT_DENSITY))
-    exact = mesh if mesh is not None and mesh.is_watertight else None  # else the points' surface, never a hull
-    cloud = object_field(points, geom.normals, mask, exact)  # a sparse cloud: distances on the mesh's samples too
-    mp = geom.mass_properties(density) if exact is not None else points_mass_properties(cloud, density)
+    obj = _object(points, normals, mask, vertices, faces, cache)
+    exact, cloud = obj.exact, obj.cloud
+    if density not in obj.masses:
+        obj.masses[density] = (obj.geometry.mass_properties(density) if exact is not None
+                               else points_mass_properties(cloud, density))  # fmt: skip
+    mp = obj.masses[density]
     centre = np.asarray(mp.com, dtype=np.float64)
     inertia = np.asarray(mp.inertia, dtype=np.float64)
     if inp.joint is not None:
@@ -105,6 +101,27 @@ def prepare(inp: SynthesisInput) -> Prepared:
                 f"contacts: {len(contacts)} contacts for a hand with {inp.hand.num_fingertips} fingertips"
             )
     return Prepared(inp, cloud, exact, centre, mp.mass, inertia, task, mu, tip_field, time.perf_counter() - t0)
+
+
+def _object(points: np.ndarray, normals: np.ndarray | None, mask: np.ndarray | None, vertices: np.ndarray | None,
+            faces: np.ndarray | None, cache: ObjectCache | None) -> PreparedObject:  # fmt: skip
+    """The object's mesh, geometry, exact surface and point field, from ``cache`` or built (a bad object raises
+    `InvalidInput` and is not kept)."""
+    cache = default_cache if cache is None else cache
+    mesh = cache.mesh(vertices, faces) if vertices is not None and faces is not None else None
+
+    def build() -> PreparedObject:
+        own = points.copy()  # kept beyond this request: not the caller's array
+        try:
+            geom = ObjectGeometry.from_points(own, None if normals is None else normals.copy(), mesh)
+        except ValueError as exc:
+            raise InvalidInput(str(exc)) from exc
+        exact = mesh if mesh is not None and mesh.is_watertight else None  # else the points' surface, never a hull
+        # a sparse cloud: distances on the mesh's samples too
+        cloud = object_field(own, geom.normals, None if mask is None else mask.copy(), exact)
+        return PreparedObject(mesh, geom, exact, cloud)
+
+    return cache.prepared(digest(points, normals, mask, vertices, faces), build)
 
 
 def _initial_pose(inp: SynthesisInput) -> None:

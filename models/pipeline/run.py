@@ -30,6 +30,7 @@ from models.pipeline.deformable import (
     network_input,
     prepare_deformable,
 )
+from models.pipeline.object_cache import ObjectCache
 from models.pipeline.prepare import ContactSet, Prepared, contact_sets, network_inputs, prepare
 from models.pipeline.types import (
     Cancelled,
@@ -265,6 +266,7 @@ def run_pipeline(
     predictor: Any | None = None,
     progress: Progress | None = None,
     should_cancel: CancelCheck | None = None,
+    cache: ObjectCache | None = None,
 ) -> SynthesisOutput:
     """Synthesise contacts, forces and hand poses for one request.
 
@@ -274,6 +276,7 @@ def run_pipeline(
             required for method "network".
         progress: ``progress(stage, fraction)`` callback.
         should_cancel: polled between stages and refinement iterations.
+        cache: where objects met before are kept (`models.pipeline.object_cache`; default: the process's).
 
     Returns:
         The output (proposals that fail verification are returned too, marked ``success=False``).
@@ -282,7 +285,7 @@ def run_pipeline(
         InvalidInput: malformed arrays or task. ModelUnavailable: "network" without a predictor.
         Cancelled: ``should_cancel()`` returned true.
     """
-    out = run_pipeline_batch([inp], predictor, progress, should_cancel, raise_errors=True)[0]
+    out = run_pipeline_batch([inp], predictor, progress, should_cancel, raise_errors=True, cache=cache)[0]
     assert isinstance(out, SynthesisOutput)
     return out
 
@@ -293,8 +296,10 @@ def run_pipeline_batch(
     progress: Progress | None = None,
     should_cancel: CancelCheck | None = None,
     raise_errors: bool = False,
+    cache: ObjectCache | None = None,
 ) -> list[SynthesisOutput | Exception]:
-    """Run many requests: the network once for the whole batch (micro-batching), then refine each.
+    """Run many requests: the network once for the whole batch (micro-batching), then refine each (``cache``:
+    as `run_pipeline`'s).
 
     Returns one entry per input: its output, or (with ``raise_errors=False``) the `InvalidInput` /
     `ModelUnavailable` raised for it, so one bad request does not sink its batch-mates. `Cancelled` always
@@ -304,7 +309,7 @@ def run_pipeline_batch(
     preps: list[Prepared | PreparedDeformable | Exception] = []
     for inp in inputs:
         try:
-            preps.append(prepare_deformable(inp) if is_deformable_task(inp) else prepare(inp))
+            preps.append(prepare_deformable(inp) if is_deformable_task(inp) else prepare(inp, cache))
         except InvalidInput as exc:
             if raise_errors:
                 raise

@@ -1,0 +1,130 @@
+"""Objects met before: their geometry built once and kept for the next requests about them.
+
+A worker meets the same object many times: a batch asks one object with several motions, hands or seeds, and a
+planner asks again about the object it is holding. What `models.pipeline.prepare` derives from the object alone
+— the processed mesh with its collision BVH, sharp edges and closest-point structures (`models.geometry.per_mesh`),
+the point field with its k-d trees, grown hull, winding-number cells and sample areas, the normals and the mass
+properties — depends on nothing else in the request, so it is kept here, keyed by a digest of the bytes it was
+built from, and shared by every request that sends the same bytes. The answers are those of a fresh build (the
+shared structures are built the same way and only read); only the time changes.
+
+Two levels: meshes by their vertices and faces (requests with other samples of the same mesh share its
+structures), and prepared objects by points, normals, mask and mesh. Both are bounded (least recently used out).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+from collections import OrderedDict
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Generic, TypeVar
+
+import numpy as np
+import trimesh
+
+from models.geometry.object import MassProperties, ObjectGeometry
+from models.refine.field import PointCloudField
+
+T = TypeVar("T")
+
+MAX_OBJECTS = 4
+"""Prepared objects kept (a 2 048-point object with its field, hull and cells ≈ 1 MB; with the most mesh samples,
+80 000, ≈ 10 MB): a worker stays within its memory bound whatever objects come."""
+MAX_MESHES = 4
+"""Meshes kept with their structures (a 6 658-vertex mesh with its BVH and edges ≈ 5 MB)."""
+
+
+def digest(*arrays: np.ndarray | None) -> bytes:
+    """A 16-byte digest of the arrays' dtypes, shapes and bytes (None counts as absent, distinct from empty)."""
+    h = hashlib.blake2b(digest_size=16)
+    for a in arrays:
+        if a is None:
+            h.update(b"\x00none")
+            continue
+        arr = np.ascontiguousarray(a)
+        h.update(f"\x01{arr.dtype.str}{arr.shape}".encode())
+        if arr.size:  # (an empty view cannot be cast)
+            h.update(arr.data.cast("B"))
+    return h.digest()
+
+
+class LeastRecentlyUsed(Generic[T]):
+    """A bounded map of built values: ``get(key, build)`` returns the kept value or keeps ``build()``'s.
+
+    Thread-safe; a build runs outside the lock (two threads may build the same key; one value is kept)."""
+
+    def __init__(self, capacity: int) -> None:
+        self.capacity = capacity
+        self._items: OrderedDict[bytes, T] = OrderedDict()
+        self._lock = threading.Lock()
+        self.hits = 0
+        self.misses = 0
+
+    def get(self, key: bytes, build: Callable[[], T]) -> T:
+        with self._lock:
+            if key in self._items:
+                self._items.move_to_end(key)
+                self.hits += 1
+                return self._items[key]
+            self.misses += 1
+        value = build()
+        with self._lock:
+            value = self._items.setdefault(key, value)
+            self._items.move_to_end(key)
+            while len(self._items) > self.capacity:
+                self._items.popitem(last=False)
+        return value
+
+    def __len__(self) -> int:
+        return len(self._items)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._items.clear()
+            self.hits = self.misses = 0
+
+
+@dataclass
+class PreparedObject:
+    """What one object's bytes determine: its processed ``mesh`` (or None), the geometry with normals, the mesh
+    used as the exact surface (``exact``: the mesh when watertight), the point field, and mass properties by
+    density."""
+
+    mesh: trimesh.Trimesh | None
+    geometry: ObjectGeometry
+    exact: trimesh.Trimesh | None
+    cloud: PointCloudField
+    masses: dict[float, MassProperties] = field(default_factory=dict)
+
+
+class ObjectCache:
+    """Meshes and prepared objects of the last requests (`MAX_MESHES`, `MAX_OBJECTS`); ``enabled=False`` builds
+    every request afresh."""
+
+    def __init__(self, max_objects: int = MAX_OBJECTS, max_meshes: int = MAX_MESHES, enabled: bool = True) -> None:
+        self.objects: LeastRecentlyUsed[PreparedObject] = LeastRecentlyUsed(max_objects)
+        self.meshes: LeastRecentlyUsed[trimesh.Trimesh] = LeastRecentlyUsed(max_meshes)
+        self.enabled = enabled
+
+    def mesh(self, vertices: np.ndarray, faces: np.ndarray) -> trimesh.Trimesh:
+        """The processed mesh of ``vertices`` (V, 3) float64 and ``faces`` (F, 3) int64 (trimesh merges
+        duplicate vertices and drops degenerate faces), kept with the structures built on it."""
+
+        def build() -> trimesh.Trimesh:
+            return trimesh.Trimesh(vertices=vertices.copy(), faces=faces.copy(), process=True)
+
+        return self.meshes.get(digest(vertices, faces), build) if self.enabled else build()
+
+    def prepared(self, key: bytes, build: Callable[[], PreparedObject]) -> PreparedObject:
+        """The prepared object of ``key`` (`digest` of everything ``build`` reads), built once."""
+        return self.objects.get(key, build) if self.enabled else build()
+
+    def clear(self) -> None:
+        self.objects.clear()
+        self.meshes.clear()
+
+
+default_cache = ObjectCache()
+"""The process's cache, used by `models.pipeline.prepare.prepare` unless given another."""
