@@ -9,7 +9,8 @@ built from, and shared by every request that sends the same bytes. The answers a
 shared structures are built the same way and only read); only the time changes.
 
 Two levels: meshes by their vertices and faces (requests with other samples of the same mesh share its
-structures), and prepared objects by points, normals, mask and mesh. Both are bounded (least recently used out).
+structures), and prepared objects by points, normals, mask and mesh. Both are bounded in count and in estimated
+bytes (least recently used out).
 """
 
 from __future__ import annotations
@@ -29,11 +30,17 @@ from models.refine.field import PointCloudField
 
 T = TypeVar("T")
 
-MAX_OBJECTS = 4
-"""Prepared objects kept (a 2 048-point object with its field, hull and cells ≈ 1 MB; with the most mesh samples,
-80 000, ≈ 10 MB): a worker stays within its memory bound whatever objects come."""
-MAX_MESHES = 4
-"""Meshes kept with their structures (a 6 658-vertex mesh with its BVH and edges ≈ 5 MB)."""
+MAX_ENTRIES = 8
+"""Objects, and meshes, kept at most."""
+MAX_BYTES = 16 * 2**20
+"""Estimated bytes of the objects kept, and of the meshes (`object_bytes`, `mesh_bytes`): with both full a worker
+holds ≈ 32 MB more, whatever objects come; an object larger than this alone is built and not kept."""
+BYTES_PER_POINT = 260
+"""A point of the field with its normal, k-d tree, sample area and winding cells (2 048 points: 0.5 MB, measured
+with tracemalloc)."""
+BYTES_PER_FACE = 700
+"""A mesh face with its share of vertices, closest-point structures, pseudo-normals, sharp edges and BVH (a
+9 216-face mesh: 5.6 MB by tracemalloc, which does not see the BVH's ≈ 100 bytes a face)."""
 
 
 def digest(*arrays: np.ndarray | None) -> bytes:
@@ -51,14 +58,17 @@ def digest(*arrays: np.ndarray | None) -> bytes:
 
 
 class LeastRecentlyUsed(Generic[T]):
-    """A bounded map of built values: ``get(key, build)`` returns the kept value or keeps ``build()``'s.
+    """A bounded map of built values: ``get(key, build)`` returns the kept value or keeps ``build()``'s, within
+    ``max_entries`` and ``max_bytes`` (``size(value)``, estimated) — the least recently used go first; a value
+    larger than ``max_bytes`` is returned and not kept.
 
     Thread-safe; a build runs outside the lock (two threads may build the same key; one value is kept)."""
 
-    def __init__(self, capacity: int) -> None:
-        self.capacity = capacity
-        self._items: OrderedDict[bytes, T] = OrderedDict()
+    def __init__(self, max_entries: int, max_bytes: int = MAX_BYTES, size: Callable[[T], int] = lambda v: 0) -> None:
+        self.max_entries, self.max_bytes, self.size = max_entries, max_bytes, size
+        self._items: OrderedDict[bytes, tuple[T, int]] = OrderedDict()
         self._lock = threading.Lock()
+        self.bytes = 0
         self.hits = 0
         self.misses = 0
 
@@ -67,14 +77,19 @@ class LeastRecentlyUsed(Generic[T]):
             if key in self._items:
                 self._items.move_to_end(key)
                 self.hits += 1
-                return self._items[key]
+                return self._items[key][0]
             self.misses += 1
         value = build()
+        cost = self.size(value)
+        if cost > self.max_bytes:
+            return value
         with self._lock:
-            value = self._items.setdefault(key, value)
-            self._items.move_to_end(key)
-            while len(self._items) > self.capacity:
-                self._items.popitem(last=False)
+            if key in self._items:  # another thread kept it meanwhile
+                return self._items[key][0]
+            self._items[key] = (value, cost)
+            self.bytes += cost
+            while len(self._items) > self.max_entries or self.bytes > self.max_bytes:
+                self.bytes -= self._items.popitem(last=False)[1][1]
         return value
 
     def __len__(self) -> int:
@@ -83,7 +98,7 @@ class LeastRecentlyUsed(Generic[T]):
     def clear(self) -> None:
         with self._lock:
             self._items.clear()
-            self.hits = self.misses = 0
+            self.bytes = self.hits = self.misses = 0
 
 
 @dataclass
@@ -99,13 +114,25 @@ class PreparedObject:
     masses: dict[float, MassProperties] = field(default_factory=dict)
 
 
-class ObjectCache:
-    """Meshes and prepared objects of the last requests (`MAX_MESHES`, `MAX_OBJECTS`); ``enabled=False`` builds
-    every request afresh."""
+def object_bytes(obj: PreparedObject) -> int:
+    """Estimated bytes of a prepared object (`BYTES_PER_POINT` per distance point) with its mesh, which it keeps
+    alive even when the mesh cache has let it go."""
+    points = len(obj.cloud.points) + (len(obj.cloud.surface.points) if obj.cloud.surface is not None else 0)
+    return BYTES_PER_POINT * points + (mesh_bytes(obj.mesh) if obj.mesh is not None else 0)
 
-    def __init__(self, max_objects: int = MAX_OBJECTS, max_meshes: int = MAX_MESHES, enabled: bool = True) -> None:
-        self.objects: LeastRecentlyUsed[PreparedObject] = LeastRecentlyUsed(max_objects)
-        self.meshes: LeastRecentlyUsed[trimesh.Trimesh] = LeastRecentlyUsed(max_meshes)
+
+def mesh_bytes(mesh: trimesh.Trimesh) -> int:
+    """Estimated bytes of a mesh with the structures built on it (`BYTES_PER_FACE` per face)."""
+    return BYTES_PER_FACE * len(mesh.faces)
+
+
+class ObjectCache:
+    """Meshes and prepared objects of the last requests (`MAX_ENTRIES`, `MAX_BYTES` each); ``enabled=False``
+    builds every request afresh."""
+
+    def __init__(self, max_entries: int = MAX_ENTRIES, max_bytes: int = MAX_BYTES, enabled: bool = True) -> None:
+        self.objects: LeastRecentlyUsed[PreparedObject] = LeastRecentlyUsed(max_entries, max_bytes, object_bytes)
+        self.meshes: LeastRecentlyUsed[trimesh.Trimesh] = LeastRecentlyUsed(max_entries, max_bytes, mesh_bytes)
         self.enabled = enabled
 
     def mesh(self, vertices: np.ndarray, faces: np.ndarray) -> trimesh.Trimesh:

@@ -3,7 +3,7 @@ import pytest
 import trimesh
 
 from models.pipeline import InvalidInput, SynthesisInput, TaskInput, run_pipeline
-from models.pipeline.object_cache import LeastRecentlyUsed, ObjectCache, digest
+from models.pipeline.object_cache import BYTES_PER_FACE, LeastRecentlyUsed, ObjectCache, digest
 from models.pipeline.prepare import prepare
 
 
@@ -53,6 +53,24 @@ def test_least_recently_used_keeps_the_last_used_and_builds_once():
     lru.get(b"c", build(3))  # evicts b, the least recently used
     assert len(lru) == 2 and lru.get(b"b", build(4)) == 4 and lru.get(b"a", build(5)) == 5
     assert built == [1, 2, 3, 4, 5]
+
+
+def test_least_recently_used_keeps_within_its_bytes_and_never_keeps_an_oversized_value():
+    lru: LeastRecentlyUsed[int] = LeastRecentlyUsed(10, max_bytes=100, size=lambda v: v)
+    for key, value in ((b"a", 40), (b"b", 40), (b"c", 40)):  # c pushes the total to 120: a goes
+        lru.get(key, lambda value=value: value)
+    assert len(lru) == 2 and lru.bytes == 80
+    assert lru.get(b"big", lambda: 101) == 101  # returned, not kept: nothing else evicted for it
+    assert len(lru) == 2 and lru.bytes == 80 and lru.get(b"big", lambda: 7) == 7
+
+
+def test_an_object_beyond_the_byte_bound_is_used_but_not_kept(box, gripper):
+    cache = ObjectCache(max_bytes=BYTES_PER_FACE * len(box[2].faces) - 1)  # not even the mesh fits
+    first = prepare(_inp(box, gripper), cache)
+    again = prepare(_inp(box, gripper), cache)
+    assert first.mesh is not again.mesh and first.cloud is not again.cloud
+    assert len(cache.meshes) == len(cache.objects) == 0 and cache.meshes.bytes == cache.objects.bytes == 0
+    assert again.mass == first.mass
 
 
 def test_the_same_object_is_prepared_once_and_answers_as_a_fresh_build(box, gripper):
