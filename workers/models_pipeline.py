@@ -50,6 +50,7 @@ class ModelsPipeline:
         threads: int = 1,
         batch_network: bool = False,
         hands: list[str] | None = None,
+        object_cache: bool = True,
     ) -> None:
         """
         Args:
@@ -57,11 +58,19 @@ class ModelsPipeline:
             threads: torch threads of this process (1: one worker process per core).
             batch_network: share one network call among a micro-batch's network jobs.
             hands: built-in hands to load and publish (default: all).
+            object_cache: keep each object's prepared geometry for the next job that sends the same bytes
+                (`models.pipeline.object_cache`: ≤ 32 MB; the same answers). Keyed by content alone: tenants
+                that send identical objects share it, and a job can be a few ms faster when the same bytes came
+                recently — ``false`` (``MANI_PIPELINE_OPTIONS='{"object_cache": false}'``) prepares every job
+                afresh.
         """
         import torch
 
         import models
+        from models.pipeline.object_cache import ObjectCache
         from models.robots import get_hand, list_hands
+
+        self.objects = ObjectCache(enabled=object_cache)
 
         torch.set_num_threads(max(1, threads))
         self.batch_network = batch_network
@@ -197,7 +206,8 @@ class ModelsPipeline:
 
         try:
             hand, inp = self._prepare(job)
-            out = run_pipeline(inp, self.predictor, _reporter(job, progress), lambda: should_cancel(job.id))
+            out = run_pipeline(inp, self.predictor, _reporter(job, progress), lambda: should_cancel(job.id),
+                               cache=self.objects)
         except ScienceError as exc:
             return error_from_exception(exc)
         return to_result(out, job.request, self.model_version or "none", hand)
@@ -224,7 +234,8 @@ class ModelsPipeline:
                 r(stage, fraction)
 
         try:
-            outs = run_pipeline_batch(inputs, self.predictor, report, lambda: all(should_cancel(j.id) for j in jobs))
+            outs = run_pipeline_batch(inputs, self.predictor, report, lambda: all(should_cancel(j.id) for j in jobs),
+                                      cache=self.objects)
         except Cancelled:
             outs = [Cancelled("cancelled")] * len(inputs)
         for i, hand, out in zip(index, hands, outs, strict=True):

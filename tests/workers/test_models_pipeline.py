@@ -123,3 +123,16 @@ def test_an_unknown_hand_is_a_404_naming_the_field() -> None:
     [outcome] = pipeline.run([JobInput(id="u", request=request)], lambda *a: None, lambda job_id: False)
     assert isinstance(outcome, ErrorBody) and outcome.kind is ErrorType.UNKNOWN_HAND and outcome.status == 404
     assert outcome.error.startswith("robot.name:")
+
+
+@pytest.mark.parametrize("keep", [True, False])
+def test_a_worker_prepares_an_object_it_has_seen_once_unless_told_not_to(keep: bool) -> None:
+    from workers.models_pipeline import ModelsPipeline
+    from workers.pipeline import JobInput
+
+    pipeline = ModelsPipeline(hands=["panda_gripper"], weights_dir=NO_WEIGHTS, object_cache=keep)
+    request = make_request("contacts", contacts=CONTACTS)
+    first, again = (pipeline.run([JobInput(id=i, request=request)], lambda *a: None, lambda job_id: False)[0]
+                    for i in ("a", "b"))  # fmt: skip
+    assert pipeline.objects.objects.hits == (1 if keep else 0) and len(pipeline.objects.objects) == int(keep)
+    assert [p.model_dump_json() for p in first.proposals] == [p.model_dump_json() for p in again.proposals]
