@@ -55,6 +55,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", default="third_party", choices=("third_party", "procedural", "box"))
     p.add_argument("--objects", type=int, default=18, help="objects of the set (third_party: at most 43)")
     p.add_argument("--seeds", type=int, default=3, help="requests per object (seeds 0..N-1)")
+    p.add_argument("--order", default="hand", choices=("hand", "object"),
+                   help="hand: each hand's requests in turn (an object's seeds in a row); object: each object's "
+                        "requests for every hand in a row (an object sent again, as a planner or a batch of one "
+                        "object's tasks does)")
     p.add_argument("--task", default="lift", choices=("lift", "closure"))
     p.add_argument("--geometry", default="mesh", choices=("mesh", "points"), help="send the mesh or points only")
     p.add_argument("--proposals", type=int, default=1)
@@ -75,7 +79,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
-    """The request specs, hand-major (a worker rebuilds each request from its spec)."""
+    """The request specs, hand-major or (``--order object``) object-major (a worker rebuilds each request from its
+    spec; the audit marks are given hand-major either way)."""
     from models.robots import list_hands
 
     hands = list(list_hands()) if args.hand == "all" else [h for h in args.hand.split(",") if h]
@@ -99,6 +104,8 @@ def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
                             "points": args.points, "audit": n < args.audit and args.set != "box",
                             "box": str(ROOT / "examples/data/box.npz")})
                 n += 1
+    if getattr(args, "order", "hand") == "object":
+        out.sort(key=lambda spec: (spec["object"], spec["seed"]))  # stable: the hands in their order
     return out
 
 

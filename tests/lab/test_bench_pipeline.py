@@ -45,6 +45,17 @@ def test_requests_are_hand_major_and_audit_the_first() -> None:
     assert [s["audit"] for s in specs[:4]] == [True, True, True, False]
 
 
+def test_object_order_asks_each_object_of_every_hand_in_a_row_with_the_same_requests() -> None:
+    p = argparse.ArgumentParser()
+    add_arguments(p)
+    base = ["--hand", "leap,allegro", "--objects", "2", "--seeds", "2", "--audit", "3"]
+    by_hand, by_object = requests(p.parse_args(base)), requests(p.parse_args([*base, "--order", "object"]))
+    assert [(s["object"], s["seed"], s["hand"]) for s in by_object[:4]] == [
+        (0, 0, "leap"), (0, 0, "allegro"), (0, 1, "leap"), (0, 1, "allegro")]  # fmt: skip
+    key = lambda s: (s["hand"], s["object"], s["seed"])  # noqa: E731
+    assert sorted(by_hand, key=key) == sorted(by_object, key=key)  # the same requests, audit marks included
+
+
 def test_worker_times_a_real_request() -> None:
     import importlib
 
