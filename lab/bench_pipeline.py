@@ -17,7 +17,9 @@ is the network's starts against random ones on the same requests (``--weights`` 
 Objects: ``third_party`` (the audit's meshes that installed packages ship, `models.audit.third_party_objects`;
 there are 43, the first 18 the original set; ``--seeds`` repeats each with other samples and contacts; each spec
 names its file, so a reference checkout with fewer candidates loads the same objects), ``procedural``
-(`models.objects`), or ``box`` (``examples/data/box.npz``, no mesh: the README protocol).
+(`models.objects`), or ``box`` (``examples/data/box.npz``, no mesh: the README protocol). ``--order object`` asks
+each object of every hand in a row (the second hand's request finds the first's object in the worker's object
+cache, `models.pipeline.object_cache`), instead of each hand's requests in turn.
 
 Example:
     mani bench pipeline --hand leap,allegro --set third_party --seeds 3 --audit 6 --compare /tmp/ref-23
