@@ -58,11 +58,8 @@ class ModelsPipeline:
             threads: torch threads of this process (1: one worker process per core).
             batch_network: share one network call among a micro-batch's network jobs.
             hands: built-in hands to load and publish (default: all).
-            object_cache: keep each object's prepared geometry for the next job that sends the same bytes
-                (`models.pipeline.object_cache`: ≤ 32 MB; the same answers). Keyed by content alone: tenants
-                that send identical objects share it, and a job can be a few ms faster when the same bytes came
-                recently — ``false`` (``MANI_PIPELINE_OPTIONS='{"object_cache": false}'``) prepares every job
-                afresh.
+            object_cache: keep objects' prepared geometry for later jobs sending the same bytes (≤ 32 MB, the
+                same answers; keyed by content alone: workers/README.md); False prepares every job afresh.
         """
         import torch
 
