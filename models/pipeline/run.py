@@ -93,17 +93,20 @@ def _start_pose(prep: Prepared) -> HandPose:
 
 class _Verifier:
     """Verification of the poses one request asks about, each once: a stalled attempt's pose is verified before
-    any restart (`_refined`), and the proposal's own verification reuses it."""
+    any restart (`_refined`), and the proposal's own verification reuses it. The refinement's questions
+    (``complete=False``) stop at a failed contact test; the proposal's answer needs every measure, so an
+    incomplete one is completed then."""
 
     def __init__(self, prep: Prepared) -> None:
         self.prep = prep
         self.seen: dict[bytes, Verification] = {}
 
-    def __call__(self, pose: HandPose) -> Verification:
+    def __call__(self, pose: HandPose, complete: bool = True) -> Verification:
         key = np.concatenate([pose.palm_pos, pose.palm_quat, pose.q]).tobytes()
-        if key not in self.seen:
+        known = self.seen.get(key)
+        if known is None or (complete and not known.complete):
             p = self.prep
-            self.seen[key] = verify(p.inp.hand, pose, p.cloud, p.task, p.mu, p.mesh)
+            self.seen[key] = verify(p.inp.hand, pose, p.cloud, p.task, p.mu, p.mesh, complete=complete)
         return self.seen[key]
 
 
@@ -231,7 +234,7 @@ def _refined(
         report("refinement", (k * inp.max_iterations + it) / total)
 
     def accept(pose: HandPose) -> bool:
-        return verified(pose).success
+        return verified(pose, complete=False).success
 
     res = refine(
         hand, prep.cloud, prep.task, start, prep.mu, config, tip_field=prep.tip_field, deadline=inp.deadline,

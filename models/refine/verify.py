@@ -70,6 +70,9 @@ class Verification:
     links: list[str] = field(default_factory=list)
     finger_distances: np.ndarray = field(default_factory=lambda: np.zeros(0))
     failures: list[str] = field(default_factory=list)
+    complete: bool = True
+    """False: stopped at the contact tests' failure (``complete=False`` in `verify`); penetration and
+    self-collision not measured (NaN), ``failures`` the contact tests' only."""
 
     @property
     def success(self) -> bool:
@@ -110,6 +113,7 @@ def verify(
     mesh: Any | None = None,
     max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE,
     collisions: bool = True,
+    complete: bool = True,
 ) -> Verification:
     """Verify ``pose`` (see module doc).
 
@@ -122,6 +126,8 @@ def verify(
         mesh: the object's watertight trimesh (exact distances and penetration); None: the points' surface.
         max_normal_force: force bound of Eq. (6-8).
         collisions: measure penetration and self-collision with fcl (False: skip, reported as 0).
+        complete: False stops once the wrench or tip-distance test fails (a pass or fail is all the caller needs:
+            the refinement asking whether to stop) — the same verdict, without the collision tests.
     """
     region = cloud.region_distance if cloud.mask is not None else None
     found = surface_contacts(hand, pose.tensors(), cloud, region, jacobian=False, guards=False)
@@ -133,12 +139,18 @@ def verify(
     tip_dist = finger.copy()
     if cloud.mask is not None:
         tip_dist = np.maximum(tip_dist, cloud.region_point_distance(contacts))
-    if task.closure:
-        sol, eps = contact_quality(hand, contacts, normals, task, mu, max_normal_force)
+    if task.closure:  # (incomplete: no ε where the wrench already fails)
+        sol, eps = contact_quality(hand, contacts, normals, task, mu, max_normal_force,
+                                   epsilon_below=None if complete else RESIDUAL_SQ_TOL)  # fmt: skip
     else:  # ε only judges force closure (≈ 10 ms, as much as the rest of the contact tests): not measured
         sol, eps = solve_forces(task, contacts, normals, mu, max_normal_force), float("nan")
+    failures = [] if produces_wrench(sol) else ["wrench_residual"]
+    if not float(np.max(tip_dist)) <= TIP_TOL:
+        failures.append("tip_distance")
     pen = selfc = 0.0
-    if collisions:
+    if failures and not complete:
+        pen = selfc = float("nan")
+    elif collisions:
         from models.geometry import hand_field_penetration, hand_mesh_penetration, hand_self_collision
 
         if mesh is not None:
@@ -147,11 +159,6 @@ def verify(
             pen = hand_field_penetration(hand, cloud, pose.palm_pos, pose.palm_quat, pose.q,
                                          inflate=cloud.resolution)  # fmt: skip
         selfc = hand_self_collision(hand, pose.palm_pos, pose.palm_quat, pose.q)
-    failures = []
-    if not produces_wrench(sol):
-        failures.append("wrench_residual")
-    if not float(np.max(tip_dist)) <= TIP_TOL:
-        failures.append("tip_distance")
     if pen > (PENETRATION_TOL if mesh is not None else POINTS_PENETRATION_TOL):
         failures.append("penetration")
     if selfc > SELF_COLLISION_TOL:
@@ -172,6 +179,7 @@ def verify(
         links=[str(hand.contact_surface.link[k]) or hand.fingertip_links[i] for i, k in enumerate(found.sample)],
         finger_distances=finger,
         failures=failures,
+        complete=complete or not failures,
     )
 
 
