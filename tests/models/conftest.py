@@ -1,4 +1,5 @@
-"""Fixtures shared by the science tests (refinement and its evaluation): a box, the Panda gripper."""
+"""Fixtures shared by the science tests (refinement and its evaluation): a box, the Panda gripper, a LEAP hand
+initialised on a cube."""
 
 import numpy as np
 import pytest
@@ -18,3 +19,20 @@ def gripper():
     from models.robots import get_hand
 
     return get_hand("panda_gripper")
+
+
+@pytest.fixture(scope="session")
+def leap_on_a_box():
+    """A LEAP hand initialised on a 6 cm cube's points, and a lift: (hand, mesh, field, task, start pose)."""
+    from models.refine.field import PointCloudField
+    from models.refine.initialise import initialise
+    from models.refine.wrench import rigid_task
+    from models.robots import get_hand
+
+    hand = get_hand("leap")
+    mesh = trimesh.creation.box((0.06, 0.06, 0.06))
+    pts, faces = trimesh.sample.sample_surface_even(mesh, 1500, seed=0)
+    field = PointCloudField(pts, mesh.face_normals[faces])
+    idx = [1093, 263, 1269, 1145]
+    start = initialise(hand, field, pts[idx], mesh.face_normals[faces][idx])[0].pose
+    return hand, mesh, field, rigid_task(np.array([0, 0, 1.0, 0, 0, 0]), np.zeros(3), 0.05), start

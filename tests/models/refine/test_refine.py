@@ -69,30 +69,21 @@ def test_masked_convergence_also_applies_the_verifications_point_test(setup, gri
     assert not refine(gripper, masked, task, start.pose, 0.5, unattainable, tip_field=masked.region_distance).converged
 
 
-def _leap_pushed_into_a_box():
-    """A LEAP hand initialised on a 6 cm box's points, then pushed 4 cm into it, and a lift: (hand, mesh, field,
-    task, pose)."""
-    import trimesh
-
+@pytest.fixture(scope="module")
+def leap_pushed(leap_on_a_box):
+    """The LEAP hand of ``leap_on_a_box`` pushed 4 cm into the cube: (hand, mesh, field, task, pose)."""
     from models.refine.state import HandPose
-    from models.robots import get_hand
 
-    hand = get_hand("leap")
-    mesh = trimesh.creation.box((0.06, 0.06, 0.06))
-    pts, faces = trimesh.sample.sample_surface_even(mesh, 1500, seed=0)
-    field = PointCloudField(pts, mesh.face_normals[faces])
-    idx = [1093, 263, 1269, 1145]
-    start = initialise(hand, field, pts[idx], mesh.face_normals[faces][idx])[0].pose
+    hand, mesh, field, task, start = leap_on_a_box
     inward = -start.palm_pos / np.linalg.norm(start.palm_pos)
-    pushed = HandPose(start.palm_pos + 0.04 * inward, start.palm_quat, start.q)
-    return hand, mesh, field, rigid_task(np.array([0, 0, 1.0, 0, 0, 0]), np.zeros(3), 0.05), pushed
+    return hand, mesh, field, task, HandPose(start.palm_pos + 0.04 * inward, start.palm_quat, start.q)
 
 
-def test_a_hand_stuck_in_the_object_stops_early_with_the_same_iterates():
+def test_a_hand_stuck_in_the_object_stops_early_with_the_same_iterates(leap_pushed):
     """A LEAP hand pushed 4 cm into a box from its initial pose: its guards stay > 1 mm deep and the merit stops
     falling, so it stops after the stuck window (3 iterations) instead of the stall window (8); every iterate up
     to there is the one the run without the rule takes."""
-    hand, _, field, task, pushed = _leap_pushed_into_a_box()
+    hand, _, field, task, pushed = leap_pushed
     cfg = RefineConfig(history=True, touch_weight=1.0)  # the full merit from the start: the rule alone (below:
     # closing the fingers first frees this hand)
     stuck = refine(hand, field, task, pushed, 0.8, cfg)
@@ -129,11 +120,11 @@ def test_a_refused_step_that_would_repeat_ends_the_attempt(setup, gripper):
     np.testing.assert_array_equal(first.delta, again.delta)  # the step it would have tried next
 
 
-def test_closing_the_fingers_first_frees_the_hand_stuck_in_the_box():
+def test_closing_the_fingers_first_frees_the_hand_stuck_in_the_box(leap_pushed):
     """The same pushed LEAP hand: with the wrench residual weighed down while a tip is more than 3 mm off, the
     fingers close first and the refinement ends in a grasp that the exact mesh verifies; with the full residual
     from the start it stays stuck."""
-    hand, mesh, field, task, pushed = _leap_pushed_into_a_box()
+    hand, mesh, field, task, pushed = leap_pushed
     closing = refine(hand, field, task, pushed, 0.8, RefineConfig(history=True))
     full = refine(hand, field, task, pushed, 0.8, RefineConfig(touch_weight=1.0))
     assert RefineConfig().touch_weight < 1.0

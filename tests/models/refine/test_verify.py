@@ -2,29 +2,11 @@
 no collision tests once those fail; and the pipeline's per-request verifier completes such an answer."""
 
 import numpy as np
-import pytest
-import trimesh
 
-from models.refine.field import PointCloudField
-from models.refine.initialise import initialise
 from models.refine.state import HandPose
 from models.refine.verify import verify
-from models.refine.wrench import rigid_task
 
 CONTACT_TESTS = {"wrench_residual", "tip_distance"}
-
-
-@pytest.fixture(scope="module")
-def leap_on_a_box():
-    from models.robots import get_hand
-
-    hand = get_hand("leap")
-    mesh = trimesh.creation.box((0.06, 0.06, 0.06))
-    pts, faces = trimesh.sample.sample_surface_even(mesh, 1500, seed=0)
-    field = PointCloudField(pts, mesh.face_normals[faces])
-    idx = [1093, 263, 1269, 1145]
-    start = initialise(hand, field, pts[idx], mesh.face_normals[faces][idx])[0].pose
-    return hand, mesh, field, rigid_task(np.array([0, 0, 1.0, 0, 0, 0]), np.zeros(3), 0.05), start
 
 
 def _poses(start: HandPose) -> list[HandPose]:
