@@ -27,6 +27,7 @@ import trimesh
 
 from models.geometry.object import MassProperties, ObjectGeometry
 from models.refine.field import PointCloudField
+from models.refine.volume import points_mass_properties
 
 T = TypeVar("T")
 
@@ -113,6 +114,14 @@ class PreparedObject:
     cloud: PointCloudField
     masses: dict[float, MassProperties] = field(default_factory=dict)
 
+    def mass_properties(self, density: float) -> MassProperties:
+        """Mass, centre and inertia at ``density`` (kg/m³): of the exact mesh when there is one, else of the
+        points' surface; computed once per density."""
+        if density not in self.masses:
+            self.masses[density] = (self.geometry.mass_properties(density) if self.exact is not None
+                                    else points_mass_properties(self.cloud, density))  # fmt: skip
+        return self.masses[density]
+
 
 def object_bytes(obj: PreparedObject) -> int:
     """Estimated bytes of a prepared object (`BYTES_PER_POINT` per distance point) with its mesh, which it keeps
@@ -135,14 +144,15 @@ class ObjectCache:
         self.meshes: LeastRecentlyUsed[trimesh.Trimesh] = LeastRecentlyUsed(max_entries, max_bytes, mesh_bytes)
         self.enabled = enabled
 
-    def mesh(self, vertices: np.ndarray, faces: np.ndarray) -> trimesh.Trimesh:
+    def mesh(self, key: bytes, vertices: np.ndarray, faces: np.ndarray) -> trimesh.Trimesh:
         """The processed mesh of ``vertices`` (V, 3) float64 and ``faces`` (F, 3) int64 (trimesh merges
-        duplicate vertices and drops degenerate faces), kept with the structures built on it."""
+        duplicate vertices and drops degenerate faces), kept with the structures built on it; ``key``: their
+        `digest`."""
 
         def build() -> trimesh.Trimesh:
             return trimesh.Trimesh(vertices=vertices.copy(), faces=faces.copy(), process=True)
 
-        return self.meshes.get(digest(vertices, faces), build) if self.enabled else build()
+        return self.meshes.get(key, build) if self.enabled else build()
 
     def prepared(self, key: bytes, build: Callable[[], PreparedObject]) -> PreparedObject:
         """The prepared object of ``key`` (`digest` of everything ``build`` reads), built once."""

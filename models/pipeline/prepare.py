@@ -16,7 +16,6 @@ from models.pipeline.tasks import build_task, network_motion
 from models.pipeline.types import MATERIALS, METHODS, InvalidInput, SynthesisInput
 from models.refine.field import PointCloudField
 from models.refine.surface_samples import object_field
-from models.refine.volume import points_mass_properties
 from models.refine.wrench import WrenchTask
 
 
@@ -74,10 +73,7 @@ def prepare(inp: SynthesisInput, cache: ObjectCache | None = None) -> Prepared:
     density = float(inp.properties.get("density", DEFAULT_DENSITY))
     obj = _object(points, normals, mask, vertices, faces, cache)
     exact, cloud = obj.exact, obj.cloud
-    if density not in obj.masses:
-        obj.masses[density] = (obj.geometry.mass_properties(density) if exact is not None
-                               else points_mass_properties(cloud, density))  # fmt: skip
-    mp = obj.masses[density]
+    mp = obj.mass_properties(density)
     centre = np.asarray(mp.com, dtype=np.float64)
     inertia = np.asarray(mp.inertia, dtype=np.float64)
     if inp.joint is not None:
@@ -108,7 +104,10 @@ def _object(points: np.ndarray, normals: np.ndarray | None, mask: np.ndarray | N
     """The object's mesh, geometry, exact surface and point field, from ``cache`` or built (a bad object raises
     `InvalidInput` and is not kept)."""
     cache = default_cache if cache is None else cache
-    mesh = cache.mesh(vertices, faces) if vertices is not None and faces is not None else None
+    mesh_key, mesh = b"", None
+    if vertices is not None and faces is not None:
+        mesh_key = digest(vertices, faces)
+        mesh = cache.mesh(mesh_key, vertices, faces)
 
     def build() -> PreparedObject:
         own = points.copy()  # kept beyond this request: not the caller's array
@@ -121,7 +120,7 @@ def _object(points: np.ndarray, normals: np.ndarray | None, mask: np.ndarray | N
         cloud = object_field(own, geom.normals, None if mask is None else mask.copy(), exact)
         return PreparedObject(mesh, geom, exact, cloud)
 
-    return cache.prepared(digest(points, normals, mask, vertices, faces), build)
+    return cache.prepared(digest(points, normals, mask) + mesh_key, build)  # the mesh's bytes hashed once
 
 
 def _initial_pose(inp: SynthesisInput) -> None:

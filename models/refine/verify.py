@@ -72,7 +72,8 @@ class Verification:
     failures: list[str] = field(default_factory=list)
     complete: bool = True
     """False: stopped at the contact tests' failure (``complete=False`` in `verify`); penetration and
-    self-collision not measured (NaN), ``failures`` the contact tests' only."""
+    self-collision not measured (NaN), for force closure ε neither where the wrench fails (−inf), ``failures``
+    the contact tests' only."""
 
     @property
     def success(self) -> bool:
