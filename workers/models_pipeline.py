@@ -17,7 +17,6 @@ import contextlib
 import hashlib
 import logging
 import time
-from collections import OrderedDict
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -35,6 +34,7 @@ from workers.pipeline import (
 from workers.queue.records import cancelled_error
 
 if TYPE_CHECKING:
+    from models.pipeline.object_cache import LeastRecentlyUsed
     from models.robots.hand import Hand
 
 log = logging.getLogger("workers.models_pipeline")
@@ -64,7 +64,7 @@ class ModelsPipeline:
         import torch
 
         import models
-        from models.pipeline.object_cache import ObjectCache
+        from models.pipeline.object_cache import LeastRecentlyUsed, ObjectCache
         from models.robots import get_hand, list_hands
 
         self.objects = ObjectCache(enabled=object_cache)
@@ -75,7 +75,7 @@ class ModelsPipeline:
         self.model_loaded = self.predictor is not None
         card = getattr(self.predictor, "card", None)
         self.model_version: str | None = f"{card.config_name}-{card.version}" if card else None
-        self._hands: OrderedDict[str, Any] = OrderedDict()
+        self._hands: LeastRecentlyUsed[Any] = LeastRecentlyUsed(_HAND_CACHE)  # user hands, by content
         self._builtin = {name: get_hand(name) for name in (hands if hands is not None else list_hands(aliases=True))}
         from models.compiled import warm_up
 
@@ -125,35 +125,29 @@ class ModelsPipeline:
         from models.robots import HandLoadError
         from workers.user_robots import build_robot
 
-        key = hashlib.blake2b(pack(robot.model_dump(mode="python", exclude_none=True)), digest_size=16).hexdigest()
-        if key in self._hands:
-            self._hands.move_to_end(key)
-            return self._hands[key]
-        try:
-            build = build_robot(robot)
-        except HandLoadError as exc:  # named by the field that carried the description
-            source = "archive" if robot.archive is not None else "urdf" if robot.urdf is not None else "mjcf"
-            raise HandLoadError(f"{source}: {exc}") from exc
-        self._hands[key] = build
-        while len(self._hands) > _HAND_CACHE:
-            self._hands.popitem(last=False)
-        return build
+        key = hashlib.blake2b(pack(robot.model_dump(mode="python", exclude_none=True)), digest_size=16).digest()
+
+        def build() -> Any:
+            try:
+                return build_robot(robot)
+            except HandLoadError as exc:  # named by the field that carried the description
+                source = "archive" if robot.archive is not None else "urdf" if robot.urdf is not None else "mjcf"
+                raise HandLoadError(f"{source}: {exc}") from exc
+
+        return self._hands.get(key, build)
 
     def _user_hand(self, name: str, urdf: str, fingertips: list[str], offsets: Any) -> Any:
         from models.robots import HandLoadError, load_hand
 
-        key = hashlib.blake2b(f"{name}\0{urdf}\0{fingertips}\0{offsets}".encode(), digest_size=16).hexdigest()
-        if key in self._hands:
-            self._hands.move_to_end(key)
-            return self._hands[key]
-        try:
-            hand = load_hand(urdf.encode(), fingertips=fingertips, tip_offsets=offsets, name=name)
-        except HandLoadError as exc:
-            raise HandLoadError(f"urdf: {exc}") from exc
-        self._hands[key] = hand
-        while len(self._hands) > _HAND_CACHE:
-            self._hands.popitem(last=False)
-        return hand
+        key = hashlib.blake2b(f"{name}\0{urdf}\0{fingertips}\0{offsets}".encode(), digest_size=16).digest()
+
+        def build() -> Any:
+            try:
+                return load_hand(urdf.encode(), fingertips=fingertips, tip_offsets=offsets, name=name)
+            except HandLoadError as exc:
+                raise HandLoadError(f"urdf: {exc}") from exc
+
+        return self._hands.get(key, build)
 
     def _hand(self, robot: RobotIn | None, registered: RobotRegister | None) -> Any:
         """The hand a request's ``robot`` names (``registered``: the user's registration it names, if any)."""
