@@ -182,7 +182,7 @@ def surface_contacts(
     pad = surf.pad[measure]
     rows: list[np.ndarray] = []
     extra: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []
-    body_T = T_all[0, torch.as_tensor(tip_body)].numpy()
+    body_T = T_all[0].numpy()[tip_body]  # numpy indexing: a torch index tensor cost ≈ 0.1 ms an iterate
     grids = part_grids_of(hand) if near_body.any() else [None] * m
     boxes = part_boxes_of(hand) if near_body.any() else [None] * m
     near_tips = np.flatnonzero(near_body)

@@ -255,6 +255,11 @@ class PointCloudField:
         """For each x (M, 3), the indices (ascending) of the cloud points within ``radius`` (one, or (M,))."""
         return list(self._tree.query_ball_point(np.asarray(x, dtype=np.float64), radius, return_sorted=True))
 
+    def ball_counts(self, x: np.ndarray, radius: float) -> np.ndarray:
+        """(M,) int: how many cloud points lie within ``radius`` of each x (M, 3) (`ball_indices` without the
+        index lists)."""
+        return np.asarray(self._tree.query_ball_point(np.asarray(x, dtype=np.float64), radius, return_length=True))
+
     def nearest_index(self, x: np.ndarray) -> np.ndarray:
         """Index of the nearest cloud point for each x."""
         return np.asarray(self._tree.query(np.asarray(x, dtype=np.float64))[1])

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 import torch
+from scipy.spatial import cKDTree
 from scipy.spatial.transform import Rotation
 
 from models.refine.field import PointCloudField
@@ -203,6 +204,30 @@ def back_off(
     return t - direction * max_distance
 
 
+def touch_overlap(field: PointCloudField, tips: np.ndarray, target: np.ndarray, radius: float
+                  ) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """For each fit's fingertips (F, m, 3): how many of the points they touch (within ``radius``) lie in the
+    boolean map ``target`` (N,), and how many lie in either — the intersection (F,) and union (F,) of the IoU.
+
+    Where a fit's fingertips are more than 2 ``radius`` apart their balls are disjoint, so the counts are sums of
+    per-fingertip ball counts (on the cloud and on the target's points); other fits take the points' indices.
+    """
+    f, m = tips.shape[:2]
+    flat = tips.reshape(-1, 3)
+    touched = field.ball_counts(flat, radius).reshape(f, m).sum(axis=1)
+    goal = field.points[target]
+    inter = np.zeros(f, dtype=np.int64)
+    if len(goal):
+        inter = cKDTree(goal).query_ball_point(flat, radius, return_length=True).reshape(f, m).sum(axis=1)
+    gap = np.linalg.norm(tips[:, :, None] - tips[:, None], axis=-1) + np.where(np.eye(m, dtype=bool), np.inf, 0.0)
+    for k in np.flatnonzero(gap.min(axis=(1, 2)) <= 2.0 * radius):  # balls may overlap: count each point once
+        seen = np.zeros(len(field.points), dtype=bool)
+        for ball in field.ball_indices(tips[k], radius):
+            seen[ball] = True
+        touched[k], inter[k] = seen.sum(), (seen & target).sum()
+    return inter, touched + int(target.sum()) - inter
+
+
 def initialise(
     hand: Hand,
     field: PointCloudField,
@@ -244,15 +269,8 @@ def initialise(
     assigns = list(itertools.permutations(range(m), h))
     rots, ts, rms = fit_palms(rest.tips, assigns, contacts, axis, np.asarray(directions), approach_weight)
     fits = [(rots[f], ts[f], float(rms[f]), assigns[f % len(assigns)]) for f in range(len(rots))]
-    # score on the fitted (not yet backed-off) pose: where the fingertips land (one batched ball query)
-    all_tips = (np.einsum("fab,kb->fka", rots, rest.tips) + ts[:, None]).reshape(-1, 3)
-    balls = field.ball_indices(all_tips, radius)
-    touched = np.zeros((len(fits), len(field.points)), dtype=bool)  # (F, N): the points each fit's tips touch
-    sizes = np.fromiter((len(b) for b in balls), dtype=np.int64, count=len(balls))
-    if sizes.sum():
-        touched[np.repeat(np.arange(len(balls)) // m, sizes), np.concatenate([b for b in balls if len(b)])] = True
-    union = (touched | target[None]).sum(axis=1)
-    inter = (touched & target[None]).sum(axis=1)
+    # score on the fitted (not yet backed-off) pose: where the fingertips land
+    inter, union = touch_overlap(field, np.einsum("fab,kb->fka", rots, rest.tips) + ts[:, None], target, radius)
     scored = []
     for f, (rot, t, err, assign) in enumerate(fits):
         score = int(inter[f]) / int(union[f]) if union[f] else 0.0

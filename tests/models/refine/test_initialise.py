@@ -2,7 +2,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from models.refine.field import PointCloudField
-from models.refine.initialise import fit_palm, initialise, iou, rest_geometry
+from models.refine.initialise import fit_palm, initialise, iou, rest_geometry, touch_overlap
 
 
 def test_fit_recovers_a_known_palm_pose(gripper):
@@ -30,6 +30,25 @@ def test_initialise_ranks_assignments_by_heatmap_iou(box):
     assert sorted(cands[0].assignment) == sorted(set(cands[0].assignment))
     assert iou(np.array([1, 1, 0], bool), np.array([1, 0, 0], bool)) == 0.5
 
+
+
+def test_touch_overlap_counts_each_touched_point_once(box):
+    """The IoU counts of `touch_overlap` equal a brute-force count over every point's distance to every fingertip,
+    for fingertips far apart (disjoint balls: summed counts) and close together (overlapping balls)."""
+    _, pts, nrm = box
+    field = PointCloudField(pts, nrm)
+    rng = np.random.default_rng(3)
+    far = pts[rng.choice(len(pts), size=(6, 3))] + rng.normal(scale=0.004, size=(6, 3, 3))
+    close = pts[rng.choice(len(pts), size=(6, 1))] + rng.normal(scale=0.006, size=(6, 3, 3))
+    tips = np.concatenate([far, close])  # (12, 3 fingertips, 3)
+    target = np.linalg.norm(pts - pts[17], axis=1) < 0.02
+    for radius in (0.005, 0.015):
+        inter, union = touch_overlap(field, tips, target, radius)
+        d = np.linalg.norm(pts[None, None] - tips[:, :, None], axis=-1)  # (F, m, N)
+        touched = (d <= radius).any(axis=1)
+        np.testing.assert_array_equal(inter, (touched & target).sum(axis=1))
+        np.testing.assert_array_equal(union, (touched | target).sum(axis=1))
+    assert touched[6:].sum() > 0 and (union > target.sum()).any()
 
 def test_back_off_finds_the_first_clear_shift(box):
     """The back-off (which measures the spheres that blocked last time first) stops at the shift the plain rule
