@@ -31,7 +31,6 @@ def test_initialise_ranks_assignments_by_heatmap_iou(box):
     assert iou(np.array([1, 1, 0], bool), np.array([1, 0, 0], bool)) == 0.5
 
 
-
 def test_touch_overlap_counts_each_touched_point_once(box):
     """The IoU counts of `touch_overlap` equal a brute-force count over every point's distance to every fingertip,
     for fingertips far apart (disjoint balls: summed counts) and close together (overlapping balls)."""
@@ -49,6 +48,7 @@ def test_touch_overlap_counts_each_touched_point_once(box):
         np.testing.assert_array_equal(inter, (touched & target).sum(axis=1))
         np.testing.assert_array_equal(union, (touched | target).sum(axis=1))
     assert touched[6:].sum() > 0 and (union > target.sum()).any()
+
 
 def test_back_off_finds_the_first_clear_shift(box):
     """The back-off (which measures the spheres that blocked last time first) stops at the shift the plain rule
