@@ -33,4 +33,6 @@ def test_rss_rows_over_requests() -> None:
         worker.communicate(b"", timeout=30)
     assert [r["requests"] for r in table] == seen == [0, 2, 4, 6]
     assert all(r["failed"] == 0 and r["api_mb"] > 0 and r["workers_mb"][0] > 0 for r in table), table
+    # the anonymous part of a worker's memory is a part of its RSS
+    assert all(0 < r["workers_anon_mb"][0] <= r["workers_mb"][0] for r in table), table
     assert format_row(table[-1]).count("|") == HEADER.splitlines()[0].count("|")
