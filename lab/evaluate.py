@@ -18,21 +18,23 @@ import argparse
 from typing import Any
 
 from lab.eval_audit import add_audit_parser
+from lab.eval_labels import add_labels_parser
 from lab.eval_network import add_network_parser
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 
 
 def register(subparsers: Any) -> None:
-    """Add ``eval`` with its ``refine`` (Table II), ``network`` (Table I), ``audit`` and ``deformable`` (Table I,
-    deformable columns) sub-commands to ``mani``."""
+    """Add ``eval`` with its ``refine`` (Table II), ``network`` (Table I), ``labels`` (the network's top point on
+    re-sampled labels), ``audit`` and ``deformable`` (Table I, deformable columns) sub-commands to ``mani``."""
     p = subparsers.add_parser(
         "eval", help="evaluate refinement / network", description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    sub = p.add_subparsers(dest="eval_command", metavar="{refine,network,audit,deformable}")
+    sub = p.add_subparsers(dest="eval_command", metavar="{refine,network,labels,audit,deformable}")
     add_refine(sub)
     add_network_parser(sub)
+    add_labels_parser(sub)
     add_audit_parser(sub)
     add_deformable(sub)
     p.set_defaults(func=lambda args: (p.print_help(), EXIT_USAGE)[1])

@@ -41,6 +41,14 @@ class TestCase:
     grasp_contacts: np.ndarray | None = None  # (G, C, 3) the valid grasps (own first), NaN rows padding
     grasp_normals: np.ndarray | None = None  # (G, C, 3)
     grasp_forces: np.ndarray | None = None  # (G, C, 3) forces that produce the motion
+    object_index: int = -1  # the object's index in its data set (`models.data.generate.make_dataset_object`)
+
+
+def data_config(data_dir: str | Path) -> DataConfig:
+    """The `DataConfig` a generated data directory was made with (its manifest's)."""
+    manifest = json.loads((Path(data_dir) / "manifest.json").read_text())
+    fields: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in manifest["config"].items()}
+    return DataConfig(**fields)
 
 
 def load_cases(
@@ -55,8 +63,7 @@ def load_cases(
     first (then more per object), seeded order."""
     d = Path(data_dir)
     manifest = json.loads((d / "manifest.json").read_text())
-    cfg_d: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in manifest["config"].items()}
-    cfg = DataConfig(**cfg_d)
+    cfg = data_config(d)
     rows: list[tuple[int, int, int, str]] = []  # (shard, example, global object, object id)
     for s in manifest["shards"].values():
         z = np.load(d / s["file"], allow_pickle=False)
@@ -89,6 +96,7 @@ def load_cases(
             TestCase(
                 split=split,
                 object_id=oid,
+                object_index=gi,
                 label_hand=str(z["hand"][e]),
                 points=obj.points,
                 normals=obj.normals,

@@ -1,0 +1,95 @@
+"""`mani eval labels`: the network's top point against valid regions re-sampled independently of each case.
+
+Each unmasked rigid case of ``--data``'s split is judged on the data's own valid region and on ``--resamples``
+regions from new samplings of its object (`models.evaluation.label_agreement`): the table gives each source's
+coverage (a random point's hit), the network's top-point hit, the same for their union, and how far the label
+sources agree with one another. The ``eval`` parser is owned by `lab.evaluate`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+
+def add_labels_parser(eval_subparsers: Any) -> None:
+    """Add ``labels`` under ``mani eval``."""
+    p = eval_subparsers.add_parser("labels", help="top point against independently re-sampled valid regions")
+    p.add_argument("--data", default="data/d6-test", help="generated data directory (its test split)")
+    p.add_argument("--split", default="test_uo")
+    p.add_argument("--hand", default="allegro", help="the hand whose grasps label the cases and are re-sampled")
+    p.add_argument("--weights", default="models/weights/cpu1k")
+    p.add_argument("--cases", type=int, default=10_000, help="at most this many cases (unmasked ones are kept)")
+    p.add_argument("--resamples", type=int, default=3, help="independent samplings of each object's grasps")
+    p.add_argument("--resample-seed", type=int, default=7000, help="sampling r uses the generator [seed + r, object]")
+    p.add_argument("--samples", type=int, default=8, help="network samples K per case")
+    p.add_argument("--workers", type=int, default=2, help="processes re-sampling the objects")
+    p.add_argument("--seed", type=int, default=0)
+    p.set_defaults(func=_run)
+
+
+def _resample(job: tuple[str, str, int, int]) -> tuple[int, int, list[Any]]:
+    import torch
+
+    from models.evaluation.label_agreement import resample_grasps
+    from models.evaluation.testset import data_config
+    from models.robots import get_hand
+
+    torch.set_num_threads(1)
+    data, hand, index, seed = job
+    return index, seed, resample_grasps(data_config(data), index, get_hand(hand), seed)
+
+
+def _run(args: argparse.Namespace) -> int:
+    from multiprocessing import get_context
+
+    import numpy as np
+    import torch
+    from tqdm import tqdm
+
+    from models.data.examples import ObjectInfo
+    from models.data.generate import make_dataset_object
+    from models.evaluation.label_agreement import case_wrench, independent_region, label_agreement
+    from models.evaluation.properties import _inputs
+    from models.evaluation.testset import data_config, load_cases
+    from models.network import ContactPredictor
+    from models.robots import get_hand
+
+    torch.set_num_threads(1)
+    cfg, hand = data_config(args.data), get_hand(args.hand)
+    cases = [c for c in load_cases(args.data, args.split, args.cases, args.seed, articulated=False,
+                                   label_hand=args.hand) if c.mask.all() and c.valid_region is not None]  # fmt: skip
+    objects = sorted({c.object_index for c in cases})
+    seeds = [args.resample_seed + r for r in range(args.resamples)]
+    jobs = [(str(args.data), args.hand, i, s) for i in objects for s in seeds]
+    grasps: dict[tuple[int, int], list[Any]] = {}
+    with get_context("spawn").Pool(args.workers) as pool:
+        for index, seed, found in tqdm(pool.imap_unordered(_resample, jobs), total=len(jobs), desc="re-sampling"):
+            grasps[(index, seed)] = found
+    predictor = ContactPredictor.from_checkpoint(args.weights)
+    info = {i: ObjectInfo.from_object(make_dataset_object(cfg, i)) for i in objects}
+    regions, tops, counts = [], [], []
+    for n, case in enumerate(tqdm(cases, desc="cases")):
+        o = info[case.object_index]
+        wrench = case_wrench(case, o.centre, o.length)
+        found = [independent_region(case.points, case.normals, grasps[(case.object_index, s)], case.friction, wrench,
+                                    o.centre, o.length) for s in seeds]  # fmt: skip
+        assert case.valid_region is not None
+        regions.append(np.stack([case.valid_region] + [r for r, _ in found]))
+        counts.append([k for _, k in found])
+        out = predictor.predict([_inputs(case, hand)], num_samples=args.samples, seed=args.seed + n)[0]
+        tops.append(out.heatmaps.argmax(axis=1))
+    report = label_agreement(regions, tops)
+    print(f"{args.hand}, {args.split}: {report.cases} unmasked rigid cases of {len(objects)} objects; "
+          f"{args.resamples} re-samplings of each object ({cfg.palms} palms, {cfg.grasps_per_job} grasps); "
+          f"K = {args.samples}; {args.weights}")
+    own = np.mean([np.isfinite(c.grasp_contacts[:, 0, 0]).sum() for c in cases if c.grasp_contacts is not None])
+    print(f"valid grasps a case: the data's {own:.1f}, a re-sampling's {np.mean(counts):.1f}")
+    print("\n| valid region | points it marks (a random point's hit) | network's top point in it |\n|---|--:|--:|")
+    names = ["the data's (its own sampling run)"] + [f"re-sampling {r + 1}" for r in range(args.resamples)]
+    for name, cov, hit in zip(names, report.coverage, report.top_hit, strict=True):
+        print(f"| {name} | {cov:.1%} | {hit:.1%} |")
+    print(f"| union of the {report.sources} | {report.union_coverage:.1%} | {report.union_top_hit:.1%} |")
+    print(f"\nlabel sources against each other: a point of one region in another {report.oracle_pair:.1%}; "
+          f"the point most of the others mark in the held-out one {report.oracle_held_out:.1%}")
+    return 0

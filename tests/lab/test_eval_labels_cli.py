@@ -1,0 +1,28 @@
+"""`mani eval labels` end to end on a tiny generated data set: the table with the data's and a re-sampled row."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import pytest
+
+from lab import data, evaluate
+
+
+@pytest.mark.slow
+def test_eval_labels_prints_each_label_source(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    p = argparse.ArgumentParser()
+    sub = p.add_subparsers()
+    data.register(sub)
+    evaluate.register(sub)
+    out = tmp_path / "tiny"
+    gen = p.parse_args(["data", "generate", "--out", str(out), "--objects", "8", "--seed", "1", "--test-objects-only",
+                        "--workers", "1", "--hands", "allegro", "--held-out-hands", "", "--palms", "8",
+                        "--grasps-per-job", "6", "--examples-per-grasp", "1", "--no-progress"])  # fmt: skip
+    assert gen.func(gen) == 0
+    run = p.parse_args(["eval", "labels", "--data", str(out), "--resamples", "1", "--workers", "1", "--samples", "2"])
+    assert run.func(run) == 0
+    text = capsys.readouterr().out
+    assert "| the data's (its own sampling run) |" in text and "| re-sampling 1 |" in text
+    assert "| union of the 2 |" in text
