@@ -90,6 +90,10 @@ def _run(args: argparse.Namespace) -> int:
     for name, cov, hit in zip(names, report.coverage, report.top_hit, strict=True):
         print(f"| {name} | {cov:.1%} | {hit:.1%} |")
     print(f"| union of the {report.sources} | {report.union_coverage:.1%} | {report.union_top_hit:.1%} |")
+    print("\n| label sources in the union (the data's first) | points it marks | network's top point in it |"
+          "\n|--:|--:|--:|")
+    for k, (cov, hit) in enumerate(zip(report.denser_coverage, report.denser_top_hit, strict=True)):
+        print(f"| {k + 1} | {cov:.1%} | {hit:.1%} |")
     print(f"\nlabel sources against each other: a point of one region in another {report.oracle_pair:.1%}; "
           f"the point most of the others mark in the held-out one {report.oracle_held_out:.1%}")
     return 0

@@ -87,6 +87,7 @@ class LabelAgreement:
         coverage: (S,) mean share of the points each source's region marks (a random point's hit).
         top_hit: (S,) share of the network's top points (every sample of every case) in each source's region.
         union_coverage, union_top_hit: the same for the union of every source's region.
+        denser_coverage, denser_top_hit: (S,) the same for the union of the first 1, 2, ..., S sources.
         oracle_pair: how often a point of one source's region lies in another's (mean over ordered pairs).
         oracle_held_out: how often the point most of the other sources mark lies in the held-out one.
     """
@@ -97,6 +98,8 @@ class LabelAgreement:
     top_hit: np.ndarray
     union_coverage: float
     union_top_hit: float
+    denser_coverage: np.ndarray
+    denser_top_hit: np.ndarray
     oracle_pair: float
     oracle_held_out: float
 
@@ -105,9 +108,13 @@ def label_agreement(regions: list[np.ndarray], tops: list[np.ndarray]) -> LabelA
     """The figures of `LabelAgreement` from each case's regions (S, N) bool (the data's first) and its network's
     top points (K,) (indices of each sample's highest point)."""
     coverage, top_hit, union_cov, union_hit, pair, held = [], [], [], [], [], []
+    denser_cov, denser_hit = [], []
     for region, top in zip(regions, tops, strict=True):
         coverage.append(region.mean(axis=1))
         top_hit.append(region[:, top].mean(axis=1))
+        first = np.logical_or.accumulate(region, axis=0)  # (S, N): the union of the first k + 1 sources
+        denser_cov.append(first.mean(axis=1))
+        denser_hit.append(first[:, top].mean(axis=1))
         union = np.asarray(region.any(axis=0))
         union_cov.append(union.mean())
         union_hit.append(union[top].mean())
@@ -122,6 +129,7 @@ def label_agreement(regions: list[np.ndarray], tops: list[np.ndarray]) -> LabelA
         cases=len(regions), sources=len(regions[0]) if regions else 0,
         coverage=np.mean(coverage, axis=0), top_hit=np.mean(top_hit, axis=0),
         union_coverage=float(np.mean(union_cov)), union_top_hit=float(np.mean(union_hit)),
+        denser_coverage=np.mean(denser_cov, axis=0), denser_top_hit=np.mean(denser_hit, axis=0),
         oracle_pair=float(np.mean(pair)) if pair else float("nan"),
         oracle_held_out=float(np.mean(held)) if held else float("nan"),
     )  # fmt: skip

@@ -37,10 +37,13 @@ def test_agreement_figures_on_known_regions() -> None:
     """Two cases of four points, three label sources each; the figures by hand."""
     first = np.array([[1, 1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]], dtype=bool)  # the data's, then two re-samplings
     second = np.array([[0, 0, 0, 1], [0, 0, 0, 1], [0, 0, 0, 1]], dtype=bool)
-    report = label_agreement([first, second], [np.array([1, 0]), np.array([3, 3])])
+    report = label_agreement([first, second], [np.array([2, 0]), np.array([3, 3])])
     np.testing.assert_allclose(report.coverage, [(0.5 + 0.25) / 2, 0.25, (0.25 + 0.25) / 2])
-    np.testing.assert_allclose(report.top_hit, [(1.0 + 1.0) / 2, (0.5 + 1.0) / 2, (0.0 + 1.0) / 2])
+    np.testing.assert_allclose(report.top_hit, [(0.5 + 1.0) / 2, (0.0 + 1.0) / 2, (0.5 + 1.0) / 2])
     assert report.union_coverage == (0.75 + 0.25) / 2 and report.union_top_hit == 1.0
+    # the unions of the first 1, 2, 3 sources: first [1,1,0,0], [1,1,0,0], [1,1,1,0]; second [0,0,0,1] each
+    np.testing.assert_allclose(report.denser_coverage, [(0.5 + 0.25) / 2, (0.5 + 0.25) / 2, (0.75 + 0.25) / 2])
+    np.testing.assert_allclose(report.denser_top_hit, [(0.5 + 1.0) / 2, (0.5 + 1.0) / 2, 1.0])
     # pairs (j, k): how much of k's region lies in j's. first: (0,1) 1, (0,2) 0, (1,0) 1/2, (1,2) 0, (2,0) 0,
     # (2,1) 0; second: all six 1
     assert report.oracle_pair == (1.5 + 6) / 12
