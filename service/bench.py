@@ -20,6 +20,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from service.bench_rss import HEADER, format_row, rss_mb, rss_over_requests
+
 EXAMPLE = """examples:
   mani bench service                              # 1, 8, 32 clients against a fresh `mani serve --workers 2`
   mani bench service --clients 1,8 --requests 40 --json artifacts/bench_service.json
@@ -65,19 +67,6 @@ def _free_port() -> int:
     with socket.socket() as sock:
         sock.bind(("127.0.0.1", 0))
         return int(sock.getsockname()[1])
-
-
-def rss_mb(pid: int) -> dict[str, float]:
-    """Resident (VmRSS) and peak resident (VmHWM) memory of a process, MB (Linux /proc)."""
-    out: dict[str, float] = {}
-    try:
-        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            name, _, value = line.partition(":")
-            if name in ("VmRSS", "VmHWM"):
-                out[name] = int(value.split()[0]) / 1024
-    except OSError:
-        pass
-    return out
 
 
 def request_body(points: int, hand: str, method: str, seed: int = 0) -> dict[str, Any]:
@@ -228,8 +217,6 @@ def run(args: argparse.Namespace) -> int:
             rows.append(row)
             print(_format(row), flush=True)
         if args.rss and proc is not None:
-            from service.bench_rss import HEADER, rss_over_requests
-
             print(HEADER, flush=True)
             table = asyncio.run(
                 rss_over_requests(url, headers, body, proc.pid, args.rss, args.rss_clients, on_row=_print_row)
@@ -260,7 +247,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print_row(row: dict[str, Any]) -> None:
-    from service.bench_rss import format_row
 
     print(format_row(row), flush=True)
 

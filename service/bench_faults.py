@@ -35,7 +35,8 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from service.bench import _free_port, request_body, rss_mb
+from service.bench import _free_port, request_body
+from service.bench_rss import rss_mb
 
 STAGED = "workers.testing:StagedPipeline"
 SCENARIOS = ("soak", "poison", "large_bodies", "full_queue", "slow_headers")

@@ -20,19 +20,21 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-HEADER = ("| requests | s | failed | API RSS MB | worker RSS MB | worker anonymous MB |\n"
-          "|---:|---:|---:|---:|---|---|")
+HEADER = "| requests | s | failed | API RSS MB | worker RSS MB | worker anonymous MB |\n|---:|---:|---:|---:|---|---|"
 
 
-def _memory_mb(pid: int, field: str = "VmRSS") -> float:
-    """A process's ``VmRSS`` (resident) or ``RssAnon`` (its anonymous part) from /proc, MB (0 when gone)."""
+def rss_mb(pid: int, fields: tuple[str, ...] = ("VmRSS", "VmHWM")) -> dict[str, float]:
+    """Memory of a process from Linux /proc, MB: by default resident (VmRSS) and peak resident (VmHWM); any
+    ``fields`` of its status (``RssAnon``: the anonymous part of VmRSS). Empty when the process is gone."""
+    out: dict[str, float] = {}
     try:
         for line in Path(f"/proc/{pid}/status").read_text().splitlines():
-            if line.startswith(f"{field}:"):
-                return int(line.split()[1]) / 1024
+            name, _, value = line.partition(":")
+            if name in fields:
+                out[name] = int(value.split()[0]) / 1024
     except OSError:
         pass
-    return 0.0
+    return out
 
 
 def worker_pids(parent: int) -> list[int]:
@@ -50,9 +52,10 @@ def worker_pids(parent: int) -> list[int]:
 
 def sample(api_pid: int) -> dict[str, Any]:
     """RSS of the API process and of each of its workers, and the workers' anonymous memory, MB."""
-    workers = worker_pids(api_pid)
-    return {"api_mb": round(_memory_mb(api_pid), 1), "workers_mb": [round(_memory_mb(p), 1) for p in workers],
-            "workers_anon_mb": [round(_memory_mb(p, "RssAnon"), 1) for p in workers]}  # fmt: skip
+    workers = [rss_mb(p, ("VmRSS", "RssAnon")) for p in worker_pids(api_pid)]
+    return {"api_mb": round(rss_mb(api_pid).get("VmRSS", 0.0), 1),
+            "workers_mb": [round(w.get("VmRSS", 0.0), 1) for w in workers],
+            "workers_anon_mb": [round(w.get("RssAnon", 0.0), 1) for w in workers]}  # fmt: skip
 
 
 async def rss_over_requests(
