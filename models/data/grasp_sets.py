@@ -17,6 +17,7 @@ examples' contact tables.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,6 +26,9 @@ from scipy.optimize import linprog
 from models.data.labels import heat_and_force
 from models.refine.grasp import grasp_maps, tangents
 from models.refine.wrench import articulated_task
+
+GraspRows = np.ndarray | Sequence[np.ndarray]
+"""G grasps' rows: an array (G, C, 3) with NaN rows padding, or G arrays (C_g, 3)."""
 
 PYRAMID_EDGES = 8
 MAX_SET = 32  # grasps kept per example (its own first, then the feasible ones by grasp index)
@@ -172,13 +176,14 @@ def grasps_in_mask(points: np.ndarray, mask: np.ndarray, set_contacts: np.ndarra
     return inside
 
 
-def set_maps(points: np.ndarray, normals: np.ndarray, contacts: np.ndarray, contact_normals: np.ndarray,
-             forces: np.ndarray, scale: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+def set_maps(points: np.ndarray, normals: np.ndarray, contacts: GraspRows,
+             contact_normals: GraspRows, forces: GraspRows,
+             scale: float) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
     """Heatmaps (G, N) and force maps (G, N, 3) of G grasps (`models.data.labels.heat_and_force` each).
 
     Args:
         points, normals: (N, 3) the object's oriented points. scale: its longest side (the kernel's s).
-        contacts, contact_normals, forces: (G, C, 3) the grasps, NaN rows padding.
+        contacts, contact_normals, forces: (G, C, 3) the grasps, NaN rows padding (or G arrays (C_g, 3)).
     """
     heats, maps = [], []
     for c, n, f in zip(contacts, contact_normals, forces, strict=True):
@@ -187,3 +192,11 @@ def set_maps(points: np.ndarray, normals: np.ndarray, contacts: np.ndarray, cont
         heats.append(heat)
         maps.append(force)
     return np.stack(heats), np.stack(maps)
+
+
+def set_region(points: np.ndarray, normals: np.ndarray, contacts: GraspRows,
+               contact_normals: GraspRows, forces: GraspRows) -> np.ndarray:  # fmt: skip
+    """(N,) bool: the valid region of G grasps (as `set_maps` takes them) on the object's points (N, 3) — where
+    any grasp's heat is at least ``REGION_HEAT``, the kernel scaled by the points' longest side as the labels'."""
+    heats, _ = set_maps(points, normals, contacts, contact_normals, forces, float(np.ptp(points, axis=0).max()))
+    return np.asarray((heats >= REGION_HEAT).any(axis=0))

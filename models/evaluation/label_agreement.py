@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from models.data.grasp_sets import MAX_SET, REGION_HEAT, feasible_forces, set_maps
+from models.data.grasp_sets import MAX_SET, feasible_forces, set_region
 from models.refine.grasp import grasp_maps
 
 if TYPE_CHECKING:
@@ -69,13 +69,8 @@ def independent_region(points: np.ndarray, normals: np.ndarray, grasps: list[Gra
             break
     if not chosen:
         return np.zeros(len(points), dtype=bool), 0
-    width = max(len(c) for c, _, _ in chosen)
-
-    def padded(i: int) -> np.ndarray:
-        return np.stack([np.pad(g[i], ((0, width - len(g[i])), (0, 0)), constant_values=np.nan) for g in chosen])
-
-    heats, _ = set_maps(points, normals, padded(0), padded(1), padded(2), float(np.ptp(points, axis=0).max()))
-    return np.asarray((heats >= REGION_HEAT).any(axis=0)), len(chosen)
+    contacts, contact_normals, forces = zip(*chosen, strict=True)
+    return set_region(points, normals, contacts, contact_normals, forces), len(chosen)
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ import numpy as np
 
 from models.data.dataset import cached_grasp_sets
 from models.data.generate import DataConfig, make_dataset_object
-from models.data.grasp_sets import REGION_HEAT, GraspSets, set_maps
+from models.data.grasp_sets import GraspSets, set_region
 
 
 @dataclass
@@ -123,10 +123,8 @@ def _grasp_set(sets: GraspSets, e: int, points: np.ndarray, normals: np.ndarray)
     ``valid_region`` (N,): the points where any of them has heat ≥ ``REGION_HEAT`` (0.5)."""
     g = int(sets.count[e])
     contacts, grasp_normals, forces = sets.contacts[e, :g], sets.normals[e, :g], sets.forces[e, :g]
-    heats, _ = set_maps(points, normals, contacts, grasp_normals, forces, float(np.ptp(points, axis=0).max()))
-    region = np.asarray((heats >= REGION_HEAT).any(axis=0))
     return {"grasp_contacts": contacts, "grasp_normals": grasp_normals, "grasp_forces": forces,
-            "valid_region": region}  # fmt: skip
+            "valid_region": set_region(points, normals, contacts, grasp_normals, forces)}  # fmt: skip
 
 
 def motion_kind(case: TestCase) -> str:
