@@ -28,16 +28,15 @@ def add_labels_parser(eval_subparsers: Any) -> None:
     p.set_defaults(func=_run)
 
 
-def _resample(job: tuple[str, str, int, int]) -> tuple[int, int, list[Any]]:
+def _resample(job: tuple[Any, str, int, int]) -> tuple[int, int, list[Any]]:
     import torch
 
     from models.evaluation.label_agreement import resample_grasps
-    from models.evaluation.testset import data_config
     from models.robots import get_hand
 
     torch.set_num_threads(1)
-    data, hand, index, seed = job
-    return index, seed, resample_grasps(data_config(data), index, get_hand(hand), seed)
+    cfg, hand, index, seed = job
+    return index, seed, resample_grasps(cfg, index, get_hand(hand), seed)
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -61,7 +60,7 @@ def _run(args: argparse.Namespace) -> int:
                                    label_hand=args.hand) if c.mask.all() and c.valid_region is not None]  # fmt: skip
     objects = sorted({c.object_index for c in cases})
     seeds = [args.resample_seed + r for r in range(args.resamples)]
-    jobs = [(str(args.data), args.hand, i, s) for i in objects for s in seeds]
+    jobs = [(cfg, args.hand, i, s) for i in objects for s in seeds]
     grasps: dict[tuple[int, int], list[Any]] = {}
     with get_context("spawn").Pool(args.workers) as pool:
         for index, seed, found in tqdm(pool.imap_unordered(_resample, jobs), total=len(jobs), desc="re-sampling"):
