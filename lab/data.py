@@ -23,6 +23,7 @@ def register(subparsers: Any) -> None:
     g.add_argument("--held-out-hands", default=None, help="comma-separated held-out hands (default: shadow,barrett)")
     g.add_argument("--palms", type=int, default=16, help="palm poses sampled per (object, hand)")
     g.add_argument("--grasps-per-job", type=int, default=6)
+    g.add_argument("--max-set", type=int, default=32, help="valid grasps kept per example (its grasp set)")
     g.add_argument("--examples-per-grasp", type=int, default=4, help="examples with random forces per grasp")
     g.add_argument(
         "--targeted-per-grasp", type=int, default=0,
@@ -84,6 +85,7 @@ def _generate(args: argparse.Namespace) -> int:
         examples_per_grasp=args.examples_per_grasp,
         targeted_per_grasp=args.targeted_per_grasp,
         palms=args.palms,
+        max_set=args.max_set,
         test_objects_only=args.test_objects_only,
     )
     from models.robots import list_hands

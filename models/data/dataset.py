@@ -129,6 +129,10 @@ def load_examples(
             offset += n_obj
     if not parts:
         raise ValueError(f"no examples of splits {splits} in {dirs}")
+    for k in SET_KEYS[:3]:  # shards may keep sets of different sizes (`DataConfig.max_set`): pad to the largest
+        widest = max(v.shape[1] for v in parts[k])
+        parts[k] = [np.pad(v, ((0, 0), (0, widest - v.shape[1]), (0, 0), (0, 0)), constant_values=np.nan)
+                    for v in parts[k]]  # fmt: skip
     cat = {k: np.concatenate(v) for k, v in parts.items()}
     if limit is not None:
         cat = {k: v[:limit] for k, v in cat.items()}

@@ -55,6 +55,7 @@ class DataConfig:
     examples_per_grasp: int = 4
     targeted_per_grasp: int = 0  # examples of a chosen task (lift, push, turn: `models.data.targeted`) per grasp
     palms: int = 16
+    max_set: int = 32  # valid grasps kept per example (grasp_sets.MAX_SET; a denser sampling has more to keep)
     num_points: int = 2048
     kinds: tuple[str, ...] = ()  # empty: every kind of models.objects
     test_objects_only: bool = False  # label test objects only (the evaluation set, ~7x faster); shards keep all ids
@@ -200,6 +201,7 @@ def run_shard(cfg: DataConfig, index: int, out_dir: str) -> ShardResult:
     for k, v in ex.items():
         arrays[k] = np.asarray(v)
     arrays["num_examples"] = np.asarray(n_ex)
+    arrays["max_set"] = np.asarray(cfg.max_set)
     tmp = Path(out_dir) / (name + ".tmp.npz")
     np.savez_compressed(tmp, **arrays)  # type: ignore[arg-type]
     os.replace(tmp, Path(out_dir) / name)

@@ -31,7 +31,7 @@ GraspRows = np.ndarray | Sequence[np.ndarray]
 """G grasps' rows: an array (G, C, 3) with NaN rows padding, or G arrays (C_g, 3)."""
 
 PYRAMID_EDGES = 8
-MAX_SET = 32  # grasps kept per example (its own first, then the feasible ones by grasp index)
+MAX_SET = 32  # grasps kept per example (its own first, then the feasible ones by grasp index), unless the shard says
 REGION_HEAT = 0.5  # a point is in a grasp's contact region where the grasp's heat there is at least this
 CONE_RESIDUAL = 1e-6  # relative: the task lies outside the grasp's pyramids when no λ ≥ 0 comes closer than this
 
@@ -108,7 +108,8 @@ def _outside_cone(task: np.ndarray, target: np.ndarray) -> bool:
 
 @dataclass
 class GraspSets:
-    """Per example, its valid grasps (own first), padded to :data:`MAX_SET` grasps of ``MAX_CONTACTS`` contacts.
+    """Per example, its valid grasps (own first), padded to the shard's set size (:data:`MAX_SET` unless its
+    ``max_set`` says otherwise) grasps of ``MAX_CONTACTS`` contacts.
 
     Attributes:
         contacts, normals, forces: (E, G, C, 3), NaN where padded.
@@ -136,9 +137,10 @@ def shard_grasp_sets(z: dict[str, np.ndarray]) -> GraspSets:
     """The :class:`GraspSets` of every example of one shard (its arrays as written by `models.data.generate`)."""
     n_ex = int(z["num_examples"])
     c_max = z["contacts"].shape[1] if n_ex else 1
+    size = int(z["max_set"]) if "max_set" in z else MAX_SET
     out = GraspSets(
-        np.full((n_ex, MAX_SET, c_max, 3), np.nan), np.full((n_ex, MAX_SET, c_max, 3), np.nan),
-        np.full((n_ex, MAX_SET, c_max, 3), np.nan), np.ones(n_ex, dtype=np.int64),
+        np.full((n_ex, size, c_max, 3), np.nan), np.full((n_ex, size, c_max, 3), np.nan),
+        np.full((n_ex, size, c_max, 3), np.nan), np.ones(n_ex, dtype=np.int64),
     )  # fmt: skip
     if n_ex == 0:
         return out
@@ -158,7 +160,7 @@ def shard_grasp_sets(z: dict[str, np.ndarray]) -> GraspSets:
             own = np.round(z["contacts"][e], 9).tobytes()
             k = 1
             for gi in grasps:
-                if k == MAX_SET:
+                if k == size:
                     break
                 if np.round(z["contacts"][gi], 9).tobytes() == own:
                     continue

@@ -104,3 +104,17 @@ def test_a_data_set_made_before_a_setting_existed_resumes(tmp_path: Path) -> Non
     (tmp_path / "manifest.json").write_text(json.dumps({"config": old, "shards": shards}))
     manifest = generate(CFG, tmp_path, workers=1, progress=False)  # nothing to do, no "another configuration"
     assert manifest["config"] == CFG.to_dict() and manifest["totals"]["shards"] == 2
+
+
+def test_data_sets_of_different_set_sizes_load_together(tmp_path: Path) -> None:
+    small, default = replace(CFG, objects=1, max_set=1), replace(CFG, objects=1)
+    generate(small, tmp_path / "s", workers=1, progress=False)
+    generate(default, tmp_path / "d", workers=1, progress=False)
+    splits = ("train", "test_so", "test_uo")
+    ex_s, ex_d = load_examples(tmp_path / "s", splits), load_examples(tmp_path / "d", splits)
+    assert ex_s.extra["set_contacts"].shape[1] == 1 and ex_d.extra["set_contacts"].shape[1] == 32
+    both = load_examples([tmp_path / "s", tmp_path / "d"], splits)
+    assert both.extra["set_contacts"].shape[1] == 32
+    np.testing.assert_array_equal(both.extra["set_contacts"][: len(ex_s), :1], ex_s.extra["set_contacts"])
+    assert np.isnan(both.extra["set_contacts"][: len(ex_s), 1:]).all()
+    assert (both.extra["set_count"][: len(ex_s)] == 1).all()

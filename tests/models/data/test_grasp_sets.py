@@ -74,3 +74,12 @@ def test_a_grasp_is_in_the_mask_when_every_contact_is() -> None:
     sets[2, 0] = [0.0, 0.0, 0.05]  # one contact, padding after it; nearest point at x ≈ 0
     inside = grasps_in_mask(points, mask, sets, 2)
     assert inside.tolist() == [True, False, False]
+
+
+def test_a_shard_keeps_as_many_valid_grasps_as_its_max_set_says() -> None:
+    shard = _shard()
+    shard["max_set"] = np.asarray(1)
+    sets = shard_grasp_sets(shard)
+    assert sets.contacts.shape[1] == 1
+    assert sets.count.tolist() == [1, 1, 1]
+    np.testing.assert_allclose(sets.contacts[2, 0, :2], _pinch(1)[0])
