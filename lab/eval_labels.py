@@ -18,7 +18,7 @@ def add_labels_parser(eval_subparsers: Any) -> None:
     p.add_argument("--data", default="data/d6-test", help="generated data directory (its test split)")
     p.add_argument("--split", default="test_uo")
     p.add_argument("--hand", default="allegro", help="the hand whose grasps label the cases and are re-sampled")
-    p.add_argument("--weights", default="models/weights/cpu1k")
+    p.add_argument("--weights", default="models/weights/cpu1k", help="checkpoint directories, comma-separated")
     p.add_argument("--cases", type=int, default=10_000, help="at most this many cases (unmasked ones are kept)")
     p.add_argument("--resamples", type=int, default=3, help="independent samplings of each object's grasps")
     p.add_argument("--resample-seed", type=int, default=7000, help="sampling r uses the generator [seed + r, object]")
@@ -65,9 +65,12 @@ def _run(args: argparse.Namespace) -> int:
     with get_context("spawn").Pool(args.workers) as pool:
         for index, seed, found in tqdm(pool.imap_unordered(_resample, jobs), total=len(jobs), desc="re-sampling"):
             grasps[(index, seed)] = found
-    predictor = ContactPredictor.from_checkpoint(args.weights)
+    weights = args.weights.split(",")
+    predictors = [ContactPredictor.from_checkpoint(w) for w in weights]
     info = {i: ObjectInfo.from_object(make_dataset_object(cfg, i)) for i in objects}
-    regions, tops, counts = [], [], []
+    regions: list[np.ndarray] = []
+    tops: list[list[np.ndarray]] = [[] for _ in weights]
+    counts = []
     for n, case in enumerate(tqdm(cases, desc="cases")):
         o = info[case.object_index]
         wrench = case_wrench(case, o.centre, o.length)
@@ -76,23 +79,27 @@ def _run(args: argparse.Namespace) -> int:
         assert case.valid_region is not None
         regions.append(np.stack([case.valid_region] + [r for r, _ in found]))
         counts.append([k for _, k in found])
-        out = predictor.predict([_inputs(case, hand)], num_samples=args.samples, seed=args.seed + n)[0]
-        tops.append(out.heatmaps.argmax(axis=1))
-    report = label_agreement(regions, tops)
+        for w, predictor in enumerate(predictors):
+            out = predictor.predict([_inputs(case, hand)], num_samples=args.samples, seed=args.seed + n)[0]
+            tops[w].append(out.heatmaps.argmax(axis=1))
+    reports = [label_agreement(regions, t) for t in tops]
+    report = reports[0]
     print(f"{args.hand}, {args.split}: {report.cases} unmasked rigid cases of {len(objects)} objects; "
           f"{args.resamples} re-samplings of each object ({cfg.palms} palms, {cfg.grasps_per_job} grasps); "
-          f"K = {args.samples}; {args.weights}")
+          f"K = {args.samples}")
     own = np.mean([np.isfinite(c.grasp_contacts[:, 0, 0]).sum() for c in cases if c.grasp_contacts is not None])
     print(f"valid grasps a case: the data's {own:.1f}, a re-sampling's {np.mean(counts):.1f}")
-    print("\n| valid region | points it marks (a random point's hit) | network's top point in it |\n|---|--:|--:|")
+    heads = " | ".join(f"top point: {w}" for w in weights)
+    rule = "--:|" * len(weights)
+    print(f"\n| valid region | points it marks (a random point's hit) | {heads} |\n|---|--:|{rule}")
     names = ["the data's (its own sampling run)"] + [f"re-sampling {r + 1}" for r in range(args.resamples)]
-    for name, cov, hit in zip(names, report.coverage, report.top_hit, strict=True):
-        print(f"| {name} | {cov:.1%} | {hit:.1%} |")
-    print(f"| union of the {report.sources} | {report.union_coverage:.1%} | {report.union_top_hit:.1%} |")
-    print("\n| label sources in the union (the data's first) | points it marks | network's top point in it |"
-          "\n|--:|--:|--:|")
-    for k, (cov, hit) in enumerate(zip(report.denser_coverage, report.denser_top_hit, strict=True)):
-        print(f"| {k + 1} | {cov:.1%} | {hit:.1%} |")
+    for k, (name, cov) in enumerate(zip(names, report.coverage, strict=True)):
+        print(f"| {name} | {cov:.1%} | " + " | ".join(f"{r.top_hit[k]:.1%}" for r in reports) + " |")
+    print(f"| union of the {report.sources} | {report.union_coverage:.1%} | "
+          + " | ".join(f"{r.union_top_hit:.1%}" for r in reports) + " |")  # fmt: skip
+    print(f"\n| label sources in the union (the data's first) | points it marks | {heads} |\n|--:|--:|{rule}")
+    for k, cov in enumerate(report.denser_coverage):
+        print(f"| {k + 1} | {cov:.1%} | " + " | ".join(f"{r.denser_top_hit[k]:.1%}" for r in reports) + " |")
     print(f"\nlabel sources against each other: a point of one region in another {report.oracle_pair:.1%}; "
           f"the point most of the others mark in the held-out one {report.oracle_held_out:.1%}")
     return 0

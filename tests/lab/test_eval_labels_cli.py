@@ -1,4 +1,5 @@
-"""`mani eval labels` end to end on a tiny generated data set: the table with the data's and a re-sampled row."""
+"""`mani eval labels` end to end on a tiny generated data set: the table with the data's and a re-sampled row, a
+column per weights."""
 
 from __future__ import annotations
 
@@ -21,8 +22,12 @@ def test_eval_labels_prints_each_label_source(tmp_path: Path, capsys: pytest.Cap
                         "--workers", "1", "--hands", "allegro", "--held-out-hands", "", "--palms", "8",
                         "--grasps-per-job", "6", "--examples-per-grasp", "1", "--no-progress"])  # fmt: skip
     assert gen.func(gen) == 0
-    run = p.parse_args(["eval", "labels", "--data", str(out), "--resamples", "1", "--workers", "1", "--samples", "2"])
+    weights = "models/weights/cpu1k,models/weights/cpu1k"  # the same twice: two columns, equal figures
+    run = p.parse_args(["eval", "labels", "--data", str(out), "--resamples", "1", "--workers", "1", "--samples", "2",
+                        "--weights", weights])  # fmt: skip
     assert run.func(run) == 0
     text = capsys.readouterr().out
     assert "| the data's (its own sampling run) |" in text and "| re-sampling 1 |" in text
-    assert "| union of the 2 |" in text
+    union = next(line for line in text.splitlines() if line.startswith("| union of the 2 |"))
+    cells = [c.strip() for c in union.strip("|").split("|")]
+    assert len(cells) == 4 and cells[2] == cells[3]
