@@ -41,7 +41,6 @@ class TrainConfig:
     lambda_set: float = 1.0  # weight of the grasp-set loss (models.network.loss.set_heat_loss)
     max_set: int = 8  # valid grasps per example a batch carries (the data keeps up to grasp_sets.MAX_SET)
     precompute: bool = True  # per-object point subsets and hierarchies computed once (models.data.prepare)
-    prefetch: bool = False  # make the next batch in a thread while this step runs (models.training.prefetch)
     mask_dropout: float = 0.0  # probability that a training example's partial region mask is replaced by all ones
     init_from: str | None = None  # start from this checkpoint directory's weights (same network configuration)
     # --- run ---

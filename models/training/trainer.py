@@ -27,13 +27,12 @@ from typing import Any
 import numpy as np
 import torch
 
-from models.data.dataset import Batch, make_batch
+from models.data.dataset import make_batch
 from models.data.prepare import PreparedObjects
 from models.network import ManiFoundationNet, ModelCard, create_model, load_checkpoint, save_checkpoint
 from models.training.best import is_best, validation_fingerprint
 from models.training.config import TrainConfig
 from models.training.objective import batch_loss, prepare
-from models.training.prefetch import made_ahead
 from models.training.sources import (
     RIGID_MATERIALS,
     Source,
@@ -126,17 +125,11 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         sums = dict.fromkeys(("loss", "heat", "force", "kl", "set"), 0.0)
         seen = 0
         bar = tqdm(batches, desc=f"epoch {epoch}/{cfg.epochs}", disable=not progress, leave=False)
-
-        def batch_of(job: tuple[int, np.ndarray], srcs: list[Source] = sources, pre: list[Prepared] = preps) -> Batch:
-            s, idx = job
-            return make_batch(srcs[s].train, idx, hand_scale, rng if cfg.augment else None, pre[s][0],
-                              max_set=cfg.max_set, mask_dropout=cfg.mask_dropout)  # fmt: skip
-
-        made = made_ahead(batch_of, batches, cfg.prefetch)
-        for step, ((_s, idx), batch) in enumerate(zip(bar, made, strict=False)):
+        for step, (s, idx) in enumerate(bar):
             if cfg.max_minutes is not None and time.perf_counter() - t_start > cfg.max_minutes * 60:
                 break  # time budget spent: validate and save what we have
-            b = batch.to(device)
+            b = make_batch(sources[s].train, idx, hand_scale, rng if cfg.augment else None, preps[s][0],
+                           max_set=cfg.max_set, mask_dropout=cfg.mask_dropout).to(device)  # fmt: skip
             terms = batch_loss(model, b, cfg, gen, device)
             frac = (epoch - 1 + step / len(batches)) / cfg.epochs
             if cfg.max_minutes is not None:  # a time budget: decay by whichever runs out first
@@ -154,7 +147,6 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             seen += len(idx)
             bar.set_postfix(loss=f"{float(terms['loss'].detach()):.4f}", lr=f"{lr:.2e}")
         bar.close()
-        made.close()
         if seen == 0:
             break
         train_m = {k: v / seen for k, v in sums.items()}

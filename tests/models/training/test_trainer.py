@@ -130,18 +130,3 @@ def test_best_is_chosen_among_epochs_measured_on_the_same_validation_examples(da
     assert int(rows[0]["examples"]) == 1 < int(rows[1]["examples"])
     _model, best = load_checkpoint(run / "best", "cpu")
     assert best.training_data["training"]["epochs"] == 2
-
-
-def test_batches_made_ahead_give_the_same_run(data_dir: Path, tmp_path: Path) -> None:
-    import dataclasses
-
-    cfg = TrainConfig(data=[str(data_dir)], out=str(tmp_path / "plain"), epochs=1, batch_size=2, limit=6,
-                      val_limit=4, threads=1, warmup_steps=1, prior_samples=2, max_set=4)  # fmt: skip
-    train(cfg, progress=False)
-    train(dataclasses.replace(cfg, out=str(tmp_path / "ahead"), prefetch=True), progress=False)
-
-    def losses(run: str) -> list[tuple[str, str]]:
-        rows = csv.DictReader((tmp_path / run / "metrics.csv").open())
-        return [(r["split"], r["loss"]) for r in rows]
-
-    assert losses("plain") == losses("ahead") and len(losses("plain")) == 2
