@@ -79,8 +79,9 @@ def _run(args: argparse.Namespace) -> int:
         assert case.valid_region is not None
         regions.append(np.stack([case.valid_region] + [r for r, _ in found]))
         counts.append([k for _, k in found])
+        inputs = [_inputs(case, hand)]
         for w, predictor in enumerate(predictors):
-            out = predictor.predict([_inputs(case, hand)], num_samples=args.samples, seed=args.seed + n)[0]
+            out = predictor.predict(inputs, num_samples=args.samples, seed=args.seed + n)[0]
             tops[w].append(out.heatmaps.argmax(axis=1))
     reports = [label_agreement(regions, t) for t in tops]
     report = reports[0]

@@ -46,7 +46,10 @@ class TestCase:
 
 def data_config(data_dir: str | Path) -> DataConfig:
     """The `DataConfig` a generated data directory was made with (its manifest's)."""
-    manifest = json.loads((Path(data_dir) / "manifest.json").read_text())
+    return _manifest_config(json.loads((Path(data_dir) / "manifest.json").read_text()))
+
+
+def _manifest_config(manifest: dict[str, Any]) -> DataConfig:
     fields: dict[str, Any] = {k: tuple(v) if isinstance(v, list) else v for k, v in manifest["config"].items()}
     return DataConfig(**fields)
 
@@ -63,7 +66,7 @@ def load_cases(
     first (then more per object), seeded order."""
     d = Path(data_dir)
     manifest = json.loads((d / "manifest.json").read_text())
-    cfg = data_config(d)
+    cfg = _manifest_config(manifest)
     rows: list[tuple[int, int, int, str]] = []  # (shard, example, global object, object id)
     for s in manifest["shards"].values():
         z = np.load(d / s["file"], allow_pickle=False)
