@@ -247,7 +247,6 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _print_row(row: dict[str, Any]) -> None:
-
     print(format_row(row), flush=True)
 
 
