@@ -4,6 +4,7 @@ not stall the event loop; a full queue refuses before a body is read; a slow bod
 from __future__ import annotations
 
 import contextlib
+import gc
 import json
 import socket
 import subprocess
@@ -66,7 +67,6 @@ def test_large_bodies_do_not_stall_the_event_loop() -> None:
     queue = create_queue(None, redis_url=None, concurrency=0, max_queue=100)
     app = create_app(Settings(rate_limit_per_s=0), queue=queue)
     with serving(app) as base, httpx.Client(base_url=base, timeout=60) as http:
-        http.post("/v1/jobs", content=data, headers={"Content-Type": "application/json"})  # warm the pool
         answers: list[int] = []
 
         def post() -> None:
@@ -74,18 +74,30 @@ def test_large_bodies_do_not_stall_the_event_loop() -> None:
                 answers.append(own.post("/v1/jobs", content=data, headers={"Content-Type": "application/json"})
                                .status_code)  # fmt: skip
 
-        threads = [threading.Thread(target=post) for _ in range(3)]
-        for thread in threads:
+        warm_up = [threading.Thread(target=post) for _ in range(2)]  # both decoding children started
+        for thread in warm_up:
             thread.start()
-        worst = 0.0
-        while any(t.is_alive() for t in threads):
-            t0 = time.monotonic()
-            assert http.get("/healthz").status_code == 200
-            worst = max(worst, time.monotonic() - t0)
-            time.sleep(0.02)
-        for thread in threads:
+        for thread in warm_up:
             thread.join()
-    assert answers == [202, 202, 202]
+        # The test process holds a thousand tests' objects, which no service process does: a full collection
+        # of that heap pauses every thread, the server's too (0.66 s once in CI). Frozen, it is not scanned.
+        gc.collect()
+        gc.freeze()
+        try:
+            threads = [threading.Thread(target=post) for _ in range(3)]
+            for thread in threads:
+                thread.start()
+            worst = 0.0
+            while any(t.is_alive() for t in threads):
+                t0 = time.monotonic()
+                assert http.get("/healthz").status_code == 200
+                worst = max(worst, time.monotonic() - t0)
+                time.sleep(0.02)
+            for thread in threads:
+                thread.join()
+        finally:
+            gc.unfreeze()
+    assert answers == [202] * 5
     assert worst < 0.5, f"/healthz took {worst:.2f} s while large bodies were decoded"
 
 
