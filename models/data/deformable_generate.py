@@ -130,7 +130,8 @@ def generate(cfg: DeformableDataConfig, out_dir: str | Path, workers: int = 1,
     if manifest["config"] is not None and manifest["config"] != cfg.to_dict():
         raise ValueError(f"{out} holds a data set with another configuration; use a new directory")
     manifest["config"] = cfg.to_dict()
-    jobs = [(cfg, m, i, str(out)) for m in cfg.materials for i in range(cfg.bodies)
+    # Body by body across the materials, so that a run stopped early holds every material in like numbers.
+    jobs = [(cfg, m, i, str(out)) for i in range(cfg.bodies) for m in cfg.materials
             if f"{m}-{i}" not in manifest["bodies"] or not (out / f"{m}-{i:05d}.npz").is_file()]  # fmt: skip
     total = len(cfg.materials) * cfg.bodies
     bar = tqdm(total=total, initial=total - len(jobs), unit="body", disable=not progress)
