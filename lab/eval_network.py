@@ -16,7 +16,9 @@ from typing import Any
 def add_network_parser(eval_subparsers: Any) -> None:
     """Add ``network`` under ``mani eval``."""
     p = eval_subparsers.add_parser("network", help="network + refinement vs random contacts + refinement")
-    p.add_argument("--weights", default="models/weights/cpu1k", help="checkpoint directories, comma-separated")
+    p.add_argument("--weights", default="models/weights/cpu1k",
+                   help="checkpoint directories, comma-separated; DIR@S samples z ~ N(0, S² I) instead of the "
+                        "card's prior_scale (the same weights at two scales side by side)")  # fmt: skip
     p.add_argument("--data", default="data/v4", help="generated data directory (its test split)")
     p.add_argument("--split", default="test_uo", help="test_uo: unseen objects and motions; test_so: seen objects")
     p.add_argument("--hand", default="allegro")
@@ -64,7 +66,10 @@ def _run(args: argparse.Namespace) -> int:
 
     props = {}
     for w in weights:
-        predictor = ContactPredictor.from_checkpoint(w)
+        path, _, scale = w.partition("@")
+        predictor = ContactPredictor.from_checkpoint(path)
+        if scale:
+            predictor.prior_scale = float(scale)
         for budget in budgets:
             run(f"network ({w})", "network", predictor, budget)
         props[w] = dataclasses.asdict(evaluate_properties(cases, hand, predictor, k=args.samples, seed=args.seed))

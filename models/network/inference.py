@@ -2,7 +2,8 @@
 
 ``ContactPredictor.predict(batch, num_samples=K, seed=s)`` normalises each object (normalize.py), resamples
 it to the model's point count (resample.py: FPS down, or repeat up; outputs are mapped back to the request's
-N points), encodes the batch once, draws K latent samples per object from N(0, I) and decodes them all.
+N points), encodes the batch once, draws K latent samples per object from N(0, s² I) and decodes them all, with
+s the weights' ``prior_scale`` (their model card; 1 for weights that name none).
 
 - Hands: ε^h is cached per ``hand_key`` (with a fingerprint of the arrays, so a changed hand under the same
   key is re-encoded rather than silently reused).
@@ -100,6 +101,7 @@ class ContactPredictor:
         self.model = model.to(device).eval()
         self.card = card
         self.device = torch.device(device)
+        self.prior_scale = float(card.prior_scale)
         self._hands = _HandCache(hand_cache_size)
 
     @classmethod
@@ -185,7 +187,7 @@ class ContactPredictor:
         resamplings = [resample(nz.points(inp.points), m) for nz, inp in zip(norms, batch, strict=True)]
         obj = self._object_tensors(batch, norms, resamplings)
         enc = self.model.encode(obj, self._hand_features(batch))
-        z = torch.stack(
+        z = self.prior_scale * torch.stack(
             [
                 torch.randn(num_samples, self.config.latent_dim, generator=torch.Generator().manual_seed(int(s)))
                 for s in seeds

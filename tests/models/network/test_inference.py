@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -46,6 +47,26 @@ def test_seed_determinism_and_diversity(predictor: ContactPredictor, make_input)
     assert np.abs(a.heatmaps - c.heatmaps).max() > 1e-4
     # the K samples of one call differ from each other
     assert np.abs(a.heatmaps[0] - a.heatmaps[1]).max() > 1e-4
+
+
+def test_prior_scale_sets_the_spread_of_the_latent_samples(make_input, tmp_path) -> None:
+    """z ~ N(0, s² I): at s = 0 the K samples are one map (the prior's mean); the card's value is loaded."""
+    from models.network.checkpoint import read_card, save_checkpoint
+
+    model = ContactPredictor.untrained("cpu", seed=0)
+    inp = make_input(512, seed=3)
+    model.prior_scale = 0.0
+    still = model.predict([inp], num_samples=3, seed=1)[0]
+    np.testing.assert_array_equal(still.heatmaps[0], still.heatmaps[2])
+    model.prior_scale = 1.0
+    spread = model.predict([inp], num_samples=3, seed=1)[0]
+    assert np.abs(spread.heatmaps[0] - spread.heatmaps[2]).max() > 1e-4
+    card = dataclasses.replace(model.card, prior_scale=1.5)
+    save_checkpoint(model.model, tmp_path / "w", card)
+    assert ContactPredictor.from_checkpoint(tmp_path / "w").prior_scale == 1.5
+    old = {k: v for k, v in dataclasses.asdict(card).items() if k != "prior_scale"}  # a card from before the field
+    (tmp_path / "w" / "model_card.json").write_text(json.dumps(old))
+    assert read_card(tmp_path / "w").prior_scale == 1.0
 
 
 def test_batch_mates_do_not_change_outputs(predictor: ContactPredictor, make_input) -> None:
