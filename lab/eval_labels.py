@@ -18,7 +18,8 @@ def add_labels_parser(eval_subparsers: Any) -> None:
     p.add_argument("--data", default="data/d6-test", help="generated data directory (its test split)")
     p.add_argument("--split", default="test_uo")
     p.add_argument("--hand", default="allegro", help="the hand whose grasps label the cases and are re-sampled")
-    p.add_argument("--weights", default="models/weights/cpu1k", help="checkpoint directories, comma-separated")
+    p.add_argument("--weights", default="models/weights/cpu1k",
+                   help="checkpoint directories, comma-separated (DIR@S: at prior scale S)")  # fmt: skip
     p.add_argument("--cases", type=int, default=10_000, help="at most this many cases (unmasked ones are kept)")
     p.add_argument("--resamples", type=int, default=3, help="independent samplings of each object's grasps")
     p.add_argument("--resample-seed", type=int, default=7000, help="sampling r uses the generator [seed + r, object]")
@@ -46,12 +47,12 @@ def _run(args: argparse.Namespace) -> int:
     import torch
     from tqdm import tqdm
 
+    from lab.eval_network import load_weights
     from models.data.examples import ObjectInfo
     from models.data.generate import make_dataset_object
     from models.evaluation.label_agreement import case_wrench, independent_region, label_agreement
     from models.evaluation.properties import _inputs
     from models.evaluation.testset import data_config, load_cases
-    from models.network import ContactPredictor
     from models.robots import get_hand
 
     torch.set_num_threads(1)
@@ -66,7 +67,7 @@ def _run(args: argparse.Namespace) -> int:
         for index, seed, found in tqdm(pool.imap_unordered(_resample, jobs), total=len(jobs), desc="re-sampling"):
             grasps[(index, seed)] = found
     weights = args.weights.split(",")
-    predictors = [ContactPredictor.from_checkpoint(w) for w in weights]
+    predictors = [load_weights(w) for w in weights]
     info = {i: ObjectInfo.from_object(make_dataset_object(cfg, i)) for i in objects}
     regions: list[np.ndarray] = []
     tops: list[list[np.ndarray]] = [[] for _ in weights]

@@ -10,7 +10,10 @@ p50). The ``eval`` parser is owned by `lab.evaluate`; it calls :func:`add_networ
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from models.network import ContactPredictor
 
 
 def add_network_parser(eval_subparsers: Any) -> None:
@@ -36,6 +39,17 @@ def add_network_parser(eval_subparsers: Any) -> None:
     p.set_defaults(func=_run)
 
 
+def load_weights(spec: str) -> ContactPredictor:
+    """The predictor of ``DIR`` or ``DIR@S``: the checkpoint in DIR, its latent samples at prior scale S if given."""
+    from models.network import ContactPredictor
+
+    path, _, scale = spec.partition("@")
+    predictor = ContactPredictor.from_checkpoint(path)
+    if scale:
+        predictor.prior_scale = float(scale)
+    return predictor
+
+
 def _run(args: argparse.Namespace) -> int:
     import dataclasses
     import json
@@ -48,7 +62,6 @@ def _run(args: argparse.Namespace) -> int:
     from models.evaluation.properties import evaluate_properties
     from models.evaluation.protocol import evaluate
     from models.evaluation.testset import load_cases, motion_kind
-    from models.network import ContactPredictor
     from models.robots import get_hand
 
     torch.set_num_threads(1)
@@ -66,10 +79,7 @@ def _run(args: argparse.Namespace) -> int:
 
     props = {}
     for w in weights:
-        path, _, scale = w.partition("@")
-        predictor = ContactPredictor.from_checkpoint(path)
-        if scale:
-            predictor.prior_scale = float(scale)
+        predictor = load_weights(w)
         for budget in budgets:
             run(f"network ({w})", "network", predictor, budget)
         props[w] = dataclasses.asdict(evaluate_properties(cases, hand, predictor, k=args.samples, seed=args.seed))

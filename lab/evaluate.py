@@ -162,7 +162,8 @@ def add_deformable(sub: Any) -> None:
     d.add_argument("--cases", type=int, default=10, help="cases per (material, split)")
     d.add_argument("--contacts", type=int, default=2, help="contacts of the random baselines (default 2)")
     d.add_argument("--hand", default="panda_gripper", help="hand the network is conditioned on (H ≤ fingertips)")
-    d.add_argument("--weights", default="models/weights/cpu1k", help="checkpoint directory of the network")
+    d.add_argument("--weights", default="models/weights/cpu1k",
+                   help="checkpoint directory of the network (DIR@S: at prior scale S)")  # fmt: skip
     d.add_argument("--seed", type=int, default=0, help="seed of the cases and the baselines")
     d.add_argument("--data-seed", type=int, default=0, help="seed of the data set whose bodies are used")
     d.add_argument("--sensitivity", type=int, default=0,
@@ -200,10 +201,10 @@ def run_deformable(args: argparse.Namespace) -> int:
         return EXIT_USAGE
     network = None
     if "network" in methods:
-        from models.network.inference import ContactPredictor
+        from lab.eval_network import load_weights
         from models.robots import get_hand
 
-        network = pipeline_network(ContactPredictor.from_checkpoint(args.weights), get_hand(args.hand), args.seed)
+        network = pipeline_network(load_weights(args.weights), get_hand(args.hand), args.seed)
     data = DeformableDataConfig(seed=args.data_seed)
     report = DeformableReport()
     rng = np.random.default_rng(args.seed)
