@@ -3,25 +3,17 @@ column per weights."""
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import pytest
 
-from lab import data, evaluate
+from tests.lab.tiny_data import cli, tiny_test_set
 
 
 @pytest.mark.slow
 def test_eval_labels_prints_each_label_source(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    p = argparse.ArgumentParser()
-    sub = p.add_subparsers()
-    data.register(sub)
-    evaluate.register(sub)
-    out = tmp_path / "tiny"
-    gen = p.parse_args(["data", "generate", "--out", str(out), "--objects", "8", "--seed", "1", "--test-objects-only",
-                        "--workers", "1", "--hands", "allegro", "--held-out-hands", "", "--palms", "8",
-                        "--grasps-per-job", "6", "--examples-per-grasp", "1", "--no-progress"])  # fmt: skip
-    assert gen.func(gen) == 0
+    p = cli()
+    out = tiny_test_set(tmp_path / "tiny")
     weights = "models/weights/cpu1k,models/weights/cpu1k"  # the same twice: two columns, equal figures
     run = p.parse_args(["eval", "labels", "--data", str(out), "--resamples", "1", "--workers", "1", "--samples", "2",
                         "--weights", weights])  # fmt: skip

@@ -3,25 +3,17 @@ and ``DIR@S`` evaluating the same weights at another prior scale."""
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
 import pytest
 
-from lab import data, evaluate
+from tests.lab.tiny_data import cli, tiny_test_set
 
 
 @pytest.mark.slow
 def test_eval_network_prints_a_row_per_weights_and_scale(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    p = argparse.ArgumentParser()
-    sub = p.add_subparsers()
-    data.register(sub)
-    evaluate.register(sub)
-    out = tmp_path / "tiny"
-    gen = p.parse_args(["data", "generate", "--out", str(out), "--objects", "8", "--seed", "1", "--test-objects-only",
-                        "--workers", "1", "--hands", "allegro", "--held-out-hands", "", "--palms", "8",
-                        "--grasps-per-job", "6", "--examples-per-grasp", "1", "--no-progress"])  # fmt: skip
-    assert gen.func(gen) == 0
+    p = cli()
+    out = tiny_test_set(tmp_path / "tiny")
     run = p.parse_args(["eval", "network", "--data", str(out), "--cases", "3", "--budgets", "2", "--no-audit",
                         "--no-random", "--samples", "4", "--proposals", "2", "--no-progress",
                         "--weights", "models/weights/cpu1k,models/weights/cpu1k@0"])  # fmt: skip
