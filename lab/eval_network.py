@@ -10,6 +10,7 @@ p50). The ``eval`` parser is owned by `lab.evaluate`; it calls :func:`add_networ
 from __future__ import annotations
 
 import argparse
+import math
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -46,7 +47,12 @@ def load_weights(spec: str) -> ContactPredictor:
     path, _, scale = spec.partition("@")
     predictor = ContactPredictor.from_checkpoint(path)
     if scale:
-        predictor.prior_scale = float(scale)
+        try:
+            predictor.prior_scale = float(scale)
+        except ValueError:
+            raise SystemExit(f"--weights {spec}: the scale after @ must be a number") from None
+        if not (math.isfinite(predictor.prior_scale) and predictor.prior_scale >= 0):
+            raise SystemExit(f"--weights {spec}: the scale after @ must be finite and ≥ 0")
     return predictor
 
 

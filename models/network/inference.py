@@ -102,6 +102,8 @@ class ContactPredictor:
         self.card = card
         self.device = torch.device(device)
         self.prior_scale = float(card.prior_scale)
+        if not (np.isfinite(self.prior_scale) and self.prior_scale >= 0):
+            raise ValueError(f"prior_scale must be a finite number ≥ 0, got {card.prior_scale!r}")
         self._hands = _HandCache(hand_cache_size)
 
     @classmethod

@@ -67,6 +67,8 @@ def test_prior_scale_sets_the_spread_of_the_latent_samples(make_input, tmp_path)
     old = {k: v for k, v in dataclasses.asdict(card).items() if k != "prior_scale"}  # a card from before the field
     (tmp_path / "w" / "model_card.json").write_text(json.dumps(old))
     assert read_card(tmp_path / "w").prior_scale == 1.0
+    with pytest.raises(ValueError, match="prior_scale"):
+        ContactPredictor(model.model, dataclasses.replace(card, prior_scale=-1.0))
 
 
 def test_batch_mates_do_not_change_outputs(predictor: ContactPredictor, make_input) -> None:
