@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from pathlib import Path
@@ -93,9 +94,13 @@ def read_card(path: str | Path) -> ModelCard:
         raise CheckpointError(f"no {CARD_FILE} in {path}")
     try:
         data = json.loads(card_path.read_text())
-        return ModelCard(**data)
+        card = ModelCard(**data)
     except (json.JSONDecodeError, TypeError) as exc:
         raise CheckpointError(f"malformed {card_path}: {exc}") from exc
+    if not (isinstance(card.prior_scale, int | float) and math.isfinite(card.prior_scale) and card.prior_scale >= 0):
+        raise CheckpointError(f"malformed {card_path}: prior_scale must be a finite number ≥ 0, "
+                              f"got {card.prior_scale!r}")  # fmt: skip
+    return card
 
 
 def load_checkpoint(path: str | Path, config: str | NetworkConfig | None = None) -> tuple[ManiFoundationNet, ModelCard]:

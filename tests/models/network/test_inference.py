@@ -51,7 +51,7 @@ def test_seed_determinism_and_diversity(predictor: ContactPredictor, make_input)
 
 def test_prior_scale_sets_the_spread_of_the_latent_samples(make_input, tmp_path) -> None:
     """z ~ N(0, s² I): at s = 0 the K samples are one map (the prior's mean); the card's value is loaded."""
-    from models.network.checkpoint import read_card, save_checkpoint
+    from models.network.checkpoint import CheckpointError, read_card, save_checkpoint
 
     model = ContactPredictor.untrained("cpu", seed=0)
     inp = make_input(512, seed=3)
@@ -69,6 +69,9 @@ def test_prior_scale_sets_the_spread_of_the_latent_samples(make_input, tmp_path)
     assert read_card(tmp_path / "w").prior_scale == 1.0
     with pytest.raises(ValueError, match="prior_scale"):
         ContactPredictor(model.model, dataclasses.replace(card, prior_scale=-1.0))
+    (tmp_path / "w" / "model_card.json").write_text(json.dumps(old | {"prior_scale": "wide"}))
+    with pytest.raises(CheckpointError, match="prior_scale"):
+        read_card(tmp_path / "w")
 
 
 def test_batch_mates_do_not_change_outputs(predictor: ContactPredictor, make_input) -> None:
