@@ -10,7 +10,6 @@ p50). The ``eval`` parser is owned by `lab.evaluate`; it calls :func:`add_networ
 from __future__ import annotations
 
 import argparse
-import math
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
@@ -50,9 +49,7 @@ def load_weights(spec: str) -> ContactPredictor:
         try:
             predictor.prior_scale = float(scale)
         except ValueError:
-            raise SystemExit(f"--weights {spec}: the scale after @ must be a number") from None
-        if not (math.isfinite(predictor.prior_scale) and predictor.prior_scale >= 0):
-            raise SystemExit(f"--weights {spec}: the scale after @ must be finite and ≥ 0")
+            raise SystemExit(f"--weights {spec}: the scale after @ must be a finite number ≥ 0") from None
     return predictor
 
 

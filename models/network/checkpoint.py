@@ -95,12 +95,18 @@ def read_card(path: str | Path) -> ModelCard:
     try:
         data = json.loads(card_path.read_text())
         card = ModelCard(**data)
-    except (json.JSONDecodeError, TypeError) as exc:
+        checked_prior_scale(card.prior_scale)
+    except (json.JSONDecodeError, TypeError, ValueError) as exc:
         raise CheckpointError(f"malformed {card_path}: {exc}") from exc
-    if not (isinstance(card.prior_scale, int | float) and math.isfinite(card.prior_scale) and card.prior_scale >= 0):
-        raise CheckpointError(f"malformed {card_path}: prior_scale must be a finite number ≥ 0, "
-                              f"got {card.prior_scale!r}")  # fmt: skip
     return card
+
+
+def checked_prior_scale(value: object) -> float:
+    """``value`` as a prior scale (the latent samples' standard deviation). Raises ValueError unless it is a
+    finite number ≥ 0."""
+    if isinstance(value, bool) or not isinstance(value, int | float) or not (math.isfinite(value) and value >= 0):
+        raise ValueError(f"prior_scale must be a finite number ≥ 0, got {value!r}")
+    return float(value)
 
 
 def load_checkpoint(path: str | Path, config: str | NetworkConfig | None = None) -> tuple[ManiFoundationNet, ModelCard]:

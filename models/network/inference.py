@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from models.network.checkpoint import ModelCard, load_checkpoint
+from models.network.checkpoint import ModelCard, checked_prior_scale, load_checkpoint
 from models.network.config import NetworkConfig
 from models.network.model import Encoded, ManiFoundationNet, ObjectTensors, create_model
 from models.network.normalize import Normalizer
@@ -101,9 +101,7 @@ class ContactPredictor:
         self.model = model.to(device).eval()
         self.card = card
         self.device = torch.device(device)
-        self.prior_scale = float(card.prior_scale)
-        if not (np.isfinite(self.prior_scale) and self.prior_scale >= 0):
-            raise ValueError(f"prior_scale must be a finite number ≥ 0, got {card.prior_scale!r}")
+        self.prior_scale = card.prior_scale
         self._hands = _HandCache(hand_cache_size)
 
     @classmethod
@@ -122,6 +120,15 @@ class ContactPredictor:
         model = create_model(config, seed=seed)
         card = ModelCard.for_model(model, trained=False, notes=f"untrained, random init with seed {seed}")
         return cls(model, card, device)
+
+    @property
+    def prior_scale(self) -> float:
+        """The latent samples' standard deviation s, z ~ N(0, s² I) (the card's; settable, a finite number ≥ 0)."""
+        return self._prior_scale
+
+    @prior_scale.setter
+    def prior_scale(self, value: float) -> None:
+        self._prior_scale = checked_prior_scale(value)
 
     @property
     def is_trained(self) -> bool:
