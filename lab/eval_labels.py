@@ -29,28 +29,14 @@ def add_labels_parser(eval_subparsers: Any) -> None:
     p.set_defaults(func=_run)
 
 
-def _resample(job: tuple[Any, str, int, int]) -> tuple[int, int, list[Any]]:
-    import torch
-
-    from models.evaluation.label_agreement import resample_grasps
-    from models.robots import get_hand
-
-    torch.set_num_threads(1)
-    cfg, hand, index, seed = job
-    return index, seed, resample_grasps(cfg, index, get_hand(hand), seed)
-
-
 def _run(args: argparse.Namespace) -> int:
-    from multiprocessing import get_context
-
     import numpy as np
     import torch
     from tqdm import tqdm
 
     from lab.eval_network import load_weights
-    from models.data.examples import ObjectInfo
-    from models.data.generate import make_dataset_object
-    from models.evaluation.label_agreement import case_wrench, independent_region, label_agreement
+    from lab.resampled_regions import resampled_regions
+    from models.evaluation.label_agreement import label_agreement
     from models.evaluation.properties import _inputs
     from models.evaluation.testset import data_config, load_cases
     from models.robots import get_hand
@@ -60,26 +46,12 @@ def _run(args: argparse.Namespace) -> int:
     cases = [c for c in load_cases(args.data, args.split, args.cases, args.seed, articulated=False,
                                    label_hand=args.hand) if c.mask.all() and c.valid_region is not None]  # fmt: skip
     objects = sorted({c.object_index for c in cases})
-    seeds = [args.resample_seed + r for r in range(args.resamples)]
-    jobs = [(cfg, args.hand, i, s) for i in objects for s in seeds]
-    grasps: dict[tuple[int, int], list[Any]] = {}
-    with get_context("spawn").Pool(args.workers) as pool:
-        for index, seed, found in tqdm(pool.imap_unordered(_resample, jobs), total=len(jobs), desc="re-sampling"):
-            grasps[(index, seed)] = found
+    regions, counts = resampled_regions(args.data, cases, args.hand, args.resamples, args.resample_seed,
+                                        args.workers)  # fmt: skip
     weights = args.weights.split(",")
     predictors = [load_weights(w) for w in weights]
-    info = {i: ObjectInfo.from_object(make_dataset_object(cfg, i)) for i in objects}
-    regions: list[np.ndarray] = []
     tops: list[list[np.ndarray]] = [[] for _ in weights]
-    counts = []
     for n, case in enumerate(tqdm(cases, desc="cases")):
-        o = info[case.object_index]
-        wrench = case_wrench(case, o.centre, o.length)
-        found = [independent_region(case.points, case.normals, grasps[(case.object_index, s)], case.friction, wrench,
-                                    o.centre, o.length) for s in seeds]  # fmt: skip
-        assert case.valid_region is not None
-        regions.append(np.stack([case.valid_region] + [r for r, _ in found]))
-        counts.append([k for _, k in found])
         inputs = [_inputs(case, hand)]
         for w, predictor in enumerate(predictors):
             out = predictor.predict(inputs, num_samples=args.samples, seed=args.seed + n)[0]

@@ -33,6 +33,12 @@ def add_network_parser(eval_subparsers: Any) -> None:
     p.add_argument("--no-random", action="store_true", help="skip the random-contacts rows (e.g. run separately)")
     p.add_argument("--oracle", action="store_true",
                    help="also the ceiling: each case's own valid grasps as the heatmaps (models.evaluation.oracle)")
+    p.add_argument("--resamples", type=int, default=0,
+                   help="also judge the top point on the union of the data's valid region and this many "
+                        "re-sampled ones per case (a lower bound of its hit on the true valid region)")
+    p.add_argument("--resample-seed", type=int, default=7000,
+                   help="re-sampling r uses the generator [seed + r, object]")
+    p.add_argument("--workers", type=int, default=2, help="processes re-sampling the objects")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", default=None, help="write all figures to this JSON file")
     p.add_argument("--no-progress", action="store_true")
@@ -80,12 +86,21 @@ def _run(args: argparse.Namespace) -> int:
                      progress=not args.no_progress, audit=not args.no_audit)[0]  # fmt: skip
         runs.append({"name": name, "budget": budget, **dataclasses.asdict(r)})
 
+    resampled = None
+    if args.resamples > 0:
+        from lab.resampled_regions import resampled_regions
+
+        judged = [i for i, c in enumerate(cases) if c.mask.all() and c.valid_region is not None]
+        found, _ = resampled_regions(args.data, [cases[i] for i in judged], args.hand, args.resamples,
+                                     args.resample_seed, args.workers, progress=not args.no_progress)  # fmt: skip
+        resampled = dict(zip(judged, found, strict=True))
     props = {}
     for w in weights:
         predictor = load_weights(w)
         for budget in budgets:
             run(f"network ({w})", "network", predictor, budget)
-        props[w] = dataclasses.asdict(evaluate_properties(cases, hand, predictor, k=args.samples, seed=args.seed))
+        props[w] = dataclasses.asdict(evaluate_properties(cases, hand, predictor, k=args.samples, seed=args.seed,
+                                                          resampled=resampled))  # fmt: skip
     if args.oracle:
         from models.evaluation.oracle import OraclePredictor
 
@@ -106,12 +121,15 @@ def _run(args: argparse.Namespace) -> int:
         audit = "–" if args.no_audit else f"{r['audited'] / n:.0%} ({r['audited']})"
         print(f"| {r['name']} | {r['budget']} | {r['successes'] / n:.0%} ({r['successes']}/{n}) | {audit} | "
               f"{float(np.median(r['iterations'])) if r['iterations'] else 0:.0f} | {r['fallbacks']} |")  # fmt: skip
-    print(f"\n| weights | flat heatmaps (samples; unmasked cases) | top point in a valid region (unmasked cases) "
-          f"| distinct sets of K = {args.samples} "
-          "| contacts inside the mask | inference p50 (batch 1, K = 1) |\n|---|--:|--:|--:|--:|--:|")  # fmt: skip
+    union_head = f"top point in the union of {args.resamples + 1} valid regions (a lower bound) | "
+    union_head = union_head if args.resamples else ""
+    print(f"\n| weights | flat heatmaps (samples; unmasked cases) | top point in a valid region (unmasked cases) | "
+          f"{union_head}distinct sets of K = {args.samples} | contacts inside the mask "
+          f"| inference p50 (batch 1, K = 1) |\n|---|--:|--:|{'--:|' if args.resamples else ''}--:|--:|--:|")
     for w, p in props.items():
+        union = (f"{p['top_in_union']:.0%} (a random point {p['union_share']:.0%}) | " if args.resamples else "")
         print(f"| {w} | {p['empty_selections']:.0%}; {p['empty_unmasked']:.0%} | "
-              f"{p['top_in_region']:.0%} ({p['top_cases']}; a random point {p['region_share']:.0%}) | "
+              f"{p['top_in_region']:.0%} ({p['top_cases']}; a random point {p['region_share']:.0%}) | {union}"
               f"{p['mean_modes']:.2f} | {p['mask_compliance']:.0%} ({p['mask_cases']} masked cases) | "
               f"{p['inference_ms_p50']:.0f} ms |")
     if args.json:

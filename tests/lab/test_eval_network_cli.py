@@ -3,6 +3,7 @@ and ``DIR@S`` evaluating the same weights at another prior scale."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -24,3 +25,23 @@ def test_eval_network_prints_a_row_per_weights_and_scale(tmp_path: Path, capsys:
     distinct = {name: float(line.strip("|").split("|")[3]) for name, line in rows.items()}
     assert distinct["models/weights/cpu1k@0"] <= 1.0  # z = 0 for every sample: one contact set at most
     assert sum("| network (models/weights/cpu1k" in line for line in text.splitlines()) == 2
+
+
+@pytest.mark.slow
+def test_resampled_regions_only_raise_the_top_point_figure(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The union of the data's region and re-sampled ones contains the data's: the top point hits it at least as
+    often, and a random point too."""
+    p = cli()
+    out = tiny_test_set(tmp_path / "tiny")
+    run = p.parse_args(["eval", "network", "--data", str(out), "--cases", "4", "--budgets", "1", "--no-audit",
+                        "--no-random", "--samples", "4", "--proposals", "1", "--no-progress", "--resamples", "2",
+                        "--workers", "1"])  # fmt: skip
+    assert run.func(run) == 0
+    text = capsys.readouterr().out
+    assert "top point in the union of 3 valid regions (a lower bound)" in text
+    row = next(line for line in text.splitlines() if line.startswith("| models/weights/cpu1k |"))
+    cells = [c.strip() for c in row.strip("|").split("|")]
+    data_hit, data_share = re.findall(r"(\d+)%", cells[2])
+    union_hit, union_share = re.findall(r"(\d+)%", cells[3])
+    assert int(union_hit) >= int(data_hit) and int(union_share) >= int(data_share)
+    assert len(cells) == 7

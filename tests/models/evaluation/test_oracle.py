@@ -88,3 +88,24 @@ def test_the_oracle_tops_its_region_where_a_random_point_rarely_would() -> None:
     assert report.top_in_region == 1.0 and report.top_cases == 1
     assert report.region_share == pytest.approx(float(case.valid_region.mean()))
     assert 0.0 < report.region_share < 0.2 and report.empty_unmasked == 0.0
+
+
+def test_the_top_point_is_judged_again_on_the_union_of_resampled_regions() -> None:
+    from models.data.grasp_sets import set_maps
+    from models.evaluation.properties import evaluate_properties
+
+    obj = make_object("box", 0.1, 0, num_points=1024)
+    case = _case(_opposite_pairs(obj.points, obj.normals, 2))
+    assert case.grasp_contacts is not None and case.grasp_normals is not None and case.grasp_forces is not None
+    heat, _ = set_maps(case.points, case.normals, case.grasp_contacts, case.grasp_normals, case.grasp_forces,
+                       float(np.ptp(case.points, axis=0).max()))  # fmt: skip
+    own = (heat >= 0.5).any(axis=0)
+    hand, oracle = get_hand("panda_gripper"), OraclePredictor([case])
+    case.valid_region = ~own  # a data region the oracle's tops miss; a re-sampling that holds them
+    report = evaluate_properties([case], hand, oracle, k=4, resampled={0: np.stack([~own, own])})
+    assert report.top_in_region == 0.0 and report.top_in_union == 1.0 and report.union_sources == 2
+    assert report.union_share == pytest.approx(1.0)
+    elsewhere = np.zeros(1024, bool)
+    elsewhere[np.flatnonzero(~own)[:10]] = True
+    report = evaluate_properties([case], hand, oracle, k=4, resampled={0: elsewhere[None]})
+    assert report.top_in_union == 0.0 and report.union_share == pytest.approx(10 / 1024)
