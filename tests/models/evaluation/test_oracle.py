@@ -74,16 +74,23 @@ def test_an_input_that_is_not_a_case_is_refused() -> None:
         OraclePredictor([case]).predict([_inputs(other, get_hand("panda_gripper"))])
 
 
-def test_the_oracle_tops_its_region_where_a_random_point_rarely_would() -> None:
+def _case_and_its_grasps_region() -> tuple[testset.TestCase, np.ndarray]:
+    """A box case with two opposite-pair grasps, and the region (N,) bool its grasps' heat marks."""
     from models.data.grasp_sets import set_maps
-    from models.evaluation.properties import evaluate_properties
 
     obj = make_object("box", 0.1, 0, num_points=1024)
     case = _case(_opposite_pairs(obj.points, obj.normals, 2))
     assert case.grasp_contacts is not None and case.grasp_normals is not None and case.grasp_forces is not None
     heat, _ = set_maps(case.points, case.normals, case.grasp_contacts, case.grasp_normals, case.grasp_forces,
                        float(np.ptp(case.points, axis=0).max()))  # fmt: skip
-    case.valid_region = (heat >= 0.5).any(axis=0)
+    return case, np.asarray((heat >= 0.5).any(axis=0))
+
+
+def test_the_oracle_tops_its_region_where_a_random_point_rarely_would() -> None:
+    from models.evaluation.properties import evaluate_properties
+
+    case, own = _case_and_its_grasps_region()
+    case.valid_region = own
     report = evaluate_properties([case], get_hand("panda_gripper"), OraclePredictor([case]), k=4)
     assert report.top_in_region == 1.0 and report.top_cases == 1
     assert report.region_share == pytest.approx(float(case.valid_region.mean()))
@@ -91,15 +98,9 @@ def test_the_oracle_tops_its_region_where_a_random_point_rarely_would() -> None:
 
 
 def test_the_top_point_is_judged_again_on_the_union_of_resampled_regions() -> None:
-    from models.data.grasp_sets import set_maps
     from models.evaluation.properties import evaluate_properties
 
-    obj = make_object("box", 0.1, 0, num_points=1024)
-    case = _case(_opposite_pairs(obj.points, obj.normals, 2))
-    assert case.grasp_contacts is not None and case.grasp_normals is not None and case.grasp_forces is not None
-    heat, _ = set_maps(case.points, case.normals, case.grasp_contacts, case.grasp_normals, case.grasp_forces,
-                       float(np.ptp(case.points, axis=0).max()))  # fmt: skip
-    own = (heat >= 0.5).any(axis=0)
+    case, own = _case_and_its_grasps_region()
     hand, oracle = get_hand("panda_gripper"), OraclePredictor([case])
     case.valid_region = ~own  # a data region the oracle's tops miss; a re-sampling that holds them
     report = evaluate_properties([case], hand, oracle, k=4, resampled={0: np.stack([~own, own])})
