@@ -37,14 +37,14 @@ def _run(args: argparse.Namespace) -> int:
     from lab.eval_network import load_weights
     from lab.resampled_regions import resampled_regions
     from models.evaluation.label_agreement import label_agreement
-    from models.evaluation.properties import _inputs
+    from models.evaluation.properties import _inputs, judges_top_point
     from models.evaluation.testset import data_config, load_cases
     from models.robots import get_hand
 
     torch.set_num_threads(1)
     cfg, hand = data_config(args.data), get_hand(args.hand)
     cases = [c for c in load_cases(args.data, args.split, args.cases, args.seed, articulated=False,
-                                   label_hand=args.hand) if c.mask.all() and c.valid_region is not None]  # fmt: skip
+                                   label_hand=args.hand) if judges_top_point(c)]  # fmt: skip
     objects = sorted({c.object_index for c in cases})
     regions, counts = resampled_regions(args.data, cases, args.hand, args.resamples, args.resample_seed,
                                         args.workers)  # fmt: skip

@@ -68,7 +68,7 @@ def _run(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
 
-    from models.evaluation.properties import evaluate_properties
+    from models.evaluation.properties import evaluate_properties, judges_top_point
     from models.evaluation.protocol import evaluate
     from models.evaluation.testset import load_cases, motion_kind
     from models.robots import get_hand
@@ -90,7 +90,7 @@ def _run(args: argparse.Namespace) -> int:
     if args.resamples > 0:
         from lab.resampled_regions import resampled_regions
 
-        judged = [i for i, c in enumerate(cases) if c.mask.all() and c.valid_region is not None]
+        judged = [i for i, c in enumerate(cases) if judges_top_point(c)]
         found, _ = resampled_regions(args.data, [cases[i] for i in judged], args.hand, args.resamples,
                                      args.resample_seed, args.workers, progress=not args.no_progress)  # fmt: skip
         resampled = dict(zip(judged, found, strict=True))

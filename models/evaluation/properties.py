@@ -49,6 +49,12 @@ def _inputs(case: TestCase, hand: Hand, friction: float | None = None) -> Any:
     )
 
 
+def judges_top_point(case: TestCase) -> bool:
+    """Whether ``case``'s top point is judged: it has a valid region and no region mask (a partial mask is drawn
+    around the label's contacts, so inside it almost any point is near one)."""
+    return case.valid_region is not None and bool(case.mask.all())
+
+
 def _select(case: TestCase, heat: np.ndarray, force: np.ndarray, hand: Hand, mask: bool = True) -> np.ndarray:
     from models.network import select_contacts
 
@@ -109,13 +115,15 @@ def evaluate_properties(
         t0 = time.perf_counter()
         predictor.predict([_inputs(case, hand)], num_samples=1, seed=seed + i)
         times.append(time.perf_counter() - t0)
-        if case.valid_region is not None and case.mask.all():  # a partial mask lies around the label's contacts
-            tops += int(case.valid_region[out.heatmaps.argmax(axis=1)].sum())
+        if judges_top_point(case):
+            assert case.valid_region is not None
+            top = out.heatmaps.argmax(axis=1)
+            tops += int(case.valid_region[top].sum())
             top_total += k
             shares.append(float(case.valid_region.mean()))
             if resampled is not None:
                 union = np.asarray(resampled[i].any(axis=0))
-                union_hits.append(float(union[out.heatmaps.argmax(axis=1)].mean()))
+                union_hits.append(float(union[top].mean()))
                 union_shares.append(float(union.mean()))
                 sources = len(resampled[i])
         scale = float(np.ptp(case.points, axis=0).max())
