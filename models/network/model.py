@@ -152,8 +152,8 @@ class ManiFoundationNet(nn.Module):
 
 
 def count_parameters(model: nn.Module) -> int:
-    """Number of trainable scalars."""
-    return sum(p.numel() for p in model.parameters() if p.requires_grad)
+    """Number of parameter scalars (frozen ones too: a partly frozen run describes the same model)."""
+    return sum(p.numel() for p in model.parameters())
 
 
 def create_model(config: str | NetworkConfig, seed: int | None = None) -> ManiFoundationNet:

@@ -43,6 +43,8 @@ class TrainConfig:
     precompute: bool = True  # per-object point subsets and hierarchies computed once (models.data.prepare)
     mask_dropout: float = 0.0  # probability that a training example's partial region mask is replaced by all ones
     init_from: str | None = None  # start from this checkpoint directory's weights (same network configuration)
+    # parameter-name prefixes: only these are trained, the rest frozen in eval mode (models.training.freezing)
+    train_only: list[str] | None = None
     # --- run ---
     out: str = "runs/cpu"
     device: str = "auto"  # auto: cuda when available, else cpu

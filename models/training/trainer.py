@@ -32,6 +32,7 @@ from models.data.prepare import PreparedObjects
 from models.network import ManiFoundationNet, ModelCard, create_model, load_checkpoint, save_checkpoint
 from models.training.best import is_best, validation_fingerprint
 from models.training.config import TrainConfig
+from models.training.freezing import freeze_except, set_train_mode
 from models.training.objective import batch_loss, prepare
 from models.training.sources import (
     RIGID_MATERIALS,
@@ -87,11 +88,16 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
     out.mkdir(parents=True, exist_ok=True)
     sources = _load(cfg)
     model = create_model(cfg.network, seed=cfg.seed).to(device)
-    if cfg.init_from is not None and not resume:
-        model.load_state_dict(load_checkpoint(cfg.init_from, cfg.network)[0].state_dict())
+    known_materials: list[str] = []  # what init_from's weights already know (kept on the card)
+    if cfg.init_from is not None:
+        loaded_init, init_card = load_checkpoint(cfg.init_from, cfg.network)
+        known_materials = list(init_card.materials or [])
+        if not resume:
+            model.load_state_dict(loaded_init.state_dict())
     preps = _prepare(sources, model, cfg)
     hand_scale = model.config.hand_scale_m
-    opt = torch.optim.AdamW(model.parameters(), lr=cfg.lr, weight_decay=cfg.weight_decay)
+    params = freeze_except(model, cfg.train_only) if cfg.train_only else list(model.parameters())
+    opt = torch.optim.AdamW(params, lr=cfg.lr, weight_decay=cfg.weight_decay)
     start_epoch, wall0, best, global_step = 0, 0.0, float("inf"), 0
     best_on = ""  # the validation examples `best` was measured on (`validation_fingerprint`)
     csv_path = out / "metrics.csv"
@@ -119,7 +125,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             sources = _load(cfg)
             preps = _prepare(sources, model, cfg)
             summary = data_summary(sources)
-        model.train()
+        set_train_mode(model, cfg.train_only)
         t0 = time.perf_counter()
         batches = epoch_batches([len(s.train) for s in sources], cfg.batch_size, rng)
         sums = dict.fromkeys(("loss", "heat", "force", "kl", "set"), 0.0)
@@ -165,7 +171,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         for r in val_rows:
             skip = ("split", "examples", "open_examples")
             final.update({f"{r['split']}_{k}": float(v) for k, v in r.items() if k not in skip})
-        materials = sorted({m for src in sources for m in src.materials()})
+        materials = sorted({m for src in sources for m in src.materials()} | set(known_materials))
         card = _card(model, cfg, summary, epoch, wall, final, device, materials)
         save_checkpoint(model, out / "last", card)
         score = float(val_m["loss"]) if val_m is not None else train_m["loss"]
@@ -254,7 +260,14 @@ def _card(
 ) -> ModelCard:
     materials = materials or list(RIGID_MATERIALS)
     deformable = [m for m in materials if m not in RIGID_MATERIALS]
-    if not deformable:
+    if cfg.train_only:
+        trained = ", ".join(cfg.train_only)
+        note = (
+            f"The weights of {cfg.init_from} with only {trained} trained on ({', '.join(deformable) or 'rigid'}); "
+            "every other parameter, BatchNorm statistics included, as loaded, so a request that never reaches the "
+            "trained parameters is answered exactly as by those weights."
+        )
+    elif not deformable:
         note = (
             "Trained on rigid and articulated (revolute/prismatic) examples only; requests for deformable "
             "materials are out of its training distribution."

@@ -130,3 +130,56 @@ def test_best_is_chosen_among_epochs_measured_on_the_same_validation_examples(da
     assert int(rows[0]["examples"]) == 1 < int(rows[1]["examples"])
     _model, best = load_checkpoint(run / "best", "cpu")
     assert best.training_data["training"]["epochs"] == 2
+
+
+def test_train_only_the_deformable_property_mlps_leaves_every_rigid_answer_bit_identical(tmp_path: Path) -> None:
+    import torch
+
+    from models.data.deformable_generate import DeformableDataConfig
+    from models.data.deformable_generate import generate as generate_deformable
+    from models.network.model import ObjectTensors
+    from models.network.properties import property_tensors
+    from models.training.freezing import DEFORMABLE_PROPERTY_MLPS
+
+    soft = tmp_path / "soft"
+    generate_deformable(DeformableDataConfig(materials=("rope",), bodies=2, examples_per_body=3, test_fraction=0.0),
+                        soft, progress=False)  # fmt: skip
+    shipped = Path(__file__).resolve().parents[3] / "models" / "weights" / "cpu1k"
+    cfg = TrainConfig(data=[str(soft)], out=str(tmp_path / "run"), network="cpu1k", epochs=2, batch_size=2,
+                      threads=1, warmup_steps=1, val_splits=("test_so",), init_from=str(shipped), lr=1e-2,
+                      train_only=list(DEFORMABLE_PROPERTY_MLPS))  # fmt: skip
+    result = train(cfg, progress=False)
+    before, _ = load_checkpoint(shipped, "cpu1k")
+    after, card = load_checkpoint(Path(result.out) / "last", "cpu1k")
+    old, new = before.state_dict(), after.state_dict()
+    changed = {k for k in old if not torch.equal(old[k], new[k])}
+    assert changed and all(k.startswith(DEFORMABLE_PROPERTY_MLPS) for k in changed)  # BatchNorm stats too
+    assert card.materials == ["articulated", "rigid", "rope"]
+    assert "as loaded" in card.notes
+
+    gen = torch.Generator().manual_seed(0)
+    xyz = torch.rand(1, 1024, 3, generator=gen) - 0.5
+    normals = torch.nn.functional.normalize(xyz, dim=-1)
+    hand = torch.cat([torch.rand(1, 256, 3, generator=gen) - 0.5, normals[:, :256]], dim=-1)
+    z = torch.randn(1, 4, before.config.latent_dim, generator=gen)
+
+    def heat_of(model: torch.nn.Module, properties: dict[str, float]) -> torch.Tensor:
+        values, mask = property_tensors([properties])
+        obj = ObjectTensors(xyz, normals, 0.1 * normals, torch.ones(1, 1024), values, mask, torch.tensor([0.1]))
+        model.eval()
+        with torch.no_grad():
+            enc = model.encode(obj, model.encode_hand(hand))
+            return torch.cat([t.flatten() for t in model.decode(enc, z)])
+
+    rigid = {"friction": 0.6, "density": 700.0}
+    assert torch.equal(heat_of(before, rigid), heat_of(after, rigid))
+    rope = {"friction": 0.6, "youngs_modulus": 3e4, "poisson_ratio": 0.3}
+    assert not torch.equal(heat_of(before, rope), heat_of(after, rope))
+
+
+def test_train_only_refuses_a_prefix_that_names_no_parameter() -> None:
+    from models.network import create_model
+    from models.training.freezing import freeze_except
+
+    with pytest.raises(ValueError, match=r"properties\.mlp\.9"):
+        freeze_except(create_model("cpu1k", seed=0), ["properties.mlp.9"])
