@@ -241,7 +241,7 @@ def run_deformable(args: argparse.Namespace) -> int:
 
         pairs = Table(title=f"property sensitivity: one shape, two property sets, {args.sensitivity} shapes each")
         for col in ("pair", "shapes", "median rollout gap (same manipulation)", "network contacts differ",
-                    "network (not fallback) answers"):
+                    "network (not fallback) answers", "own properties' answer better (ties)"):
             pairs.add_column(col, justify="left" if col == "pair" else "right")
         figures["sensitivity"] = []
         for material in [m for m in materials if m in SENSITIVITY_PAIRS]:
@@ -249,10 +249,14 @@ def run_deformable(args: argparse.Namespace) -> int:
             a, _, b, _ = SENSITIVITY_PAIRS[material]
             differ = [r.contacts_differ for r in res if r.contacts_differ is not None]
             own = sum(s == "network" for r in res for s in r.sources)
+            wins = [r.matched_wins() for r in res] if network is not None else []
+            better = f"{sum(w for w, _ in wins)}/{2 * len(res)} ({sum(t for _, t in wins)})" if wins else "-"
             pairs.add_row(f"{a} / {b}", str(len(res)), f"{np.median([r.rollout_gap for r in res]):.3f}",
-                          f"{sum(differ)}/{len(differ)}" if differ else "-", f"{own}/{2 * len(res)}")
+                          f"{sum(differ)}/{len(differ)}" if differ else "-", f"{own}/{2 * len(res)}", better)
             figures["sensitivity"].append({"pair": f"{a}/{b}", "gaps": [r.rollout_gap for r in res],
-                                           "differ": differ, "network_answers": own})
+                                           "differ": differ, "network_answers": own,
+                                           "matched_error": [r.matched_error for r in res],
+                                           "swapped_error": [r.swapped_error for r in res]})
         console.print(pairs)
     if args.json:
         with open(args.json, "w") as fh:

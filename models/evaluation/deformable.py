@@ -234,19 +234,38 @@ class SensitivityResult:
         contacts_differ: the network's contact sets for the same target motion differ (some contact farther than
             ``CONTACT_GAP`` of the size from every contact of the other set), or None without a network.
         sources: the network's contact source for each member.
+        matched_error: for each member, with its own rollout as the target: the shape error (top mean, metric
+            units) of the network's answer made with that member's properties, simulated on that member.
+        swapped_error: the same target and body, the answer made with the other member's properties. A network
+            that reads the properties' meaning makes ``matched < swapped``; one that ignores them ties.
     """
 
     material: str
     rollout_gap: float
     contacts_differ: bool | None
     sources: tuple[str, str]
+    matched_error: tuple[float, float] | None = None
+    swapped_error: tuple[float, float] | None = None
+
+    def matched_wins(self) -> tuple[int, int]:
+        """(members whose matched answer is the better one, members where the two answers tie)."""
+        if self.matched_error is None or self.swapped_error is None:
+            return 0, 0
+        pairs = list(zip(self.matched_error, self.swapped_error, strict=True))
+        return sum(m < s - TIE for m, s in pairs), sum(abs(m - s) <= TIE for m, s in pairs)
 
 
 CONTACT_GAP = 0.1
+TIE = 1e-9  # shape errors this close are one answer simulated twice (the simulator is deterministic)
 
 
 def property_sensitivity(material: str, count: int, seed: int, network: Answer | None) -> list[SensitivityResult]:
-    """``count`` shapes of ``material`` (square cloths or ropes) as both members of its `SENSITIVITY_PAIRS`."""
+    """``count`` shapes of ``material`` (square cloths or ropes) as both members of its `SENSITIVITY_PAIRS`.
+
+    Each shape gets one random manipulation; each member's rollout under it is that member's target. With a
+    network, each member is answered twice for its target — once with its own properties, once with the
+    other member's — and both answers are simulated on it (``matched_error``, ``swapped_error``).
+    """
     from models.deformable.metrics import NORMALISED_SIDE
     from models.deformable.shapes import make_body
 
@@ -260,13 +279,22 @@ def property_sensitivity(material: str, count: int, seed: int, network: Answer |
         manip = random_manipulation(a, rng)
         ra, rb = simulate(a, manip.contacts, manip.motions), simulate(b, manip.contacts, manip.motions)
         gap = float(np.linalg.norm(ra.cloud - rb.cloud, axis=1).mean()) * NORMALISED_SIDE / a.size
-        differ, sources = None, ("", "")
-        if network is not None:
-            target = ra.cloud  # the same target for both: the shape the first member reaches
-            pa, _, sa = network(DeformableCase(material, "sensitivity", a, manip, target))
-            pb, _, sb = network(DeformableCase(material, "sensitivity", b, manip, target))
-            d = np.linalg.norm(pa[:, None] - pb[None], axis=-1)
-            differ = bool(max(d.min(axis=1).max(), d.min(axis=0).max()) > CONTACT_GAP * a.size)
-            sources = (sa, sb)
-        out.append(SensitivityResult(material, gap, differ, sources))
+        if network is None:
+            out.append(SensitivityResult(material, gap, None, ("", "")))
+            continue
+        target = ra.cloud  # the same target for both: the shape the first member reaches
+        pa, ma, sa = network(DeformableCase(material, "sensitivity", a, manip, target))
+        pb, mb, sb = network(DeformableCase(material, "sensitivity", b, manip, target))
+        d = np.linalg.norm(pa[:, None] - pb[None], axis=-1)
+        differ = bool(max(d.min(axis=1).max(), d.min(axis=0).max()) > CONTACT_GAP * a.size)
+        qa, na, _ = network(DeformableCase(material, "sensitivity", a, manip, rb.cloud))
+        qb, nb, _ = network(DeformableCase(material, "sensitivity", b, manip, rb.cloud))
+
+        def error(body: DeformableBody, target: np.ndarray, contacts: np.ndarray, motions: np.ndarray) -> float:
+            rollout = simulate(body, contacts, motions).cloud
+            return shape_score(material, body.points, target, rollout).top_mean_error
+
+        matched = (error(a, ra.cloud, pa, ma), error(b, rb.cloud, qb, nb))
+        swapped = (error(a, ra.cloud, pb, mb), error(b, rb.cloud, qa, na))
+        out.append(SensitivityResult(material, gap, differ, (sa, sb), matched, swapped))
     return out
