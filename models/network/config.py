@@ -62,6 +62,8 @@ class NetworkConfig:
     posterior_head: tuple[int, ...] = (256,)
     decoder_local: tuple[int, ...] = (128, 128)  # per-point MLP of φ_c / φ_f before the global max-pool
     decoder_head: tuple[int, ...] = (128, 64)  # after concatenating the global feature
+    # hidden widths of the deformable head (models.network.deformable_head); () = none
+    deformable_head: tuple[int, ...] = ()
     # --- loss of Eq. (3) ---
     # The paper does not state λ_C, λ_S, λ_KL; these defaults are ours (heatmap and force map weighted
     # equally, a small KL weight as usual for CVAEs) and are recorded in every model card.
@@ -96,13 +98,22 @@ class NetworkConfig:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> NetworkConfig:
         """Inverse of :meth:`to_dict`."""
-        d = dict(data)
+        d = with_defaults(data)
         d["levels"] = tuple(LevelConfig(**lv) for lv in d["levels"])
         for key in ("sa_mlps", "fp_mlps", "posterior_sa_mlps"):
             d[key] = tuple(tuple(m) for m in d[key])
-        for key in ("hand_mlp", "posterior_head", "decoder_local", "decoder_head"):
+        for key in ("hand_mlp", "posterior_head", "decoder_local", "decoder_head", "deformable_head"):
             d[key] = tuple(d[key])
         return cls(**d)
+
+
+def with_defaults(data: dict[str, Any]) -> dict[str, Any]:
+    """A stored config dict with the fields added since it was stored set to their defaults (plain JSON)."""
+    out = dict(data)
+    for f in dataclasses.fields(NetworkConfig):
+        if f.name not in out and f.default is not dataclasses.MISSING:
+            out[f.name] = json_ready(f.default)
+    return out
 
 
 def json_ready(value: Any) -> Any:
@@ -198,4 +209,11 @@ def cpu1k() -> NetworkConfig:
     )
 
 
-__all__ = ["LevelConfig", "NetworkConfig", "get_config", "list_configs", "register_config"]
+@register_config
+def cpu1k_deformable() -> NetworkConfig:
+    """``cpu1k`` with the deformable head (64, 64): the shipped rigid weights plus a head only deformable
+    objects reach (models.network.deformable_head)."""
+    return dataclasses.replace(cpu1k(), name="cpu1k_deformable", deformable_head=(64, 64))
+
+
+__all__ = ["LevelConfig", "NetworkConfig", "get_config", "list_configs", "register_config", "with_defaults"]

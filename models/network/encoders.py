@@ -117,6 +117,12 @@ class Decoder(nn.Module):
         self, eo: torch.Tensor, eh: torch.Tensor, z: torch.Tensor, heat: torch.Tensor | None = None
     ) -> torch.Tensor:
         """Args: eo (B, N, C_o), eh (B, C_h), z (B, K, latent), heat (B, K, N) when fed the heatmap."""
+        return self.with_features(eo, eh, z, heat)[0]
+
+    def with_features(
+        self, eo: torch.Tensor, eh: torch.Tensor, z: torch.Tensor, heat: torch.Tensor | None = None
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """:meth:`forward` and the last hidden layer's features (B, K, N, decoder_head[-1])."""
         p = self.first.parts
         h = p[0](eo).unsqueeze(1) + p[1](eh)[:, None, None, :] + p[2](z).unsqueeze(2)
         if self.with_heatmap:
@@ -127,4 +133,4 @@ class Decoder(nn.Module):
         glob = local.max(dim=2, keepdim=True).values
         out = self.head(self.head_act(self.head_first(local, glob)))
         result: torch.Tensor = self.out(out)
-        return result
+        return result, out

@@ -24,7 +24,7 @@ import torch
 
 from models.network.checkpoint import ModelCard, checked_prior_scale, load_checkpoint
 from models.network.config import NetworkConfig
-from models.network.model import Encoded, ManiFoundationNet, ObjectTensors, create_model
+from models.network.model import ManiFoundationNet, ObjectTensors, create_model
 from models.network.normalize import Normalizer
 from models.network.properties import property_tensors
 from models.network.resample import Resampling, resample
@@ -206,8 +206,7 @@ class ContactPredictor:
         per_chunk = max(1, MAX_DECODE_ROWS // num_samples)
         for start in range(0, len(batch), per_chunk):
             sl = slice(start, start + per_chunk)
-            chunk = Encoded(enc.hierarchy, enc.eo[sl], enc.eh[sl])
-            heat, force = self.model.decode(chunk, z[sl])
+            heat, force = self.model.decode(enc.rows(sl), z[sl])
             heat_np, force_np = heat.float().cpu().numpy(), force.float().cpu().numpy()
             for j in range(heat_np.shape[0]):
                 i = start + j

@@ -14,6 +14,7 @@ import torch
 from torch import nn
 
 from models.network.config import NetworkConfig, get_config
+from models.network.deformable_head import DeformableHead, deformable_condition, is_deformable
 from models.network.encoders import Decoder, HandEncoder, ObjectEncoder, Posterior
 from models.network.hierarchy import PointHierarchy, build_hierarchy
 from models.network.properties import PropertyEncoder
@@ -53,11 +54,20 @@ class ObjectTensors:
 
 @dataclass
 class Encoded:
-    """The condition ε^oh of a batch: hierarchy, per-point ε^o (B, N, C_o) and global ε^h (B, C_h)."""
+    """The condition ε^oh of a batch: hierarchy, per-point ε^o (B, N, C_o) and global ε^h (B, C_h); with a
+    deformable head also its per-point condition (B, N, CONDITION_DIM) and which objects are deformable (B,)."""
 
     hierarchy: PointHierarchy
     eo: torch.Tensor
     eh: torch.Tensor
+    condition: torch.Tensor | None = None
+    deformable: torch.Tensor | None = None
+
+    def rows(self, rows: slice) -> Encoded:
+        """The objects ``rows`` of the batch (the hierarchy is not sliced: decoding does not read it)."""
+        cond = None if self.condition is None else self.condition[rows]
+        deformable = None if self.deformable is None else self.deformable[rows]
+        return Encoded(self.hierarchy, self.eo[rows], self.eh[rows], cond, deformable)
 
 
 class ManiFoundationNet(nn.Module):
@@ -73,6 +83,11 @@ class ManiFoundationNet(nn.Module):
         self.contact_decoder = Decoder(config, out_dim=1, with_heatmap=False)
         self.force_decoder = Decoder(config, out_dim=3, with_heatmap=True)
         nn.init.constant_(self.contact_decoder.out.bias, math.log(HEAT_PRIOR / (1.0 - HEAT_PRIOR)))
+        self.deformable_head = (
+            DeformableHead(config.decoder_head[-1], config.decoder_head[-1], config.deformable_head)
+            if config.deformable_head
+            else None
+        )
 
     def encode_hand(self, hand: torch.Tensor) -> torch.Tensor:
         """φ_h: hand clouds (B, M_h, 6) = (x / hand_scale_m, n) → ε^h (B, C_h)."""
@@ -100,7 +115,11 @@ class ManiFoundationNet(nn.Module):
             ],
             dim=-1,
         )
-        return Encoded(hierarchy, self.object_encoder(hierarchy, feats), eh)
+        eo = self.object_encoder(hierarchy, feats)
+        if self.deformable_head is None:
+            return Encoded(hierarchy, eo, eh)
+        condition = deformable_condition(obj.motion, obj.prop_values, obj.prop_mask)
+        return Encoded(hierarchy, eo, eh, condition, is_deformable(obj.prop_mask))
 
     def decode(self, enc: Encoded, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """φ_c then φ_f (fed the heatmap) for z (B, K, latent) → heatmap (B, K, N) in [0, 1], force (B, K, N, 3)."""
@@ -109,9 +128,18 @@ class ManiFoundationNet(nn.Module):
 
     def decode_logits(self, enc: Encoded, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """:meth:`decode` with the heatmap's logits (B, K, N) first (a cross-entropy loss needs them)."""
-        logit = self.contact_decoder(enc.eo, enc.eh, z).squeeze(-1)
-        heat = torch.sigmoid(logit)
-        return logit, heat, self.force_decoder(enc.eo, enc.eh, z, heat)
+        if self.deformable_head is None:
+            logit = self.contact_decoder(enc.eo, enc.eh, z).squeeze(-1)
+            heat = torch.sigmoid(logit)
+            return logit, heat, self.force_decoder(enc.eo, enc.eh, z, heat)
+        if enc.condition is None or enc.deformable is None:
+            raise ValueError("a network with a deformable head decodes an encoding made by it (its condition)")
+        logit, contact_features = self.contact_decoder.with_features(enc.eo, enc.eh, z)
+        logit = logit.squeeze(-1)
+        force, force_features = self.force_decoder.with_features(enc.eo, enc.eh, z, torch.sigmoid(logit))
+        logit, force = self.deformable_head(contact_features, force_features, logit, force, enc.condition,
+                                            enc.deformable)  # fmt: skip
+        return logit, torch.sigmoid(logit), force
 
     def forward(
         self,

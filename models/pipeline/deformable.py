@@ -86,14 +86,17 @@ def prepare_deformable(inp: SynthesisInput) -> PreparedDeformable:
 
 
 def network_input(p: PreparedDeformable) -> NetworkInput:
-    """The `models.network.inference.NetworkInput` of a deformable request."""
+    """The `models.network.inference.NetworkInput` of a deformable request: its properties completed with the
+    material's defaults, as the simulator completes them (the training data carry every one)."""
+    from models.deformable.materials import with_defaults
     from models.network.inference import NetworkInput
 
     hand = p.inp.hand
+    properties = with_defaults(p.inp.material, dict(p.inp.properties))
     return NetworkInput(
         points=p.points, normals=p.normals, motion=p.motion,
         mask=p.mask if p.mask is not None else np.ones(len(p.points), dtype=bool),
-        properties={k: v for k, v in p.inp.properties.items() if k != "yield_stress"},
+        properties={k: v for k, v in properties.items() if k != "yield_stress"},
         hand_points=np.asarray(hand.surface_points), hand_normals=np.asarray(hand.surface_normals),
         hand_key=str(p.inp.hand_key or getattr(hand, "name", "hand")),
     )  # fmt: skip

@@ -90,10 +90,10 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
     model = create_model(cfg.network, seed=cfg.seed).to(device)
     known_materials: list[str] = []  # what init_from's weights already know (kept on the card)
     if cfg.init_from is not None:
-        loaded_init, init_card = load_checkpoint(cfg.init_from, cfg.network)
+        loaded_init, init_card = load_checkpoint(cfg.init_from)
         known_materials = list(init_card.materials or [])
         if not resume:
-            model.load_state_dict(loaded_init.state_dict())
+            initialise_from(model, loaded_init)
     preps = _prepare(sources, model, cfg)
     hand_scale = model.config.hand_scale_m
     params = freeze_except(model, cfg.train_only) if cfg.train_only else list(model.parameters())
@@ -200,6 +200,21 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             break
     return TrainResult(out, epoch, time.perf_counter() - t_start, final, best)
 
+
+
+def initialise_from(model: ManiFoundationNet, source: ManiFoundationNet) -> None:
+    """Copy ``source``'s weights into ``model``: the same configuration, or ``model``'s with a deformable head
+    added (the head keeps its initialisation: zero output, so ``model`` starts as ``source``).
+
+    Raises:
+        ValueError: the configurations differ otherwise.
+    """
+    mine = {**model.config.to_dict(), "name": "", "deformable_head": []}
+    theirs = {**source.config.to_dict(), "name": "", "deformable_head": []}
+    if mine != theirs or (source.config.deformable_head and source.config != model.config):
+        raise ValueError(f"init_from: a {source.config.name!r} network cannot start a {model.config.name!r} one")
+    missing, unexpected = model.load_state_dict(source.state_dict(), strict=False)
+    assert not unexpected and all(k.startswith("deformable_head.") for k in missing), (missing, unexpected)
 
 
 def _load(cfg: TrainConfig) -> list[Source]:

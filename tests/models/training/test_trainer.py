@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -132,49 +133,72 @@ def test_best_is_chosen_among_epochs_measured_on_the_same_validation_examples(da
     assert best.training_data["training"]["epochs"] == 2
 
 
-def test_train_only_the_deformable_property_mlps_leaves_every_rigid_answer_bit_identical(tmp_path: Path) -> None:
-    import torch
+SHIPPED = Path(__file__).resolve().parents[3] / "models" / "weights" / "cpu1k"
+RIGID = {"friction": 0.6, "density": 700.0}
+ROPE = {"friction": 0.6, "youngs_modulus": 3e4, "poisson_ratio": 0.3}
 
+
+def _train_only_from_shipped(tmp_path: Path, network: str, train_only: list[str]) -> tuple[Any, Any, Any]:
+    """(shipped network, the trained one, its card) after two epochs on a tiny rope set training ``train_only``."""
     from models.data.deformable_generate import DeformableDataConfig
     from models.data.deformable_generate import generate as generate_deformable
-    from models.network.model import ObjectTensors
-    from models.network.properties import property_tensors
-    from models.training.freezing import DEFORMABLE_PROPERTY_MLPS
 
     soft = tmp_path / "soft"
     generate_deformable(DeformableDataConfig(materials=("rope",), bodies=2, examples_per_body=3, test_fraction=0.0),
                         soft, progress=False)  # fmt: skip
-    shipped = Path(__file__).resolve().parents[3] / "models" / "weights" / "cpu1k"
-    cfg = TrainConfig(data=[str(soft)], out=str(tmp_path / "run"), network="cpu1k", epochs=2, batch_size=2,
-                      threads=1, warmup_steps=1, val_splits=("test_so",), init_from=str(shipped), lr=1e-2,
-                      train_only=list(DEFORMABLE_PROPERTY_MLPS))  # fmt: skip
+    cfg = TrainConfig(data=[str(soft)], out=str(tmp_path / "run"), network=network, epochs=2, batch_size=2,
+                      threads=1, warmup_steps=1, val_splits=["test_so"], init_from=str(SHIPPED), lr=1e-2,
+                      train_only=train_only)  # fmt: skip
     result = train(cfg, progress=False)
-    before, _ = load_checkpoint(shipped, "cpu1k")
-    after, card = load_checkpoint(Path(result.out) / "last", "cpu1k")
-    old, new = before.state_dict(), after.state_dict()
-    changed = {k for k in old if not torch.equal(old[k], new[k])}
-    assert changed and all(k.startswith(DEFORMABLE_PROPERTY_MLPS) for k in changed)  # BatchNorm stats too
-    assert card.materials == ["articulated", "rigid", "rope"]
-    assert "as loaded" in card.notes
+    after, card = load_checkpoint(Path(result.out) / "last", network)
+    return load_checkpoint(SHIPPED, "cpu1k")[0], after, card
+
+
+def _outputs(model: Any, properties: dict[str, float]) -> Any:
+    """Every output (heatmaps and motion maps of 4 prior samples, flattened) for one fixed random object."""
+    import torch
+
+    from models.network.model import ObjectTensors
+    from models.network.properties import property_tensors
 
     gen = torch.Generator().manual_seed(0)
     xyz = torch.rand(1, 1024, 3, generator=gen) - 0.5
     normals = torch.nn.functional.normalize(xyz, dim=-1)
     hand = torch.cat([torch.rand(1, 256, 3, generator=gen) - 0.5, normals[:, :256]], dim=-1)
-    z = torch.randn(1, 4, before.config.latent_dim, generator=gen)
+    z = torch.randn(1, 4, model.config.latent_dim, generator=gen)
+    values, mask = property_tensors([properties])
+    obj = ObjectTensors(xyz, normals, 0.1 * normals, torch.ones(1, 1024), values, mask, torch.tensor([0.1]))
+    model.eval()
+    with torch.no_grad():
+        enc = model.encode(obj, model.encode_hand(hand))
+        return torch.cat([t.flatten() for t in model.decode(enc, z)])
 
-    def heat_of(model: torch.nn.Module, properties: dict[str, float]) -> torch.Tensor:
-        values, mask = property_tensors([properties])
-        obj = ObjectTensors(xyz, normals, 0.1 * normals, torch.ones(1, 1024), values, mask, torch.tensor([0.1]))
-        model.eval()
-        with torch.no_grad():
-            enc = model.encode(obj, model.encode_hand(hand))
-            return torch.cat([t.flatten() for t in model.decode(enc, z)])
 
-    rigid = {"friction": 0.6, "density": 700.0}
-    assert torch.equal(heat_of(before, rigid), heat_of(after, rigid))
-    rope = {"friction": 0.6, "youngs_modulus": 3e4, "poisson_ratio": 0.3}
-    assert not torch.equal(heat_of(before, rope), heat_of(after, rope))
+def test_train_only_the_deformable_property_mlps_leaves_every_rigid_answer_bit_identical(tmp_path: Path) -> None:
+    import torch
+
+    from models.training.freezing import DEFORMABLE_PROPERTY_MLPS
+
+    before, after, card = _train_only_from_shipped(tmp_path, "cpu1k", list(DEFORMABLE_PROPERTY_MLPS))
+    old, new = before.state_dict(), after.state_dict()
+    changed = {k for k in old if not torch.equal(old[k], new[k])}
+    assert changed and all(k.startswith(DEFORMABLE_PROPERTY_MLPS) for k in changed)  # BatchNorm stats too
+    assert card.materials == ["articulated", "rigid", "rope"]
+    assert "as loaded" in card.notes
+    assert torch.equal(_outputs(before, RIGID), _outputs(after, RIGID))
+    assert not torch.equal(_outputs(before, ROPE), _outputs(after, ROPE))
+
+
+def test_a_deformable_head_trained_from_the_shipped_weights_changes_only_deformable_answers(tmp_path: Path) -> None:
+    import torch
+
+    before, after, card = _train_only_from_shipped(tmp_path, "cpu1k_deformable", ["deformable_head."])
+    old, new = before.state_dict(), after.state_dict()
+    assert all(torch.equal(old[k], new[k]) for k in old)  # every shipped tensor as it was
+    assert {k.split(".")[0] for k in set(new) - set(old)} == {"deformable_head"}
+    assert card.config_name == "cpu1k_deformable" and card.materials == ["articulated", "rigid", "rope"]
+    assert torch.equal(_outputs(before, RIGID), _outputs(after, RIGID))
+    assert not torch.equal(_outputs(before, ROPE), _outputs(after, ROPE))
 
 
 def test_train_only_refuses_a_prefix_that_names_no_parameter() -> None:

@@ -1,0 +1,90 @@
+"""The deformable head: a residual on the heatmap logits and the motion map, open only for deformable objects.
+
+Why a separate head: every run that trained the whole network on deformables as well lost rigid success on two
+CPU cores (model card, rounds 8 and 11), and training the deformable properties' MLPs ψ alone barely moved the
+deformable loss (round 12: training loss 0.54 after the first epoch, 0.52 from the second to the eighth). This
+head is the capacity a deformable answer needs, placed where a rigid answer never reaches it: it reads each
+point's decoder features (both decoders' last hidden layer, so the object's geometry, the hand and the latent
+sample), the base outputs, the target motion at the point (and its size against the object's largest) and the
+raw properties, and adds (Δ logit, Δ motion) — but only for objects that carry a deformable property (stretch,
+bending, Young's modulus or Poisson's ratio; the wire schema allows them only on cloth, rope and plasticine).
+For every other object the base outputs pass through unchanged, bit for bit, so weights trained with only this
+head (``train_only: [deformable_head.]``) answer rigid and articulated requests exactly as the weights they
+started from. Its last layer starts at zero: an untrained head is the base network.
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import nn
+
+from models.network.layers import MLP
+from models.network.properties import PROPERTY_NAMES
+
+DEFORMABLE_PROPERTIES = ("stretch", "bending", "youngs_modulus", "poisson_ratio")
+_DEFORMABLE_INDEX = [PROPERTY_NAMES.index(n) for n in DEFORMABLE_PROPERTIES]
+CONDITION_DIM = 3 + 1 + 2 * len(PROPERTY_NAMES)  # motion, its relative size, property values and presence
+
+
+def is_deformable(prop_mask: torch.Tensor) -> torch.Tensor:
+    """(B, 6) property presence → (B,) bool: the object carries a deformable property."""
+    return prop_mask[:, _DEFORMABLE_INDEX].any(dim=1)
+
+
+def deformable_condition(motion: torch.Tensor, prop_values: torch.Tensor, prop_mask: torch.Tensor) -> torch.Tensor:
+    """The head's per-point input besides the decoder features.
+
+    Args:
+        motion: (B, N, 3) normalised target motion.
+        prop_values: (B, 6) transformed property values.
+        prop_mask: (B, 6) bool presence.
+
+    Returns:
+        (B, N, CONDITION_DIM): the motion, its length over the object's largest, the values (0 where absent) and
+        the presence flags.
+    """
+    length = motion.norm(dim=-1, keepdim=True)
+    relative = length / length.amax(dim=1, keepdim=True).clamp_min(1e-9)
+    mask = prop_mask.to(motion.dtype)
+    props = torch.cat([prop_values * mask, mask], dim=-1)
+    return torch.cat([motion, relative, props.unsqueeze(1).expand(-1, motion.shape[1], -1)], dim=-1)
+
+
+class DeformableHead(nn.Module):
+    """Per-point MLP → (Δ logit, Δ motion), applied where :func:`is_deformable`."""
+
+    def __init__(self, contact_features: int, force_features: int, hidden: tuple[int, ...]) -> None:
+        super().__init__()
+        in_dim = contact_features + force_features + 1 + 3 + CONDITION_DIM
+        self.mlp = MLP(in_dim, hidden, norm=False)
+        self.out = nn.Linear(hidden[-1], 4)
+        nn.init.zeros_(self.out.weight)
+        nn.init.zeros_(self.out.bias)
+
+    def forward(
+        self,
+        contact_features: torch.Tensor,
+        force_features: torch.Tensor,
+        logit: torch.Tensor,
+        force: torch.Tensor,
+        condition: torch.Tensor,
+        deformable: torch.Tensor,
+    ) -> tuple[torch.Tensor, torch.Tensor]:
+        """Args: decoder features (B, K, N, C_c) and (B, K, N, C_f), base logits (B, K, N), base motion map
+        (B, K, N, 3), condition (B, N, CONDITION_DIM), deformable (B,) bool. Returns the logits and the map."""
+        k = logit.shape[1]
+        x = torch.cat(
+            [
+                contact_features,
+                force_features,
+                logit.unsqueeze(-1),
+                force,
+                condition.unsqueeze(1).expand(-1, k, -1, -1),
+            ],
+            dim=-1,
+        )
+        delta = self.out(self.mlp(x))
+        gate = deformable.view(-1, 1, 1)
+        new_logit = torch.where(gate, logit + delta[..., 0], logit)
+        new_force = torch.where(gate.unsqueeze(-1), force + delta[..., 1:], force)
+        return new_logit, new_force

@@ -1,0 +1,52 @@
+"""The deformable head: closed for rigid objects (bit for bit), a no-op until trained, open for deformables."""
+
+from __future__ import annotations
+
+import torch
+
+from models.network import create_model
+from models.network.model import ManiFoundationNet, ObjectTensors
+from models.network.properties import property_tensors
+
+CLOTH = {"friction": 0.6, "density": 600.0, "stretch": 3e3, "bending": 3e-5}
+RIGID = {"friction": 0.6, "density": 700.0}
+
+
+def _decode(model: ManiFoundationNet, properties: list[dict[str, float]]) -> tuple[torch.Tensor, torch.Tensor]:
+    """Heatmaps (B, 3, N) and motion maps of one random object under each property set."""
+    gen = torch.Generator().manual_seed(1)
+    b, n = len(properties), 1024
+    xyz = (torch.rand(1, n, 3, generator=gen) - 0.5).expand(b, -1, -1)
+    normals = torch.nn.functional.normalize(xyz, dim=-1)
+    motion = 0.2 * torch.rand(1, n, 3, generator=gen).expand(b, -1, -1)
+    values, mask = property_tensors(properties)
+    obj = ObjectTensors(xyz, normals, motion, torch.ones(b, n), values, mask, torch.full((b,), 0.3))
+    hand = torch.cat([torch.rand(1, 128, 3, generator=gen).expand(b, -1, -1), normals[:, :128]], dim=-1)
+    z = torch.randn(1, 3, model.config.latent_dim, generator=gen).expand(b, -1, -1)
+    model.eval()
+    with torch.no_grad():
+        return model.decode(model.encode(obj, model.encode_hand(hand)), z)
+
+
+def _pair() -> tuple[ManiFoundationNet, ManiFoundationNet]:
+    """The base network and the same weights with a deformable head."""
+    base, headed = create_model("cpu1k", seed=3), create_model("cpu1k_deformable", seed=3)
+    missing, unexpected = headed.load_state_dict(base.state_dict(), strict=False)
+    assert not unexpected and missing and all(k.startswith("deformable_head.") for k in missing)
+    return base, headed
+
+
+def test_an_untrained_head_is_the_base_network() -> None:
+    base, headed = _pair()
+    for got, want in zip(_decode(headed, [RIGID, CLOTH]), _decode(base, [RIGID, CLOTH]), strict=True):
+        assert torch.equal(got, want)
+
+
+def test_a_trained_head_changes_deformable_answers_only_in_a_mixed_batch() -> None:
+    base, headed = _pair()
+    assert headed.deformable_head is not None
+    torch.nn.init.normal_(headed.deformable_head.out.weight, std=0.5, generator=torch.Generator().manual_seed(0))
+    (heat, motion), (base_heat, base_motion) = _decode(headed, [RIGID, CLOTH, RIGID]), _decode(base, [RIGID] * 3)
+    for row in (0, 2):  # rigid rows, beside a cloth one: exactly the base network's
+        assert torch.equal(heat[row], base_heat[row]) and torch.equal(motion[row], base_motion[row])
+    assert (heat[1] - base_heat[1]).abs().max() > 1e-3 and (motion[1] - base_motion[1]).abs().max() > 1e-3
