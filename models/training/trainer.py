@@ -89,6 +89,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
     sources = _load(cfg)
     model = create_model(cfg.network, seed=cfg.seed).to(device)
     known_materials: list[str] = []  # what init_from's weights already know (kept on the card)
+    init_card: ModelCard | None = None
     if cfg.init_from is not None:
         loaded_init, init_card = load_checkpoint(cfg.init_from)
         known_materials = list(init_card.materials or [])
@@ -172,7 +173,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             skip = ("split", "examples", "open_examples")
             final.update({f"{r['split']}_{k}": float(v) for k, v in r.items() if k not in skip})
         materials = sorted({m for src in sources for m in src.materials()} | set(known_materials))
-        card = _card(model, cfg, summary, epoch, wall, final, device, materials)
+        card = _card(model, cfg, summary, epoch, wall, final, device, materials, init_card)
         save_checkpoint(model, out / "last", card)
         score = float(val_m["loss"]) if val_m is not None else train_m["loss"]
         measured_on = validation_fingerprint(sources)
@@ -272,7 +273,11 @@ def _card(
     metrics: dict[str, float],
     device: torch.device,
     materials: list[str] | None = None,
+    init_card: ModelCard | None = None,
 ) -> ModelCard:
+    """The run's card. With ``train_only`` the frozen weights' own record stays on it: ``init_card``'s training
+    data, metrics and notes under ``training_data["init_from"]``, and its prior scale (the frozen network's
+    answers were tuned at it)."""
     materials = materials or list(RIGID_MATERIALS)
     deformable = [m for m in materials if m not in RIGID_MATERIALS]
     if cfg.train_only:
@@ -294,10 +299,16 @@ def _card(
             f"Trained on deformable examples only ({', '.join(deformable)}); rigid requests are out of its "
             "training distribution."
         )
+    inherited: dict[str, Any] = {}
+    if cfg.train_only and init_card is not None:
+        inherited = {"init_from": {"path": cfg.init_from, "training_data": init_card.training_data,
+                                   "metrics": init_card.metrics, "notes": init_card.notes}}  # fmt: skip
     return ModelCard.for_model(
         model,  # type: ignore[arg-type]
         trained=True,
+        prior_scale=init_card.prior_scale if cfg.train_only and init_card is not None else 1.0,
         training_data={
+            **inherited,
             **summary,
             "generator": "models.data (hierarchical grasp sampling, see models/data/__init__.py; labels: each "
             "example's grasp set, models/data/grasp_sets.py)",

@@ -36,3 +36,26 @@ def test_eval_refine_logs_progress_and_keeps_ground_truths(tmp_path: Path, capsy
     again = pickle.load(cache.open("rb"))
     assert next(iter(again.values()))[1] == rounds
     assert len(next(iter(again.values()))[0]) == len(candidates)
+
+
+def test_eval_deformable_judges_the_goal_only_beside_a_random_baseline(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from lab.evaluate import add_deformable
+
+    p = argparse.ArgumentParser()
+    add_deformable(p.add_subparsers())
+    common = ["deformable", "--materials", "rope", "--splits", "test_uo", "--cases", "1", "--weights",
+              "models/weights/cpu1k", "--sensitivity", "1", "--json", str(tmp_path / "f.json")]  # fmt: skip
+    args = p.parse_args([*common, "--methods", "network"])
+    assert args.func(args) == 0
+    out = capsys.readouterr().out
+    assert "no random baseline in this run" in out and "not met" not in out
+    args = p.parse_args([*common, "--methods", "random_target_motion,network"])
+    assert args.func(args) == 0
+    out = capsys.readouterr().out
+    assert "stronger random baseline" in out and "no random baseline" not in out
+    import json
+
+    [pair] = json.loads((tmp_path / "f.json").read_text())["sensitivity"]
+    assert pair["pair"] == "rope/stick" and len(pair["matched_error"]) == 1 and len(pair["swapped_error"][0]) == 2
