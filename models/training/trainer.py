@@ -18,7 +18,6 @@ from __future__ import annotations
 import csv
 import json
 import math
-import platform
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,11 +30,11 @@ from models.data.dataset import make_batch
 from models.data.prepare import PreparedObjects
 from models.network import ManiFoundationNet, ModelCard, create_model, load_checkpoint, save_checkpoint
 from models.training.best import is_best, validation_fingerprint
+from models.training.card import initialise_from, run_card
 from models.training.config import TrainConfig
 from models.training.freezing import freeze_except, set_train_mode
 from models.training.objective import batch_loss, prepare
 from models.training.sources import (
-    RIGID_MATERIALS,
     Source,
     data_summary,
     epoch_batches,
@@ -173,7 +172,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             skip = ("split", "examples", "open_examples")
             final.update({f"{r['split']}_{k}": float(v) for k, v in r.items() if k not in skip})
         materials = sorted({m for src in sources for m in src.materials()} | set(known_materials))
-        card = _card(model, cfg, summary, epoch, wall, final, device, materials, init_card)
+        card = run_card(model, cfg, summary, epoch, wall, final, device, materials, init_card)
         save_checkpoint(model, out / "last", card)
         score = float(val_m["loss"]) if val_m is not None else train_m["loss"]
         measured_on = validation_fingerprint(sources)
@@ -201,21 +200,6 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             break
     return TrainResult(out, epoch, time.perf_counter() - t_start, final, best)
 
-
-
-def initialise_from(model: ManiFoundationNet, source: ManiFoundationNet) -> None:
-    """Copy ``source``'s weights into ``model``: the same configuration, or ``model``'s with a deformable head
-    added (the head keeps its initialisation: zero output, so ``model`` starts as ``source``).
-
-    Raises:
-        ValueError: the configurations differ otherwise.
-    """
-    mine = {**model.config.to_dict(), "name": "", "deformable_head": []}
-    theirs = {**source.config.to_dict(), "name": "", "deformable_head": []}
-    if mine != theirs or (source.config.deformable_head and source.config != model.config):
-        raise ValueError(f"init_from: a {source.config.name!r} network cannot start a {model.config.name!r} one")
-    missing, unexpected = model.load_state_dict(source.state_dict(), strict=False)
-    assert not unexpected and all(k.startswith("deformable_head.") for k in missing), (missing, unexpected)
 
 
 def _load(cfg: TrainConfig) -> list[Source]:
@@ -262,67 +246,3 @@ def _validate(model: ManiFoundationNet, sources: list[Source], preps: list[Prepa
             w, den = ("open_examples", n_open) if k.endswith("_open") else ("examples", n)
             total[k] = sum(r[k] * r[w] for r in per) / max(den, 1)
     return [total, *per] if len(per) > 1 else [total]
-
-
-def _card(
-    model: torch.nn.Module,
-    cfg: TrainConfig,
-    summary: dict[str, Any],
-    epoch: int,
-    wall: float,
-    metrics: dict[str, float],
-    device: torch.device,
-    materials: list[str] | None = None,
-    init_card: ModelCard | None = None,
-) -> ModelCard:
-    """The run's card. With ``train_only`` the frozen weights' own record stays on it: ``init_card``'s training
-    data, metrics and notes under ``training_data["init_from"]``, and its prior scale (the frozen network's
-    answers were tuned at it)."""
-    materials = materials or list(RIGID_MATERIALS)
-    deformable = [m for m in materials if m not in RIGID_MATERIALS]
-    if cfg.train_only:
-        trained = ", ".join(cfg.train_only)
-        note = (
-            f"The weights of {cfg.init_from} with only {trained} trained on ({', '.join(deformable) or 'rigid'}); "
-            "every other parameter, BatchNorm statistics included, as loaded, so a request that never reaches the "
-            "trained parameters is answered exactly as by those weights."
-        )
-    elif not deformable:
-        note = (
-            "Trained on rigid and articulated (revolute/prismatic) examples only; requests for deformable "
-            "materials are out of its training distribution."
-        )
-    elif "rigid" in materials:
-        note = f"Trained on rigid and articulated objects and on deformables ({', '.join(deformable)}) in one run."
-    else:
-        note = (
-            f"Trained on deformable examples only ({', '.join(deformable)}); rigid requests are out of its "
-            "training distribution."
-        )
-    inherited: dict[str, Any] = {}
-    if cfg.train_only and init_card is not None:
-        inherited = {"init_from": {"path": cfg.init_from, "training_data": init_card.training_data,
-                                   "metrics": init_card.metrics, "notes": init_card.notes}}  # fmt: skip
-    return ModelCard.for_model(
-        model,  # type: ignore[arg-type]
-        trained=True,
-        prior_scale=init_card.prior_scale if cfg.train_only and init_card is not None else 1.0,
-        training_data={
-            **inherited,
-            **summary,
-            "generator": "models.data (hierarchical grasp sampling, see models/data/__init__.py; labels: each "
-            "example's grasp set, models/data/grasp_sets.py)",
-            "data_dirs": list(cfg.data),
-            "training": {
-                "epochs": epoch,
-                "wall_seconds": round(wall, 1),
-                "device": str(device),
-                "machine": f"{platform.machine()} {platform.processor() or ''} "
-                f"{torch.get_num_threads()} threads".strip(),
-                "config": cfg.to_dict(),
-            },
-        },
-        metrics={k: float(v) for k, v in metrics.items()},
-        materials=materials,
-        notes=note,
-    )

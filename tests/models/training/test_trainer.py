@@ -138,20 +138,34 @@ RIGID = {"friction": 0.6, "density": 700.0}
 ROPE = {"friction": 0.6, "youngs_modulus": 3e4, "poisson_ratio": 0.3}
 
 
+def _rigid_base(out: Path) -> Path:
+    """The shipped weights without their deformable head (the round-10 rigid network), saved as a checkpoint."""
+    from models.network import ModelCard, create_model, save_checkpoint
+
+    shipped, card = load_checkpoint(SHIPPED)
+    base = create_model("cpu1k")
+    base.load_state_dict({k: v for k, v in shipped.state_dict().items() if not k.startswith("deformable_head.")})
+    card = ModelCard.for_model(base, trained=True, materials=["articulated", "rigid"], prior_scale=card.prior_scale,
+                               training_data={"note": "rigid"})  # fmt: skip
+    return save_checkpoint(base, out, card)
+
+
 def _train_only_from_shipped(tmp_path: Path, network: str, train_only: list[str]) -> tuple[Any, Any, Any]:
-    """(shipped network, the trained one, its card) after two epochs on a tiny rope set training ``train_only``."""
+    """(the rigid base network, the trained one, its card) after two epochs on a tiny rope set training
+    ``train_only``."""
     from models.data.deformable_generate import DeformableDataConfig
     from models.data.deformable_generate import generate as generate_deformable
 
     soft = tmp_path / "soft"
     generate_deformable(DeformableDataConfig(materials=("rope",), bodies=2, examples_per_body=3, test_fraction=0.0),
                         soft, progress=False)  # fmt: skip
+    base = _rigid_base(tmp_path / "base")
     cfg = TrainConfig(data=[str(soft)], out=str(tmp_path / "run"), network=network, epochs=2, batch_size=2,
-                      threads=1, warmup_steps=1, val_splits=["test_so"], init_from=str(SHIPPED), lr=1e-2,
+                      threads=1, warmup_steps=1, val_splits=["test_so"], init_from=str(base), lr=1e-2,
                       train_only=train_only)  # fmt: skip
     result = train(cfg, progress=False)
     after, card = load_checkpoint(Path(result.out) / "last", network)
-    return load_checkpoint(SHIPPED, "cpu1k")[0], after, card
+    return load_checkpoint(base, "cpu1k")[0], after, card
 
 
 def _outputs(model: Any, properties: dict[str, float]) -> Any:
@@ -197,6 +211,7 @@ def test_a_deformable_head_trained_from_the_shipped_weights_changes_only_deforma
     assert all(torch.equal(old[k], new[k]) for k in old)  # every shipped tensor as it was
     assert {k.split(".")[0] for k in set(new) - set(old)} == {"deformable_head"}
     assert card.config_name == "cpu1k_deformable" and card.materials == ["articulated", "rigid", "rope"]
+    assert card.prior_scale == 1.75 and card.training_data["init_from"]["training_data"] == {"note": "rigid"}
     assert torch.equal(_outputs(before, RIGID), _outputs(after, RIGID))
     assert not torch.equal(_outputs(before, ROPE), _outputs(after, ROPE))
 
