@@ -128,7 +128,8 @@ class ManiFoundationNet(nn.Module):
 
     def decode_logits(self, enc: Encoded, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """:meth:`decode` with the heatmap's logits (B, K, N) first (a cross-entropy loss needs them)."""
-        if self.deformable_head is None:
+        if self.deformable_head is None or (enc.deformable is not None and not bool(enc.deformable.any())):
+            # no head, or no deformable object in the batch: the head would pass every output through
             logit = self.contact_decoder(enc.eo, enc.eh, z).squeeze(-1)
             heat = torch.sigmoid(logit)
             return logit, heat, self.force_decoder(enc.eo, enc.eh, z, heat)
