@@ -240,7 +240,7 @@ def run_deformable(args: argparse.Namespace) -> int:
                           f"baseline {stronger:.1f} %: goal (≥ 85 %, ≥ baseline + 30) {'met' if met else 'not met'}")
     figures: dict[str, Any] = {"table": rows}
     if args.sensitivity:
-        from models.evaluation.deformable import SENSITIVITY_PAIRS, property_sensitivity
+        from models.evaluation.property_pairs import SENSITIVITY_PAIRS, property_sensitivity
 
         pairs = Table(title=f"property sensitivity: one shape, two property sets, {args.sensitivity} shapes each")
         for col in ("pair", "shapes", "median rollout gap (same manipulation)", "network contacts differ",

@@ -19,7 +19,7 @@ from typing import Any
 from safetensors.torch import load_file, save_file
 
 from models.errors import CheckpointError
-from models.network.config import NetworkConfig, get_config, with_defaults
+from models.network.config import NetworkConfig, config_with_defaults, get_config
 from models.network.model import ManiFoundationNet, count_parameters
 from models.network.properties import PROPERTY_NAMES
 
@@ -134,7 +134,7 @@ def load_checkpoint(path: str | Path, config: str | NetworkConfig | None = None)
             raise CheckpointError(f"checkpoint config {card.config_name!r} is not registered") from exc
     else:
         expected = get_config(config) if isinstance(config, str) else config
-    diffs = config_differences(with_defaults(card.config), expected.to_dict())
+    diffs = config_differences(config_with_defaults(card.config), expected.to_dict())
     if diffs:
         raise CheckpointError(
             f"checkpoint {path} was saved with config {card.config_name!r}, which does not match the expected "

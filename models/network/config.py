@@ -98,7 +98,7 @@ class NetworkConfig:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> NetworkConfig:
         """Inverse of :meth:`to_dict`."""
-        d = with_defaults(data)
+        d = config_with_defaults(data)
         d["levels"] = tuple(LevelConfig(**lv) for lv in d["levels"])
         for key in ("sa_mlps", "fp_mlps", "posterior_sa_mlps"):
             d[key] = tuple(tuple(m) for m in d[key])
@@ -107,7 +107,7 @@ class NetworkConfig:
         return cls(**d)
 
 
-def with_defaults(data: dict[str, Any]) -> dict[str, Any]:
+def config_with_defaults(data: dict[str, Any]) -> dict[str, Any]:
     """A stored config dict with the fields added since it was stored set to their defaults (plain JSON)."""
     out = dict(data)
     for f in dataclasses.fields(NetworkConfig):
@@ -216,4 +216,4 @@ def cpu1k_deformable() -> NetworkConfig:
     return dataclasses.replace(cpu1k(), name="cpu1k_deformable", deformable_head=(64, 64))
 
 
-__all__ = ["LevelConfig", "NetworkConfig", "get_config", "list_configs", "register_config", "with_defaults"]
+__all__ = ["LevelConfig", "NetworkConfig", "config_with_defaults", "get_config", "list_configs", "register_config"]

@@ -128,16 +128,16 @@ class ManiFoundationNet(nn.Module):
 
     def decode_logits(self, enc: Encoded, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
         """:meth:`decode` with the heatmap's logits (B, K, N) first (a cross-entropy loss needs them)."""
-        if self.deformable_head is None or (enc.deformable is not None and not bool(enc.deformable.any())):
-            # no head, or no deformable object in the batch: the head would pass every output through
-            logit = self.contact_decoder(enc.eo, enc.eh, z).squeeze(-1)
-            heat = torch.sigmoid(logit)
-            return logit, heat, self.force_decoder(enc.eo, enc.eh, z, heat)
-        if enc.condition is None or enc.deformable is None:
-            raise ValueError("a network with a deformable head decodes an encoding made by it (its condition)")
         logit, contact_features = self.contact_decoder.with_features(enc.eo, enc.eh, z)
         logit = logit.squeeze(-1)
-        force, force_features = self.force_decoder.with_features(enc.eo, enc.eh, z, torch.sigmoid(logit))
+        heat = torch.sigmoid(logit)
+        force, force_features = self.force_decoder.with_features(enc.eo, enc.eh, z, heat)
+        if self.deformable_head is None:
+            return logit, heat, force
+        if enc.condition is None or enc.deformable is None:
+            raise ValueError("a network with a deformable head decodes an encoding made by it (its condition)")
+        if not bool(enc.deformable.any()):  # the head would pass every output through
+            return logit, heat, force
         logit, force = self.deformable_head(contact_features, force_features, logit, force, enc.condition,
                                             enc.deformable)  # fmt: skip
         return logit, torch.sigmoid(logit), force

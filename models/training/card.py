@@ -63,14 +63,15 @@ def run_card(
             f"Trained on deformable examples only ({', '.join(deformable)}); rigid requests are out of its "
             "training distribution."
         )
+    frozen_from = init_card if cfg.train_only else None
     inherited: dict[str, Any] = {}
-    if cfg.train_only and init_card is not None:
-        inherited = {"init_from": {"path": cfg.init_from, "training_data": init_card.training_data,
-                                   "metrics": init_card.metrics, "notes": init_card.notes}}  # fmt: skip
+    if frozen_from is not None:
+        inherited = {"init_from": {"path": cfg.init_from, "training_data": frozen_from.training_data,
+                                   "metrics": frozen_from.metrics, "notes": frozen_from.notes}}  # fmt: skip
     return ModelCard.for_model(
         model,  # type: ignore[arg-type]
         trained=True,
-        prior_scale=init_card.prior_scale if cfg.train_only and init_card is not None else 1.0,
+        prior_scale=frozen_from.prior_scale if frozen_from is not None else 1.0,
         training_data={
             **inherited,
             **summary,

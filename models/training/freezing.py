@@ -1,10 +1,11 @@
 """Training only part of a network: ``train_only`` parameter-name prefixes, everything else frozen.
 
-Why: the shipped weights were trained on rigid and articulated objects, and every run that trained all of them on
-deformables as well lost rigid success. A rigid request carries only ``friction`` and ``density``, so the property
-MLPs ψ of ``stretch``, ``bending``, ``youngs_modulus`` and ``poisson_ratio`` never see it (masked mean pooling
-drops absent properties). Training those alone teaches deformables through their properties and leaves every rigid
-answer bit for bit as it was.
+Why: the shipped rigid weights lose rigid success when all of them are trained on deformables as well (model
+card, rounds 8 and 11). Parameters a rigid or articulated request never reaches can be trained without touching
+a single rigid answer: the deformable head (``deformable_head.``, models/network/deformable_head.py — what the
+shipped weights train) or the property MLPs ψ of the deformable properties (:data:`DEFORMABLE_PROPERTY_MLPS`;
+masked mean pooling drops absent properties, and a rigid request carries only friction and density — tried in
+round 12, did not learn).
 
 Frozen modules are kept in eval mode during training: BatchNorm in train mode would normalise with the batch's
 statistics and update its running ones, and both would change the frozen part's outputs.
@@ -16,13 +17,12 @@ from collections.abc import Sequence
 
 from torch import nn
 
-# The parameters a rigid or articulated request never reaches (models.network.properties.PROPERTY_NAMES order:
-# friction 0, density 1, stretch 2, bending 3, youngs_modulus 4, poisson_ratio 5).
-DEFORMABLE_PROPERTY_MLPS: tuple[str, ...] = (
-    "properties.mlps.2.",
-    "properties.mlps.3.",
-    "properties.mlps.4.",
-    "properties.mlps.5.",
+from models.network.deformable_head import DEFORMABLE_PROPERTIES
+from models.network.properties import PROPERTY_NAMES
+
+# The property MLPs ψ a rigid or articulated request never reaches.
+DEFORMABLE_PROPERTY_MLPS: tuple[str, ...] = tuple(
+    f"properties.mlps.{PROPERTY_NAMES.index(name)}." for name in DEFORMABLE_PROPERTIES
 )
 
 
@@ -47,16 +47,11 @@ def freeze_except(model: nn.Module, prefixes: Sequence[str]) -> list[nn.Paramete
     return trainable
 
 
-def set_train_mode(model: nn.Module, prefixes: Sequence[str] | None) -> None:
-    """``model.train()``; with ``prefixes``, every module holding no trainable parameter goes back to eval mode.
-
-    A module counts as trainable when one of its own or its children's parameters starts with a prefix; the
-    others (and their BatchNorm statistics) stay as loaded.
-    """
+def set_train_mode(model: nn.Module, partial: bool) -> None:
+    """``model.train()``; when ``partial`` (after :func:`freeze_except`), every module holding no trainable
+    parameter, its own or a child's, goes back to eval mode, so it and its BatchNorm statistics stay as loaded."""
     model.train()
-    if not prefixes:
-        return
-    for name, module in model.named_modules():
-        own = [f"{name}.{p}" if name else p for p, _ in module.named_parameters()]
-        if not any(n.startswith(tuple(prefixes)) for n in own):
-            module.eval()
+    if partial:
+        for module in model.modules():
+            if not any(p.requires_grad for p in module.parameters()):
+                module.eval()

@@ -87,11 +87,9 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
     out.mkdir(parents=True, exist_ok=True)
     sources = _load(cfg)
     model = create_model(cfg.network, seed=cfg.seed).to(device)
-    known_materials: list[str] = []  # what init_from's weights already know (kept on the card)
-    init_card: ModelCard | None = None
+    init_card: ModelCard | None = None  # what init_from's weights already know stays on the run's card
     if cfg.init_from is not None:
         loaded_init, init_card = load_checkpoint(cfg.init_from)
-        known_materials = list(init_card.materials or [])
         if not resume:
             initialise_from(model, loaded_init)
     preps = _prepare(sources, model, cfg)
@@ -125,7 +123,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
             sources = _load(cfg)
             preps = _prepare(sources, model, cfg)
             summary = data_summary(sources)
-        set_train_mode(model, cfg.train_only)
+        set_train_mode(model, partial=bool(cfg.train_only))
         t0 = time.perf_counter()
         batches = epoch_batches([len(s.train) for s in sources], cfg.batch_size, rng)
         sums = dict.fromkeys(("loss", "heat", "force", "kl", "set"), 0.0)
@@ -171,7 +169,8 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
         for r in val_rows:
             skip = ("split", "examples", "open_examples")
             final.update({f"{r['split']}_{k}": float(v) for k, v in r.items() if k not in skip})
-        materials = sorted({m for src in sources for m in src.materials()} | set(known_materials))
+        known = set(init_card.materials) if init_card is not None else set()
+        materials = sorted({m for src in sources for m in src.materials()} | known)
         card = run_card(model, cfg, summary, epoch, wall, final, device, materials, init_card)
         save_checkpoint(model, out / "last", card)
         score = float(val_m["loss"]) if val_m is not None else train_m["loss"]

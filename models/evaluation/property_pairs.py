@@ -1,0 +1,103 @@
+"""The paper's property figure as a check: one shape as both members of a pair (handkerchief / card, rope / stick).
+
+Each shape gets one random manipulation, and each member's rollout under it is that member's target. A network
+answers each target twice — with the member's own properties and with the other member's — and both answers are
+simulated on the member: a network that reads the properties' meaning makes the own-property answer the better
+one, a property-blind one ties, one whose answers merely change wins about half.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from models.deformable.body import DeformableBody
+from models.deformable.metrics import shape_score
+from models.deformable.procedures import random_manipulation
+from models.deformable.simulate import simulate
+from models.evaluation.deformable import Answer, DeformableCase
+
+# The paper's property-sensitivity pairs: the same shape with two property sets.
+SENSITIVITY_PAIRS: dict[str, tuple[str, dict[str, float], str, dict[str, float]]] = {
+    "cloth": ("handkerchief", {"friction": 0.6, "density": 600.0, "stretch": 1e3, "bending": 1e-5},
+              "card", {"friction": 0.6, "density": 600.0, "stretch": 1e5, "bending": 1e-2}),
+    "rope": ("rope", {"friction": 0.6, "youngs_modulus": 1e4, "poisson_ratio": 0.3},
+             "stick", {"friction": 0.6, "youngs_modulus": 1e9, "poisson_ratio": 0.3}),
+}  # fmt: skip
+
+
+@dataclass
+class SensitivityResult:
+    """One shape as both members of a pair: their rollouts under the same manipulation, and the network's contacts.
+
+    Attributes:
+        rollout_gap: mean distance between the two rollouts (normalised 2 m cube).
+        contacts_differ: the network's contact sets for the same target motion differ (some contact farther than
+            ``CONTACT_GAP`` of the size from every contact of the other set), or None without a network.
+        sources: the network's contact source for each member.
+        matched_error: for each member, with its own rollout as the target: the shape error (top mean, metric
+            units) of the network's answer made with that member's properties, simulated on that member.
+        swapped_error: the same target and body, the answer made with the other member's properties. A network
+            that reads the properties' meaning makes ``matched < swapped``; one that ignores them ties.
+    """
+
+    material: str
+    rollout_gap: float
+    contacts_differ: bool | None
+    sources: tuple[str, str]
+    matched_error: tuple[float, float] | None = None
+    swapped_error: tuple[float, float] | None = None
+
+    def matched_wins(self) -> tuple[int, int]:
+        """(members whose matched answer is the better one, members where the two answers tie)."""
+        if self.matched_error is None or self.swapped_error is None:
+            return 0, 0
+        pairs = list(zip(self.matched_error, self.swapped_error, strict=True))
+        return sum(m < s - TIE for m, s in pairs), sum(abs(m - s) <= TIE for m, s in pairs)
+
+
+CONTACT_GAP = 0.1
+TIE = 1e-9  # shape errors this close are one answer simulated twice (the simulator is deterministic)
+
+
+def _top_error(body: DeformableBody, target: np.ndarray, contacts: np.ndarray, motions: np.ndarray) -> float:
+    """The shape error (top mean) of ``contacts`` moved by ``motions`` on ``body`` against ``target``."""
+    rollout = simulate(body, contacts, motions).cloud
+    return shape_score(body.material, body.points, target, rollout).top_mean_error
+
+
+def property_sensitivity(material: str, count: int, seed: int, network: Answer | None) -> list[SensitivityResult]:
+    """``count`` shapes of ``material`` (square cloths or ropes) as both members of its `SENSITIVITY_PAIRS`.
+
+    Each shape gets one random manipulation; each member's rollout under it is that member's target. With a
+    network, each member is answered twice for its target — once with its own properties, once with the
+    other member's — and both answers are simulated on it (``matched_error``, ``swapped_error``).
+    """
+    from models.deformable.metrics import NORMALISED_SIDE
+    from models.deformable.shapes import make_body
+
+    _, first, _, second = SENSITIVITY_PAIRS[material]
+    kind = "square" if material == "cloth" else "rope"
+    rng = np.random.default_rng([seed, 7])
+    out = []
+    for k in range(count):
+        a = make_body(material, kind, seed + k, first)
+        b = a.with_properties(second)
+        manip = random_manipulation(a, rng)
+        ra, rb = simulate(a, manip.contacts, manip.motions), simulate(b, manip.contacts, manip.motions)
+        gap = float(np.linalg.norm(ra.cloud - rb.cloud, axis=1).mean()) * NORMALISED_SIDE / a.size
+        if network is None:
+            out.append(SensitivityResult(material, gap, None, ("", "")))
+            continue
+        target = ra.cloud  # the same target for both: the shape the first member reaches
+        pa, ma, sa = network(DeformableCase(material, "sensitivity", a, manip, target))
+        pb, mb, sb = network(DeformableCase(material, "sensitivity", b, manip, target))
+        d = np.linalg.norm(pa[:, None] - pb[None], axis=-1)
+        differ = bool(max(d.min(axis=1).max(), d.min(axis=0).max()) > CONTACT_GAP * a.size)
+        qa, na, _ = network(DeformableCase(material, "sensitivity", a, manip, rb.cloud))
+        qb, nb, _ = network(DeformableCase(material, "sensitivity", b, manip, rb.cloud))
+        matched = (_top_error(a, ra.cloud, pa, ma), _top_error(b, rb.cloud, qb, nb))
+        swapped = (_top_error(a, ra.cloud, pb, mb), _top_error(b, rb.cloud, qa, na))
+        out.append(SensitivityResult(material, gap, differ, (sa, sb), matched, swapped))
+    return out
