@@ -43,6 +43,11 @@ def register(subparsers: Any) -> None:
     )
     g.add_argument("--bodies", type=int, default=12, help="deformable bodies per material")
     g.add_argument("--examples-per-body", type=int, default=4, help="simulated manipulations per deformable body")
+    g.add_argument(
+        "--verify-moving",
+        action="store_true",
+        help="cloth and rope: label the target's most-moved points too when a rollout verifies them (one more each)",
+    )
     g.add_argument("--no-progress", action="store_true")
     g.set_defaults(func=_generate)
     lab = sub.add_parser("labels", help="how much of each object its valid grasps cover, and simple rules' hits")
@@ -68,7 +73,8 @@ def _generate(args: argparse.Namespace) -> int:
         from models.data.deformable_generate import generate as generate_deformable
 
         dcfg = DeformableDataConfig(materials=tuple(deformable), bodies=args.bodies,
-                                    examples_per_body=args.examples_per_body, seed=args.seed)  # fmt: skip
+                                    examples_per_body=args.examples_per_body, seed=args.seed,
+                                    verify_moving=args.verify_moving)  # fmt: skip
         made = generate_deformable(dcfg, args.out, workers=args.workers, progress=not args.no_progress)
         print(json.dumps(made["totals"], indent=1))
     if not {"rigid", "articulated"} & set(materials):

@@ -6,6 +6,14 @@ motion map, both by the rigid data's documented kernel (`models.data.labels.heat
 in place of forces), ``mask`` (N,) region mask (all ones, or the contacts' neighbourhood, half each), the
 contacts (cloud indices) and their motions, the procedure's name, and the motion split.
 
+Verified labels (``verify_moving``, cloth and rope): one procedure's contacts are one valid answer among many
+(a drag can take the cloth anywhere), so regressing them alone averages into a flat map. After the procedure's
+rollout has given the target, the ``H`` points the target moves most, spread apart (`models.deformable.answer.
+moving_indices`, ``H`` the procedure's contact count, at least two), are moved by the target's displacement there
+in the same simulator; when that rollout reaches the target by the paper's metric they are a second valid contact
+set, and the labels are the union of both sets (:func:`union_labels`). Plasticine is never verified this way: its
+target is the press after spring-back, which the target's displacement does not reach (docs/deformables.md).
+
 Motion split: a manipulation is an "unseen motion" when the heading of its mean contact motion lies within
 ``HELD_OUT_HALF_WIDTH`` of one of ``HELD_OUT_HEADINGS`` (four diagonals; ≈ 22 % of headings); those never enter
 training (``test_so`` on training bodies, ``test_uo`` on test bodies).
@@ -17,8 +25,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from models.data.labels import heat_and_force, region_mask
+from models.data.labels import heat_and_force, kernel, region_mask
+from models.deformable.answer import moving_indices
 from models.deformable.body import DeformableBody
+from models.deformable.metrics import shape_score
 from models.deformable.procedures import Manipulation, random_manipulation
 from models.deformable.simulate import simulate
 
@@ -39,6 +49,8 @@ class DeformableExample:
     procedure: str
     unseen_motion: bool
     seconds: float
+    label_sets: int = 1
+    moving_checked: bool = False
 
 
 def is_unseen_motion(motions: np.ndarray) -> bool:
@@ -56,15 +68,52 @@ def labels(body: DeformableBody, manipulation: Manipulation) -> tuple[np.ndarray
                           body.size)  # fmt: skip
 
 
-def make_example(body: DeformableBody, rng: np.random.Generator, tries: int = 3) -> DeformableExample | None:
-    """A random manipulation of ``body`` simulated and labelled, or None when every try was unstable."""
+def union_labels(body: DeformableBody, sets: list[Manipulation]) -> tuple[np.ndarray, np.ndarray]:
+    """Heatmap (N,) and motion map (N, 3) of several valid contact sets: the kernel of every contact of every set,
+    heat_j = max_i k_ij and motion_j = heat_j · m_i* (i* the contact of the largest kernel), so that motion / heat
+    reads one contact's motion back (`models.deformable.answer.motion_at`) even where two sets' contacts overlap."""
+    idx = np.concatenate([s.contacts for s in sets])
+    motions = np.concatenate([s.motions for s in sets])
+    k = kernel(body.points, body.normals, body.points[idx], body.normals[idx], body.size)
+    heat = k.max(axis=1)
+    return heat, heat[:, None] * motions[np.argmax(k, axis=1)]
+
+
+def moving_alternative(body: DeformableBody, manipulation: Manipulation, target: np.ndarray) -> Manipulation | None:
+    """The target's most-moved points moved by its displacement, when their rollout reaches ``target`` (N, 3)."""
+    motion = target - body.points
+    count = max(2, len(manipulation.contacts))
+    idx = moving_indices(body.points, np.arange(len(body.points)), motion, count)
+    out = simulate(body, idx, motion[idx])
+    if not out.stable or not shape_score(body.material, body.points, target, out.cloud).success:
+        return None
+    return Manipulation(idx, motion[idx], "moving_points")
+
+
+def make_example(body: DeformableBody, rng: np.random.Generator, tries: int = 3,
+                 verify_moving: bool = False) -> DeformableExample | None:  # fmt: skip
+    """A random manipulation of ``body`` simulated and labelled, or None when every try was unstable.
+
+    Args:
+        body: the body at rest. rng: draws the manipulation and the mask. tries: unstable rollouts allowed.
+        verify_moving: cloth and rope: add the most-moved points to the labels when their rollout reaches the
+            target (see the module doc; one more rollout).
+    """
     for _ in range(tries):
         m = random_manipulation(body, rng)
         out = simulate(body, m.contacts, m.motions)
         if not out.stable:
             continue
-        heat, motion_map = labels(body, m)
-        mask = region_mask(body.points, body.points[m.contacts], body.size, rng)
+        sets = [m]
+        checked = verify_moving and body.material in ("cloth", "rope")
+        if checked:
+            alternative = moving_alternative(body, m, out.cloud)
+            if alternative is not None:
+                sets.append(alternative)
+        heat, motion_map = labels(body, m) if len(sets) == 1 else union_labels(body, sets)
+        every = np.unique(np.concatenate([s.contacts for s in sets]))
+        mask = region_mask(body.points, body.points[every], body.size, rng)
         return DeformableExample(out.cloud - body.points, heat, motion_map, mask, m.contacts, m.motions,
-                                 m.procedure, is_unseen_motion(m.motions), out.seconds)  # fmt: skip
+                                 m.procedure, is_unseen_motion(m.motions), out.seconds, len(sets),
+                                 checked)  # fmt: skip
     return None

@@ -40,9 +40,13 @@ class DeformableDataConfig:
     examples_per_body: int = 4
     seed: int = 0
     test_fraction: float = 0.25
+    verify_moving: bool = False  # cloth and rope labels: + the most-moved points when the simulator verifies them
 
     def to_dict(self) -> dict[str, Any]:
-        return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
+        out = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
+        if not self.verify_moving:  # data sets made before the option keep their manifests' configuration
+            del out["verify_moving"]
+        return out
 
 
 @dataclass
@@ -74,13 +78,16 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
     rows: dict[str, list[Any]] = {}
     counts: dict[str, int] = {}
     for _ in range(cfg.examples_per_body):
-        ex = make_example(body, rng)
+        ex = make_example(body, rng, verify_moving=cfg.verify_moving)
         if ex is None:
             counts["unstable"] = counts.get("unstable", 0) + 1
             continue
         which = ("test_uo" if split == "test" else "test_so") if ex.unseen_motion else "train"
         if split == "test" and which == "train":
             continue
+        if ex.moving_checked:
+            key = "moving_valid" if ex.label_sets > 1 else "moving_invalid"
+            counts[key] = counts.get(key, 0) + 1
         h = len(ex.contacts)
         contacts = np.full(MAX_CONTACTS, -1, dtype=np.int64)
         motions = np.zeros((MAX_CONTACTS, 3))
@@ -89,7 +96,7 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
         for key, value in (("motion", ex.motion.astype(np.float32)), ("heat", ex.heat.astype(np.float32)),
                            ("motion_map", ex.motion_map.astype(np.float32)), ("mask", ex.mask),
                            ("contacts", contacts), ("contact_motions", motions), ("procedure", ex.procedure),
-                           ("split", which), ("sim_seconds", ex.seconds)):  # fmt: skip
+                           ("split", which), ("sim_seconds", ex.seconds), ("label_sets", ex.label_sets)):  # fmt: skip
             rows.setdefault(key, []).append(value)
         counts[which] = counts.get(which, 0) + 1
     props = np.array([body.properties.get(k, np.nan) for k in PROPERTY_KEYS])
