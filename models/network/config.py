@@ -64,6 +64,8 @@ class NetworkConfig:
     decoder_head: tuple[int, ...] = (128, 64)  # after concatenating the global feature
     # hidden widths of the deformable head (models.network.deformable_head); () = none
     deformable_head: tuple[int, ...] = ()
+    # the head's motion as gain · target motion + residual (True) or as a residual alone (False, round 12)
+    deformable_motion_gain: bool = False
     # --- loss of Eq. (3) ---
     # The paper does not state λ_C, λ_S, λ_KL; these defaults are ours (heatmap and force map weighted
     # equally, a small KL weight as usual for CVAEs) and are recorded in every model card.
@@ -214,6 +216,13 @@ def cpu1k_deformable() -> NetworkConfig:
     """``cpu1k`` with the deformable head (64, 64): the shipped rigid weights plus a head only deformable
     objects reach (models.network.deformable_head)."""
     return dataclasses.replace(cpu1k(), name="cpu1k_deformable", deformable_head=(64, 64))
+
+
+@register_config
+def cpu1k_deformable_gain() -> NetworkConfig:
+    """``cpu1k_deformable`` whose head adds a per-point gain on the target motion to the motion map
+    (models.network.deformable_head): a post-contact motion is mostly the target's displacement at the contact."""
+    return dataclasses.replace(cpu1k_deformable(), name="cpu1k_deformable_gain", deformable_motion_gain=True)
 
 
 __all__ = ["LevelConfig", "NetworkConfig", "config_with_defaults", "get_config", "list_configs", "register_config"]

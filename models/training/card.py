@@ -15,16 +15,29 @@ from models.training.sources import RIGID_MATERIALS
 
 def initialise_from(model: ManiFoundationNet, source: ManiFoundationNet) -> None:
     """Copy ``source``'s weights into ``model``: the same configuration, or ``model``'s with a deformable head
-    added (the head keeps its initialisation: zero output, so ``model`` starts as ``source``).
+    added or changed. A new head keeps its initialisation (zero output, so ``model`` starts as ``source``); a
+    head of the same hidden widths but another output (a motion gain added) takes the source head's hidden layers
+    and its output rows for the logit and the motion residual, the gain's row starting at zero.
 
     Raises:
         ValueError: the configurations differ otherwise.
     """
-    mine = {**model.config.to_dict(), "name": "", "deformable_head": []}
-    theirs = {**source.config.to_dict(), "name": "", "deformable_head": []}
-    if mine != theirs or (source.config.deformable_head and source.config != model.config):
+    head_fields = {"name": "", "deformable_head": [], "deformable_motion_gain": False}
+    mine = {**model.config.to_dict(), **head_fields}
+    theirs = {**source.config.to_dict(), **head_fields}
+    same_head = source.config.deformable_head == model.config.deformable_head and (
+        model.config.deformable_motion_gain or not source.config.deformable_motion_gain
+    )
+    if mine != theirs or (source.config.deformable_head and not same_head):
         raise ValueError(f"init_from: a {source.config.name!r} network cannot start a {model.config.name!r} one")
-    missing, unexpected = model.load_state_dict(source.state_dict(), strict=False)
+    state = source.state_dict()
+    target = model.state_dict()
+    for key in ("deformable_head.out.weight", "deformable_head.out.bias"):
+        if key in state and state[key].shape != target[key].shape:  # (Δ logit, Δ motion) → (Δ logit, gain, Δ motion)
+            grown = torch.zeros_like(target[key])
+            grown[0], grown[-3:] = state[key][0], state[key][1:]
+            state[key] = grown
+    missing, unexpected = model.load_state_dict(state, strict=False)
     assert not unexpected and all(k.startswith("deformable_head.") for k in missing), (missing, unexpected)
 
 

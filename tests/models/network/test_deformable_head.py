@@ -50,3 +50,20 @@ def test_a_trained_head_changes_deformable_answers_only_in_a_mixed_batch() -> No
     for row in (0, 2):  # rigid rows, beside a cloth one: exactly the base network's
         assert torch.equal(heat[row], base_heat[row]) and torch.equal(motion[row], base_motion[row])
     assert (heat[1] - base_heat[1]).abs().max() > 1e-3 and (motion[1] - base_motion[1]).abs().max() > 1e-3
+
+
+def test_the_motion_gain_scales_the_target_motion_at_each_point() -> None:
+    base = create_model("cpu1k", seed=3)
+    gained = create_model("cpu1k_deformable_gain", seed=3)
+    gained.load_state_dict(base.state_dict(), strict=False)
+    head = gained.deformable_head
+    assert head is not None and head.out.out_features == 5
+    with torch.no_grad():
+        head.out.bias[1] = 2.0  # gain 2 everywhere, nothing else
+    heat0, force0 = _decode(base, [CLOTH])
+    heat1, force1 = _decode(gained, [CLOTH])
+    gen = torch.Generator().manual_seed(1)  # the motion `_decode` draws, after the cloud
+    torch.rand(1, 1024, 3, generator=gen)
+    motion = 0.2 * torch.rand(1, 1024, 3, generator=gen)
+    assert torch.equal(heat0, heat1)
+    torch.testing.assert_close(force1 - force0, 2.0 * motion.unsqueeze(1).expand_as(force0), rtol=0, atol=1e-5)
