@@ -14,6 +14,11 @@ mark every plausible place, not none.
 :func:`set_heat_loss` is ours: a motion can usually be produced by several grasps (`models.data.grasp_sets`), and
 a heatmap decoded from a *prior* sample should be one of them, whichever. Each prior sample pays the (weighted)
 heat error of the valid grasp nearest it, so no sample is pulled towards the average of several.
+
+:func:`readout_loss` is ours too: a deformable answer reads a contact's motion as motion map / heat
+(`models.deformable.answer.motion_at`), and the MSE of Eq. (3) makes that ratio right only where the predicted
+heat is the conditional mean of the label's — with a contact-weighted cross-entropy it is not, and the motions read
+back were 0.25-1.5 of the label's (round 13). This term is the error of the read-out itself at the label's contacts.
 """
 
 from __future__ import annotations
@@ -116,3 +121,31 @@ def set_heat_loss(
     err = error(prior_heat.unsqueeze(2), set_heat.unsqueeze(1), alpha)  # (B, K, G)
     err = err.masked_fill(~set_valid.unsqueeze(1), float("inf"))
     return err.min(dim=2).values.mean()
+
+
+READOUT_FLOOR = 0.1  # the least heat a motion is divided by (models.deformable.answer.HEAT_FLOOR)
+READOUT_CONTACT = 0.5  # label heat from which a point is a contact whose motion is read
+
+
+def readout_loss(heat: torch.Tensor, force: torch.Tensor, heat_gt: torch.Tensor, force_gt: torch.Tensor) -> torch.Tensor:
+    """Squared error of the motion read at the label's contacts: force / max(heat, floor) against the label's
+    force_gt / heat_gt, over points with heat_gt ≥ ``READOUT_CONTACT`` (the predicted heat is held fixed: this term
+    trains the map to match the heat, not the heat to match the map).
+
+    Args:
+        heat: (B, N) or (B, K, N) predicted heat. force: the predicted map, (B, N, 3) or (B, K, N, 3).
+        heat_gt: (B, N) label heat. force_gt: (B, N, 3) label map.
+
+    Returns:
+        The mean over contact points (and samples) of |read − label|²; zero without a contact point.
+    """
+    contact = heat_gt >= READOUT_CONTACT
+    target = force_gt / heat_gt.clamp_min(READOUT_CONTACT).unsqueeze(-1)
+    if heat.dim() == 3:
+        contact = contact.unsqueeze(1).expand_as(heat)
+        target = target.unsqueeze(1).expand_as(force)
+    read = force / heat.detach().clamp_min(READOUT_FLOOR).unsqueeze(-1)
+    err = (read - target).square().sum(dim=-1)
+    if not bool(contact.any()):
+        return err.sum() * 0.0
+    return err[contact].mean()

@@ -39,6 +39,7 @@ class TrainConfig:
     heat_loss: str = "mse"  # "mse" (Eq. 3) or "bce": cross-entropy on the logits (models.network.loss)
     prior_samples: int = 0  # K prior samples per example for the grasp-set loss (0: Eq. 3 alone)
     lambda_set: float = 1.0  # weight of the grasp-set loss (models.network.loss.set_heat_loss)
+    lambda_readout: float = 0.0  # weight of the motion read-out loss (models.network.loss.readout_loss; 0: none)
     max_set: int = 8  # valid grasps per example a batch carries (the data keeps up to grasp_sets.MAX_SET)
     precompute: bool = True  # per-object point subsets and hierarchies computed once (models.data.prepare)
     mask_dropout: float = 0.0  # probability that a training example's partial region mask is replaced by all ones

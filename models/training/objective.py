@@ -7,7 +7,7 @@ import torch
 from models.data.dataset import Batch, Examples
 from models.data.prepare import PreparedObjects, prepare_objects
 from models.network import ManiFoundationNet, cvae_loss
-from models.network.loss import set_heat_loss
+from models.network.loss import readout_loss, set_heat_loss
 from models.training.config import TrainConfig
 
 
@@ -15,7 +15,8 @@ def batch_loss(
     model: ManiFoundationNet, b: Batch, cfg: TrainConfig, gen: torch.Generator, device: torch.device
 ) -> dict[str, torch.Tensor]:
     """The loss terms of Eq. (3) on one batch (posterior z; the generator seeds z on the CPU), plus the grasp-set
-    term on ``cfg.prior_samples`` prior samples when asked."""
+    term on ``cfg.prior_samples`` prior samples and the motion read-out term (posterior and prior samples alike)
+    when asked."""
     prior_z = None
     if cfg.prior_samples > 0:
         shape = (b.heat.shape[0], cfg.prior_samples, model.config.latent_dim)
@@ -40,6 +41,12 @@ def batch_loss(
         prior = res["prior_heat_logit"] if cfg.heat_loss == "bce" else res["prior_heat"]
         terms["set"] = set_heat_loss(prior, b.set_heat, b.set_valid, cfg.heat_contact_weight, cfg.heat_loss)
         terms["loss"] = terms["loss"] + cfg.lambda_set * terms["set"]
+    if cfg.lambda_readout > 0:
+        heat, force = res["heat"].unsqueeze(1), res["force"].unsqueeze(1)
+        if prior_z is not None:
+            heat, force = torch.cat([heat, res["prior_heat"]], dim=1), torch.cat([force, res["prior_force"]], dim=1)
+        terms["readout"] = readout_loss(heat, force, b.heat, b.force)
+        terms["loss"] = terms["loss"] + cfg.lambda_readout * terms["readout"]
     return terms
 
 
