@@ -127,7 +127,9 @@ READOUT_FLOOR = 0.1  # the least heat a motion is divided by (models.deformable.
 READOUT_CONTACT = 0.5  # label heat from which a point is a contact whose motion is read
 
 
-def readout_loss(heat: torch.Tensor, force: torch.Tensor, heat_gt: torch.Tensor, force_gt: torch.Tensor) -> torch.Tensor:
+def readout_loss(
+    heat: torch.Tensor, force: torch.Tensor, heat_gt: torch.Tensor, force_gt: torch.Tensor
+) -> torch.Tensor:
     """Squared error of the motion read at the label's contacts: force / max(heat, floor) against the label's
     force_gt / heat_gt, over points with heat_gt ≥ ``READOUT_CONTACT`` (the predicted heat is held fixed: this term
     trains the map to match the heat, not the heat to match the map).
