@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 import trimesh
 
 from models.data.generate import object_split
@@ -45,16 +46,20 @@ def test_shipped_heatmap_on_a_held_out_object_is_not_flat_and_its_contacts_lie_o
         assert dist.max() < 1e-3
 
 
-def test_shipped_weights_answer_held_out_ropes_themselves_and_reach_a_target() -> None:
-    """Their deformable head on six rope cases of bodies no training saw (the evaluation's own cases): answers
-    from the network's own peaks (not the most-moved-points fallback) reach their targets in the simulator by the
-    paper's metric in at least two (measured: 3 of 4 own answers; the same weights without the head: 1 of 4)."""
+@pytest.mark.parametrize(("material", "least"), [("rope", 3), ("cloth", 3)])
+def test_shipped_weights_answer_held_out_deformables_themselves_and_reach_their_targets(
+    material: str, least: int
+) -> None:
+    """Their deformable head on six cases of bodies no training saw (the evaluation's own cases): answers from the
+    network's own peaks (not the most-moved-points fallback) reach their targets in the simulator by the paper's
+    metric in at least three (measured 2026-12-05: rope 4 of 5 own answers, cloth 4 of 6; the round-12 weights,
+    without verified labels, the motion gain and the read-out loss: rope 3 of 4, cloth 0 of 4)."""
     from models.data.deformable_generate import DeformableDataConfig
     from models.evaluation.deformable import build_cases, evaluate_case, pipeline_network
 
     predictor = ContactPredictor.from_checkpoint(WEIGHTS)
     answer = pipeline_network(predictor, get_hand("panda_gripper"), seed=0)
-    cases = build_cases("rope", "test_uo", 6, seed=0, data=DeformableDataConfig(seed=5))
+    cases = build_cases(material, "test_uo", 6, seed=0, data=DeformableDataConfig(seed=5))
     results = [evaluate_case(c, ("network",), 2, np.random.default_rng(0), answer)[0] for c in cases]
     own = [r.score.success for r in results if r.source == "network"]
-    assert sum(own) >= 2, [(r.source, r.score) for r in results]
+    assert sum(own) >= least, [(r.source, r.score) for r in results]
