@@ -31,6 +31,11 @@ def register(subparsers: Any) -> None:
     p.add_argument("--iters", type=int, default=20, help="timed calls per batch size")
     p.add_argument("--warmup", type=int, default=3, help="untimed calls first")
     p.add_argument("--threads", type=int, default=2, help="torch intra-op threads")
+    p.add_argument(
+        "--deformable",
+        action="store_true",
+        help="objects carry cloth properties, so a network's deformable head runs (rigid objects skip it)",
+    )
     p.set_defaults(func=run)
 
 
@@ -54,7 +59,10 @@ def _peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-def _inputs(n: int, batch: int) -> list[Any]:
+CLOTH_PROPERTIES = {"friction": 0.5, "density": 300.0, "stretch": 3e3, "bending": 3e-5}
+
+
+def _inputs(n: int, batch: int, deformable: bool = False) -> list[Any]:
     import numpy as np
 
     from models.network import NetworkInput
@@ -72,7 +80,7 @@ def _inputs(n: int, batch: int) -> list[Any]:
                 normals=d,
                 motion=np.tile([0.02, 0.0, 0.0], (n, 1)),
                 mask=np.ones(n, dtype=bool),
-                properties={"friction": 0.5},
+                properties=dict(CLOTH_PROPERTIES) if deformable else {"friction": 0.5},
                 hand_points=hand_n * 0.05,
                 hand_normals=hand_n,
                 hand_key="bench-hand",
@@ -93,7 +101,8 @@ def run(args: argparse.Namespace) -> int:
     exact_peak = _reset_peak_rss()
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} CPUs, torch {torch.__version__}, "
-        f"{torch.get_num_threads()} threads; N={args.points}, K={args.samples}, {args.iters} timed calls; "
+        f"{torch.get_num_threads()} threads; N={args.points}, K={args.samples}, {args.iters} timed calls, "
+        f"{'cloth' if args.deformable else 'rigid'} objects; "
         f"load average at start {os.getloadavg()[0]:.1f}"
     )
     print(f"peak memory: process peak RSS {'during each row' if exact_peak else 'so far (cumulative)'}")
@@ -107,7 +116,7 @@ def run(args: argparse.Namespace) -> int:
         predictor = ContactPredictor.untrained(name.strip(), seed=0)
         params = count_parameters(predictor.model)
         for batch in batches:
-            inputs = _inputs(args.points, batch)
+            inputs = _inputs(args.points, batch, args.deformable)
             for _ in range(args.warmup):
                 predictor.predict(inputs, num_samples=args.samples, seed=0)
             _reset_peak_rss()
