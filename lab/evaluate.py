@@ -172,6 +172,12 @@ def add_deformable(sub: Any) -> None:
     d.set_defaults(func=run_deformable)
 
 
+def _readback(row: dict[str, object]) -> str:
+    """The median read-back of the network's own answers (models.evaluation.deformable.motion_readback)."""
+    value = row.get("network_readback")
+    return f"{value:.2f}" if isinstance(value, float) and value == value else "-"
+
+
 def run_deformable(args: argparse.Namespace) -> int:
     """Build the cases, run every method on them and print the table."""
     import json
@@ -219,13 +225,14 @@ def run_deformable(args: argparse.Namespace) -> int:
     table = Table(title=f"deformables: simulated rollout vs target (paper metric), {args.cases} cases per row "
                         f"group, seed {args.seed}")
     for col in ("material", "split", "method", "cases", "success %", "median mean err", "median top err",
-                "network's own contacts (successes)"):
+                "network's own contacts (successes)", "own motion / target's"):
         table.add_column(col, justify="left" if col in ("material", "split", "method") else "right")
     rows = report.summary()
     for r in rows:
         table.add_row(str(r["material"]), str(r["split"]), str(r["method"]), str(r["cases"]),
                       f"{r['success']:.1f}", f"{r['mean_error']:.3f}", f"{r['top_mean_error']:.3f}",
-                      f"{r['network_contacts']} ({r['network_successes']})" if r["method"] == "network" else "-")
+                      f"{r['network_contacts']} ({r['network_successes']})" if r["method"] == "network" else "-",
+                      _readback(r))
     console = Console(width=160)
     console.print(table)
     for material in materials:  # the issue's goals, on unseen objects

@@ -68,6 +68,7 @@ class MethodResult:
     score: ShapeScore
     contacts: int
     source: str = ""
+    readback: float = float("nan")  # network's own answers: median |motion| / |target displacement| at its contacts
 
 
 @dataclass
@@ -100,8 +101,13 @@ class DeformableReport:
                     "top_mean_error": float(np.median([r.score.top_mean_error for r in rs])),
                     "network_contacts": sum(r.source == "network" for r in rs),
                     "network_successes": sum(r.source == "network" and r.score.success for r in rs),
+                    "network_readback": _median_or_nan([r.readback for r in rs if r.source == "network"]),
                 })  # fmt: skip
         return rows
+
+
+def _median_or_nan(values: list[float]) -> float:
+    return float(np.median(values)) if values else float("nan")
 
 
 def build_cases(material: str, split: str, count: int, seed: int, data: DeformableDataConfig) -> list[DeformableCase]:
@@ -172,13 +178,23 @@ def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int,
             if network is None:
                 raise ValueError("methods: 'network' needs a predictor")
             idx, mot, source = network(case)
-            out.append(MethodResult(method, _score(case, idx, mot), len(idx), source))
+            readback = motion_readback(case, idx, mot) if source == "network" else float("nan")
+            out.append(MethodResult(method, _score(case, idx, mot), len(idx), source, readback))
         else:
             raise ValueError(f"methods: unknown {method!r} (one of {', '.join(METHODS)})")
     return out
 
 
 Answer = Callable[[DeformableCase], tuple[np.ndarray, np.ndarray, str]]
+
+
+def motion_readback(case: DeformableCase, points: np.ndarray, motions: np.ndarray) -> float:
+    """Median over an answer's contacts (H, 3) of |its motion| / |the target's displacement at the nearest cloud
+    point|: 1 when the motions read from the maps have the target's length (what found round 12's short motions)."""
+    cloud = case.body.points
+    nearest = np.argmin(np.linalg.norm(cloud[None] - np.asarray(points)[:, None], axis=-1), axis=1)
+    target = np.linalg.norm((case.target - cloud)[nearest], axis=1)
+    return float(np.median(np.linalg.norm(motions, axis=1) / np.maximum(target, 1e-12)))
 
 
 def corrected_answer(case: DeformableCase, contacts: np.ndarray, corrections: int) -> tuple[np.ndarray, np.ndarray]:

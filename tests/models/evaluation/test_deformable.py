@@ -26,3 +26,17 @@ def test_the_moving_points_baseline_reaches_a_rope_drag_that_spread_random_point
     mean = {m: float(np.mean([s.mean_error for s in v])) for m, v in scores.items()}
     assert mean["moving_target_motion"] < mean["random_target_motion"]
 
+
+
+def test_readback_is_the_answers_motion_length_over_the_targets_at_its_contacts() -> None:
+    from models.evaluation.deformable import motion_readback
+
+    [case] = build_cases("rope", "test_uo", 1, seed=0, data=DeformableDataConfig(seed=0))
+    displacement = case.target - case.body.points
+    idx = np.array([0, len(displacement) // 2])
+    points = case.body.points[idx]
+    assert motion_readback(case, points, displacement[idx]) == 1.0
+    assert np.isclose(motion_readback(case, points, 0.4 * displacement[idx]), 0.4)
+    answer = lambda c: (points, 0.5 * displacement[idx], "network")  # noqa: E731 — what a short map answers
+    [result] = evaluate_case(case, ("network",), contacts=2, rng=np.random.default_rng(0), network=answer)
+    assert np.isclose(result.readback, 0.5)
