@@ -156,7 +156,7 @@ def add_deformable(sub: Any) -> None:
     d.add_argument("--splits", default="test_so,test_uo", help="test_so (seen objects), test_uo (unseen objects)")
     d.add_argument("--methods", default="random_motion,random_target_motion,moving_target_motion,ground_truth,network",
                    help="comma-separated, of random_motion, random_target_motion, moving_target_motion, "
-                   "moving_corrected, ground_truth, network")
+                   "moving_corrected, ground_truth, ground_truth_cut, network")
     d.add_argument("--corrections", type=int, default=4,
                    help="rollouts moving_corrected may spend correcting its motions (default 4)")
     d.add_argument("--cases", type=int, default=10, help="cases per (material, split)")

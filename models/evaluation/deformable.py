@@ -19,6 +19,8 @@ Methods (all in one run, on the same cases):
   closed loop on the body rebuilt from the cloud), then simulated on the case's own body like every method.
 - ``ground_truth``: the procedure's own contacts and motions — the ceiling the simulator allows (the target was
   made by them, so it measures the simulator's repeatability: 100 % when deterministic).
+- ``ground_truth_cut``: the procedure's contacts cut to the ``contacts`` the target moves most, with their own
+  motions — the ceiling for an answer with that many contacts (a plasticine press moves a whole cluster).
 - ``network``: `models.pipeline.run_pipeline` with method "network" (what the service answers: NMS contacts on
   the heatmap, the motion map there; H ≤ the hand's fingertips), first proposal.
 """
@@ -44,7 +46,7 @@ if TYPE_CHECKING:
     from models.robots import Hand
 
 METHODS = ("random_motion", "random_target_motion", "moving_target_motion", "moving_corrected", "ground_truth",
-           "network")  # fmt: skip
+           "ground_truth_cut", "network")  # fmt: skip
 SPLITS = ("test_so", "test_uo")
 MOTION_TRIES = 60
 
@@ -174,6 +176,10 @@ def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int,
         elif method == "ground_truth":
             m = case.manipulation
             out.append(MethodResult(method, _score(case, m.contacts, m.motions), len(m.contacts)))
+        elif method == "ground_truth_cut":
+            m = case.manipulation
+            keep = np.argsort(-np.linalg.norm(target_motion[m.contacts], axis=1), kind="stable")[:contacts]
+            out.append(MethodResult(method, _score(case, m.contacts[keep], m.motions[keep]), len(keep)))
         elif method == "network":
             if network is None:
                 raise ValueError("methods: 'network' needs a predictor")

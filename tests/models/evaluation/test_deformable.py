@@ -40,3 +40,15 @@ def test_readback_is_the_answers_motion_length_over_the_targets_at_its_contacts(
     answer = lambda c: (points, 0.5 * displacement[idx], "network")  # noqa: E731 — what a short map answers
     [result] = evaluate_case(case, ("network",), contacts=2, rng=np.random.default_rng(0), network=answer)
     assert np.isclose(result.readback, 0.5)
+
+
+def test_the_ground_truth_cut_to_its_contact_budget_keeps_the_most_moved_contacts() -> None:
+    [case] = build_cases("plasticine", "test_uo", 1, seed=0, data=DeformableDataConfig(seed=5))
+    h = len(case.manipulation.contacts)
+    assert h > 2  # a pressed cluster
+    results = evaluate_case(case, ("ground_truth", "ground_truth_cut"), contacts=2, rng=np.random.default_rng(0))
+    full, cut = results
+    assert full.contacts == h and full.score.success
+    assert cut.contacts == 2 and not cut.score.success  # two fingertips do not make a cluster's press
+    [whole] = evaluate_case(case, ("ground_truth_cut",), contacts=h, rng=np.random.default_rng(0))
+    assert whole.score.success and whole.score.mean_error == full.score.mean_error
