@@ -46,14 +46,15 @@ def test_shipped_heatmap_on_a_held_out_object_is_not_flat_and_its_contacts_lie_o
         assert dist.max() < 1e-3
 
 
-@pytest.mark.parametrize(("material", "least"), [("rope", 3), ("cloth", 3)])
+@pytest.mark.parametrize(("material", "least"), [("rope", 4), ("cloth", 3)])
 def test_shipped_weights_answer_held_out_deformables_themselves_and_reach_their_targets(
     material: str, least: int
 ) -> None:
     """Their deformable head on six cases of bodies no training saw (the evaluation's own cases): answers from the
     network's own peaks (not the most-moved-points fallback) reach their targets in the simulator by the paper's
-    metric in at least three (measured 2026-12-05: rope 4 of 5 own answers, cloth 4 of 6; the round-12 weights,
-    without verified labels, the motion gain and the read-out loss: rope 3 of 4, cloth 0 of 4)."""
+    metric in at least four (rope) and three (cloth) (measured 2026-12-05: rope 5 of 5 own answers, cloth 4 of 6;
+    the round-12 weights, without verified labels, the motion gain and the read-out loss: rope 3 of 4, cloth 0 of
+    4)."""
     from models.data.deformable_generate import DeformableDataConfig
     from models.evaluation.deformable import build_cases, evaluate_case, pipeline_network
 
