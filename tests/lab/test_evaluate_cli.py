@@ -54,8 +54,12 @@ def test_eval_deformable_judges_the_goal_only_beside_a_random_baseline(
     args = p.parse_args([*common, "--methods", "random_target_motion,network"])
     assert args.func(args) == 0
     out = capsys.readouterr().out
-    assert "stronger random baseline" in out and "no random baseline" not in out
+    assert "stronger random baseline" in out and "no random baseline" not in out and "paper's baseline" not in out
     import json
 
     [pair] = json.loads((tmp_path / "f.json").read_text())["sensitivity"]
     assert pair["pair"] == "rope/stick" and len(pair["matched_error"]) == 1 and len(pair["swapped_error"][0]) == 2
+    args = p.parse_args([*common, "--methods", "random_motion,network", "--sensitivity", "0"])
+    assert args.func(args) == 0
+    out = capsys.readouterr().out
+    assert "stronger random baseline" in out and "against the paper's baseline" in out
