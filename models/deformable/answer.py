@@ -14,10 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from models.network.selection import select_contacts
+from models.network.selection import HEAT_FLOOR, select_contacts
 
 TASK_KINDS = ("point_motion", "target_points")
-HEAT_FLOOR = 0.1  # the least heat a motion is divided by (a selected peak stands at least this high in practice)
 
 
 def motion_at(heatmap: np.ndarray, motion_map: np.ndarray, indices: np.ndarray) -> np.ndarray:

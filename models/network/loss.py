@@ -27,6 +27,7 @@ import torch
 import torch.nn.functional as F
 
 from models.network.config import NetworkConfig
+from models.network.selection import HEAT_FLOOR
 
 
 def kl_to_standard_normal(mu: torch.Tensor, logvar: torch.Tensor) -> torch.Tensor:
@@ -123,7 +124,6 @@ def set_heat_loss(
     return err.min(dim=2).values.mean()
 
 
-READOUT_FLOOR = 0.1  # the least heat a motion is divided by (models.deformable.answer.HEAT_FLOOR)
 READOUT_CONTACT = 0.5  # label heat from which a point is a contact whose motion is read
 
 
@@ -146,7 +146,7 @@ def readout_loss(
     if heat.dim() == 3:
         contact = contact.unsqueeze(1).expand_as(heat)
         target = target.unsqueeze(1).expand_as(force)
-    read = force / heat.detach().clamp_min(READOUT_FLOOR).unsqueeze(-1)
+    read = force / heat.detach().clamp_min(HEAT_FLOOR).unsqueeze(-1)
     err = (read - target).square().sum(dim=-1)
     if not bool(contact.any()):
         return err.sum() * 0.0
