@@ -59,12 +59,10 @@ def _peak_rss_mb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
-CLOTH_PROPERTIES = {"friction": 0.5, "density": 300.0, "stretch": 3e3, "bending": 3e-5}
-
-
 def _inputs(n: int, batch: int, deformable: bool = False) -> list[Any]:
     import numpy as np
 
+    from models.deformable.materials import DEFAULTS
     from models.network import NetworkInput
 
     rng = np.random.default_rng(0)
@@ -80,7 +78,7 @@ def _inputs(n: int, batch: int, deformable: bool = False) -> list[Any]:
                 normals=d,
                 motion=np.tile([0.02, 0.0, 0.0], (n, 1)),
                 mask=np.ones(n, dtype=bool),
-                properties=dict(CLOTH_PROPERTIES) if deformable else {"friction": 0.5},
+                properties=dict(DEFAULTS["cloth"]) if deformable else {"friction": 0.5},  # what a cloth request gets
                 hand_points=hand_n * 0.05,
                 hand_normals=hand_n,
                 hand_key="bench-hand",
