@@ -23,11 +23,14 @@ Methods (all in one run, on the same cases):
   motions — the ceiling for an answer with that many contacts (a plasticine press moves a whole cluster).
 - ``network``: `models.pipeline.run_pipeline` with method "network" (what the service answers: NMS contacts on
   the heatmap, the motion map there; H ≤ the hand's fingertips), first proposal.
+- ``network_samples``, ``network_checked``, ``random_checked``: the service asked for K proposals
+  (`models.evaluation.deformable_service`): the network's per-sample success rate, and the first answer after the
+  service's own rollout check, for the network and for random contacts at the same budget.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
@@ -40,13 +43,14 @@ from models.deformable.materials import MATERIALS
 from models.deformable.metrics import ShapeScore, shape_score
 from models.deformable.procedures import Manipulation, random_manipulation
 from models.deformable.simulate import simulate
+from models.evaluation.deformable_service import SERVICE_METHODS, Answers
 
 if TYPE_CHECKING:
     from models.network.inference import ContactPredictor
     from models.robots import Hand
 
 METHODS = ("random_motion", "random_target_motion", "moving_target_motion", "moving_corrected", "ground_truth",
-           "ground_truth_cut", "network")  # fmt: skip
+           "ground_truth_cut", "network", *SERVICE_METHODS)  # fmt: skip
 SPLITS = ("test_so", "test_uo")
 MOTION_TRIES = 60
 
@@ -71,6 +75,12 @@ class MethodResult:
     contacts: int
     source: str = ""
     readback: float = float("nan")  # network's own answers: median |motion| / |target displacement| at its contacts
+    rate: float | None = None  # several answers judged (network_samples): the fraction that succeed
+
+    @property
+    def success(self) -> float:
+        """1 or 0, or the fraction of the answers that succeed."""
+        return float(self.score.success) if self.rate is None else self.rate
 
 
 @dataclass
@@ -84,7 +94,7 @@ class DeformableReport:
         """Success % per method on the (material, split) cases."""
         idx = [i for i, c in enumerate(self.cases) if (c.material, c.split) == (material, split)]
         found = {r.method for i in idx for r in self.results[i]}
-        return {m: 100.0 * float(np.mean([r.score.success for i in idx for r in self.results[i] if r.method == m]))
+        return {m: 100.0 * float(np.mean([r.success for i in idx for r in self.results[i] if r.method == m]))
                 for m in found}  # fmt: skip
 
     def summary(self) -> list[dict[str, object]]:
@@ -98,7 +108,7 @@ class DeformableReport:
                     continue
                 rows.append({
                     "material": material, "split": split, "method": method, "cases": len(rs),
-                    "success": 100.0 * float(np.mean([r.score.success for r in rs])),
+                    "success": 100.0 * float(np.mean([r.success for r in rs])),
                     "mean_error": float(np.median([r.score.mean_error for r in rs])),
                     "top_mean_error": float(np.median([r.score.top_mean_error for r in rs])),
                     "network_contacts": sum(r.source == "network" for r in rs),
@@ -150,10 +160,11 @@ def _score(case: DeformableCase, contacts: np.ndarray, motions: np.ndarray) -> S
 
 
 def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int, rng: np.random.Generator,
-                  network: Answer | None = None, corrections: int = 4,
+                  network: Answer | None = None, corrections: int = 4, service: Mapping[str, Answers] | None = None,
                   ) -> list[MethodResult]:  # fmt: skip
     """Every method of ``methods`` on one case (``network`` needs the callable: case → contacts, motions, source;
-    ``corrections``: the rollouts ``moving_corrected`` may spend)."""
+    ``corrections``: the rollouts ``moving_corrected`` may spend; the `SERVICE_METHODS` need their callables in
+    ``service``, `models.evaluation.deformable_service.service_answers`)."""
     from models.deformable.answer import moving_indices
 
     target_motion = case.target - case.body.points
@@ -186,6 +197,15 @@ def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int,
             idx, mot, source = network(case)
             readback = motion_readback(case, idx, mot) if source == "network" else float("nan")
             out.append(MethodResult(method, _score(case, idx, mot), len(idx), source, readback))
+        elif method in SERVICE_METHODS:
+            if service is None or method not in service:
+                raise ValueError(f"methods: {method!r} needs the service's answers (and a predictor for the network)")
+            answers = service[method](case)
+            scores = [_score(case, points, motions) for points, motions, _ in answers]
+            rate = float(np.mean([s.success for s in scores])) if method == "network_samples" else None
+            points, motions, source = answers[0]
+            readback = motion_readback(case, points, motions) if source == "network" else float("nan")
+            out.append(MethodResult(method, scores[0], len(points), source, readback, rate))
         else:
             raise ValueError(f"methods: unknown {method!r} (one of {', '.join(METHODS)})")
     return out

@@ -41,7 +41,7 @@ def test_eval_refine_logs_progress_and_keeps_ground_truths(tmp_path: Path, capsy
 def test_eval_deformable_judges_the_goal_only_beside_a_random_baseline(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from lab.evaluate import add_deformable
+    from lab.eval_deformable import add_deformable
 
     p = argparse.ArgumentParser()
     add_deformable(p.add_subparsers())
@@ -54,7 +54,8 @@ def test_eval_deformable_judges_the_goal_only_beside_a_random_baseline(
     args = p.parse_args([*common, "--methods", "random_target_motion,network"])
     assert args.func(args) == 0
     out = capsys.readouterr().out
-    assert "stronger random baseline" in out and "no random baseline" not in out and "paper's baseline" not in out
+    assert "against random points with the target's motion" in out and "no random baseline" not in out
+    assert "paper's baseline" not in out
     import json
 
     [pair] = json.loads((tmp_path / "f.json").read_text())["sensitivity"]
@@ -62,4 +63,12 @@ def test_eval_deformable_judges_the_goal_only_beside_a_random_baseline(
     args = p.parse_args([*common, "--methods", "random_motion,network", "--sensitivity", "0"])
     assert args.func(args) == 0
     out = capsys.readouterr().out
-    assert "stronger random baseline" in out and "against the paper's baseline" in out
+    assert "against the paper's baseline" in out and "with the target's motion" not in out
+    # the service asked for K answers: the rollout-checked network against random contacts at the same budget
+    args = p.parse_args([*common, "--methods", "network_samples,network_checked,random_checked", "--proposals", "2",
+                         "--sensitivity", "0"])
+    assert args.func(args) == 0
+    out = capsys.readouterr().out
+    assert "network_checked" in out and "network_samples" in out
+    assert "network_checked" in out.split("checked by the same rollouts")[0].splitlines()[-1]
+    assert "network_samples" not in "".join(line for line in out.splitlines() if "checked by the same" in line)

@@ -1,0 +1,76 @@
+"""The service's deformable answers with K proposals, for `models.evaluation.deformable` (methods
+``network_samples``, ``network_checked``, ``random_checked``).
+
+One latent sample is a noisy measure of the network: at 20 cases a row, the first proposal's success moves by
+5-10 points between seeds while the network does not change. The methods here ask the service
+(`models.pipeline.run_pipeline`, what a caller gets) for ``proposals`` = K answers at once:
+
+- ``network_samples``: the K network proposals, each simulated on the case's own body; the case's success is
+  the fraction that reach the target (the network's per-sample success rate, the noise of one draw averaged).
+- ``network_checked``: the same request with ``simulate_rollout``: the service rebuilds the body from the cloud,
+  simulates each proposal (and the most-moved points beside them), and returns the best by its rollout first;
+  that first answer is then simulated on the case's own body. The deformable counterpart of network +
+  refinement: the service's physics picks, an independent body judges.
+- ``random_checked``: the same budget for random contacts (K spread points with the target's motion at them,
+  method ``random_contacts``), picked by the same rollout: the equal-budget baseline of ``network_checked``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Protocol
+
+import numpy as np
+
+from models.deformable.body import DeformableBody
+
+if TYPE_CHECKING:
+    from models.network.inference import ContactPredictor
+    from models.robots import Hand
+
+SERVICE_METHODS = ("network_samples", "network_checked", "random_checked")
+Proposal = tuple[np.ndarray, np.ndarray, str]  # contact points (H, 3), motions (H, 3), source
+
+
+class Case(Protocol):
+    """What a request is made of: the body at rest and the target cloud (N, 3) (`deformable.DeformableCase`)."""
+
+    body: DeformableBody
+    target: np.ndarray
+
+
+Answers = Callable[[Case], list[Proposal]]
+
+
+def service_answers(predictor: ContactPredictor | None, hand: Hand, seed: int, proposals: int
+                    ) -> dict[str, Answers]:  # fmt: skip
+    """The callables of `SERVICE_METHODS` (the network's two need ``predictor``; without one only
+    ``random_checked`` is there).
+
+    Args:
+        predictor: the network. hand: the robot (H ≤ its fingertips). seed: the requests' seed.
+        proposals: K answers per request.
+    """
+    from models.pipeline import SynthesisInput, TaskInput, run_pipeline
+
+    if proposals < 1:
+        raise ValueError(f"proposals must be ≥ 1, got {proposals}")
+
+    def ask(case: Case, method: str, checked: bool) -> list[Proposal]:
+        body = case.body
+        inp = SynthesisInput(points=body.points, hand=hand, normals=body.normals,
+                             task=TaskInput("point_motion", motion=case.target - body.points),
+                             material=body.material, properties=dict(body.properties), method=method,
+                             num_proposals=proposals, seed=seed, simulate_rollout=checked)  # fmt: skip
+        out = run_pipeline(inp, predictor if method == "network" else None)
+        answers = []
+        for p in out.proposals:
+            assert p.contact_motions is not None
+            answers.append((np.asarray(p.contact_points), np.asarray(p.contact_motions), p.contact_source))
+        return answers
+
+    methods: dict[str, Answers] = {"random_checked": lambda case: ask(case, "random_contacts", True)[:1]}
+    if predictor is not None:
+        methods["network_samples"] = lambda case: ask(case, "network", False)
+        methods["network_checked"] = lambda case: ask(case, "network", True)[:1]
+    return methods
