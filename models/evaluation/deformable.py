@@ -42,8 +42,8 @@ from models.deformable.body import DeformableBody
 from models.deformable.materials import MATERIALS
 from models.deformable.metrics import ShapeScore, shape_score
 from models.deformable.procedures import Manipulation, random_manipulation
-from models.deformable.simulate import simulate
-from models.evaluation.deformable_service import SERVICE_METHODS, Answers
+from models.deformable.simulate import contact_vertices, simulate
+from models.evaluation.deformable_service import SERVICE_METHODS, Answers, ask_service
 
 if TYPE_CHECKING:
     from models.network.inference import ContactPredictor
@@ -217,9 +217,8 @@ Answer = Callable[[DeformableCase], tuple[np.ndarray, np.ndarray, str]]
 def motion_readback(case: DeformableCase, points: np.ndarray, motions: np.ndarray) -> float:
     """Median over an answer's contacts (H, 3) of |its motion| / |the target's displacement at the nearest cloud
     point|: 1 when the motions read from the maps have the target's length (what found round 12's short motions)."""
-    cloud = case.body.points
-    nearest = np.argmin(np.linalg.norm(cloud[None] - np.asarray(points)[:, None], axis=-1), axis=1)
-    target = np.linalg.norm((case.target - cloud)[nearest], axis=1)
+    nearest = contact_vertices(case.body, points)
+    target = np.linalg.norm((case.target - case.body.points)[nearest], axis=1)
     return float(np.median(np.linalg.norm(motions, axis=1) / np.maximum(target, 1e-12)))
 
 
@@ -243,16 +242,8 @@ def corrected_answer(case: DeformableCase, contacts: np.ndarray, corrections: in
 
 def pipeline_network(predictor: ContactPredictor, hand: Hand, seed: int) -> Answer:
     """The service's answer for a case: `run_pipeline` with method "network", first proposal."""
-    from models.pipeline import SynthesisInput, TaskInput, run_pipeline
 
     def answer(case: DeformableCase) -> tuple[np.ndarray, np.ndarray, str]:
-        body = case.body
-        task = TaskInput("point_motion", motion=case.target - body.points)
-        inp = SynthesisInput(points=body.points, hand=hand, task=task, normals=body.normals,
-                             material=body.material, properties=dict(body.properties), method="network",
-                             num_proposals=1, seed=seed)
-        p = run_pipeline(inp, predictor).proposals[0]
-        assert p.contact_motions is not None
-        return np.asarray(p.contact_points), np.asarray(p.contact_motions), p.contact_source
+        return ask_service(case, predictor, hand, seed, "network", 1, False)[0]
 
     return answer

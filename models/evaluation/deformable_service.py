@@ -42,6 +42,28 @@ class Case(Protocol):
 Answers = Callable[[Case], list[Proposal]]
 
 
+def ask_service(case: Case, predictor: ContactPredictor | None, hand: Hand, seed: int, method: str,
+                proposals: int, checked: bool) -> list[Proposal]:  # fmt: skip
+    """The service's answers (`run_pipeline`) to the case's request: its cloud with the target's per-point motion.
+
+    Args:
+        case: the body and target. predictor: the network (used by method "network" only). hand: the robot.
+        seed: the request's seed. method: the request's method. proposals: K. checked: ``simulate_rollout``.
+    """
+    from models.pipeline import SynthesisInput, TaskInput, run_pipeline
+
+    body = case.body
+    inp = SynthesisInput(points=body.points, hand=hand, normals=body.normals,
+                         task=TaskInput("point_motion", motion=case.target - body.points),
+                         material=body.material, properties=dict(body.properties), method=method,
+                         num_proposals=proposals, seed=seed, simulate_rollout=checked)  # fmt: skip
+    answers = []
+    for p in run_pipeline(inp, predictor if method == "network" else None).proposals:
+        assert p.contact_motions is not None
+        answers.append((np.asarray(p.contact_points), np.asarray(p.contact_motions), p.contact_source))
+    return answers
+
+
 def service_answers(predictor: ContactPredictor | None, hand: Hand, seed: int, proposals: int
                     ) -> dict[str, Answers]:  # fmt: skip
     """The callables of `SERVICE_METHODS` (the network's two need ``predictor``; without one only
@@ -51,23 +73,11 @@ def service_answers(predictor: ContactPredictor | None, hand: Hand, seed: int, p
         predictor: the network. hand: the robot (H ≤ its fingertips). seed: the requests' seed.
         proposals: K answers per request.
     """
-    from models.pipeline import SynthesisInput, TaskInput, run_pipeline
-
     if proposals < 1:
         raise ValueError(f"proposals must be ≥ 1, got {proposals}")
 
     def ask(case: Case, method: str, checked: bool) -> list[Proposal]:
-        body = case.body
-        inp = SynthesisInput(points=body.points, hand=hand, normals=body.normals,
-                             task=TaskInput("point_motion", motion=case.target - body.points),
-                             material=body.material, properties=dict(body.properties), method=method,
-                             num_proposals=proposals, seed=seed, simulate_rollout=checked)  # fmt: skip
-        out = run_pipeline(inp, predictor if method == "network" else None)
-        answers = []
-        for p in out.proposals:
-            assert p.contact_motions is not None
-            answers.append((np.asarray(p.contact_points), np.asarray(p.contact_motions), p.contact_source))
-        return answers
+        return ask_service(case, predictor, hand, seed, method, proposals, checked)
 
     methods: dict[str, Answers] = {"random_checked": lambda case: ask(case, "random_contacts", True)[:1]}
     if predictor is not None:
