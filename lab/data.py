@@ -48,6 +48,13 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="cloth and rope: label the target's most-moved points too when a rollout verifies them (one more each)",
     )
+    g.add_argument(
+        "--slides",
+        type=float,
+        default=0.0,
+        help="cloth and rope: this fraction of the examples slides the whole body (labelled by the sets that reach it)",
+    )
+    g.add_argument("--stiff", action="store_true", help="cloth and rope properties reach a card's and a stick's")
     g.add_argument("--no-progress", action="store_true")
     g.set_defaults(func=_generate)
     lab = sub.add_parser("labels", help="how much of each object its valid grasps cover, and simple rules' hits")
@@ -74,7 +81,8 @@ def _generate(args: argparse.Namespace) -> int:
 
         dcfg = DeformableDataConfig(materials=tuple(deformable), bodies=args.bodies,
                                     examples_per_body=args.examples_per_body, seed=args.seed,
-                                    verify_moving=args.verify_moving)  # fmt: skip
+                                    verify_moving=args.verify_moving, slides=args.slides,
+                                    stiff=args.stiff)  # fmt: skip
         made = generate_deformable(dcfg, args.out, workers=args.workers, progress=not args.no_progress)
         print(json.dumps(made["totals"], indent=1))
     if not {"rigid", "articulated"} & set(materials):

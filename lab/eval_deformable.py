@@ -13,7 +13,12 @@ Examples:
 from __future__ import annotations
 
 import argparse
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from models.evaluation.deformable import Answer
 
 EXIT_OK, EXIT_USAGE = 0, 2
 
@@ -40,6 +45,9 @@ def add_deformable(sub: Any) -> None:
     d.add_argument("--data-seed", type=int, default=0, help="seed of the data set whose bodies are used")
     d.add_argument("--sensitivity", type=int, default=0,
                    help="also run the property pairs (handkerchief vs card, rope vs stick) on this many shapes")
+    d.add_argument("--figure", type=int, default=0,
+                   help="also run the paper's property figure (the same slide asked of both members) on this many "
+                   "shapes")
     d.add_argument("--json", default=None, help="also write the summary to this JSON file")
     d.set_defaults(func=run_deformable)
 
@@ -110,13 +118,13 @@ def run_deformable(args: argparse.Namespace) -> int:
         print(f"--splits from {', '.join(SPLITS)}, --methods from {', '.join(METHODS)}, --cases ≥ 1, --proposals ≥ 1")
         return EXIT_USAGE
     network = service = None
-    if set(methods) & {"network", *SERVICE_METHODS}:
+    if set(methods) & {"network", *SERVICE_METHODS} or args.figure:
         from lab.eval_network import load_weights
         from models.robots import get_hand
 
         hand = get_hand(args.hand)
         predictor = load_weights(args.weights) if {"network", "network_samples", "network_checked"} & set(methods) \
-            else None
+            or args.figure else None
         network = pipeline_network(predictor, hand, args.seed) if predictor is not None else None
         service = service_answers(predictor, hand, args.seed, args.proposals)
     data = DeformableDataConfig(seed=args.data_seed)
@@ -171,7 +179,36 @@ def run_deformable(args: argparse.Namespace) -> int:
                                            "matched_error": [r.matched_error for r in res],
                                            "swapped_error": [r.swapped_error for r in res]})
         console.print(pairs)
+    if args.figure and network is not None:
+        figures["figure"] = _print_figure(console, materials, args.figure, args.seed, network)
     if args.json:
         with open(args.json, "w") as fh:
             json.dump(figures, fh, indent=1)
     return EXIT_OK
+
+
+def _print_figure(console: Console, materials: list[str], count: int, seed: int, network: Answer) -> list[object]:
+    """The paper's property figure as a table (`models.evaluation.property_pairs.property_figure`); its rows."""
+    import numpy as np
+    from rich.table import Table
+
+    from models.evaluation.property_pairs import FIGURE_SLIDE, SENSITIVITY_PAIRS, property_figure
+
+    table = Table(title=f"property figure: the same cloud slid by {FIGURE_SLIDE} × size, {count} shapes a pair")
+    names = ("front_pair", "rear_one", "centre", "far_pair")
+    for col in ("member", "own answer reaches", "the other member's answer reaches", "contacts along d (median)",
+                "network's own answers", *(f"{n} reaches" for n in names)):
+        table.add_column(col, justify="left" if col == "member" else "right")
+    rows: list[object] = []
+    for material in [m for m in materials if m in SENSITIVITY_PAIRS]:
+        pairs = property_figure(material, count, seed, network)
+        for i in (0, 1):
+            members = [pair[i] for pair in pairs]
+            table.add_row(members[0].name, f"{sum(m.own_reaches for m in members)}/{count}",
+                          f"{sum(m.other_reaches for m in members)}/{count}",
+                          f"{np.median([m.along for m in members]):+.2f}",
+                          f"{sum(m.source == 'network' for m in members)}/{count}",
+                          *(f"{sum(m.candidates[n] for m in members)}/{count}" for n in names))  # fmt: skip
+            rows.append([vars(m) for m in members])
+    console.print(table)
+    return rows

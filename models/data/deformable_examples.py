@@ -14,6 +14,12 @@ in the same simulator; when that rollout reaches the target by the paper's metri
 set, and the labels are the union of both sets (:func:`union_labels`). Plasticine is never verified this way: its
 target is the press after spring-back, which the target's displacement does not reach (docs/deformables.md).
 
+Slides (cloth and rope, `models.deformable.slides`): the target is the body translated by one displacement; the
+six named contact sets of `models.deformable.slides.slide_candidates` are simulated, and those that reach the
+target by the paper's metric are the labels (their union); an example none of them reaches is dropped. What
+reaches a slide depends on the properties (a handkerchief must be pulled from its front, a card can be pushed):
+what the property figure asks the network to have learnt.
+
 Motion split: a manipulation is an "unseen motion" when the heading of its mean contact motion lies within
 ``HELD_OUT_HALF_WIDTH`` of one of ``HELD_OUT_HEADINGS`` (four diagonals; ≈ 22 % of headings); those never enter
 training (``test_so`` on training bodies, ``test_uo`` on test bodies).
@@ -31,6 +37,7 @@ from models.deformable.body import DeformableBody
 from models.deformable.metrics import shape_score
 from models.deformable.procedures import Manipulation, random_manipulation
 from models.deformable.simulate import simulate
+from models.deformable.slides import slide_candidates, slide_displacement
 
 HELD_OUT_HEADINGS = np.deg2rad([45.0, 135.0, 225.0, 315.0])
 HELD_OUT_HALF_WIDTH = np.deg2rad(10.0)
@@ -117,3 +124,26 @@ def make_example(body: DeformableBody, rng: np.random.Generator, tries: int = 3,
                                  m.procedure, is_unseen_motion(m.motions), out.seconds, len(sets),
                                  checked)  # fmt: skip
     return None
+
+
+def make_slide_example(body: DeformableBody, rng: np.random.Generator) -> DeformableExample | None:
+    """A slide of ``body`` (cloth or rope) labelled by the candidate sets that reach it, or None when none does.
+
+    The example's ``contacts`` are the first valid set's (front to rear), ``label_sets`` how many were valid.
+    """
+    displacement = slide_displacement(body, rng)
+    target = body.points + displacement
+    valid, seconds = [], 0.0
+    for m in slide_candidates(body, displacement):
+        out = simulate(body, m.contacts, m.motions)
+        seconds += out.seconds
+        if out.stable and shape_score(body.material, body.points, target, out.cloud).success:
+            valid.append(m)
+    if not valid:
+        return None
+    heat, motion_map = labels(body, valid[0]) if len(valid) == 1 else union_labels(body, valid)
+    every = np.unique(np.concatenate([s.contacts for s in valid]))
+    mask = region_mask(body.points, body.points[every], body.size, rng)
+    first = valid[0]
+    return DeformableExample(target - body.points, heat, motion_map, mask, first.contacts, first.motions, "slide",
+                             is_unseen_motion(first.motions), seconds, len(valid))  # fmt: skip

@@ -22,7 +22,7 @@ import numpy as np
 
 from models.data.runs import run_jobs, write_manifest
 from models.deformable.body import DeformableBody
-from models.deformable.materials import MATERIALS
+from models.deformable.materials import MATERIALS, STIFF_RANGES, sample_properties
 from models.deformable.shapes import KINDS, make_body
 
 SUBDIR = "deformable"
@@ -41,11 +41,14 @@ class DeformableDataConfig:
     seed: int = 0
     test_fraction: float = 0.25
     verify_moving: bool = False  # cloth and rope labels: + the most-moved points when the simulator verifies them
+    slides: float = 0.0  # cloth and rope: the fraction of examples that are slides (`make_slide_example`)
+    stiff: bool = False  # properties drawn in `materials.STIFF_RANGES` (cards and sticks too)
 
     def to_dict(self) -> dict[str, Any]:
         out = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
-        if not self.verify_moving:  # data sets made before the option keep their manifests' configuration
-            del out["verify_moving"]
+        for name, default in (("verify_moving", False), ("slides", 0.0), ("stiff", False)):
+            if out[name] == default:  # data sets made before the option keep their manifests' configuration
+                del out[name]
         return out
 
 
@@ -63,12 +66,15 @@ def dataset_body(cfg: DeformableDataConfig, material: str, i: int) -> Deformable
     """Body ``i`` of ``material`` in the data set."""
     kinds = KINDS[material]
     seed = int(np.random.default_rng([cfg.seed, MATERIALS.index(material), i]).integers(2**31))
-    return make_body(material, kinds[i % len(kinds)], seed)
+    body = make_body(material, kinds[i % len(kinds)], seed)
+    if not cfg.stiff:
+        return body
+    return body.with_properties(sample_properties(material, np.random.default_rng([seed, 2]), STIFF_RANGES))
 
 
 def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> BodyResult:
     """Generate and write body ``i`` of ``material``."""
-    from models.data.deformable_examples import make_example
+    from models.data.deformable_examples import make_example, make_slide_example
     from models.data.generate import object_split
 
     t0 = time.perf_counter()
@@ -78,9 +84,11 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
     rows: dict[str, list[Any]] = {}
     counts: dict[str, int] = {}
     for _ in range(cfg.examples_per_body):
-        ex = make_example(body, rng, verify_moving=cfg.verify_moving)
+        slide = cfg.slides > 0 and material in ("cloth", "rope") and rng.random() < cfg.slides  # no draw without
+        ex = make_slide_example(body, rng) if slide else make_example(body, rng, verify_moving=cfg.verify_moving)
         if ex is None:
-            counts["unstable"] = counts.get("unstable", 0) + 1
+            key = "slide_unreached" if slide else "unstable"
+            counts[key] = counts.get(key, 0) + 1
             continue
         which = ("test_uo" if split == "test" else "test_so") if ex.unseen_motion else "train"
         if split == "test" and which == "train":

@@ -61,6 +61,14 @@ RANGES: dict[str, dict[str, tuple[float, float, bool]]] = {
     },
 }
 
+# The paper's property figure asks for a card (a stiff square) and a stick (a stiff cylinder): `STIFF_RANGES`
+# stretches cloth and rope ranges to reach them (data sets made with `--stiff`).
+STIFF_RANGES: dict[str, dict[str, tuple[float, float, bool]]] = {
+    **RANGES,
+    "cloth": {**RANGES["cloth"], "stretch": (3e2, 1e5, True), "bending": (1e-6, 1e-2, True)},
+    "rope": {**RANGES["rope"], "youngs_modulus": (1e3, 1e9, True)},
+}
+
 DEFAULTS: dict[str, dict[str, float]] = {
     "cloth": {"friction": 0.6, "density": 800.0, "stretch": 3e3, "bending": 3e-5},
     "rope": {"friction": 0.6, "youngs_modulus": 3e4, "poisson_ratio": 0.3},
@@ -80,10 +88,13 @@ class FlexParameters:
     mass: float
 
 
-def sample_properties(material: str, rng: np.random.Generator) -> dict[str, float]:
-    """Random properties of ``material`` inside `RANGES`."""
+Ranges = dict[str, dict[str, tuple[float, float, bool]]]
+
+
+def sample_properties(material: str, rng: np.random.Generator, ranges: Ranges = RANGES) -> dict[str, float]:
+    """Random properties of ``material`` inside ``ranges`` (`RANGES` or `STIFF_RANGES`)."""
     out = {}
-    for name, (lo, hi, log) in RANGES[check_material(material)].items():
+    for name, (lo, hi, log) in ranges[check_material(material)].items():
         out[name] = float(np.exp(rng.uniform(np.log(lo), np.log(hi)))) if log else float(rng.uniform(lo, hi))
     return out
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from models.deformable.body import DeformableBody
 from models.deformable.metrics import shape_score
-from models.deformable.procedures import random_manipulation
+from models.deformable.procedures import Manipulation, random_manipulation
 from models.deformable.simulate import simulate
 from models.evaluation.deformable import Answer, DeformableCase
 
@@ -100,4 +100,73 @@ def property_sensitivity(material: str, count: int, seed: int, network: Answer |
         matched = (_top_error(a, ra.cloud, pa, ma), _top_error(b, rb.cloud, qb, nb))
         swapped = (_top_error(a, ra.cloud, pb, mb), _top_error(b, rb.cloud, qa, na))
         out.append(SensitivityResult(material, gap, differ, (sa, sb), matched, swapped))
+    return out
+
+
+FIGURE_SLIDE = 0.3  # the figure's slide, × the body's size: far enough that a pushed handkerchief bunches up
+
+
+@dataclass
+class FigureMember:
+    """One member of a pair asked to slide by d (the paper's figure: the same cloud, the same motion).
+
+    Attributes:
+        name: handkerchief, card, rope or stick.
+        own_reaches: the network's answer made with this member's properties reaches the slid body when
+            simulated on this member.
+        other_reaches: the answer made with the other member's properties, simulated on this member.
+        along: the own answer's contacts' mean position along d from the centroid, × size (+ front, − rear).
+        source: the own answer's contact source (network, motion_fallback, ...).
+        candidates: each `slides.slide_candidates` set's name → whether it reaches the slid body on this member
+            (what the physics allows).
+    """
+
+    name: str
+    own_reaches: bool
+    other_reaches: bool
+    along: float
+    source: str
+    candidates: dict[str, bool]
+
+
+def _reaches(body: DeformableBody, target: np.ndarray, contacts: np.ndarray, motions: np.ndarray) -> bool:
+    out = simulate(body, contacts, motions)
+    return bool(out.stable and shape_score(body.material, body.points, target, out.cloud).success)
+
+
+def property_figure(material: str, count: int, seed: int, network: Answer) -> list[tuple[FigureMember, FigureMember]]:
+    """The paper's property figure on ``count`` shapes of ``material`` (square cloths or ropes).
+
+    Each shape, as both members of its `SENSITIVITY_PAIRS`, is asked to slide by the same d (``FIGURE_SLIDE`` ×
+    size, a random heading): the target is the cloud translated by d, identical for both. The network answers
+    each member with its own properties; each answer is simulated on its own member and on the other one, and
+    the named candidate sets show what each member's physics allows.
+    """
+    from models.deformable.shapes import make_body
+    from models.deformable.slides import slide_candidates
+
+    first_name, first, second_name, second = SENSITIVITY_PAIRS[material]
+    kind = "square" if material == "cloth" else "rope"
+    rng = np.random.default_rng([seed, 11])
+    out = []
+    for k in range(count):
+        a = make_body(material, kind, seed + k, first)
+        b = a.with_properties(second)
+        angle = rng.uniform(0.0, 2.0 * np.pi)
+        d = np.array([np.cos(angle), np.sin(angle), 0.0]) * FIGURE_SLIDE * a.size
+        target = a.points + d
+        slide = Manipulation(np.zeros(1, dtype=np.int64), d[None], "slide")
+        answers = [network(DeformableCase(material, "figure", body, slide, target)) for body in (a, b)]
+        members = []
+        for i, (name, body) in enumerate(((first_name, a), (second_name, b))):
+            contacts, motions, source = answers[i]
+            other_contacts, other_motions, _ = answers[1 - i]
+            heading = d[:2] / np.linalg.norm(d[:2])
+            along = (np.asarray(contacts)[:, :2] - body.points[:, :2].mean(axis=0)) @ heading
+            members.append(FigureMember(
+                name, _reaches(body, target, contacts, motions), _reaches(body, target, other_contacts, other_motions),
+                float(along.mean()) / body.size, source,
+                {m.procedure.removeprefix("slide_"): _reaches(body, target, m.contacts, m.motions)
+                 for m in slide_candidates(body, d)}))  # fmt: skip
+        out.append((members[0], members[1]))
     return out

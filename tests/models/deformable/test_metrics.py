@@ -1,6 +1,6 @@
 import numpy as np
 
-from models.deformable.metrics import shape_score
+from models.deformable.metrics import most_moving, shape_score
 
 
 def _square(n: int = 100) -> np.ndarray:
@@ -42,3 +42,18 @@ def test_solid_threshold_mean_half_centimetre() -> None:
     target = start.copy()
     assert shape_score("plasticine", start, target, target + 0.002).success is False  # 0.4 cm·√3 ≈ 0.69 cm
     assert shape_score("plasticine", start, target, target + np.array([0.002, 0, 0])).success  # 0.4 cm
+
+
+def test_a_slide_judges_every_point_not_the_fifty_round_off_picks() -> None:
+    rng = np.random.default_rng(0)
+    start = rng.uniform(0, 1, size=(200, 3))
+    d = np.array([0.3, 0.1, 0.0])
+    np.testing.assert_array_equal(np.sort(most_moving(start, start + d, 50)), np.arange(200))
+    rollout = start + d
+    rollout[:60] += [0.2, 0.0, 0.0]  # 60 of 200 points 0.4 off in the normalised cube: > 0.3, < 0.5
+    first = shape_score("rope", start, start + d, rollout)
+    again = shape_score("rope", start, start + d + rng.normal(scale=1e-15, size=start.shape), rollout)
+    assert (first.success, first.top_fraction_over) == (again.success, again.top_fraction_over)
+    assert first.top_fraction_over == 0.3 and first.success
+    moved = np.linalg.norm(rng.normal(size=(200, 3)), axis=1)[:, None] * d
+    assert len(most_moving(start, start + moved, 50)) == 50  # no ties: the fifty

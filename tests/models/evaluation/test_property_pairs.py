@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from models.deformable.slides import slide_candidates
 from models.evaluation.deformable import DeformableCase
-from models.evaluation.property_pairs import SENSITIVITY_PAIRS, property_sensitivity
+from models.evaluation.property_pairs import SENSITIVITY_PAIRS, property_figure, property_sensitivity
 
 
 def test_the_property_pairs_credit_an_answer_that_reads_the_properties_and_not_one_that_ignores_them() -> None:
@@ -31,3 +32,22 @@ def test_the_property_pairs_credit_an_answer_that_reads_the_properties_and_not_o
     assert reading.matched_wins() == (1, 0)
     [ignoring] = property_sensitivity("rope", 1, seed=0, network=blind)
     assert ignoring.matched_wins() == (0, 2) and not ignoring.contacts_differ
+
+
+def test_the_figure_credits_pulling_a_handkerchief_and_pushing_a_card_from_behind() -> None:
+    """An answer that pulls the front corners of a pliable square and pushes a stiff one from behind (the paper's
+    figure) reaches the slid square on both; the card's push, tried on the handkerchief, does not."""
+
+    def paper(case: DeformableCase) -> tuple[np.ndarray, np.ndarray, str]:
+        d = case.target[0] - case.body.points[0]
+        name = "slide_front_pair" if case.body.properties["bending"] < 1e-3 else "slide_rear_one"
+        [m] = [m for m in slide_candidates(case.body, d) if m.procedure == name]
+        return case.body.points[m.contacts], m.motions, "network"
+
+    [(handkerchief, card)] = property_figure("cloth", 1, seed=0, network=paper)
+    assert (handkerchief.name, card.name) == ("handkerchief", "card")
+    assert handkerchief.own_reaches and card.own_reaches
+    assert not handkerchief.other_reaches  # pushed from behind, it bunches up
+    assert handkerchief.along > 0.3 > -0.3 > card.along
+    assert not handkerchief.candidates["rear_one"] and card.candidates["rear_one"]
+    assert handkerchief.candidates["front_pair"]

@@ -1,0 +1,62 @@
+"""Slides: the whole body moved across the table by one displacement d — the task of the paper's property figure.
+
+The target is the body at rest translated by d (every point moves by d: the paper's "identical point clouds and
+motions", asked of a handkerchief and a card, a rope and a stick). Which contacts reach it depends on the
+material, and the simulator says which: pulled from its leading edge a handkerchief or a rope follows, pushed from
+behind it bunches up; a card or a stick also goes when pushed from behind or at its middle.
+
+`slide_candidates` names six contact sets by where they sit along d, each moved by d:
+
+- ``front_pair``: the two points of the leading tenth of the cloud farthest apart across d (a cloth's front
+  corners; a rope's leading stretch);
+- ``front_one``: the most leading point near the middle across d;
+- ``centre``: the point nearest the centroid;
+- ``rear_one`` and ``rear_pair``: as the front ones, at the trailing edge;
+- ``far_pair``: the two points of the cloud farthest apart (a rope's ends, a cloth's opposite corners), which the
+  paper's figure drags on a rope.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from models.deformable.body import DeformableBody
+from models.deformable.procedures import Manipulation
+
+SLIDE = (0.15, 0.4)  # |d| / the body's size
+EDGE_FRACTION = 0.1  # the leading (trailing) tenth of the cloud holds the front (rear) pair
+ACROSS_WEIGHT = 0.5  # the single front (rear) point: most leading, less half its distance across d
+
+
+def slide_displacement(body: DeformableBody, rng: np.random.Generator) -> np.ndarray:
+    """A horizontal displacement (3,) m in a uniform heading, ``SLIDE`` × the body's size long."""
+    angle = rng.uniform(0.0, 2.0 * np.pi)
+    return np.array([np.cos(angle), np.sin(angle), 0.0]) * rng.uniform(*SLIDE) * body.size
+
+
+def along_and_across(points: np.ndarray, displacement: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Coordinates (N,), (N,) of ``points`` (N, 3) from their centroid along the heading of ``displacement`` (3,)
+    and across it (horizontal, to its left)."""
+    heading = np.asarray(displacement, dtype=np.float64)[:2]
+    heading = heading / max(float(np.linalg.norm(heading)), 1e-12)
+    rel = np.asarray(points, dtype=np.float64)[:, :2] - np.asarray(points, dtype=np.float64)[:, :2].mean(axis=0)
+    return rel @ heading, rel @ np.array([-heading[1], heading[0]])
+
+
+def slide_candidates(body: DeformableBody, displacement: np.ndarray) -> list[Manipulation]:
+    """The six named contact sets of the module doc, each contact moved by ``displacement`` (3,)."""
+    points = body.points
+    along, across = along_and_across(points, displacement)
+    edge = max(2, round(EDGE_FRACTION * len(points)))
+    sets: dict[str, list[int]] = {}
+    for side, sign in (("front", 1.0), ("rear", -1.0)):
+        rim = np.argsort(-sign * along)[:edge]
+        sets[f"{side}_pair"] = sorted({int(rim[np.argmin(across[rim])]), int(rim[np.argmax(across[rim])])})
+        sets[f"{side}_one"] = [int(np.argmax(sign * along - ACROSS_WEIGHT * np.abs(across)))]
+    sets["centre"] = [int(np.argmin(along**2 + across**2))]
+    gap = np.linalg.norm(points[:, None] - points[None], axis=-1)
+    sets["far_pair"] = sorted(int(k) for k in np.unravel_index(np.argmax(gap), gap.shape))
+    order = ("front_pair", "front_one", "centre", "rear_one", "rear_pair", "far_pair")
+    d = np.asarray(displacement, dtype=np.float64)
+    return [Manipulation(np.array(sets[name], dtype=np.int64), np.tile(d, (len(sets[name]), 1)), f"slide_{name}")
+            for name in order]  # fmt: skip

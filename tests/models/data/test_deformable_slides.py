@@ -1,0 +1,55 @@
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from models.data.deformable_examples import make_slide_example
+from models.data.deformable_generate import DeformableDataConfig, dataset_body, generate, load_body_file
+from models.deformable.materials import RANGES, STIFF_RANGES
+from models.deformable.metrics import shape_score
+from models.deformable.rope import make_rope
+from models.deformable.simulate import simulate
+from models.deformable.slides import slide_candidates
+
+
+def test_a_slide_example_labels_exactly_the_candidate_sets_that_reach_the_slid_body() -> None:
+    rope = make_rope(seed=5, properties={"friction": 0.6, "youngs_modulus": 1e5, "poisson_ratio": 0.3})
+    ex = make_slide_example(rope, np.random.default_rng(2))
+    assert ex is not None and ex.procedure == "slide"
+    d = ex.motion[0]
+    np.testing.assert_allclose(ex.motion, np.tile(d, (len(rope.points), 1)))  # every point asked to move by d
+    target = rope.points + d
+    reached = []
+    for m in slide_candidates(rope, d):  # judged again here, one rollout each
+        out = simulate(rope, m.contacts, m.motions)
+        if shape_score("rope", rope.points, target, out.cloud).success:
+            reached.append(m)
+    assert ex.label_sets == len(reached) >= 1
+    for m in reached:
+        assert np.all(ex.heat[m.contacts] == pytest.approx(1.0))
+    missed = [m for m in slide_candidates(rope, d) if all(m.procedure != r.procedure for r in reached)]
+    labelled = {int(i) for m in reached for i in m.contacts}
+    for m in missed:
+        for i in m.contacts:
+            if int(i) not in labelled:
+                assert ex.heat[i] < 1.0
+
+
+def test_stiff_data_sets_reach_cards_and_sticks_and_old_manifests_keep_their_configuration() -> None:
+    assert "slides" not in DeformableDataConfig().to_dict() and "stiff" not in DeformableDataConfig().to_dict()
+    cfg = DeformableDataConfig(materials=("rope",), bodies=40, stiff=True)
+    moduli = [dataset_body(cfg, "rope", i).properties["youngs_modulus"] for i in range(40)]
+    lo, hi, _ = STIFF_RANGES["rope"]["youngs_modulus"]
+    assert lo <= min(moduli) and max(moduli) <= hi
+    assert max(moduli) > 1e2 * RANGES["rope"]["youngs_modulus"][1]  # beyond the default range: stick-like
+
+
+def test_a_data_set_of_slides_holds_slide_examples(tmp_path: Path) -> None:
+    cfg = DeformableDataConfig(materials=("rope",), bodies=1, examples_per_body=2, seed=1, slides=1.0, stiff=True,
+                               test_fraction=0.0)  # a training body keeps every example  # fmt: skip
+    manifest = generate(cfg, tmp_path, progress=False)
+    assert manifest["config"]["slides"] == 1.0 and manifest["config"]["stiff"] is True
+    body = load_body_file(tmp_path / "deformable" / "rope-00000.npz")
+    counts = manifest["bodies"]["rope-0"]["counts"]
+    assert int(body["num_examples"]) + counts.get("slide_unreached", 0) == 2
+    assert set(body.get("procedure", np.array(["slide"])).tolist()) <= {"slide"}
