@@ -65,7 +65,8 @@ def most_moving(start: np.ndarray, target: np.ndarray, count: int) -> np.ndarray
     if len(order) <= count:
         return order
     cut = moved[order[count - 1]] - TIE * max(float(moved.max()), 1e-12)
-    return order[moved[order] >= cut]
+    top: np.ndarray = order[moved[order] >= cut]
+    return top
 
 
 def shortfall(material: str, score: ShapeScore) -> float:
