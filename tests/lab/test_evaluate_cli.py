@@ -72,3 +72,22 @@ def test_eval_deformable_judges_the_goal_only_beside_a_random_baseline(
     assert "network_checked" in out and "network_samples" in out
     assert "network_checked" in out.split("checked by the same rollouts")[0].splitlines()[-1]
     assert "network_samples" not in "".join(line for line in out.splitlines() if "checked by the same" in line)
+
+
+def test_eval_deformable_prints_the_property_figure_for_each_member(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from lab.eval_deformable import add_deformable
+
+    p = argparse.ArgumentParser()
+    add_deformable(p.add_subparsers())
+    args = p.parse_args(["deformable", "--materials", "rope", "--splits", "test_uo", "--cases", "1", "--methods",
+                         "random_motion", "--figure", "1", "--json", str(tmp_path / "f.json")])  # fmt: skip
+    assert args.func(args) == 0  # no network method asked for: the figure loads the weights itself
+    out = capsys.readouterr().out
+    assert "property figure" in out and "stick" in out
+    rows = json.loads((tmp_path / "f.json").read_text())["figure"]
+    assert [r[0]["name"] for r in rows] == ["rope", "stick"]
+    assert set(rows[1][0]["candidates"]) == {"front_pair", "front_one", "centre", "rear_one", "rear_pair", "far_pair"}
