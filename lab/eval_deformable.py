@@ -19,6 +19,7 @@ if TYPE_CHECKING:
     from rich.console import Console
 
     from models.evaluation.deformable import Answer
+    from models.evaluation.property_pairs import FigureMember
 
 EXIT_OK, EXIT_USAGE = 0, 2
 
@@ -197,7 +198,8 @@ def _print_figure(console: Console, materials: list[str], count: int, seed: int,
     table = Table(title=f"property figure: the same cloud slid by {FIGURE_SLIDE} × size, {count} shapes a pair")
     names = ("front_pair", "rear_one", "centre", "far_pair")
     for col in ("member", "own answer reaches", "the other member's answer reaches", "contacts along d (median)",
-                "network's own answers", *(f"{n} reaches" for n in names)):
+                "network's own answers", "of them ahead / behind the centre (reaching)",
+                *(f"{n} reaches" for n in names)):
         table.add_column(col, justify="left" if col == "member" else "right")
     rows: list[object] = []
     for material in [m for m in materials if m in SENSITIVITY_PAIRS]:
@@ -207,8 +209,16 @@ def _print_figure(console: Console, materials: list[str], count: int, seed: int,
             table.add_row(members[0].name, f"{sum(m.own_reaches for m in members)}/{count}",
                           f"{sum(m.other_reaches for m in members)}/{count}",
                           f"{np.median([m.along for m in members]):+.2f}",
-                          f"{sum(m.source == 'network' for m in members)}/{count}",
+                          f"{sum(m.source == 'network' for m in members)}/{count}", _ahead_behind(members),
                           *(f"{sum(m.candidates[n] for m in members)}/{count}" for n in names))  # fmt: skip
             rows.append([vars(m) for m in members])
     console.print(table)
     return rows
+
+
+def _ahead_behind(members: list[FigureMember]) -> str:
+    """The network's own-peak answers at or ahead of the centre along d and behind it, each with how many reached."""
+    own = [m for m in members if m.source == "network"]
+    ahead, behind = [m for m in own if m.along >= 0], [m for m in own if m.along < 0]
+    return (f"{len(ahead)} ({sum(m.own_reaches for m in ahead)}) / "
+            f"{len(behind)} ({sum(m.own_reaches for m in behind)})")  # fmt: skip

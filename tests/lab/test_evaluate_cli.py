@@ -91,3 +91,15 @@ def test_eval_deformable_prints_the_property_figure_for_each_member(
     rows = json.loads((tmp_path / "f.json").read_text())["figure"]
     assert [r[0]["name"] for r in rows] == ["rope", "stick"]
     assert set(rows[1][0]["candidates"]) == {"front_pair", "front_one", "centre", "rear_one", "rear_pair", "far_pair"}
+
+
+def test_the_figure_counts_own_answers_ahead_of_and_behind_the_centre_with_their_successes() -> None:
+    from lab.eval_deformable import _ahead_behind
+    from models.evaluation.property_pairs import FigureMember
+
+    def member(along: float, reaches: bool, source: str = "network") -> FigureMember:
+        return FigureMember("handkerchief", reaches, True, along, source, {})
+
+    members = [member(0.4, True), member(0.0, False), member(-0.3, False), member(-0.5, True),
+               member(-0.2, True, "motion_fallback")]  # fmt: skip
+    assert _ahead_behind(members) == "2 (1) / 2 (1)"  # the fallback's answer is not the network's own
