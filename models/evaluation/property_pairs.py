@@ -61,6 +61,17 @@ CONTACT_GAP = 0.1
 TIE = 1e-9  # shape errors this close are one answer simulated twice (the simulator is deterministic)
 
 
+def pair_bodies(material: str, count: int, seed: int) -> list[tuple[DeformableBody, DeformableBody]]:
+    """``count`` shapes of ``material`` (square cloths or ropes, seeds ``seed`` …), each as both members of its
+    `SENSITIVITY_PAIRS`: the same mesh with the first member's and the second member's properties."""
+    from models.deformable.shapes import make_body
+
+    _, first, _, second = SENSITIVITY_PAIRS[material]
+    kind = "square" if material == "cloth" else "rope"
+    bodies = [make_body(material, kind, seed + k, first) for k in range(count)]
+    return [(a, a.with_properties(second)) for a in bodies]
+
+
 def _top_error(body: DeformableBody, target: np.ndarray, contacts: np.ndarray, motions: np.ndarray) -> float:
     """The shape error (top mean) of ``contacts`` moved by ``motions`` on ``body`` against ``target``."""
     rollout = simulate(body, contacts, motions).cloud
@@ -75,15 +86,10 @@ def property_sensitivity(material: str, count: int, seed: int, network: Answer |
     other member's — and both answers are simulated on it (``matched_error``, ``swapped_error``).
     """
     from models.deformable.metrics import NORMALISED_SIDE
-    from models.deformable.shapes import make_body
 
-    _, first, _, second = SENSITIVITY_PAIRS[material]
-    kind = "square" if material == "cloth" else "rope"
     rng = np.random.default_rng([seed, 7])
     out = []
-    for k in range(count):
-        a = make_body(material, kind, seed + k, first)
-        b = a.with_properties(second)
+    for a, b in pair_bodies(material, count, seed):
         manip = random_manipulation(a, rng)
         ra, rb = simulate(a, manip.contacts, manip.motions), simulate(b, manip.contacts, manip.motions)
         gap = float(np.linalg.norm(ra.cloud - rb.cloud, axis=1).mean()) * NORMALISED_SIDE / a.size
@@ -142,16 +148,12 @@ def property_figure(material: str, count: int, seed: int, network: Answer) -> li
     each member with its own properties; each answer is simulated on its own member and on the other one, and
     the named candidate sets show what each member's physics allows.
     """
-    from models.deformable.shapes import make_body
     from models.deformable.slides import slide_candidates
 
-    first_name, first, second_name, second = SENSITIVITY_PAIRS[material]
-    kind = "square" if material == "cloth" else "rope"
+    first_name, _, second_name, _ = SENSITIVITY_PAIRS[material]
     rng = np.random.default_rng([seed, 11])
     out = []
-    for k in range(count):
-        a = make_body(material, kind, seed + k, first)
-        b = a.with_properties(second)
+    for a, b in pair_bodies(material, count, seed):
         angle = rng.uniform(0.0, 2.0 * np.pi)
         d = np.array([np.cos(angle), np.sin(angle), 0.0]) * FIGURE_SLIDE * a.size
         target = a.points + d
