@@ -34,7 +34,6 @@ import numpy as np
 from models.data.labels import heat_and_force, kernel, region_mask
 from models.deformable.answer import moving_indices
 from models.deformable.body import DeformableBody
-from models.deformable.metrics import shape_score
 from models.deformable.procedures import Manipulation, random_manipulation
 from models.deformable.simulate import simulate
 from models.deformable.slides import slide_candidates, slide_displacement
@@ -92,7 +91,7 @@ def moving_alternative(body: DeformableBody, manipulation: Manipulation, target:
     count = max(2, len(manipulation.contacts))
     idx = moving_indices(body.points, np.arange(len(body.points)), motion, count)
     out = simulate(body, idx, motion[idx])
-    if not out.stable or not shape_score(body.material, body.points, target, out.cloud).success:
+    if not out.reaches(body, target):
         return None
     return Manipulation(idx, motion[idx], "moving_points")
 
@@ -137,7 +136,7 @@ def make_slide_example(body: DeformableBody, rng: np.random.Generator) -> Deform
     for m in slide_candidates(body, displacement):
         out = simulate(body, m.contacts, m.motions)
         seconds += out.seconds
-        if out.stable and shape_score(body.material, body.points, target, out.cloud).success:
+        if out.reaches(body, target):
             valid.append(m)
     if not valid:
         return None

@@ -136,8 +136,7 @@ class FigureMember:
 
 
 def _reaches(body: DeformableBody, target: np.ndarray, contacts: np.ndarray, motions: np.ndarray) -> bool:
-    out = simulate(body, contacts, motions)
-    return bool(out.stable and shape_score(body.material, body.points, target, out.cloud).success)
+    return simulate(body, contacts, motions).reaches(body, target)
 
 
 def property_figure(material: str, count: int, seed: int, network: Answer) -> list[tuple[FigureMember, FigureMember]]:
