@@ -28,18 +28,22 @@ EDGE_FRACTION = 0.1  # the leading (trailing) tenth of the cloud holds the front
 ACROSS_WEIGHT = 0.5  # the single front (rear) point: most leading, less half its distance across d
 
 
-def slide_displacement(body: DeformableBody, rng: np.random.Generator) -> np.ndarray:
-    """A horizontal displacement (3,) m in a uniform heading, ``SLIDE`` × the body's size long."""
+def slide_displacement(body: DeformableBody, rng: np.random.Generator, fraction: float | None = None) -> np.ndarray:
+    """A horizontal displacement (3,) m in a uniform heading, ``fraction`` × the body's size long (None: drawn
+    in ``SLIDE``)."""
     angle = rng.uniform(0.0, 2.0 * np.pi)
-    return np.array([np.cos(angle), np.sin(angle), 0.0]) * rng.uniform(*SLIDE) * body.size
+    length = rng.uniform(*SLIDE) if fraction is None else fraction
+    return np.array([np.cos(angle), np.sin(angle), 0.0]) * length * body.size
 
 
-def along_and_across(points: np.ndarray, displacement: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Coordinates (N,), (N,) of ``points`` (N, 3) from their centroid along the heading of ``displacement`` (3,)
-    and across it (horizontal, to its left)."""
+def along_and_across(points: np.ndarray, displacement: np.ndarray,
+                     origin: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """Coordinates (N,), (N,) of ``points`` (N, 3) from ``origin`` (3,; None: their centroid) along the heading of
+    ``displacement`` (3,) and across it (horizontal, to its left)."""
     heading = np.asarray(displacement, dtype=np.float64)[:2]
     heading = heading / max(float(np.linalg.norm(heading)), 1e-12)
-    rel = np.asarray(points, dtype=np.float64)[:, :2] - np.asarray(points, dtype=np.float64)[:, :2].mean(axis=0)
+    xy = np.asarray(points, dtype=np.float64)[:, :2]
+    rel = xy - (xy.mean(axis=0) if origin is None else np.asarray(origin, dtype=np.float64)[:2])
     return rel @ heading, rel @ np.array([-heading[1], heading[0]])
 
 

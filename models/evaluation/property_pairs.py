@@ -147,14 +147,13 @@ def property_figure(material: str, count: int, seed: int, network: Answer) -> li
     each member with its own properties; each answer is simulated on its own member and on the other one, and
     the named candidate sets show what each member's physics allows.
     """
-    from models.deformable.slides import slide_candidates
+    from models.deformable.slides import along_and_across, slide_candidates, slide_displacement
 
     first_name, _, second_name, _ = SENSITIVITY_PAIRS[material]
     rng = np.random.default_rng([seed, 11])
     out = []
     for a, b in pair_bodies(material, count, seed):
-        angle = rng.uniform(0.0, 2.0 * np.pi)
-        d = np.array([np.cos(angle), np.sin(angle), 0.0]) * FIGURE_SLIDE * a.size
+        d = slide_displacement(a, rng, FIGURE_SLIDE)
         target = a.points + d
         slide = Manipulation(np.zeros(1, dtype=np.int64), d[None], "slide")
         answers = [network(DeformableCase(material, "figure", body, slide, target)) for body in (a, b)]
@@ -162,8 +161,7 @@ def property_figure(material: str, count: int, seed: int, network: Answer) -> li
         for i, (name, body) in enumerate(((first_name, a), (second_name, b))):
             contacts, motions, source = answers[i]
             other_contacts, other_motions, _ = answers[1 - i]
-            heading = d[:2] / np.linalg.norm(d[:2])
-            along = (np.asarray(contacts)[:, :2] - body.points[:, :2].mean(axis=0)) @ heading
+            along, _ = along_and_across(contacts, d, origin=body.points.mean(axis=0))
             members.append(FigureMember(
                 name, _reaches(body, target, contacts, motions), _reaches(body, target, other_contacts, other_motions),
                 float(along.mean()) / body.size, source,
