@@ -55,6 +55,12 @@ def register(subparsers: Any) -> None:
         help="cloth and rope: this fraction of the examples slides the whole body (labelled by the sets that reach it)",
     )
     g.add_argument("--stiff", action="store_true", help="cloth and rope properties reach a card's and a stick's")
+    g.add_argument(
+        "--slide-margin",
+        type=float,
+        default=0.0,
+        help="slides: label only the sets that also reach the same heading's slide this long (× size; 0: off)",
+    )
     g.add_argument("--no-progress", action="store_true")
     g.set_defaults(func=_generate)
     lab = sub.add_parser("labels", help="how much of each object its valid grasps cover, and simple rules' hits")
@@ -82,7 +88,7 @@ def _generate(args: argparse.Namespace) -> int:
         dcfg = DeformableDataConfig(materials=tuple(deformable), bodies=args.bodies,
                                     examples_per_body=args.examples_per_body, seed=args.seed,
                                     verify_moving=args.verify_moving, slides=args.slides,
-                                    stiff=args.stiff)  # fmt: skip
+                                    stiff=args.stiff, slide_margin=args.slide_margin)  # fmt: skip
         made = generate_deformable(dcfg, args.out, workers=args.workers, progress=not args.no_progress)
         print(json.dumps(made["totals"], indent=1))
     if not {"rigid", "articulated"} & set(materials):
@@ -119,8 +125,10 @@ def _labels(args: argparse.Namespace) -> int:
     from models.data.dataset import example_sets, load_examples
     from models.data.label_density import label_density
 
-    print("| data | split | examples | valid grasps an example | points in the valid region | in its own grasp's "
-          "| hit: random point | hit: most-opposed normal | hit: farthest point |")
+    print(
+        "| data | split | examples | valid grasps an example | points in the valid region | in its own grasp's "
+        "| hit: random point | hit: most-opposed normal | hit: farthest point |"
+    )
     print("|---|---|--:|--:|--:|--:|--:|--:|--:|")
     for d in args.data:
         for split in args.splits.split(","):
@@ -135,6 +143,8 @@ def _labels(args: argparse.Namespace) -> int:
                 set_heat, _ = example_sets(ex, int(i), slice(None))
                 rows.append((ex.points[o], ex.normals[o], ex.motion[i], set_heat, ex.heat[i]))
             r = label_density(rows, args.seed)
-            print(f"| {d} | {split} | {r.examples} | {r.set_size:.1f} | {r.coverage:.1%} | {r.own:.1%} | "
-                  f"{r.hit_random:.1%} | {r.hit_push:.1%} | {r.hit_far:.1%} |")
+            print(
+                f"| {d} | {split} | {r.examples} | {r.set_size:.1f} | {r.coverage:.1%} | {r.own:.1%} | "
+                f"{r.hit_random:.1%} | {r.hit_push:.1%} | {r.hit_far:.1%} |"
+            )
     return 0

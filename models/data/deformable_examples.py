@@ -18,7 +18,9 @@ Slides (cloth and rope, `models.deformable.slides`): the target is the body tran
 six named contact sets of `models.deformable.slides.slide_candidates` are simulated, and those that reach the
 target by the paper's metric are the labels (their union); an example none of them reaches is dropped. What
 reaches a slide depends on the properties (a handkerchief must be pulled from its front, a card can be pushed):
-what the property figure asks the network to have learnt.
+what the property figure asks the network to have learnt. With a margin (``slide_margin``), the labels keep only
+the sets that also reach the same heading's slide at the margin's length: at a sixth of its size a handkerchief
+still follows a push from behind, at a quarter it bunches up, and an open-loop answer should not sit on that edge.
 
 Motion split: a manipulation is an "unseen motion" when the heading of its mean contact motion lies within
 ``HELD_OUT_HALF_WIDTH`` of one of ``HELD_OUT_HEADINGS`` (four diagonals; ≈ 22 % of headings); those never enter
@@ -57,6 +59,7 @@ class DeformableExample:
     seconds: float
     label_sets: int = 1
     moving_checked: bool = False
+    margin_fallback: bool = False  # a slide whose labels no set reached with the margin (`make_slide_example`)
 
 
 def is_unseen_motion(motions: np.ndarray) -> bool:
@@ -125,24 +128,51 @@ def make_example(body: DeformableBody, rng: np.random.Generator, tries: int = 3,
     return None
 
 
-def make_slide_example(body: DeformableBody, rng: np.random.Generator) -> DeformableExample | None:
+def make_slide_example(body: DeformableBody, rng: np.random.Generator,
+                       margin: float = 0.0) -> DeformableExample | None:  # fmt: skip
     """A slide of ``body`` (cloth or rope) labelled by the candidate sets that reach it, or None when none does.
 
-    The example's ``contacts`` are the first valid set's (front to rear), ``label_sets`` how many were valid.
+    Args:
+        body: the body at rest. rng: draws the slide and the mask.
+        margin: 0, or a slide length (fraction of the body's size): the labels keep only the sets that also reach
+            the same heading's slide of at least this length — an open-loop answer with room to spare — unless
+            none does (``margin_fallback``).
+
+    The example's ``contacts`` are the first labelled set's (front to rear), ``label_sets`` how many were labelled.
     """
     displacement = slide_displacement(body, rng)
-    target = body.points + displacement
-    valid, seconds = [], 0.0
-    for m in slide_candidates(body, displacement):
-        out = simulate(body, m.contacts, m.motions)
-        seconds += out.seconds
-        if out.reaches(body, target):
-            valid.append(m)
+    valid, seconds = _reaching_sets(body, displacement)
     if not valid:
         return None
+    longer = displacement * margin * body.size / float(np.linalg.norm(displacement))
+    fallback = False
+    if margin > 0 and np.linalg.norm(longer) > np.linalg.norm(displacement) * (1 + 1e-9):
+        names = {m.procedure for m in valid}
+        kept, more = _reaching_sets(body, longer, names)
+        seconds += more
+        kept_names = {m.procedure for m in kept}
+        fallback = not kept_names
+        valid = valid if fallback else [m for m in valid if m.procedure in kept_names]
     heat, motion_map = labels(body, valid[0]) if len(valid) == 1 else union_labels(body, valid)
     every = np.unique(np.concatenate([s.contacts for s in valid]))
     mask = region_mask(body.points, body.points[every], body.size, rng)
     first = valid[0]
-    return DeformableExample(target - body.points, heat, motion_map, mask, first.contacts, first.motions, "slide",
-                             is_unseen_motion(first.motions), seconds, len(valid))  # fmt: skip
+    return DeformableExample(np.tile(displacement, (len(body.points), 1)), heat, motion_map, mask, first.contacts,
+                             first.motions, "slide", is_unseen_motion(first.motions), seconds, len(valid),
+                             margin_fallback=fallback)  # fmt: skip
+
+
+def _reaching_sets(body: DeformableBody, displacement: np.ndarray,
+                   names: set[str] | None = None) -> tuple[list[Manipulation], float]:  # fmt: skip
+    """The `slide_candidates` (those named in ``names``; None: all) whose rollouts reach ``body`` slid by
+    ``displacement`` (3,), and the rollouts' seconds."""
+    target = body.points + displacement
+    valid, seconds = [], 0.0
+    for m in slide_candidates(body, displacement):
+        if names is not None and m.procedure not in names:
+            continue
+        out = simulate(body, m.contacts, m.motions)
+        seconds += out.seconds
+        if out.reaches(body, target):
+            valid.append(m)
+    return valid, seconds

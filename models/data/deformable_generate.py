@@ -43,10 +43,11 @@ class DeformableDataConfig:
     verify_moving: bool = False  # cloth and rope labels: + the most-moved points when the simulator verifies them
     slides: float = 0.0  # cloth and rope: the fraction of examples that are slides (`make_slide_example`)
     stiff: bool = False  # properties drawn in `materials.STIFF_RANGES` (cards and sticks too)
+    slide_margin: float = 0.0  # slides: labelled sets also reach a slide this long (× size; make_slide_example)
 
     def to_dict(self) -> dict[str, Any]:
         out = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
-        for name, default in (("verify_moving", False), ("slides", 0.0), ("stiff", False)):
+        for name, default in (("verify_moving", False), ("slides", 0.0), ("stiff", False), ("slide_margin", 0.0)):
             if out[name] == default:  # data sets made before the option keep their manifests' configuration
                 del out[name]
         return out
@@ -85,7 +86,11 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
     counts: dict[str, int] = {}
     for _ in range(cfg.examples_per_body):
         slide = cfg.slides > 0 and material in ("cloth", "rope") and rng.random() < cfg.slides  # no draw without
-        ex = make_slide_example(body, rng) if slide else make_example(body, rng, verify_moving=cfg.verify_moving)
+        ex = (
+            make_slide_example(body, rng, cfg.slide_margin)
+            if slide
+            else make_example(body, rng, verify_moving=cfg.verify_moving)
+        )
         if ex is None:
             key = "slide_unreached" if slide else "unstable"
             counts[key] = counts.get(key, 0) + 1
@@ -93,6 +98,8 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
         which = ("test_uo" if split == "test" else "test_so") if ex.unseen_motion else "train"
         if split == "test" and which == "train":
             continue
+        if ex.margin_fallback:
+            counts["slide_margin_fallback"] = counts.get("slide_margin_fallback", 0) + 1
         if ex.moving_checked:
             key = "moving_valid" if ex.label_sets > 1 else "moving_invalid"
             counts[key] = counts.get(key, 0) + 1

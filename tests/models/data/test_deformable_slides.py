@@ -5,9 +5,11 @@ import pytest
 
 from models.data.deformable_examples import make_slide_example
 from models.data.deformable_generate import DeformableDataConfig, dataset_body, generate, load_body_file
+from models.deformable.body import DeformableBody
 from models.deformable.materials import RANGES, STIFF_RANGES
 from models.deformable.metrics import shape_score
 from models.deformable.rope import make_rope
+from models.deformable.shapes import make_body
 from models.deformable.simulate import simulate
 from models.deformable.slides import slide_candidates
 
@@ -35,8 +37,36 @@ def test_a_slide_example_labels_exactly_the_candidate_sets_that_reach_the_slid_b
                 assert ex.heat[i] < 1.0
 
 
+def _reaching(body: DeformableBody, d: np.ndarray) -> set[str]:
+    """Names of the candidate sets whose rollout reaches ``body`` slid by ``d``, one rollout each, judged here."""
+    names = set()
+    for m in slide_candidates(body, d):
+        out = simulate(body, m.contacts, m.motions)
+        if out.stable and shape_score(body.material, body.points, body.points + d, out.cloud).success:
+            names.add(m.procedure)
+    return names
+
+
+def test_a_margin_keeps_the_sets_that_also_reach_a_longer_slide_which_drops_a_handkerchief_pushed_from_behind() -> None:
+    handkerchief = make_body("cloth", "square", 100, {"friction": 0.6, "density": 600.0, "stretch": 1e3,
+                                                      "bending": 1e-5})  # fmt: skip
+    plain = make_slide_example(handkerchief, np.random.default_rng(2))
+    kept = make_slide_example(handkerchief, np.random.default_rng(2), margin=0.4)
+    assert plain is not None and kept is not None
+    d = kept.motion[0]
+    np.testing.assert_allclose(plain.motion[0], d)  # the same slide, a fifth of the size long
+    assert 0.15 < np.linalg.norm(d) / handkerchief.size < 0.3
+    short, long = _reaching(handkerchief, d), _reaching(handkerchief, d * 0.4 * handkerchief.size / np.linalg.norm(d))
+    assert plain.label_sets == len(short) and kept.label_sets == len(short & long) and not kept.margin_fallback
+    assert "slide_rear_one" in short and "slide_rear_one" not in long  # pushed from behind: only the short slide
+    rear = slide_candidates(handkerchief, d)[3]
+    assert rear.procedure == "slide_rear_one"
+    assert plain.heat[rear.contacts[0]] == pytest.approx(1.0) and kept.heat[rear.contacts[0]] < 1.0
+
+
 def test_stiff_data_sets_reach_cards_and_sticks_and_old_manifests_keep_their_configuration() -> None:
-    assert "slides" not in DeformableDataConfig().to_dict() and "stiff" not in DeformableDataConfig().to_dict()
+    for option in ("slides", "stiff", "slide_margin"):
+        assert option not in DeformableDataConfig().to_dict()
     cfg = DeformableDataConfig(materials=("rope",), bodies=40, stiff=True)
     moduli = [dataset_body(cfg, "rope", i).properties["youngs_modulus"] for i in range(40)]
     lo, hi, _ = STIFF_RANGES["rope"]["youngs_modulus"]
