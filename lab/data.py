@@ -125,10 +125,8 @@ def _labels(args: argparse.Namespace) -> int:
     from models.data.dataset import example_sets, load_examples
     from models.data.label_density import label_density
 
-    print(
-        "| data | split | examples | valid grasps an example | points in the valid region | in its own grasp's "
-        "| hit: random point | hit: most-opposed normal | hit: farthest point |"
-    )
+    print("| data | split | examples | valid grasps an example | points in the valid region | in its own grasp's "
+          "| hit: random point | hit: most-opposed normal | hit: farthest point |")
     print("|---|---|--:|--:|--:|--:|--:|--:|--:|")
     for d in args.data:
         for split in args.splits.split(","):
@@ -143,8 +141,6 @@ def _labels(args: argparse.Namespace) -> int:
                 set_heat, _ = example_sets(ex, int(i), slice(None))
                 rows.append((ex.points[o], ex.normals[o], ex.motion[i], set_heat, ex.heat[i]))
             r = label_density(rows, args.seed)
-            print(
-                f"| {d} | {split} | {r.examples} | {r.set_size:.1f} | {r.coverage:.1%} | {r.own:.1%} | "
-                f"{r.hit_random:.1%} | {r.hit_push:.1%} | {r.hit_far:.1%} |"
-            )
+            print(f"| {d} | {split} | {r.examples} | {r.set_size:.1f} | {r.coverage:.1%} | {r.own:.1%} | "
+                  f"{r.hit_random:.1%} | {r.hit_push:.1%} | {r.hit_far:.1%} |")
     return 0

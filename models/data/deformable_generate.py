@@ -86,11 +86,10 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
     counts: dict[str, int] = {}
     for _ in range(cfg.examples_per_body):
         slide = cfg.slides > 0 and material in ("cloth", "rope") and rng.random() < cfg.slides  # no draw without
-        ex = (
-            make_slide_example(body, rng, cfg.slide_margin)
-            if slide
-            else make_example(body, rng, verify_moving=cfg.verify_moving)
-        )
+        if slide:
+            ex = make_slide_example(body, rng, cfg.slide_margin)
+        else:
+            ex = make_example(body, rng, verify_moving=cfg.verify_moving)
         if ex is None:
             key = "slide_unreached" if slide else "unstable"
             counts[key] = counts.get(key, 0) + 1

@@ -18,7 +18,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from models.deformable.body import DeformableBody
-from models.deformable.metrics import shape_score
+from models.deformable.metrics import ShapeScore, shape_score
 from models.deformable.mjcf import FLEX_NAME, scene_xml
 
 LIFT = {"cloth": 0.3, "rope": 0.1, "plasticine": 0.0}
@@ -56,9 +56,14 @@ class Rollout:
     steps: int
     seconds: float
 
+    def score(self, body: DeformableBody, target: np.ndarray) -> ShapeScore:
+        """This rollout's cloud of ``body`` against ``target`` (N, 3) by the paper's metric (an unstable rollout
+        is scored on its last finite state)."""
+        return shape_score(body.material, body.points, target, self.cloud)
+
     def reaches(self, body: DeformableBody, target: np.ndarray) -> bool:
         """Whether this rollout of ``body`` is stable and reaches ``target`` (N, 3) by the paper's metric."""
-        return bool(self.stable and shape_score(body.material, body.points, target, self.cloud).success)
+        return bool(self.stable and self.score(body, target).success)
 
 
 def minimum_jerk(s: np.ndarray | float) -> np.ndarray:

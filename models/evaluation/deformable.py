@@ -40,7 +40,7 @@ from models.data.deformable_examples import is_unseen_motion
 from models.data.deformable_generate import DeformableDataConfig, dataset_body
 from models.deformable.body import DeformableBody
 from models.deformable.materials import MATERIALS
-from models.deformable.metrics import ShapeScore, shape_score
+from models.deformable.metrics import ShapeScore
 from models.deformable.procedures import Manipulation, random_manipulation
 from models.deformable.simulate import contact_vertices, simulate
 from models.evaluation.deformable_service import SERVICE_METHODS, Answers, ask_service
@@ -155,8 +155,7 @@ def _random_points(body: DeformableBody, count: int, rng: np.random.Generator) -
 
 
 def _score(case: DeformableCase, contacts: np.ndarray, motions: np.ndarray) -> ShapeScore:
-    out = simulate(case.body, contacts, motions)
-    return shape_score(case.material, case.body.points, case.target, out.cloud)
+    return simulate(case.body, contacts, motions).score(case.body, case.target)
 
 
 def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int, rng: np.random.Generator,

@@ -13,7 +13,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from models.deformable.body import DeformableBody
-from models.deformable.metrics import shape_score
 from models.deformable.procedures import Manipulation, random_manipulation
 from models.deformable.simulate import simulate
 from models.evaluation.deformable import Answer, DeformableCase
@@ -74,8 +73,7 @@ def pair_bodies(material: str, count: int, seed: int) -> list[tuple[DeformableBo
 
 def _top_error(body: DeformableBody, target: np.ndarray, contacts: np.ndarray, motions: np.ndarray) -> float:
     """The shape error (top mean) of ``contacts`` moved by ``motions`` on ``body`` against ``target``."""
-    rollout = simulate(body, contacts, motions).cloud
-    return shape_score(body.material, body.points, target, rollout).top_mean_error
+    return simulate(body, contacts, motions).score(body, target).top_mean_error
 
 
 def property_sensitivity(material: str, count: int, seed: int, network: Answer | None) -> list[SensitivityResult]:
