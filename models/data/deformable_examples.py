@@ -21,6 +21,9 @@ reaches a slide depends on the properties (a handkerchief must be pulled from it
 what the property figure asks the network to have learnt. With a margin (``slide_margin``), the labels keep only
 the sets that also reach the same heading's slide at the margin's length: at a sixth of its size a handkerchief
 still follows a push from behind, at a quarter it bunches up, and an open-loop answer should not sit on that edge.
+Each slide also keeps every named set's `metrics.shortfall` at the slide and at the margin's length
+(``set_shortfall``, ``set_shortfall_margin``; stored as ``slide_shortfall``, NaN rows for other examples), so
+that other labels — the best set alone, a weight by margin — can be drawn from a data set without simulating again.
 
 Motion split: a manipulation is an "unseen motion" when the heading of its mean contact motion lies within
 ``HELD_OUT_HALF_WIDTH`` of one of ``HELD_OUT_HEADINGS`` (four diagonals; ≈ 22 % of headings); those never enter
@@ -36,9 +39,10 @@ import numpy as np
 from models.data.labels import heat_and_force, kernel, region_mask
 from models.deformable.answer import moving_indices
 from models.deformable.body import DeformableBody
+from models.deformable.metrics import shortfall
 from models.deformable.procedures import Manipulation, random_manipulation
 from models.deformable.simulate import simulate
-from models.deformable.slides import slide_candidates, slide_displacement
+from models.deformable.slides import SET_NAMES, slide_candidates, slide_displacement
 
 HELD_OUT_HEADINGS = np.deg2rad([45.0, 135.0, 225.0, 315.0])
 HELD_OUT_HALF_WIDTH = np.deg2rad(10.0)
@@ -60,6 +64,10 @@ class DeformableExample:
     label_sets: int = 1
     moving_checked: bool = False
     margin_fallback: bool = False  # a slide whose labels no set reached with the margin (`make_slide_example`)
+    # slides: each named set's `metrics.shortfall` (`slides.SET_NAMES` order; ≤ 1 reaches, inf unstable, NaN not
+    # simulated) at the slide and at the margin's length, so that other labels can be drawn without simulating again
+    set_shortfall: np.ndarray | None = None
+    set_shortfall_margin: np.ndarray | None = None
 
 
 def is_unseen_motion(motions: np.ndarray) -> bool:
@@ -141,14 +149,14 @@ def make_slide_example(body: DeformableBody, rng: np.random.Generator,
     The example's ``contacts`` are the first labelled set's (front to rear), ``label_sets`` how many were labelled.
     """
     displacement = slide_displacement(body, rng)
-    valid, seconds = _reaching_sets(body, displacement)
+    valid, shortfall, seconds = _reaching_sets(body, displacement)
     if not valid:
         return None
     longer = displacement * margin * body.size / float(np.linalg.norm(displacement))
-    fallback = False
+    fallback, shortfall_margin = False, np.full(len(SET_NAMES), np.nan)
     if margin > 0 and np.linalg.norm(longer) > np.linalg.norm(displacement) * (1 + 1e-9):
         names = {m.procedure for m in valid}
-        kept, more = _reaching_sets(body, longer, names)
+        kept, shortfall_margin, more = _reaching_sets(body, longer, names)
         seconds += more
         kept_names = {m.procedure for m in kept}
         fallback = not kept_names
@@ -159,20 +167,24 @@ def make_slide_example(body: DeformableBody, rng: np.random.Generator,
     first = valid[0]
     return DeformableExample(np.tile(displacement, (len(body.points), 1)), heat, motion_map, mask, first.contacts,
                              first.motions, "slide", is_unseen_motion(first.motions), seconds, len(valid),
-                             margin_fallback=fallback)  # fmt: skip
+                             margin_fallback=fallback, set_shortfall=shortfall,
+                             set_shortfall_margin=shortfall_margin)  # fmt: skip
 
 
 def _reaching_sets(body: DeformableBody, displacement: np.ndarray,
-                   names: set[str] | None = None) -> tuple[list[Manipulation], float]:  # fmt: skip
+                   names: set[str] | None = None) -> tuple[list[Manipulation], np.ndarray, float]:  # fmt: skip
     """The `slide_candidates` (those named in ``names``; None: all) whose rollouts reach ``body`` slid by
-    ``displacement`` (3,), and the rollouts' seconds."""
+    ``displacement`` (3,); every set's shortfall (`SET_NAMES` order, `metrics.shortfall`: ≤ 1 reaches, inf
+    unstable, NaN not simulated); the rollouts' seconds."""
     target = body.points + displacement
     valid, seconds = [], 0.0
-    for m in slide_candidates(body, displacement):
+    shortfalls = np.full(len(SET_NAMES), np.nan)
+    for k, m in enumerate(slide_candidates(body, displacement)):
         if names is not None and m.procedure not in names:
             continue
         out = simulate(body, m.contacts, m.motions)
         seconds += out.seconds
+        shortfalls[k] = shortfall(body.material, out.score(body, target)) if out.stable else np.inf
         if out.reaches(body, target):
             valid.append(m)
-    return valid, seconds
+    return valid, shortfalls, seconds

@@ -24,6 +24,7 @@ from models.data.runs import run_jobs, write_manifest
 from models.deformable.body import DeformableBody
 from models.deformable.materials import MATERIALS, STIFF_RANGES, sample_properties
 from models.deformable.shapes import KINDS, make_body
+from models.deformable.slides import SET_NAMES
 
 SUBDIR = "deformable"
 MANIFEST = "manifest.json"
@@ -110,7 +111,9 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
         for key, value in (("motion", ex.motion.astype(np.float32)), ("heat", ex.heat.astype(np.float32)),
                            ("motion_map", ex.motion_map.astype(np.float32)), ("mask", ex.mask),
                            ("contacts", contacts), ("contact_motions", motions), ("procedure", ex.procedure),
-                           ("split", which), ("sim_seconds", ex.seconds), ("label_sets", ex.label_sets)):  # fmt: skip
+                           ("split", which), ("sim_seconds", ex.seconds), ("label_sets", ex.label_sets),
+                           ("slide_shortfall", _or_nan(ex.set_shortfall)),
+                           ("slide_shortfall_margin", _or_nan(ex.set_shortfall_margin))):  # fmt: skip
             rows.setdefault(key, []).append(value)
         counts[which] = counts.get(which, 0) + 1
     props = np.array([body.properties.get(k, np.nan) for k in PROPERTY_KEYS])
@@ -126,6 +129,11 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
     np.savez_compressed(tmp, **arrays)  # type: ignore[arg-type]
     os.replace(tmp, Path(out_dir) / name)
     return BodyResult(material, i, name, int(arrays["num_examples"]), counts, time.perf_counter() - t0)
+
+
+def _or_nan(shortfalls: np.ndarray | None) -> np.ndarray:
+    """A slide's per-set shortfalls (6,), or NaN for an example that is not a slide."""
+    return np.full(len(SET_NAMES), np.nan) if shortfalls is None else shortfalls
 
 
 def _run_star(args: tuple[DeformableDataConfig, str, int, str]) -> BodyResult:

@@ -26,6 +26,7 @@ from models.deformable.procedures import Manipulation
 SLIDE = (0.15, 0.4)  # |d| / the body's size
 EDGE_FRACTION = 0.1  # the leading (trailing) tenth of the cloud holds the front (rear) pair
 ACROSS_WEIGHT = 0.5  # the single front (rear) point: most leading, less half its distance across d
+SET_NAMES = ("front_pair", "front_one", "centre", "rear_one", "rear_pair", "far_pair")  # `slide_candidates`' order
 
 
 def slide_displacement(body: DeformableBody, rng: np.random.Generator, fraction: float | None = None) -> np.ndarray:
@@ -60,7 +61,6 @@ def slide_candidates(body: DeformableBody, displacement: np.ndarray) -> list[Man
     sets["centre"] = [int(np.argmin(along**2 + across**2))]
     gap = np.linalg.norm(points[:, None] - points[None], axis=-1)
     sets["far_pair"] = sorted(int(k) for k in np.unravel_index(np.argmax(gap), gap.shape))
-    order = ("front_pair", "front_one", "centre", "rear_one", "rear_pair", "far_pair")
     d = np.asarray(displacement, dtype=np.float64)
     return [Manipulation(np.array(sets[name], dtype=np.int64), np.tile(d, (len(sets[name]), 1)), f"slide_{name}")
-            for name in order]  # fmt: skip
+            for name in SET_NAMES]  # fmt: skip

@@ -61,6 +61,12 @@ def test_a_margin_keeps_the_sets_that_also_reach_a_longer_slide_which_drops_a_ha
     assert "slide_rear_one" in short and "slide_rear_one" not in long  # pushed from behind: only the short slide
     rear = slide_candidates(handkerchief, d)[3]
     assert rear.procedure == "slide_rear_one"
+    # every set's shortfall is kept (≤ 1: reached), so other labels can be drawn without simulating again
+    names = [m.procedure for m in slide_candidates(handkerchief, d)]
+    assert kept.set_shortfall is not None and kept.set_shortfall_margin is not None
+    assert {n for n, f in zip(names, kept.set_shortfall, strict=True) if f <= 1.0} == short
+    assert {n for n, f in zip(names, kept.set_shortfall_margin, strict=True) if f <= 1.0} == short & long
+    assert all(np.isnan(f) for n, f in zip(names, kept.set_shortfall_margin, strict=True) if n not in short)
     assert plain.heat[rear.contacts[0]] == pytest.approx(1.0) and kept.heat[rear.contacts[0]] < 1.0
 
 
@@ -83,3 +89,6 @@ def test_a_data_set_of_slides_holds_slide_examples(tmp_path: Path) -> None:
     counts = manifest["bodies"]["rope-0"]["counts"]
     assert int(body["num_examples"]) + counts.get("slide_unreached", 0) == 2
     assert set(body.get("procedure", np.array(["slide"])).tolist()) <= {"slide"}
+    shortfalls = body.get("slide_shortfall", np.zeros((0, 6)))
+    assert shortfalls.shape == (int(body["num_examples"]), 6)
+    assert np.all(np.nanmin(shortfalls, axis=1) <= 1.0)  # a kept slide is reached by some set
