@@ -39,10 +39,9 @@ import numpy as np
 from models.data.labels import heat_and_force, kernel, region_mask
 from models.deformable.answer import moving_indices
 from models.deformable.body import DeformableBody
-from models.deformable.metrics import shortfall
 from models.deformable.procedures import Manipulation, random_manipulation
 from models.deformable.simulate import simulate
-from models.deformable.slides import SET_NAMES, slide_candidates, slide_displacement
+from models.deformable.slides import SET_NAMES, reaching_sets, slide_displacement
 
 HELD_OUT_HEADINGS = np.deg2rad([45.0, 135.0, 225.0, 315.0])
 HELD_OUT_HALF_WIDTH = np.deg2rad(10.0)
@@ -149,14 +148,14 @@ def make_slide_example(body: DeformableBody, rng: np.random.Generator,
     The example's ``contacts`` are the first labelled set's (front to rear), ``label_sets`` how many were labelled.
     """
     displacement = slide_displacement(body, rng)
-    valid, shortfall, seconds = _reaching_sets(body, displacement)
+    valid, shortfall, seconds = reaching_sets(body, displacement)
     if not valid:
         return None
     longer = displacement * margin * body.size / float(np.linalg.norm(displacement))
     fallback, shortfall_margin = False, np.full(len(SET_NAMES), np.nan)
     if margin > 0 and np.linalg.norm(longer) > np.linalg.norm(displacement) * (1 + 1e-9):
         names = {m.procedure for m in valid}
-        kept, shortfall_margin, more = _reaching_sets(body, longer, names)
+        kept, shortfall_margin, more = reaching_sets(body, longer, names)
         seconds += more
         kept_names = {m.procedure for m in kept}
         fallback = not kept_names
@@ -169,22 +168,3 @@ def make_slide_example(body: DeformableBody, rng: np.random.Generator,
                              first.motions, "slide", is_unseen_motion(first.motions), seconds, len(valid),
                              margin_fallback=fallback, set_shortfall=shortfall,
                              set_shortfall_margin=shortfall_margin)  # fmt: skip
-
-
-def _reaching_sets(body: DeformableBody, displacement: np.ndarray,
-                   names: set[str] | None = None) -> tuple[list[Manipulation], np.ndarray, float]:  # fmt: skip
-    """The `slide_candidates` (those named in ``names``; None: all) whose rollouts reach ``body`` slid by
-    ``displacement`` (3,); every set's shortfall (`SET_NAMES` order, `metrics.shortfall`: ≤ 1 reaches, inf
-    unstable, NaN not simulated); the rollouts' seconds."""
-    target = body.points + displacement
-    valid, seconds = [], 0.0
-    shortfalls = np.full(len(SET_NAMES), np.nan)
-    for k, m in enumerate(slide_candidates(body, displacement)):
-        if names is not None and m.procedure not in names:
-            continue
-        out = simulate(body, m.contacts, m.motions)
-        seconds += out.seconds
-        shortfalls[k] = shortfall(body.material, out.score(body, target)) if out.stable else np.inf
-        if out.reaches(body, target):
-            valid.append(m)
-    return valid, shortfalls, seconds

@@ -14,6 +14,9 @@ behind it bunches up; a card or a stick also goes when pushed from behind or at 
 - ``rear_one`` and ``rear_pair``: as the front ones, at the trailing edge;
 - ``far_pair``: the two points of the cloud farthest apart (a rope's ends, a cloth's opposite corners), which the
   paper's figure drags on a rope.
+
+`reaching_sets` simulates them and says which reach the slid body: the data's slide labels and the property
+figure's named-set columns both read it.
 """
 
 from __future__ import annotations
@@ -21,7 +24,9 @@ from __future__ import annotations
 import numpy as np
 
 from models.deformable.body import DeformableBody
+from models.deformable.metrics import shortfall
 from models.deformable.procedures import Manipulation
+from models.deformable.simulate import simulate
 
 SLIDE = (0.15, 0.4)  # |d| / the body's size
 EDGE_FRACTION = 0.1  # the leading (trailing) tenth of the cloud holds the front (rear) pair
@@ -64,3 +69,22 @@ def slide_candidates(body: DeformableBody, displacement: np.ndarray) -> list[Man
     d = np.asarray(displacement, dtype=np.float64)
     return [Manipulation(np.array(sets[name], dtype=np.int64), np.tile(d, (len(sets[name]), 1)), f"slide_{name}")
             for name in SET_NAMES]  # fmt: skip
+
+
+def reaching_sets(body: DeformableBody, displacement: np.ndarray,
+                  names: set[str] | None = None) -> tuple[list[Manipulation], np.ndarray, float]:  # fmt: skip
+    """The `slide_candidates` (those named in ``names``; None: all) whose rollouts reach ``body`` slid by
+    ``displacement`` (3,) by the paper's metric; every set's shortfall (`SET_NAMES` order,
+    `models.deformable.metrics.shortfall`: ≤ 1 reaches, inf unstable, NaN not simulated); the rollouts' seconds."""
+    target = body.points + displacement
+    valid, seconds = [], 0.0
+    shortfalls = np.full(len(SET_NAMES), np.nan)
+    for k, m in enumerate(slide_candidates(body, displacement)):
+        if names is not None and m.procedure not in names:
+            continue
+        out = simulate(body, m.contacts, m.motions)
+        seconds += out.seconds
+        shortfalls[k] = shortfall(body.material, out.score(body, target)) if out.stable else np.inf
+        if out.reaches(body, target):
+            valid.append(m)
+    return valid, shortfalls, seconds

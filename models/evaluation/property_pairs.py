@@ -145,7 +145,7 @@ def property_figure(material: str, count: int, seed: int, network: Answer) -> li
     each member with its own properties; each answer is simulated on its own member and on the other one, and
     the named candidate sets show what each member's physics allows.
     """
-    from models.deformable.slides import along_and_across, slide_candidates, slide_displacement
+    from models.deformable.slides import SET_NAMES, along_and_across, reaching_sets, slide_displacement
 
     first_name, _, second_name, _ = SENSITIVITY_PAIRS[material]
     rng = np.random.default_rng([seed, 11])
@@ -160,10 +160,9 @@ def property_figure(material: str, count: int, seed: int, network: Answer) -> li
             contacts, motions, source = answers[i]
             other_contacts, other_motions, _ = answers[1 - i]
             along, _ = along_and_across(contacts, d, origin=body.points.mean(axis=0))
+            reached = {m.procedure.removeprefix("slide_") for m in reaching_sets(body, d)[0]}
             members.append(FigureMember(
                 name, _reaches(body, target, contacts, motions), _reaches(body, target, other_contacts, other_motions),
-                float(along.mean()) / body.size, source,
-                {m.procedure.removeprefix("slide_"): _reaches(body, target, m.contacts, m.motions)
-                 for m in slide_candidates(body, d)}))  # fmt: skip
+                float(along.mean()) / body.size, source, {n: n in reached for n in SET_NAMES}))  # fmt: skip
         out.append((members[0], members[1]))
     return out
