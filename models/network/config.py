@@ -66,6 +66,8 @@ class NetworkConfig:
     deformable_head: tuple[int, ...] = ()
     # the head's motion as gain · target motion + residual (True) or as a residual alone (False, round 12)
     deformable_motion_gain: bool = False
+    # the head also reads each point's place along and across the mean motion (deformable_head.motion_frame)
+    deformable_frame: bool = False
     # --- loss of Eq. (3) ---
     # The paper does not state λ_C, λ_S, λ_KL; these defaults are ours (heatmap and force map weighted
     # equally, a small KL weight as usual for CVAEs) and are recorded in every model card.
@@ -223,6 +225,14 @@ def cpu1k_deformable_gain() -> NetworkConfig:
     """``cpu1k_deformable`` whose head adds a per-point gain on the target motion to the motion map
     (models.network.deformable_head): a post-contact motion is mostly the target's displacement at the contact."""
     return dataclasses.replace(cpu1k_deformable(), name="cpu1k_deformable_gain", deformable_motion_gain=True)
+
+
+@register_config
+def cpu1k_deformable_frame() -> NetworkConfig:
+    """``cpu1k_deformable_gain`` whose head also reads where each point sits along and across the mean target
+    motion (models.network.deformable_head.motion_frame): under a slide every point moves alike, and only its place
+    says whether it is a leading edge."""
+    return dataclasses.replace(cpu1k_deformable_gain(), name="cpu1k_deformable_frame", deformable_frame=True)
 
 
 __all__ = ["LevelConfig", "NetworkConfig", "config_with_defaults", "get_config", "list_configs", "register_config"]

@@ -9,9 +9,10 @@ sample), the base outputs, the target motion at the point (and its size against 
 raw properties, and adds (Δ logit, Δ motion) — with ``motion_gain``, Δ motion = a · target motion + b (a per-point
 gain a and residual b; see below) — but only for objects that carry a deformable property (stretch,
 bending, Young's modulus or Poisson's ratio; the wire schema allows them only on cloth, rope and plasticine).
-For every other object the base outputs pass through unchanged, bit for bit, so weights trained with only this
-head (``train_only: [deformable_head.]``) answer rigid and articulated requests exactly as the weights they
-started from. Its last layer starts at zero: an untrained head is the base network.
+With ``frame`` it also reads each point's place in the motion's frame (:func:`motion_frame`). For every other
+object the base outputs pass through unchanged, bit for bit, so weights trained with only this head
+(``train_only: [deformable_head.]``) answer rigid and articulated requests exactly as the weights they started
+from. Its last layer starts at zero: an untrained head is the base network.
 
 Why a gain: the motion label at a contact is heat × the contact's post-contact motion, and for a drag or a fold
 that motion is close to the target's displacement there, which the head is given. A residual alone has to
@@ -32,6 +33,7 @@ from models.network.properties import PROPERTY_NAMES
 DEFORMABLE_PROPERTIES = ("stretch", "bending", "youngs_modulus", "poisson_ratio")
 _DEFORMABLE_INDEX = [PROPERTY_NAMES.index(n) for n in DEFORMABLE_PROPERTIES]
 CONDITION_DIM = 3 + 1 + 2 * len(PROPERTY_NAMES)  # motion, its relative size, property values and presence
+FRAME_DIM = 2  # where the point sits along the mean motion and across it (`motion_frame`)
 
 
 def is_deformable(prop_mask: torch.Tensor) -> torch.Tensor:
@@ -58,13 +60,37 @@ def deformable_condition(motion: torch.Tensor, prop_values: torch.Tensor, prop_m
     return torch.cat([motion, relative, props.unsqueeze(1).expand(-1, motion.shape[1], -1)], dim=-1)
 
 
+def motion_frame(xyz: torch.Tensor, motion: torch.Tensor) -> torch.Tensor:
+    """Each point's place in the frame of the object's mean target motion: how far it leads (+1: the most leading
+    point, −1: the most trailing, from the centroid) and how far it sits across the motion (1: the farthest).
+
+    Why: a slide moves every point by the same d, so the motion at a point says nothing of whether the point is a
+    leading edge (a handkerchief must be pulled there) or a trailing one (pushed from there it bunches up); the
+    product of a point's place and the motion's heading is one a per-point MLP would have to learn to multiply.
+
+    Args:
+        xyz: (B, N, 3) normalised points. motion: (B, N, 3) normalised target motion.
+
+    Returns:
+        (B, N, FRAME_DIM): along and across, each over its largest magnitude (0 where the mean motion vanishes).
+    """
+    rel = xyz - xyz.mean(dim=1, keepdim=True)
+    mean = motion.mean(dim=1, keepdim=True)
+    heading = mean / mean.norm(dim=-1, keepdim=True).clamp_min(1e-9)
+    along = (rel * heading).sum(dim=-1, keepdim=True)
+    across = (rel - along * heading).norm(dim=-1, keepdim=True)
+    along = along / along.abs().amax(dim=1, keepdim=True).clamp_min(1e-9)
+    across = across / across.amax(dim=1, keepdim=True).clamp_min(1e-9)
+    return torch.cat([along, across], dim=-1)
+
+
 class DeformableHead(nn.Module):
     """Per-point MLP → (Δ logit, Δ motion), applied where :func:`is_deformable`."""
 
     def __init__(self, contact_features: int, force_features: int, hidden: tuple[int, ...],
-                 motion_gain: bool = False) -> None:  # fmt: skip
+                 motion_gain: bool = False, frame: bool = False) -> None:  # fmt: skip
         super().__init__()
-        in_dim = contact_features + force_features + 1 + 3 + CONDITION_DIM
+        in_dim = contact_features + force_features + 1 + 3 + CONDITION_DIM + (FRAME_DIM if frame else 0)
         self.motion_gain = motion_gain
         self.mlp = MLP(in_dim, hidden, norm=False)
         self.out = nn.Linear(hidden[-1], 5 if motion_gain else 4)
@@ -81,7 +107,8 @@ class DeformableHead(nn.Module):
         deformable: torch.Tensor,
     ) -> tuple[torch.Tensor, torch.Tensor]:
         """Args: decoder features (B, K, N, C_c) and (B, K, N, C_f), base logits (B, K, N), base motion map
-        (B, K, N, 3), condition (B, N, CONDITION_DIM), deformable (B,) bool. Returns the logits and the map."""
+        (B, K, N, 3), condition (B, N, CONDITION_DIM, + FRAME_DIM with ``frame``), deformable (B,) bool. Returns
+        the logits and the map."""
         k = logit.shape[1]
         x = torch.cat(
             [

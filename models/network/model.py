@@ -14,7 +14,7 @@ import torch
 from torch import nn
 
 from models.network.config import NetworkConfig, get_config
-from models.network.deformable_head import DeformableHead, deformable_condition, is_deformable
+from models.network.deformable_head import DeformableHead, deformable_condition, is_deformable, motion_frame
 from models.network.encoders import Decoder, HandEncoder, ObjectEncoder, Posterior
 from models.network.hierarchy import PointHierarchy, build_hierarchy
 from models.network.properties import PropertyEncoder
@@ -85,7 +85,7 @@ class ManiFoundationNet(nn.Module):
         nn.init.constant_(self.contact_decoder.out.bias, math.log(HEAT_PRIOR / (1.0 - HEAT_PRIOR)))
         self.deformable_head = (
             DeformableHead(config.decoder_head[-1], config.decoder_head[-1], config.deformable_head,
-                           config.deformable_motion_gain)
+                           config.deformable_motion_gain, config.deformable_frame)
             if config.deformable_head
             else None
         )
@@ -120,6 +120,8 @@ class ManiFoundationNet(nn.Module):
         if self.deformable_head is None:
             return Encoded(hierarchy, eo, eh)
         condition = deformable_condition(obj.motion, obj.prop_values, obj.prop_mask)
+        if self.config.deformable_frame:
+            condition = torch.cat([condition, motion_frame(obj.xyz, obj.motion)], dim=-1)
         return Encoded(hierarchy, eo, eh, condition, is_deformable(obj.prop_mask))
 
     def decode(self, enc: Encoded, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:

@@ -17,17 +17,19 @@ def initialise_from(model: ManiFoundationNet, source: ManiFoundationNet) -> None
     """Copy ``source``'s weights into ``model``: the same configuration, or ``model``'s with a deformable head
     added or changed. A new head keeps its initialisation (zero output, so ``model`` starts as ``source``); a
     head of the same hidden widths but another output (a motion gain added) takes the source head's hidden layers
-    and its output rows for the logit and the motion residual, the gain's row starting at zero.
+    and its output rows for the logit and the motion residual, the gain's row starting at zero; one with more
+    inputs (the motion frame added) takes the source's first layer with zero weights on the new inputs, so it
+    too starts as ``source``.
 
     Raises:
         ValueError: the configurations differ otherwise.
     """
-    head_fields = {"name": "", "deformable_head": [], "deformable_motion_gain": False}
+    head_fields = {"name": "", "deformable_head": [], "deformable_motion_gain": False, "deformable_frame": False}
     mine = {**model.config.to_dict(), **head_fields}
     theirs = {**source.config.to_dict(), **head_fields}
     same_head = source.config.deformable_head == model.config.deformable_head and (
         model.config.deformable_motion_gain or not source.config.deformable_motion_gain
-    )
+    ) and (model.config.deformable_frame or not source.config.deformable_frame)
     if mine != theirs or (source.config.deformable_head and not same_head):
         raise ValueError(f"init_from: a {source.config.name!r} network cannot start a {model.config.name!r} one")
     state = source.state_dict()
@@ -37,6 +39,11 @@ def initialise_from(model: ManiFoundationNet, source: ManiFoundationNet) -> None
             grown = torch.zeros_like(target[key])
             grown[0], grown[-3:] = state[key][0], state[key][1:]
             state[key] = grown
+    first = "deformable_head.mlp.net.0.weight"  # (hidden, inputs): the frame's inputs come last
+    if first in state and state[first].shape[1] < target[first].shape[1]:
+        grown = torch.zeros_like(target[first])
+        grown[:, : state[first].shape[1]] = state[first]
+        state[first] = grown
     missing, unexpected = model.load_state_dict(state, strict=False)
     assert not unexpected and all(k.startswith("deformable_head.") for k in missing), (missing, unexpected)
 

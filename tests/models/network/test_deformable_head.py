@@ -5,8 +5,10 @@ from __future__ import annotations
 import torch
 
 from models.network import create_model
+from models.network.deformable_head import motion_frame
 from models.network.model import ManiFoundationNet, ObjectTensors
 from models.network.properties import property_tensors
+from models.training.card import initialise_from
 
 CLOTH = {"friction": 0.6, "density": 600.0, "stretch": 3e3, "bending": 3e-5}
 RIGID = {"friction": 0.6, "density": 700.0}
@@ -67,3 +69,32 @@ def test_the_motion_gain_scales_the_target_motion_at_each_point() -> None:
     motion = 0.2 * torch.rand(1, 1024, 3, generator=gen)
     assert torch.equal(heat0, heat1)
     torch.testing.assert_close(force1 - force0, 2.0 * motion.unsqueeze(1).expand_as(force0), rtol=0, atol=1e-5)
+
+
+def test_the_motion_frame_says_which_points_lead_and_how_far_across() -> None:
+    # a 3 × 3 grid in the table's plane, slid along +y: the row at y = +1 leads, the column x = ±1 is farthest across
+    x, y = torch.meshgrid(torch.tensor([-1.0, 0.0, 1.0]), torch.tensor([-1.0, 0.0, 1.0]), indexing="ij")
+    xyz = torch.stack([x.flatten(), y.flatten() + 5.0, torch.zeros(9)], dim=-1).unsqueeze(0)
+    motion = torch.tensor([0.0, 0.3, 0.0]).expand(1, 9, 3)
+    frame = motion_frame(xyz, motion)[0]
+    torch.testing.assert_close(frame[:, 0], y.flatten())
+    torch.testing.assert_close(frame[:, 1], x.flatten().abs())
+    reversed_frame = motion_frame(xyz, -motion)[0]  # the same slide backwards: the other row leads
+    torch.testing.assert_close(reversed_frame[:, 0], -y.flatten())
+
+
+def test_a_head_grown_to_read_the_frame_answers_as_its_source_until_trained() -> None:
+    base = create_model("cpu1k", seed=3)
+    gained, framed = create_model("cpu1k_deformable_gain", seed=3), create_model("cpu1k_deformable_frame", seed=4)
+    gained.load_state_dict(base.state_dict(), strict=False)
+    assert gained.deformable_head is not None and framed.deformable_head is not None
+    torch.nn.init.normal_(gained.deformable_head.out.weight, std=0.5, generator=torch.Generator().manual_seed(0))
+    initialise_from(framed, gained)
+    for got, want in zip(_decode(framed, [CLOTH, RIGID]), _decode(gained, [CLOTH, RIGID]), strict=True):
+        torch.testing.assert_close(got, want, rtol=0, atol=1e-6)
+    first = framed.deformable_head.mlp.net[0]
+    assert isinstance(first, torch.nn.Linear)
+    with torch.no_grad():  # weight on the frame's inputs (the last two) changes the cloth's answer
+        first.weight[:, -2:] = 1.0
+    heat, _ = _decode(framed, [CLOTH])
+    assert (heat - _decode(gained, [CLOTH])[0]).abs().max() > 1e-3
