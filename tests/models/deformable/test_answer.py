@@ -1,10 +1,11 @@
-"""The deformable answer's fallback: the points the task moves most, spread apart."""
+"""The deformable answer: its fallback (the points the task moves most, spread apart), the motion read at a
+contact, and a slid body's contacts on both sides of its centre line."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from models.deformable.answer import deformable_contacts, moving_indices
+from models.deformable.answer import deformable_contacts, is_slide, moving_indices
 
 
 def _line(n: int = 101) -> np.ndarray:
@@ -65,3 +66,45 @@ def test_a_network_unsure_of_the_place_still_gives_the_contacts_motion() -> None
     assert answer.source == "network" and answer.indices[0] == 50 and heat[50] < 0.9
     np.testing.assert_allclose(answer.motions[0], m[0], rtol=1e-9)
     assert np.linalg.norm(motion_map[50]) < 0.9 * np.linalg.norm(m)  # the map's own value is shrunk
+
+
+def _square(n: int = 41) -> np.ndarray:
+    """(n², 3) a flat 1 × 1 square at the table's height, centred on the origin."""
+    u = np.linspace(-0.5, 0.5, n)
+    x, y = np.meshgrid(u, u, indexing="ij")
+    return np.stack([x.ravel(), y.ravel(), np.zeros(n * n)], axis=1)
+
+
+def _bumps(points: np.ndarray, centres: list[tuple[float, float]], heights: list[float]) -> np.ndarray:
+    heat = np.full(len(points), 0.01)
+    for (cx, cy), h in zip(centres, heights, strict=True):
+        heat = np.maximum(heat, h * np.exp(-((points[:, 0] - cx) ** 2 + (points[:, 1] - cy) ** 2) / (2 * 0.03**2)))
+    return heat
+
+
+def test_a_slid_body_is_taken_on_both_sides_of_the_line_along_its_motion() -> None:
+    # slid along +x: the two highest peaks sit on the left edge's front (y > 0); the third on the right front
+    points = _square()
+    peaks = [(0.45, 0.45), (0.3, 0.45), (0.45, -0.4)]
+    heat = _bumps(points, peaks, [0.9, 0.85, 0.8])
+    d = np.array([0.2, 0.0, 0.0])
+    slide = np.tile(d, (len(points), 1))
+    answer = deformable_contacts(points, heat, heat[:, None] * d, slide, None, 2)
+    got = sorted(map(tuple, np.round(answer.points[:, :2], 2)))
+    assert answer.source == "network" and got == sorted([peaks[0], peaks[2]])
+    np.testing.assert_allclose(answer.motions, np.tile(d, (2, 1)))
+    # the same maps for a fold (the motion grows along x): the plain NMS order, the two highest peaks
+    fold = np.zeros_like(points)
+    fold[:, 2] = 0.2 * (points[:, 0] + 0.5)
+    answer = deformable_contacts(points, heat, heat[:, None] * d, fold, None, 2)
+    assert sorted(map(tuple, np.round(answer.points[:, :2], 2))) == sorted(peaks[:2])
+
+
+def test_a_slide_is_a_motion_alike_everywhere() -> None:
+    points = _square(11)
+    d = np.array([0.1, -0.05, 0.0])
+    assert is_slide(np.tile(d, (len(points), 1)))
+    assert is_slide(np.tile(d, (len(points), 1)) + 0.005 * np.random.default_rng(0).standard_normal((len(points), 3)))
+    assert not is_slide(np.zeros_like(points))
+    rotation = np.cross([0.0, 0.0, 0.1], points)  # a turn about the centre: no two points move alike
+    assert not is_slide(rotation) and not is_slide(rotation + d)
