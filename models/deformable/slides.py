@@ -84,7 +84,8 @@ def reaching_sets(body: DeformableBody, displacement: np.ndarray,
             continue
         out = simulate(body, m.contacts, m.motions)
         seconds += out.seconds
-        shortfalls[k] = shortfall(body.material, out.score(body, target)) if out.stable else np.inf
-        if out.reaches(body, target):
+        score = out.score(body, target)  # `Rollout.reaches`, scored once for the shortfall too
+        shortfalls[k] = shortfall(body.material, score) if out.stable else np.inf
+        if out.stable and score.success:
             valid.append(m)
     return valid, shortfalls, seconds
