@@ -20,7 +20,8 @@ from itertools import combinations
 
 import numpy as np
 
-from models.network.selection import HEAT_FLOOR, ContactSelection, select_contacts
+from models.deformable.slides import along_and_across
+from models.network.selection import HEAT_FLOOR, select_contacts
 
 TASK_KINDS = ("point_motion", "target_points")
 UNIFORM_MOTION = 0.1  # a slide: the points' motions differ from their mean by at most this × its length (mean)
@@ -63,14 +64,11 @@ def is_slide(target_motion: np.ndarray) -> bool:
     return size > 0.0 and float(np.linalg.norm(m - mean, axis=1).mean()) <= UNIFORM_MOTION * size
 
 
-def balanced_peaks(points: np.ndarray, peaks: ContactSelection, count: int, displacement: np.ndarray) -> np.ndarray:
-    """Positions into ``peaks`` (heat order) of the ``count`` peaks, the first among them, whose mean lies nearest
-    the line through the centroid of ``points`` (N, 3) along ``displacement`` (3,) (horizontal distance; ties: the
-    higher peaks)."""
-    heading = np.asarray(displacement, dtype=np.float64)[:2]
-    heading = heading / max(float(np.linalg.norm(heading)), 1e-12)
-    across = (peaks.points[:, :2] - np.asarray(points, dtype=np.float64)[:, :2].mean(axis=0)) @ np.array(
-        [-heading[1], heading[0]])  # fmt: skip
+def balanced_peaks(points: np.ndarray, peaks: np.ndarray, count: int, displacement: np.ndarray) -> np.ndarray:
+    """Positions into ``peaks`` (H', 3; heat order) of the ``count`` peaks, the first among them, whose mean lies
+    nearest the line through the centroid of ``points`` (N, 3) along ``displacement`` (3,) (horizontal distance;
+    ties: the higher peaks)."""
+    _, across = along_and_across(peaks, displacement, origin=np.asarray(points, dtype=np.float64).mean(axis=0))
     best, best_offset = np.arange(count), np.inf
     for rest in combinations(range(1, len(peaks)), count - 1):
         chosen = np.array((0, *rest))
@@ -139,14 +137,17 @@ def deformable_contacts(
         mask: (N,) bool allowed region or None. max_contacts: H, e.g. the hand's fingertips.
         rng: draws the fallback's first point (None: the most-moved one; see `moving_indices`).
     """
-    sel = select_contacts(points, heatmap, motion_map, mask, max_contacts)
-    if len(sel) > 1 and is_slide(target_motion):
-        peaks = select_contacts(points, heatmap, motion_map, mask, max(BALANCE_PEAKS, max_contacts))
-        keep = balanced_peaks(points, peaks, len(sel), np.asarray(target_motion, dtype=np.float64).mean(axis=0))
-        sel = ContactSelection(peaks.indices[keep], peaks.points[keep], peaks.forces[keep], peaks.scores[keep])
-    if len(sel):
-        return DeformableContacts(sel.indices, points[sel.indices], motion_at(heatmap, motion_map, sel.indices),
-                                  "network")  # fmt: skip
+    slide = is_slide(target_motion)
+    # greedy NMS: its first H peaks of more are the H it would pick alone
+    peaks = select_contacts(points, heatmap, motion_map, mask, max(BALANCE_PEAKS, max_contacts) if slide
+                            else max_contacts)  # fmt: skip
+    count = min(max_contacts, len(peaks))
+    keep = np.arange(count)
+    if slide and count > 1:
+        keep = balanced_peaks(points, peaks.points, count, np.asarray(target_motion, dtype=np.float64).mean(axis=0))
+    if count:
+        idx = peaks.indices[keep]
+        return DeformableContacts(idx, points[idx], motion_at(heatmap, motion_map, idx), "network")
     allowed = np.flatnonzero(mask) if mask is not None else np.arange(len(points))
     idx = moving_indices(points, allowed, target_motion, max_contacts, rng)
     return DeformableContacts(idx, points[idx], np.asarray(target_motion, dtype=np.float64)[idx], "motion_fallback")
