@@ -87,7 +87,8 @@ def labels(body: DeformableBody, manipulation: Manipulation) -> tuple[np.ndarray
 def union_labels(body: DeformableBody, sets: list[Manipulation]) -> tuple[np.ndarray, np.ndarray]:
     """Heatmap (N,) and motion map (N, 3) of several valid contact sets: the kernel of every contact of every set,
     heat_j = max_i k_ij and motion_j = heat_j · m_i* (i* the contact of the largest kernel), so that motion / heat
-    reads one contact's motion back (`models.deformable.answer.motion_at`) even where two sets' contacts overlap."""
+    reads one contact's motion back (the quotient `models.network.loss.readout_loss` trains) even where two sets'
+    contacts overlap."""
     idx = np.concatenate([s.contacts for s in sets])
     motions = np.concatenate([s.motions for s in sets])
     k = kernel(body.points, body.normals, body.points[idx], body.normals[idx], body.size)

@@ -15,8 +15,9 @@ mark every plausible place, not none.
 a heatmap decoded from a *prior* sample should be one of them, whichever. Each prior sample pays the (weighted)
 heat error of the valid grasp nearest it, so no sample is pulled towards the average of several.
 
-:func:`readout_loss` is ours too: a deformable answer reads a contact's motion as motion map / heat
-(`models.deformable.answer.motion_at`), and the MSE of Eq. (3) makes that ratio right only where the predicted
+:func:`readout_loss` is ours too: the network's estimate of a deformable contact's motion is motion map / heat
+(the service's answer moves a contact by the task's own displacement there instead, which measured better:
+`models.deformable.answer`), and the MSE of Eq. (3) makes that ratio right only where the predicted
 heat is the conditional mean of the label's — with a contact-weighted cross-entropy it is not, and the motions read
 back were 0.25-1.5 of the label's (round 13). This term is the error of the read-out itself at the label's contacts.
 """

@@ -32,8 +32,8 @@ DEFAULT_RELATIVE = 0.5
 DEFAULT_MIN_CONTRAST = 0.1
 DEFAULT_RADIUS_FRACTION = 0.1
 DEFAULT_MIN_GROUP_SIZE = 3
-# the least heat a motion map is divided by when a contact's motion is read as map / heat (deformable answers,
-# models.deformable.answer.motion_at; the read-out loss in models.network.loss trains the same quotient)
+# the least heat a motion map is divided by when a contact's motion is read as map / heat (the network's own
+# estimate of a deformable contact's motion; the read-out loss in models.network.loss trains that quotient)
 HEAT_FLOOR = 0.1
 
 

@@ -1,7 +1,7 @@
 """Deformable requests (cloth, rope, plasticine with a ``point_motion`` or ``target_points`` task) in the pipeline.
 
 No wrench and no refinement: the answer is contacts with a post-contact motion each (`models.deformable.answer`).
-Methods: "network" (the heatmap's NMS contacts and the motion map there), "random_contacts" (spread points with
+Methods: "network" (the heatmap's NMS contacts with the task's motion at them), "random_contacts" (spread points with
 the task's motion at them), "contacts" (the given points, with the task's motion at them). With a hand, each
 proposal names the fingertip at each contact from the rigid fit of the hand's fingertips onto the contacts
 (`models.refine.initialise`, the pose is that fit's, not refined); ``quality.success`` is False with reason
@@ -117,9 +117,8 @@ def finish_deformable(p: PreparedDeformable, net_out: NetworkOutput | None, timi
     sets: list[DeformableContacts] = []
     for k in range(inp.num_proposals):
         if inp.method == "network" and net_out is not None:
-            heat, motion_map = net_out.heatmaps[k], net_out.force_maps[k]
             explore = rng if k > 0 else None  # the first proposal's fallback takes the most-moved point
-            sets.append(deformable_contacts(p.points, heat, motion_map, p.motion, p.mask, m, explore))
+            sets.append(deformable_contacts(p.points, net_out.heatmaps[k], p.motion, p.mask, m, explore))
         elif inp.method == "contacts":
             given = np.asarray(inp.contacts, dtype=np.float64).reshape(-1, 3)[:m]
             idx = PointCloudField(p.points, p.normals).nearest_index(given)
