@@ -39,11 +39,13 @@ def initialise_from(model: ManiFoundationNet, source: ManiFoundationNet) -> None
             grown = torch.zeros_like(target[key])
             grown[0], grown[-3:] = state[key][0], state[key][1:]
             state[key] = grown
-    first = "deformable_head.mlp.net.0.weight"  # (hidden, inputs): the frame's inputs come last
-    if first in state and state[first].shape[1] < target[first].shape[1]:
-        grown = torch.zeros_like(target[first])
-        grown[:, : state[first].shape[1]] = state[first]
-        state[first] = grown
+    for key, weight in list(state.items()):  # a head layer with more inputs (the frame's come last): zero on them
+        want = target.get(key)
+        if key.startswith("deformable_head.") and want is not None and weight.dim() == 2 \
+                and weight.shape[0] == want.shape[0] and weight.shape[1] < want.shape[1]:
+            grown = torch.zeros_like(want)
+            grown[:, : weight.shape[1]] = weight
+            state[key] = grown
     missing, unexpected = model.load_state_dict(state, strict=False)
     assert not unexpected and all(k.startswith("deformable_head.") for k in missing), (missing, unexpected)
 
