@@ -6,9 +6,9 @@ point goes where the gripper takes it, so the target says exactly where it must 
 (its φ_f map, motion map / heat) estimates the same vector; measured on unseen cloth bodies at the same contacts,
 the target's displacement reached the target more often (85.6 against 79.4 % per sample) and never less, rope
 the same (docs/deformables.md, "The motion at a network contact"). No hand refinement: a deformable is moved by
-grasping its points, not by balancing a wrench. A heatmap with no peak
-gives no network contacts; the answer then takes the H allowed points that the target moves most, spread apart
-(`moving_indices`), with the target motion at them, and says ``motion_fallback``.
+grasping its points, not by balancing a wrench. A heatmap with no peak gives no network contacts; the answer then
+takes the H allowed points that the target moves most, spread apart (`moving_indices`), with the target motion at
+them, and says ``motion_fallback``.
 
 A body slid as a whole (every point's target motion about the same d) is pulled through its centre line: of the
 heatmap's peaks, the H contacts (the highest peak among them) whose mean lies nearest the line along d through

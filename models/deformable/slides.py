@@ -84,8 +84,11 @@ def reaching_sets(body: DeformableBody, displacement: np.ndarray,
             continue
         out = simulate(body, m.contacts, m.motions)
         seconds += out.seconds
+        if not out.stable:
+            shortfalls[k] = np.inf
+            continue
         score = out.score(body, target)  # `Rollout.reaches`, scored once for the shortfall too
-        shortfalls[k] = shortfall(body.material, score) if out.stable else np.inf
-        if out.stable and score.success:
+        shortfalls[k] = shortfall(body.material, score)
+        if score.success:
             valid.append(m)
     return valid, shortfalls, seconds
