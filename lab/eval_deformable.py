@@ -54,7 +54,8 @@ def add_deformable(sub: Any) -> None:
 
 
 def _readback(row: dict[str, object]) -> str:
-    """The median read-back of the network's own answers (models.evaluation.deformable.motion_readback)."""
+    """The median read-back of the head's own motion estimate at the network's contacts (first answer of an
+    unchecked request; models.evaluation.deformable.motion_readback)."""
     value = row.get("network_readback")
     return f"{value:.2f}" if isinstance(value, float) and value == value else "-"
 
@@ -143,7 +144,7 @@ def run_deformable(args: argparse.Namespace) -> int:
     table = Table(title=f"deformables: simulated rollout vs target (paper metric), {args.cases} cases per row "
                         f"group, seed {args.seed}")
     for col in ("material", "split", "method", "cases", "success %", "median mean err", "median top err",
-                "network's own contacts (successes)", "own motion / target's"):
+                "network's own contacts (successes)", "head's motion / target's"):
         table.add_column(col, justify="left" if col in ("material", "split", "method") else "right")
     rows = report.summary()
     for r in rows:

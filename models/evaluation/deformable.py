@@ -43,7 +43,7 @@ from models.deformable.materials import MATERIALS
 from models.deformable.metrics import ShapeScore
 from models.deformable.procedures import Manipulation, random_manipulation
 from models.deformable.simulate import contact_vertices, simulate
-from models.evaluation.deformable_service import SERVICE_METHODS, Answers, ask_service
+from models.evaluation.deformable_service import SERVICE_METHODS, Answers, Proposal, ask_service
 
 if TYPE_CHECKING:
     from models.network.inference import ContactPredictor
@@ -74,7 +74,7 @@ class MethodResult:
     score: ShapeScore
     contacts: int
     source: str = ""
-    readback: float = float("nan")  # network's own answers: median |motion| / |target displacement| at its contacts
+    readback: float = float("nan")  # network answers: median |the head's own motion| / |target displacement| there
     rate: float | None = None  # several answers judged (network_samples): the fraction that succeed
 
     @property
@@ -193,29 +193,37 @@ def evaluate_case(case: DeformableCase, methods: tuple[str, ...], contacts: int,
         elif method == "network":
             if network is None:
                 raise ValueError("methods: 'network' needs a predictor")
-            idx, mot, source = network(case)
-            readback = motion_readback(case, idx, mot) if source == "network" else float("nan")
-            out.append(MethodResult(method, _score(case, idx, mot), len(idx), source, readback))
+            answer = network(case)
+            readback = _head_readback(case, answer)
+            out.append(MethodResult(method, _score(case, answer.points, answer.motions), len(answer.points),
+                                    answer.source, readback))  # fmt: skip
         elif method in SERVICE_METHODS:
             if service is None or method not in service:
                 raise ValueError(f"methods: {method!r} needs the service's answers (and a predictor for the network)")
             answers = service[method](case)
-            scores = [_score(case, points, motions) for points, motions, _ in answers]
+            scores = [_score(case, a.points, a.motions) for a in answers]
             rate = float(np.mean([s.success for s in scores])) if method == "network_samples" else None
-            points, motions, source = answers[0]
-            readback = motion_readback(case, points, motions) if source == "network" else float("nan")
-            out.append(MethodResult(method, scores[0], len(points), source, readback, rate))
+            first = answers[0]
+            out.append(MethodResult(method, scores[0], len(first.points), first.source, _head_readback(case, first),
+                                    rate))  # fmt: skip
         else:
             raise ValueError(f"methods: unknown {method!r} (one of {', '.join(METHODS)})")
     return out
 
 
-Answer = Callable[[DeformableCase], tuple[np.ndarray, np.ndarray, str]]
+Answer = Callable[[DeformableCase], Proposal]
+
+
+def _head_readback(case: DeformableCase, answer: Proposal) -> float:
+    if answer.source != "network" or answer.estimate is None:
+        return float("nan")
+    return motion_readback(case, answer.points, answer.estimate)
 
 
 def motion_readback(case: DeformableCase, points: np.ndarray, motions: np.ndarray) -> float:
-    """Median over an answer's contacts (H, 3) of |its motion| / |the target's displacement at the nearest cloud
-    point|: 1 when the motions read from the maps have the target's length (what found round 12's short motions)."""
+    """Median over contacts (H, 3) of |motion| / |the target's displacement at the nearest cloud point|: given the
+    head's own estimate (`deformable_service.head_estimate`), 1 when its maps read the target's length back (what
+    found round 12's short motions); the service's answers move by the displacement itself, so theirs is 1."""
     nearest = contact_vertices(case.body, points)
     target = np.linalg.norm((case.target - case.body.points)[nearest], axis=1)
     return float(np.median(np.linalg.norm(motions, axis=1) / np.maximum(target, 1e-12)))
@@ -242,7 +250,7 @@ def corrected_answer(case: DeformableCase, contacts: np.ndarray, corrections: in
 def pipeline_network(predictor: ContactPredictor, hand: Hand, seed: int) -> Answer:
     """The service's answer for a case: `run_pipeline` with method "network", first proposal."""
 
-    def answer(case: DeformableCase) -> tuple[np.ndarray, np.ndarray, str]:
+    def answer(case: DeformableCase) -> Proposal:
         return ask_service(case, predictor, hand, seed, "network", 1, False)[0]
 
     return answer

@@ -18,7 +18,7 @@ One latent sample is a noisy measure of the network: at 20 cases a row, the firs
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, NamedTuple, Protocol
 
 import numpy as np
 
@@ -29,7 +29,24 @@ if TYPE_CHECKING:
     from models.robots import Hand
 
 SERVICE_METHODS = ("network_samples", "network_checked", "random_checked")
-Proposal = tuple[np.ndarray, np.ndarray, str]  # contact points (H, 3), motions (H, 3), source
+
+
+class Proposal(NamedTuple):
+    """One answer of the service.
+
+    Attributes:
+        points: (H, 3) contact points. motions: (H, 3) their post-contact motions, m. source: network,
+            motion_fallback, random, ...
+        estimate: (H, 3) the network's own estimate of each contact's motion (motion map / heat at the contact,
+            `head_estimate`), where the output carries the maps of the sample the answer came from (the first
+            answer of an unchecked request); None otherwise. The answer's motions are the task's displacement
+            there, so only this says what the head has learnt about motion.
+    """
+
+    points: np.ndarray
+    motions: np.ndarray
+    source: str
+    estimate: np.ndarray | None = None
 
 
 class Case(Protocol):
@@ -57,11 +74,32 @@ def ask_service(case: Case, predictor: ContactPredictor | None, hand: Hand, seed
                          task=TaskInput("point_motion", motion=case.target - body.points),
                          material=body.material, properties=dict(body.properties), method=method,
                          num_proposals=proposals, seed=seed, simulate_rollout=checked)  # fmt: skip
+    out = run_pipeline(inp, predictor if method == "network" else None)
     answers = []
-    for p in run_pipeline(inp, predictor if method == "network" else None).proposals:
+    for k, p in enumerate(out.proposals):
         assert p.contact_motions is not None
-        answers.append((np.asarray(p.contact_points), np.asarray(p.contact_motions), p.contact_source))
+        points = np.asarray(p.contact_points)
+        estimate = None
+        # without a rollout the k-th answer is the k-th latent sample's, and the output holds sample 0's maps
+        if k == 0 and not checked and p.contact_source == "network" and out.heatmap is not None \
+                and out.force_map is not None:  # fmt: skip
+            estimate = head_estimate(body.points, out.heatmap, out.force_map, points)
+        answers.append(Proposal(points, np.asarray(p.contact_motions), p.contact_source, estimate))
     return answers
+
+
+def head_estimate(cloud: np.ndarray, heatmap: np.ndarray, motion_map: np.ndarray, contacts: np.ndarray
+                  ) -> np.ndarray:  # fmt: skip
+    """The network's own motion (H, 3) at ``contacts`` (H, 3): its motion map (N, 3) over its heat (N,) at the
+    nearest points of ``cloud`` (N, 3), the heat floored at `HEAT_FLOOR` (the quotient the read-out loss trains)."""
+    from scipy.spatial import cKDTree
+
+    from models.network.selection import HEAT_FLOOR
+
+    idx = cKDTree(np.asarray(cloud, dtype=np.float64)).query(np.asarray(contacts, dtype=np.float64))[1]
+    heat = np.maximum(np.asarray(heatmap, dtype=np.float64)[idx], HEAT_FLOOR)
+    estimate: np.ndarray = np.asarray(motion_map, dtype=np.float64)[idx] / heat[:, None]
+    return estimate
 
 
 def service_answers(predictor: ContactPredictor | None, hand: Hand, seed: int, proposals: int

@@ -95,12 +95,12 @@ def property_sensitivity(material: str, count: int, seed: int, network: Answer |
             out.append(SensitivityResult(material, gap, None, ("", "")))
             continue
         target = ra.cloud  # the same target for both: the shape the first member reaches
-        pa, ma, sa = network(DeformableCase(material, "sensitivity", a, manip, target))
-        pb, mb, sb = network(DeformableCase(material, "sensitivity", b, manip, target))
+        pa, ma, sa, _ = network(DeformableCase(material, "sensitivity", a, manip, target))
+        pb, mb, sb, _ = network(DeformableCase(material, "sensitivity", b, manip, target))
         d = np.linalg.norm(pa[:, None] - pb[None], axis=-1)
         differ = bool(max(d.min(axis=1).max(), d.min(axis=0).max()) > CONTACT_GAP * a.size)
-        qa, na, _ = network(DeformableCase(material, "sensitivity", a, manip, rb.cloud))
-        qb, nb, _ = network(DeformableCase(material, "sensitivity", b, manip, rb.cloud))
+        qa, na, *_ = network(DeformableCase(material, "sensitivity", a, manip, rb.cloud))
+        qb, nb, *_ = network(DeformableCase(material, "sensitivity", b, manip, rb.cloud))
         matched = (_top_error(a, ra.cloud, pa, ma), _top_error(b, rb.cloud, qb, nb))
         swapped = (_top_error(a, ra.cloud, pb, mb), _top_error(b, rb.cloud, qa, na))
         out.append(SensitivityResult(material, gap, differ, (sa, sb), matched, swapped))
@@ -157,8 +157,8 @@ def property_figure(material: str, count: int, seed: int, network: Answer) -> li
         answers = [network(DeformableCase(material, "figure", body, slide, target)) for body in (a, b)]
         members = []
         for i, (name, body) in enumerate(((first_name, a), (second_name, b))):
-            contacts, motions, source = answers[i]
-            other_contacts, other_motions, _ = answers[1 - i]
+            contacts, motions, source, _ = answers[i]
+            other_contacts, other_motions, *_ = answers[1 - i]
             along, _ = along_and_across(contacts, d, origin=body.points.mean(axis=0))
             reached = {m.procedure.removeprefix("slide_") for m in reaching_sets(body, d)[0]}
             members.append(FigureMember(

@@ -28,8 +28,9 @@ def test_the_moving_points_baseline_reaches_a_rope_drag_that_spread_random_point
 
 
 
-def test_readback_is_the_answers_motion_length_over_the_targets_at_its_contacts() -> None:
+def test_readback_is_the_heads_own_motion_length_over_the_targets_at_its_contacts() -> None:
     from models.evaluation.deformable import motion_readback
+    from models.evaluation.deformable_service import Proposal
 
     [case] = build_cases("rope", "test_uo", 1, seed=0, data=DeformableDataConfig(seed=0))
     displacement = case.target - case.body.points
@@ -37,9 +38,24 @@ def test_readback_is_the_answers_motion_length_over_the_targets_at_its_contacts(
     points = case.body.points[idx]
     assert motion_readback(case, points, displacement[idx]) == 1.0
     assert np.isclose(motion_readback(case, points, 0.4 * displacement[idx]), 0.4)
-    answer = lambda c: (points, 0.5 * displacement[idx], "network")  # noqa: E731 — what a short map answers
-    [result] = evaluate_case(case, ("network",), contacts=2, rng=np.random.default_rng(0), network=answer)
+    # the answer moves by the target's displacement; the head's own estimate (a short map) is what is read back
+    short = lambda c: Proposal(points, displacement[idx], "network", 0.5 * displacement[idx])  # noqa: E731
+    [result] = evaluate_case(case, ("network",), contacts=2, rng=np.random.default_rng(0), network=short)
     assert np.isclose(result.readback, 0.5)
+    no_maps = lambda c: Proposal(points, displacement[idx], "network")  # noqa: E731
+    [result] = evaluate_case(case, ("network",), contacts=2, rng=np.random.default_rng(0), network=no_maps)
+    assert np.isnan(result.readback)
+
+
+def test_the_heads_estimate_is_its_motion_map_over_its_heat_at_the_nearest_points() -> None:
+    from models.evaluation.deformable_service import head_estimate
+
+    cloud = np.array([[0.0, 0, 0], [1, 0, 0], [2, 0, 0]])
+    heat = np.array([0.5, 0.02, 1.0])
+    motion_map = np.array([[0.1, 0, 0], [0.0, 0.01, 0], [0, 0, 0.3]])
+    got = head_estimate(cloud, heat, motion_map, np.array([[0.1, 0, 0], [1.1, 0, 0], [1.9, 0, 0]]))
+    # the second point's heat is below the floor (0.1): its map is divided by the floor, not by 0.02
+    assert np.allclose(got, [[0.2, 0, 0], [0, 0.1, 0], [0, 0, 0.3]])
 
 
 def test_the_ground_truth_cut_to_its_contact_budget_keeps_the_most_moved_contacts() -> None:

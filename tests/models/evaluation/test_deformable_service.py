@@ -28,10 +28,14 @@ def test_network_samples_is_the_fraction_of_the_services_k_answers_that_reach_th
         answers = service["network_samples"](case)
         assert len(answers) == 3
         own = [shape_score("rope", case.body.points, case.target, simulate(case.body, p, m).cloud).success
-               for p, m, _ in answers]  # fmt: skip
+               for p, m, *_ in answers]  # fmt: skip
+        # the output holds sample 0's maps: only the first answer carries the head's own motion estimate
+        assert (answers[0].estimate is not None) == (answers[0].source == "network")
+        assert all(a.estimate is None for a in answers[1:])
         [result] = evaluate_case(case, ("network_samples",), 2, np.random.default_rng(0), service=service)
         assert result.success == pytest.approx(np.mean(own))
         assert result.score.success == own[0]
+        assert np.isfinite(result.readback) == (result.source == "network")
         rates.append(result.success)
     assert np.mean(rates) >= 0.5
 

@@ -6,6 +6,7 @@ import numpy as np
 
 from models.deformable.slides import slide_candidates
 from models.evaluation.deformable import DeformableCase
+from models.evaluation.deformable_service import Proposal
 from models.evaluation.property_pairs import SENSITIVITY_PAIRS, property_figure, property_sensitivity
 
 
@@ -15,15 +16,15 @@ def test_the_property_pairs_credit_an_answer_that_reads_the_properties_and_not_o
     own properties and better for the second with the swapped ones; a property-blind replay ties on both."""
     first = SENSITIVITY_PAIRS["rope"][1]
 
-    def reads_properties(case: DeformableCase) -> tuple[np.ndarray, np.ndarray, str]:
+    def reads_properties(case: DeformableCase) -> Proposal:
         m, points = case.manipulation, case.body.points
         if dict(case.body.properties) == first:
-            return points[m.contacts], m.motions, "network"
-        return points[m.contacts[:1]], np.zeros((1, 3)), "network"
+            return Proposal(points[m.contacts], m.motions, "network")
+        return Proposal(points[m.contacts[:1]], np.zeros((1, 3)), "network")
 
-    def blind(case: DeformableCase) -> tuple[np.ndarray, np.ndarray, str]:
+    def blind(case: DeformableCase) -> Proposal:
         m = case.manipulation
-        return case.body.points[m.contacts], m.motions, "network"
+        return Proposal(case.body.points[m.contacts], m.motions, "network")
 
     [reading] = property_sensitivity("rope", 1, seed=0, network=reads_properties)
     assert reading.matched_error is not None and reading.swapped_error is not None
@@ -38,11 +39,11 @@ def test_the_figure_credits_pulling_a_handkerchief_and_pushing_a_card_from_behin
     """An answer that pulls the front corners of a pliable square and pushes a stiff one from behind (the paper's
     figure) reaches the slid square on both; the card's push, tried on the handkerchief, does not."""
 
-    def paper(case: DeformableCase) -> tuple[np.ndarray, np.ndarray, str]:
+    def paper(case: DeformableCase) -> Proposal:
         d = case.target[0] - case.body.points[0]
         name = "slide_front_pair" if case.body.properties["bending"] < 1e-3 else "slide_rear_one"
         [m] = [m for m in slide_candidates(case.body, d) if m.procedure == name]
-        return case.body.points[m.contacts], m.motions, "network"
+        return Proposal(case.body.points[m.contacts], m.motions, "network")
 
     [(handkerchief, card)] = property_figure("cloth", 1, seed=0, network=paper)
     assert (handkerchief.name, card.name) == ("handkerchief", "card")
