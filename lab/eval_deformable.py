@@ -92,9 +92,22 @@ def _goal_lines(material: str, rates: dict[str, float]) -> list[str]:
 
 
 def run_deformable(args: argparse.Namespace) -> int:
-    """Build the cases, run every method on them and print the table."""
+    """Build the cases, run every method on them and print the table (and write ``args.json``)."""
     import json
 
+    figures = deformable_figures(args)
+    if figures is None:
+        return EXIT_USAGE
+    if args.json:
+        with open(args.json, "w") as fh:
+            json.dump(figures, fh, indent=1)
+    return EXIT_OK
+
+
+def deformable_figures(args: argparse.Namespace) -> dict[str, Any] | None:
+    """Print the deformable table, the goal lines and the asked-for figures; return them (None: bad arguments).
+
+    ``args`` holds `add_deformable`'s options (``mani eval network --deformables`` builds them too)."""
     import numpy as np
     import torch
     from rich.console import Console
@@ -118,7 +131,7 @@ def run_deformable(args: argparse.Namespace) -> int:
     methods = tuple(m for m in args.methods.split(",") if m)
     if not set(splits) <= set(SPLITS) or not set(methods) <= set(METHODS) or args.cases < 1 or args.proposals < 1:
         print(f"--splits from {', '.join(SPLITS)}, --methods from {', '.join(METHODS)}, --cases ≥ 1, --proposals ≥ 1")
-        return EXIT_USAGE
+        return None
     network = service = None
     if set(methods) & {"network", *SERVICE_METHODS} or args.figure:
         from lab.eval_network import load_weights
@@ -132,7 +145,8 @@ def run_deformable(args: argparse.Namespace) -> int:
     data = DeformableDataConfig(seed=args.data_seed)
     report = DeformableReport()
     rng = np.random.default_rng(args.seed)
-    bar = tqdm(total=len(materials) * len(splits) * args.cases, unit="case")
+    bar = tqdm(total=len(materials) * len(splits) * args.cases, unit="case",
+               disable=getattr(args, "no_progress", False))  # fmt: skip
     for material in materials:
         for split in splits:
             for case in build_cases(material, split, args.cases, args.seed, data):
@@ -183,10 +197,7 @@ def run_deformable(args: argparse.Namespace) -> int:
         console.print(pairs)
     if args.figure and network is not None:
         figures["figure"] = _print_figure(console, materials, args.figure, args.seed, network)
-    if args.json:
-        with open(args.json, "w") as fh:
-            json.dump(figures, fh, indent=1)
-    return EXIT_OK
+    return figures
 
 
 def _print_figure(console: Console, materials: list[str], count: int, seed: int, network: Answer) -> list[object]:

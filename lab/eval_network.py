@@ -4,7 +4,10 @@ One command prints the issue's table (`models/evaluation`): per weights and iter
 verification and by the outside audit, median refinement iterations and fallback cases, for network +
 refinement and random contacts + refinement on the same cases, seeds and hand; then the network's own figures
 (flat heatmaps, top point in a valid contact region, distinct contact sets of K = 8, region mask, inference
-p50). The ``eval`` parser is owned by `lab.evaluate`; it calls :func:`add_network_parser` with its sub-parsers.
+p50); with ``--deformables N`` the deformable goals on N unseen-body cases a material (cloth, rope, plasticine:
+the network against the paper's random baseline and random points with the target's motion, the same code as
+`mani eval deformable`), with ``--figure N`` the paper's property figure. The ``eval`` parser is owned by
+`lab.evaluate`; it calls :func:`add_network_parser` with its sub-parsers.
 """
 
 from __future__ import annotations
@@ -39,6 +42,14 @@ def add_network_parser(eval_subparsers: Any) -> None:
     p.add_argument("--resample-seed", type=int, default=7000,
                    help="re-sampling r uses the generator [seed + r, object]")
     p.add_argument("--workers", type=int, default=2, help="processes re-sampling the objects")
+    p.add_argument("--deformables", type=int, default=0,
+                   help="also the deformable goals: this many unseen-body cases of cloth, rope and plasticine, the "
+                        "network (first weights) against the paper's random baseline and random points with the "
+                        "target's motion (`mani eval deformable`)")
+    p.add_argument("--deformable-data-seed", type=int, default=5,
+                   help="seed of the data set whose bodies the deformable cases use (the shipped weights: 5)")
+    p.add_argument("--figure", type=int, default=0,
+                   help="also the paper's property figure (handkerchief / card, rope / stick) on this many shapes")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", default=None, help="write all figures to this JSON file")
     p.add_argument("--no-progress", action="store_true")
@@ -132,8 +143,25 @@ def _run(args: argparse.Namespace) -> int:
               f"{p['top_in_region']:.0%} ({p['top_cases']}; a random point {p['region_share']:.0%}) | {union}"
               f"{p['mean_modes']:.2f} | {p['mask_compliance']:.0%} ({p['mask_cases']} masked cases) | "
               f"{p['inference_ms_p50']:.0f} ms |")
+    deformables = _deformables(args, weights[0]) if args.deformables or args.figure else None
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump({"runs": runs, "properties": props, "args": vars(args) | {"func": None},
-                       "cases": n, "motions": kinds, "seconds": time.perf_counter() - t0}, fh, indent=1)  # fmt: skip
+            json.dump({"runs": runs, "properties": props, "args": vars(args) | {"func": None}, "cases": n,
+                       "motions": kinds, "deformables": deformables, "seconds": time.perf_counter() - t0}, fh,
+                      indent=1)  # fmt: skip
     return 0
+
+
+def _deformables(args: argparse.Namespace, weights: str) -> dict[str, Any] | None:
+    """The deformable rows of the issue's table (`lab.eval_deformable.deformable_figures`) for ``weights``."""
+    from lab.eval_deformable import deformable_figures
+
+    cases = max(args.deformables, 1)
+    methods = "random_motion,random_target_motion,network" if args.deformables else "network"
+    print(f"\ndeformables: {cases} unseen-body case(s) a material, data seed {args.deformable_data_seed}, "
+          f"weights {weights}")
+    return deformable_figures(argparse.Namespace(
+        materials="cloth,rope,plasticine" if args.deformables else "cloth,rope", splits="test_uo", methods=methods,
+        proposals=args.proposals, corrections=4, cases=cases, contacts=2, hand="panda_gripper", weights=weights,
+        seed=args.seed, data_seed=args.deformable_data_seed, sensitivity=0, figure=args.figure,
+        no_progress=args.no_progress))

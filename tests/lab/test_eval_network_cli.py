@@ -45,3 +45,29 @@ def test_resampled_regions_only_raise_the_top_point_figure(tmp_path: Path, capsy
     union_hit, union_share = re.findall(r"(\d+)%", cells[3])
     assert int(union_hit) >= int(data_hit) and int(union_share) >= int(data_share)
     assert len(cells) == 7
+
+
+@pytest.mark.slow
+def test_eval_network_adds_the_deformable_goals_beside_their_random_baselines(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--deformables N``: one command prints the rigid table and, for every material, the network against the
+    paper's random baseline and random points with the target's motion, with the goal judged against each."""
+    import json
+
+    p = cli()
+    out = tiny_test_set(tmp_path / "tiny")
+    report = tmp_path / "figures.json"
+    run = p.parse_args(["eval", "network", "--data", str(out), "--cases", "2", "--budgets", "1", "--no-audit",
+                        "--no-random", "--samples", "2", "--proposals", "1", "--no-progress", "--deformables", "1",
+                        "--json", str(report)])  # fmt: skip
+    assert run.func(run) == 0
+    text = capsys.readouterr().out
+    for material in ("cloth", "rope", "plasticine"):
+        assert re.search(rf"{material}: network [\d.]+ % on unseen objects against the paper's baseline", text)
+        assert re.search(rf"{material}: network [\d.]+ % on unseen objects against random points with the target", text)
+    rows = json.loads(report.read_text())["deformables"]["table"]
+    assert {(r["material"], r["method"]) for r in rows} == {
+        (m, k) for m in ("cloth", "rope", "plasticine") for k in ("random_motion", "random_target_motion", "network")
+    }
+    assert all(r["cases"] == 1 and r["split"] == "test_uo" for r in rows)
