@@ -134,7 +134,7 @@ def deformable_figures(args: argparse.Namespace) -> dict[str, Any] | None:
         return None
     network = service = None
     if set(methods) & {"network", *SERVICE_METHODS} or args.figure:
-        from lab.eval_network import load_weights
+        from lab.weights import load_weights
         from models.robots import get_hand
 
         hand = get_hand(args.hand)

@@ -34,8 +34,8 @@ def _run(args: argparse.Namespace) -> int:
     import torch
     from tqdm import tqdm
 
-    from lab.eval_network import load_weights
     from lab.resampled_regions import resampled_regions
+    from lab.weights import load_weights
     from models.evaluation.label_agreement import label_agreement
     from models.evaluation.properties import _inputs, judges_top_point
     from models.evaluation.testset import data_config, load_cases

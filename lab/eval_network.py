@@ -13,10 +13,7 @@ the network against the paper's random baseline and random points with the targe
 from __future__ import annotations
 
 import argparse
-from typing import TYPE_CHECKING, Any
-
-if TYPE_CHECKING:
-    from models.network import ContactPredictor
+from typing import Any
 
 
 def add_network_parser(eval_subparsers: Any) -> None:
@@ -56,20 +53,6 @@ def add_network_parser(eval_subparsers: Any) -> None:
     p.set_defaults(func=_run)
 
 
-def load_weights(spec: str) -> ContactPredictor:
-    """The predictor of ``DIR`` or ``DIR@S``: the checkpoint in DIR, its latent samples at prior scale S if given."""
-    from models.network import ContactPredictor
-
-    path, _, scale = spec.partition("@")
-    predictor = ContactPredictor.from_checkpoint(path)
-    if scale:
-        try:
-            predictor.prior_scale = float(scale)
-        except ValueError:
-            raise SystemExit(f"--weights {spec}: the scale after @ must be a finite number ≥ 0") from None
-    return predictor
-
-
 def _run(args: argparse.Namespace) -> int:
     import dataclasses
     import json
@@ -79,6 +62,7 @@ def _run(args: argparse.Namespace) -> int:
     import numpy as np
     import torch
 
+    from lab.weights import load_weights
     from models.evaluation.properties import evaluate_properties, judges_top_point
     from models.evaluation.protocol import evaluate
     from models.evaluation.testset import load_cases, motion_kind

@@ -1,0 +1,22 @@
+"""`DIR` or `DIR@S`: the weights an evaluation command loads (`mani eval network`, `deformable`, `labels`)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from models.network import ContactPredictor
+
+
+def load_weights(spec: str) -> ContactPredictor:
+    """The predictor of ``DIR`` or ``DIR@S``: the checkpoint in DIR, its latent samples at prior scale S if given."""
+    from models.network import ContactPredictor
+
+    path, _, scale = spec.partition("@")
+    predictor = ContactPredictor.from_checkpoint(path)
+    if scale:
+        try:
+            predictor.prior_scale = float(scale)
+        except ValueError:
+            raise SystemExit(f"--weights {spec}: the scale after @ must be a finite number ≥ 0") from None
+    return predictor
