@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
@@ -13,10 +14,15 @@ def load_weights(spec: str) -> ContactPredictor:
     from models.network import ContactPredictor
 
     path, _, scale = spec.partition("@")
-    predictor = ContactPredictor.from_checkpoint(path)
+    value = None
     if scale:
         try:
-            predictor.prior_scale = float(scale)
+            value = float(scale)
         except ValueError:
-            raise SystemExit(f"--weights {spec}: the scale after @ must be a finite number ≥ 0") from None
+            value = float("nan")
+        if not math.isfinite(value) or value < 0:
+            raise SystemExit(f"--weights {spec}: the scale after @ must be a finite number ≥ 0")
+    predictor = ContactPredictor.from_checkpoint(path)
+    if value is not None:
+        predictor.prior_scale = value
     return predictor
