@@ -67,6 +67,7 @@ def ask_service(case: Case, predictor: ContactPredictor | None, hand: Hand, seed
         case: the body and target. predictor: the network (used by method "network" only). hand: the robot.
         seed: the request's seed. method: the request's method. proposals: K. checked: ``simulate_rollout``.
     """
+    from models.deformable.simulate import contact_vertices
     from models.pipeline import SynthesisInput, TaskInput, run_pipeline
 
     body = case.body
@@ -83,22 +84,18 @@ def ask_service(case: Case, predictor: ContactPredictor | None, hand: Hand, seed
         # without a rollout the k-th answer is the k-th latent sample's, and the output holds sample 0's maps
         if k == 0 and not checked and p.contact_source == "network" and out.heatmap is not None \
                 and out.force_map is not None:  # fmt: skip
-            estimate = head_estimate(body.points, out.heatmap, out.force_map, points)
+            estimate = head_estimate(out.heatmap, out.force_map, contact_vertices(body, points))
         answers.append(Proposal(points, np.asarray(p.contact_motions), p.contact_source, estimate))
     return answers
 
 
-def head_estimate(cloud: np.ndarray, heatmap: np.ndarray, motion_map: np.ndarray, contacts: np.ndarray
-                  ) -> np.ndarray:  # fmt: skip
-    """The network's own motion (H, 3) at ``contacts`` (H, 3): its motion map (N, 3) over its heat (N,) at the
-    nearest points of ``cloud`` (N, 3), the heat floored at `HEAT_FLOOR` (the quotient the read-out loss trains)."""
-    from scipy.spatial import cKDTree
-
+def head_estimate(heatmap: np.ndarray, motion_map: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """The network's own motion (H, 3) at the contacts ``indices`` (H,): its motion map (N, 3) over its heat (N,)
+    there, the heat floored at `HEAT_FLOOR` (the quotient the read-out loss trains)."""
     from models.network.selection import HEAT_FLOOR
 
-    idx = cKDTree(np.asarray(cloud, dtype=np.float64)).query(np.asarray(contacts, dtype=np.float64))[1]
-    heat = np.maximum(np.asarray(heatmap, dtype=np.float64)[idx], HEAT_FLOOR)
-    estimate: np.ndarray = np.asarray(motion_map, dtype=np.float64)[idx] / heat[:, None]
+    heat = np.maximum(np.asarray(heatmap, dtype=np.float64)[indices], HEAT_FLOOR)
+    estimate: np.ndarray = np.asarray(motion_map, dtype=np.float64)[indices] / heat[:, None]
     return estimate
 
 
