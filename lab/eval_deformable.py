@@ -50,6 +50,7 @@ def add_deformable(sub: Any) -> None:
                    help="also run the paper's property figure (the same slide asked of both members) on this many "
                    "shapes")
     d.add_argument("--json", default=None, help="also write the summary to this JSON file")
+    d.add_argument("--no-progress", action="store_true")
     d.set_defaults(func=run_deformable)
 
 
@@ -145,8 +146,7 @@ def deformable_figures(args: argparse.Namespace) -> dict[str, Any] | None:
     data = DeformableDataConfig(seed=args.data_seed)
     report = DeformableReport()
     rng = np.random.default_rng(args.seed)
-    bar = tqdm(total=len(materials) * len(splits) * args.cases, unit="case",
-               disable=getattr(args, "no_progress", False))  # fmt: skip
+    bar = tqdm(total=len(materials) * len(splits) * args.cases, unit="case", disable=args.no_progress)
     for material in materials:
         for split in splits:
             for case in build_cases(material, split, args.cases, args.seed, data):

@@ -137,15 +137,20 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _deformables(args: argparse.Namespace, weights: str) -> dict[str, Any] | None:
-    """The deformable rows of the issue's table (`lab.eval_deformable.deformable_figures`) for ``weights``."""
-    from lab.eval_deformable import deformable_figures
+    """The deformable rows of the issue's table (`lab.eval_deformable.deformable_figures`) for ``weights``, with
+    `mani eval deformable`'s own options and defaults."""
+    from lab.eval_deformable import add_deformable, deformable_figures
 
     cases = max(args.deformables, 1)
-    methods = "random_motion,random_target_motion,network" if args.deformables else "network"
     print(f"\ndeformables: {cases} unseen-body case(s) a material, data seed {args.deformable_data_seed}, "
           f"weights {weights}")
-    return deformable_figures(argparse.Namespace(
-        materials="cloth,rope,plasticine" if args.deformables else "cloth,rope", splits="test_uo", methods=methods,
-        proposals=args.proposals, corrections=4, cases=cases, contacts=2, hand="panda_gripper", weights=weights,
-        seed=args.seed, data_seed=args.deformable_data_seed, sensitivity=0, figure=args.figure,
-        no_progress=args.no_progress))
+    parser = argparse.ArgumentParser(prog="mani eval")
+    add_deformable(parser.add_subparsers())
+    options = parser.parse_args([
+        "deformable", "--splits", "test_uo", "--cases", str(cases), "--weights", weights, "--seed", str(args.seed),
+        "--data-seed", str(args.deformable_data_seed), "--figure", str(args.figure),
+        *(["--materials", "cloth,rope,plasticine", "--methods", "random_motion,random_target_motion,network"]
+          if args.deformables else ["--materials", "cloth,rope", "--methods", "network"]),
+        *(["--no-progress"] if args.no_progress else []),
+    ])  # fmt: skip
+    return deformable_figures(options)
