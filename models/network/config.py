@@ -68,6 +68,8 @@ class NetworkConfig:
     deformable_motion_gain: bool = False
     # the head also reads each point's place along and across the mean motion (deformable_head.motion_frame)
     deformable_frame: bool = False
+    # ... only where the task is a slide (deformable_head.is_slide); zero on every other task
+    deformable_frame_slides_only: bool = False
     # --- loss of Eq. (3) ---
     # The paper does not state λ_C, λ_S, λ_KL; these defaults are ours (heatmap and force map weighted
     # equally, a small KL weight as usual for CVAEs) and are recorded in every model card.
@@ -233,6 +235,14 @@ def cpu1k_deformable_frame() -> NetworkConfig:
     motion (models.network.deformable_head.motion_frame): under a slide every point moves alike, and only its place
     says whether it is a leading edge."""
     return dataclasses.replace(cpu1k_deformable_gain(), name="cpu1k_deformable_frame", deformable_frame=True)
+
+
+@register_config
+def cpu1k_deformable_slide_frame() -> NetworkConfig:
+    """``cpu1k_deformable_frame`` whose frame is read only when the task is a slide (zero otherwise): the frame
+    says which edge of a slid body leads, and on other tasks it cost the rope's usual cases ten points."""
+    return dataclasses.replace(cpu1k_deformable_frame(), name="cpu1k_deformable_slide_frame",
+                               deformable_frame_slides_only=True)  # fmt: skip
 
 
 __all__ = ["LevelConfig", "NetworkConfig", "config_with_defaults", "get_config", "list_configs", "register_config"]

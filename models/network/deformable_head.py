@@ -34,6 +34,7 @@ DEFORMABLE_PROPERTIES = ("stretch", "bending", "youngs_modulus", "poisson_ratio"
 _DEFORMABLE_INDEX = [PROPERTY_NAMES.index(n) for n in DEFORMABLE_PROPERTIES]
 CONDITION_DIM = 3 + 1 + 2 * len(PROPERTY_NAMES)  # motion, its relative size, property values and presence
 FRAME_DIM = 2  # where the point sits along the mean motion and across it (`motion_frame`)
+SLIDE_UNIFORMITY = 0.1  # a slide: motions differ from their mean by ≤ this × its length (answer.UNIFORM_MOTION)
 
 
 def is_deformable(prop_mask: torch.Tensor) -> torch.Tensor:
@@ -60,7 +61,17 @@ def deformable_condition(motion: torch.Tensor, prop_values: torch.Tensor, prop_m
     return torch.cat([motion, relative, props.unsqueeze(1).expand(-1, motion.shape[1], -1)], dim=-1)
 
 
-def motion_frame(xyz: torch.Tensor, motion: torch.Tensor) -> torch.Tensor:
+def is_slide(motion: torch.Tensor) -> torch.Tensor:
+    """(B, N, 3) target motion → (B,) bool: every point moves by about the same nonzero displacement (the mean
+    distance of the motions from their mean ≤ `SLIDE_UNIFORMITY` × its length; `models.deformable.answer.is_slide`'s
+    rule, which picks a slide's contacts)."""
+    mean = motion.mean(dim=1, keepdim=True)
+    size = mean.norm(dim=-1).squeeze(1)
+    spread = (motion - mean).norm(dim=-1).mean(dim=1)
+    return (size > 0) & (spread <= SLIDE_UNIFORMITY * size)
+
+
+def motion_frame(xyz: torch.Tensor, motion: torch.Tensor, slides_only: bool = False) -> torch.Tensor:
     """Each point's place in the frame of the object's mean target motion: how far it leads (+1: the most leading
     point, −1: the most trailing, from the centroid) and how far it sits across the motion (1: the farthest).
 
@@ -68,8 +79,13 @@ def motion_frame(xyz: torch.Tensor, motion: torch.Tensor) -> torch.Tensor:
     leading edge (a handkerchief must be pulled there) or a trailing one (pushed from there it bunches up); the
     product of a point's place and the motion's heading is one a per-point MLP would have to learn to multiply.
 
+    Why ``slides_only``: read on every task, the frame cost the rope ten points on its usual drags and folds
+    (docs/deformables.md, "Which side of the line a slid body is pulled on"), where the mean motion's heading says
+    little of a point's role; zero there, the head answers those tasks from the inputs it had before.
+
     Args:
         xyz: (B, N, 3) normalised points. motion: (B, N, 3) normalised target motion.
+        slides_only: zero frame for an object whose task is not a slide (:func:`is_slide`).
 
     Returns:
         (B, N, FRAME_DIM): along and across, each over its largest magnitude (0 where the mean motion vanishes).
@@ -81,7 +97,10 @@ def motion_frame(xyz: torch.Tensor, motion: torch.Tensor) -> torch.Tensor:
     across = (rel - along * heading).norm(dim=-1, keepdim=True)
     along = along / along.abs().amax(dim=1, keepdim=True).clamp_min(1e-9)
     across = across / across.amax(dim=1, keepdim=True).clamp_min(1e-9)
-    return torch.cat([along, across], dim=-1)
+    frame = torch.cat([along, across], dim=-1)
+    if slides_only:
+        frame = frame * is_slide(motion).to(frame.dtype).view(-1, 1, 1)
+    return frame
 
 
 class DeformableHead(nn.Module):

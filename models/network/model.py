@@ -121,7 +121,8 @@ class ManiFoundationNet(nn.Module):
             return Encoded(hierarchy, eo, eh)
         condition = deformable_condition(obj.motion, obj.prop_values, obj.prop_mask)
         if self.config.deformable_frame:
-            condition = torch.cat([condition, motion_frame(obj.xyz, obj.motion)], dim=-1)
+            frame = motion_frame(obj.xyz, obj.motion, self.config.deformable_frame_slides_only)
+            condition = torch.cat([condition, frame], dim=-1)
         return Encoded(hierarchy, eo, eh, condition, is_deformable(obj.prop_mask))
 
     def decode(self, enc: Encoded, z: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:

@@ -24,7 +24,8 @@ def initialise_from(model: ManiFoundationNet, source: ManiFoundationNet) -> None
     Raises:
         ValueError: the configurations differ otherwise.
     """
-    head_fields = {"name": "", "deformable_head": [], "deformable_motion_gain": False, "deformable_frame": False}
+    head_fields = {"name": "", "deformable_head": [], "deformable_motion_gain": False, "deformable_frame": False,
+                   "deformable_frame_slides_only": False}
     mine = {**model.config.to_dict(), **head_fields}
     theirs = {**source.config.to_dict(), **head_fields}
     same_head = source.config.deformable_head == model.config.deformable_head and (

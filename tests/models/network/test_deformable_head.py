@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+import numpy as np
 import torch
 
 from models.network import create_model
-from models.network.deformable_head import motion_frame
+from models.network.deformable_head import is_slide, motion_frame
 from models.network.model import ManiFoundationNet, ObjectTensors
 from models.network.properties import property_tensors
 from models.training.card import initialise_from
@@ -81,6 +82,31 @@ def test_the_motion_frame_says_which_points_lead_and_how_far_across() -> None:
     torch.testing.assert_close(frame[:, 1], x.flatten().abs())
     reversed_frame = motion_frame(xyz, -motion)[0]  # the same slide backwards: the other row leads
     torch.testing.assert_close(reversed_frame[:, 0], -y.flatten())
+
+
+def test_the_slide_only_frame_is_zero_unless_every_point_moves_alike() -> None:
+    x, y = torch.meshgrid(torch.tensor([-1.0, 0.0, 1.0]), torch.tensor([-1.0, 0.0, 1.0]), indexing="ij")
+    xyz = torch.stack([x.flatten(), y.flatten(), torch.zeros(9)], dim=-1).expand(3, 9, 3)
+    slide = torch.tensor([0.0, 0.3, 0.0]).expand(9, 3)
+    nearly = slide + 0.02 * torch.linspace(-1.0, 1.0, 9).unsqueeze(-1) * torch.tensor([1.0, 0.0, 0.0])
+    fold = torch.zeros(9, 3)
+    fold[y.flatten() > 0, 2] = 0.3  # one row lifted: motions far from their mean
+    motion = torch.stack([slide, nearly, fold])
+    assert is_slide(motion).tolist() == [True, True, False]
+    assert not is_slide(torch.zeros(1, 9, 3)).item()  # no motion is no slide
+    gated, plain = motion_frame(xyz, motion, slides_only=True), motion_frame(xyz, motion)
+    torch.testing.assert_close(gated[:2], plain[:2])
+    assert plain[2].abs().sum() > 0 and not gated[2].any()
+
+
+def test_the_head_and_the_answer_call_the_same_tasks_slides() -> None:
+    from models.deformable.answer import is_slide as answer_is_slide
+
+    rng = np.random.default_rng(0)
+    d = np.array([0.2, -0.1, 0.0])
+    for spread in (0.0, 0.005, 0.02, 0.05, 0.2, 1.0):
+        motion = d + spread * rng.standard_normal((64, 3))
+        assert is_slide(torch.from_numpy(motion).unsqueeze(0)).item() == answer_is_slide(motion), spread
 
 
 def test_a_head_grown_to_read_the_frame_answers_as_its_source_until_trained() -> None:
