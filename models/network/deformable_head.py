@@ -68,7 +68,8 @@ def is_slide(motion: torch.Tensor) -> torch.Tensor:
     mean = motion.mean(dim=1, keepdim=True)
     size = mean.norm(dim=-1).squeeze(1)
     spread = (motion - mean).norm(dim=-1).mean(dim=1)
-    return (size > 0) & (spread <= SLIDE_UNIFORMITY * size)
+    slide: torch.Tensor = (size > 0) & (spread <= SLIDE_UNIFORMITY * size)
+    return slide
 
 
 def motion_frame(xyz: torch.Tensor, motion: torch.Tensor, slides_only: bool = False) -> torch.Tensor:
