@@ -8,6 +8,7 @@ one, a property-blind one ties, one whose answers merely change wins about half.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -137,6 +138,20 @@ def _reaches(body: DeformableBody, target: np.ndarray, contacts: np.ndarray, mot
     return simulate(body, contacts, motions).reaches(body, target)
 
 
+def figure_cases(material: str, count: int, seed: int) -> Iterator[tuple[DeformableCase, DeformableCase]]:
+    """The figure's ``count`` shapes of ``material``, each as both members' cases of `SENSITIVITY_PAIRS`: one
+    slide d (``FIGURE_SLIDE`` × size, a random heading; the manipulation's one motion) and one target for both,
+    the first member's cloud translated by d."""
+    from models.deformable.slides import slide_displacement
+
+    rng = np.random.default_rng([seed, 11])
+    for a, b in pair_bodies(material, count, seed):
+        d = slide_displacement(a, rng, FIGURE_SLIDE)
+        slide = Manipulation(np.zeros(1, dtype=np.int64), d[None], "slide")
+        target = a.points + d
+        yield DeformableCase(material, "figure", a, slide, target), DeformableCase(material, "figure", b, slide, target)
+
+
 def property_figure(material: str, count: int, seed: int, network: Answer) -> list[tuple[FigureMember, FigureMember]]:
     """The paper's property figure on ``count`` shapes of ``material`` (square cloths or ropes).
 
@@ -145,24 +160,21 @@ def property_figure(material: str, count: int, seed: int, network: Answer) -> li
     each member with its own properties; each answer is simulated on its own member and on the other one, and
     the named candidate sets show what each member's physics allows.
     """
-    from models.deformable.slides import SET_NAMES, along_and_across, reaching_sets, slide_displacement
+    from models.deformable.slides import SET_NAMES, along_and_across, reaching_sets
 
     first_name, _, second_name, _ = SENSITIVITY_PAIRS[material]
-    rng = np.random.default_rng([seed, 11])
     out = []
-    for a, b in pair_bodies(material, count, seed):
-        d = slide_displacement(a, rng, FIGURE_SLIDE)
-        target = a.points + d
-        slide = Manipulation(np.zeros(1, dtype=np.int64), d[None], "slide")
-        answers = [network(DeformableCase(material, "figure", body, slide, target)) for body in (a, b)]
+    for cases in figure_cases(material, count, seed):
+        answers = [network(case) for case in cases]
         members = []
-        for i, (name, body) in enumerate(((first_name, a), (second_name, b))):
-            contacts, motions, source, _ = answers[i]
-            other_contacts, other_motions, *_ = answers[1 - i]
-            along, _ = along_and_across(contacts, d, origin=body.points.mean(axis=0))
+        for i, (name, case) in enumerate(zip((first_name, second_name), cases, strict=True)):
+            body, target, d = case.body, case.target, case.manipulation.motions[0]
+            own, other = answers[i], answers[1 - i]
+            along, _ = along_and_across(own.points, d, origin=body.points.mean(axis=0))
             reached = {m.procedure.removeprefix("slide_") for m in reaching_sets(body, d)[0]}
             members.append(FigureMember(
-                name, _reaches(body, target, contacts, motions), _reaches(body, target, other_contacts, other_motions),
-                float(along.mean()) / body.size, source, {n: n in reached for n in SET_NAMES}))  # fmt: skip
+                name, _reaches(body, target, own.points, own.motions),
+                _reaches(body, target, other.points, other.motions), float(along.mean()) / body.size, own.source,
+                {n: n in reached for n in SET_NAMES}))  # fmt: skip
         out.append((members[0], members[1]))
     return out

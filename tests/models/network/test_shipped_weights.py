@@ -72,24 +72,20 @@ def test_shipped_weights_pull_a_slid_handkerchief_from_its_front() -> None:
     of the centre along d and reaches the slid square in the simulator, and there are at least four such answers
     (measured 2026-12-06: round 15, 6 own answers, all ahead and reaching; round 14, 4 own answers, the two
     behind the centre, −0.37 and −0.67 of the size, folding the square)."""
-    from models.deformable.procedures import Manipulation
     from models.deformable.simulate import simulate
-    from models.deformable.slides import along_and_across, slide_displacement
-    from models.evaluation.deformable import DeformableCase, pipeline_network
-    from models.evaluation.property_pairs import FIGURE_SLIDE, pair_bodies
+    from models.deformable.slides import along_and_across
+    from models.evaluation.deformable import pipeline_network
+    from models.evaluation.property_pairs import figure_cases
 
     answer = pipeline_network(ContactPredictor.from_checkpoint(WEIGHTS), get_hand("panda_gripper"), seed=0)
-    rng = np.random.default_rng([0, 11])  # property_figure's draw of the slides
     own = []
-    for handkerchief, _card in pair_bodies("cloth", 8, 0):
-        d = slide_displacement(handkerchief, rng, FIGURE_SLIDE)
-        target = handkerchief.points + d
-        slide = Manipulation(np.zeros(1, dtype=np.int64), d[None], "slide")
-        contacts, motions, source, _ = answer(DeformableCase("cloth", "figure", handkerchief, slide, target))
-        if source != "network":
+    for case, _card in figure_cases("cloth", 8, 0):
+        proposal = answer(case)
+        if proposal.source != "network":
             continue
-        along, _ = along_and_across(contacts, d, origin=handkerchief.points.mean(axis=0))
-        reached = simulate(handkerchief, contacts, motions).reaches(handkerchief, target)
-        own.append((float(along.mean()) / handkerchief.size, reached))
+        hk, d = case.body, case.manipulation.motions[0]
+        along, _ = along_and_across(proposal.points, d, origin=hk.points.mean(axis=0))
+        reached = simulate(hk, proposal.points, proposal.motions).reaches(hk, case.target)
+        own.append((float(along.mean()) / hk.size, reached))
     assert len(own) >= 4, own
     assert all(ahead > 0 and reached for ahead, reached in own), own
