@@ -61,6 +61,11 @@ def register(subparsers: Any) -> None:
         default=0.0,
         help="slides: label only the sets that also reach the same heading's slide this long (× size; 0: off)",
     )
+    g.add_argument(
+        "--push-first",
+        action="store_true",
+        help="slides: label only the pushes from behind where they also reach a 0.4 × size slide (else only pulls)",
+    )
     g.add_argument("--no-progress", action="store_true")
     g.set_defaults(func=_generate)
     lab = sub.add_parser("labels", help="how much of each object its valid grasps cover, and simple rules' hits")
@@ -88,7 +93,8 @@ def _generate(args: argparse.Namespace) -> int:
         dcfg = DeformableDataConfig(materials=tuple(deformable), bodies=args.bodies,
                                     examples_per_body=args.examples_per_body, seed=args.seed,
                                     verify_moving=args.verify_moving, slides=args.slides,
-                                    stiff=args.stiff, slide_margin=args.slide_margin)  # fmt: skip
+                                    stiff=args.stiff, slide_margin=args.slide_margin,
+                                    push_first=args.push_first)  # fmt: skip
         made = generate_deformable(dcfg, args.out, workers=args.workers, progress=not args.no_progress)
         print(json.dumps(made["totals"], indent=1))
     if not {"rigid", "articulated"} & set(materials):

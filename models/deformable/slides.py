@@ -32,6 +32,8 @@ SLIDE = (0.15, 0.4)  # |d| / the body's size
 EDGE_FRACTION = 0.1  # the leading (trailing) tenth of the cloud holds the front (rear) pair
 ACROSS_WEIGHT = 0.5  # the single front (rear) point: most leading, less half its distance across d
 SET_NAMES = ("front_pair", "front_one", "centre", "rear_one", "rear_pair", "far_pair")  # `slide_candidates`' order
+PUSH_SETS = ("slide_rear_one", "slide_rear_pair")  # contacts behind the body moved along d: they push it
+PUSH_HOLD = SLIDE[1]  # a push labelled first also reaches the longest slide the data draws (× size)
 
 
 def slide_displacement(body: DeformableBody, rng: np.random.Generator, fraction: float | None = None) -> np.ndarray:

@@ -66,8 +66,37 @@ def test_a_margin_keeps_the_sets_that_also_reach_a_longer_slide_which_drops_a_ha
     assert plain.heat[rear.contacts[0]] == pytest.approx(1.0) and kept.heat[rear.contacts[0]] < 1.0
 
 
+def test_pushes_first_label_a_card_pushed_from_behind_and_a_handkerchief_pulled_from_its_front() -> None:
+    from models.deformable.slides import PUSH_HOLD, PUSH_SETS, along_and_across
+    from models.evaluation.property_pairs import pair_bodies
+
+    ((handkerchief, card),) = pair_bodies("cloth", 1, 0)
+    for body, pushed in ((card, True), (handkerchief, False)):
+        ex = make_slide_example(body, np.random.default_rng(0), push_first=True)
+        assert ex is not None and ex.pushed is pushed
+        d = ex.motion[0]
+        held = d * PUSH_HOLD * body.size / np.linalg.norm(d)
+        hot = {int(i) for i in np.flatnonzero(ex.heat >= 1.0 - 1e-9)}
+        sets = slide_candidates(body, d)
+        pushes = [m for m in sets if m.procedure in PUSH_SETS]
+        push_points = {int(i) for m in pushes for i in m.contacts}
+        pull_points = {int(i) for m in sets if m.procedure not in PUSH_SETS for i in m.contacts}
+        # judged here, by rollouts of their own: which pushes reach the slide, and which also the longest one
+        reach = {m.procedure: [shape_score(body.material, body.points, body.points + move,
+                                           simulate(body, m.contacts, np.tile(move, (len(m.contacts), 1))).cloud
+                                           ).success for move in (d, held)] for m in pushes}  # fmt: skip
+        if pushed:  # the pushes that hold are the labels, and nothing else is
+            holding = [m for m in pushes if all(reach[m.procedure])]
+            assert holding and hot == {int(i) for m in holding for i in m.contacts}
+        else:  # a push that reaches the short slide but not the long one leaves the labels
+            assert any(short and not long for short, long in reach.values())
+            assert hot and hot <= pull_points and not hot & (push_points - pull_points)
+        along, _ = along_and_across(body.points, d)
+        assert bool(np.mean(along[sorted(hot)]) < 0) is pushed  # the card's label heat behind, the handkerchief's ahead
+
+
 def test_stiff_data_sets_reach_cards_and_sticks_and_old_manifests_keep_their_configuration() -> None:
-    for option in ("slides", "stiff", "slide_margin"):
+    for option in ("slides", "stiff", "slide_margin", "push_first"):
         assert option not in DeformableDataConfig().to_dict()
     cfg = DeformableDataConfig(materials=("rope",), bodies=40, stiff=True)
     moduli = [dataset_body(cfg, "rope", i).properties["youngs_modulus"] for i in range(40)]
