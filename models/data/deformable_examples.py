@@ -160,15 +160,12 @@ def make_slide_example(body: DeformableBody, rng: np.random.Generator, margin: f
     valid, shortfall, seconds = reaching_sets(body, displacement)
     if not valid:
         return None
-    longer = displacement * margin * body.size / float(np.linalg.norm(displacement))
     fallback, shortfall_margin = False, np.full(len(SET_NAMES), np.nan)
-    if margin > 0 and np.linalg.norm(longer) > np.linalg.norm(displacement) * (1 + 1e-9):
-        names = {m.procedure for m in valid}
-        kept, shortfall_margin, more = reaching_sets(body, longer, names)
+    if margin > 0:
+        kept, shortfall_margin, more = _holding(body, displacement, margin, valid)
         seconds += more
-        kept_names = {m.procedure for m in kept}
-        fallback = not kept_names
-        valid = valid if fallback else [m for m in valid if m.procedure in kept_names]
+        fallback = not kept
+        valid = valid if fallback else kept
     pushed = False
     if push_first:
         valid, pushed, more = _pushes_first(body, displacement, valid)
@@ -183,20 +180,29 @@ def make_slide_example(body: DeformableBody, rng: np.random.Generator, margin: f
                              set_shortfall_margin=shortfall_margin)  # fmt: skip
 
 
+def _holding(body: DeformableBody, displacement: np.ndarray, fraction: float,
+             sets: list[Manipulation]) -> tuple[list[Manipulation], np.ndarray, float]:  # fmt: skip
+    """Those of ``sets`` (in their order) that also reach the same heading's slide ``fraction`` × size long — all of
+    them, without a rollout, when the slide is already as long; every named set's shortfall there (NaN: not
+    simulated); the rollouts' seconds."""
+    longer = displacement * fraction * body.size / float(np.linalg.norm(displacement))
+    if np.linalg.norm(longer) <= np.linalg.norm(displacement) * (1 + 1e-9):
+        return sets, np.full(len(SET_NAMES), np.nan), 0.0
+    kept, shortfalls, seconds = reaching_sets(body, longer, {m.procedure for m in sets})
+    names = {m.procedure for m in kept}
+    return [m for m in sets if m.procedure in names], shortfalls, seconds
+
+
 def _pushes_first(body: DeformableBody, displacement: np.ndarray,
                   valid: list[Manipulation]) -> tuple[list[Manipulation], bool, float]:  # fmt: skip
-    """``valid``'s pushes from behind when one also reaches the slide ``PUSH_HOLD`` × size long (those that do),
-    else ``valid`` without its pushes (all of ``valid`` when it holds nothing else); whether pushes were kept; the
+    """``valid``'s pushes from behind that also reach the slide ``PUSH_HOLD`` × size long, when one does; else
+    ``valid`` without its pushes (all of ``valid`` when it holds nothing else); whether pushes were kept; the
     rollouts' seconds."""
-    pushes = {m.procedure for m in valid if m.procedure in PUSH_SETS}
-    pulls = [m for m in valid if m.procedure not in PUSH_SETS]
+    pushes = [m for m in valid if m.procedure in PUSH_SETS]
     if not pushes:
         return valid, False, 0.0
-    scale = PUSH_HOLD * body.size / float(np.linalg.norm(displacement))
-    if scale <= 1.0:  # the slide is already as long: its pushes hold
-        return [m for m in valid if m.procedure in pushes], True, 0.0
-    held, _, seconds = reaching_sets(body, displacement * scale, pushes)
-    held_names = {m.procedure for m in held}
-    if held_names:
-        return [m for m in valid if m.procedure in held_names], True, seconds
+    held, _, seconds = _holding(body, displacement, PUSH_HOLD, pushes)
+    if held:
+        return held, True, seconds
+    pulls = [m for m in valid if m.procedure not in PUSH_SETS]
     return (pulls or valid), False, seconds

@@ -14,10 +14,13 @@ from models.deformable.simulate import simulate
 from models.deformable.slides import slide_candidates
 
 
-def _reaching(body: DeformableBody, d: np.ndarray) -> set[str]:
-    """Names of the candidate sets whose rollout reaches ``body`` slid by ``d``, one rollout each, judged here."""
+def _reaching(body: DeformableBody, d: np.ndarray, among: set[str] | None = None) -> set[str]:
+    """Names of the candidate sets (those in ``among``; None: all) whose rollout reaches ``body`` slid by ``d``, one
+    rollout each, judged here."""
     names = set()
     for m in slide_candidates(body, d):
+        if among is not None and m.procedure not in among:
+            continue
         out = simulate(body, m.contacts, m.motions)
         if out.stable and shape_score(body.material, body.points, body.points + d, out.cloud).success:
             names.add(m.procedure)
@@ -82,14 +85,12 @@ def test_pushes_first_label_a_card_pushed_from_behind_and_a_handkerchief_pulled_
         push_points = {int(i) for m in pushes for i in m.contacts}
         pull_points = {int(i) for m in sets if m.procedure not in PUSH_SETS for i in m.contacts}
         # judged here, by rollouts of their own: which pushes reach the slide, and which also the longest one
-        reach = {m.procedure: [shape_score(body.material, body.points, body.points + move,
-                                           simulate(body, m.contacts, np.tile(move, (len(m.contacts), 1))).cloud
-                                           ).success for move in (d, held)] for m in pushes}  # fmt: skip
+        short, long = _reaching(body, d, set(PUSH_SETS)), _reaching(body, held, set(PUSH_SETS))
         if pushed:  # the pushes that hold are the labels, and nothing else is
-            holding = [m for m in pushes if all(reach[m.procedure])]
+            holding = [m for m in pushes if m.procedure in short & long]
             assert holding and hot == {int(i) for m in holding for i in m.contacts}
         else:  # a push that reaches the short slide but not the long one leaves the labels
-            assert any(short and not long for short, long in reach.values())
+            assert short - long
             assert hot and hot <= pull_points and not hot & (push_points - pull_points)
         along, _ = along_and_across(body.points, d)
         assert bool(np.mean(along[sorted(hot)]) < 0) is pushed  # the card's label heat behind, the handkerchief's ahead
