@@ -22,7 +22,7 @@ import numpy as np
 
 from models.data.runs import run_jobs, write_manifest
 from models.deformable.body import DeformableBody
-from models.deformable.materials import MATERIALS, STIFF_RANGES, sample_properties
+from models.deformable.materials import MATERIALS, STIFF_RANGES, sample_properties, sample_stiff_end
 from models.deformable.shapes import KINDS, make_body
 from models.deformable.slides import SET_NAMES
 
@@ -46,11 +46,12 @@ class DeformableDataConfig:
     stiff: bool = False  # properties drawn in `materials.STIFF_RANGES` (cards and sticks too)
     slide_margin: float = 0.0  # slides: labelled sets also reach a slide this long (× size; make_slide_example)
     push_first: bool = False  # slides: pushes from behind that hold are the labels alone (make_slide_example)
+    stiff_ends: float = 0.0  # with `stiff`: this fraction of bodies draws its stiffnesses in one of `STIFF_ENDS`
 
     def to_dict(self) -> dict[str, Any]:
         out = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
         for name, default in (("verify_moving", False), ("slides", 0.0), ("stiff", False), ("slide_margin", 0.0),
-                              ("push_first", False)):
+                              ("push_first", False), ("stiff_ends", 0.0)):
             if out[name] == default:  # data sets made before the option keep their manifests' configuration
                 del out[name]
         return out
@@ -73,7 +74,12 @@ def dataset_body(cfg: DeformableDataConfig, material: str, i: int) -> Deformable
     body = make_body(material, kinds[i % len(kinds)], seed)
     if not cfg.stiff:
         return body
-    return body.with_properties(sample_properties(material, np.random.default_rng([seed, 2]), STIFF_RANGES))
+    properties = sample_properties(material, np.random.default_rng([seed, 2]), STIFF_RANGES)
+    if cfg.stiff_ends > 0:  # its own stream: bodies outside the ends keep the properties they had without it
+        ends = np.random.default_rng([seed, 3])
+        if ends.random() < cfg.stiff_ends:
+            properties.update(sample_stiff_end(material, ends))
+    return body.with_properties(properties)
 
 
 def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> BodyResult:

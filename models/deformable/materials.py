@@ -69,6 +69,15 @@ STIFF_RANGES: dict[str, dict[str, tuple[float, float, bool]]] = {
     "rope": {**RANGES["rope"], "youngs_modulus": (1e3, 1e9, True)},
 }
 
+# The two ends of `STIFF_RANGES`' stiffnesses, where the figure's members sit (a handkerchief and a card, a rope
+# and a stick). Drawn uniformly in log over the whole range, a body lands near the card in about 1 of 25 draws;
+# `--stiff-ends` draws some bodies' stiffnesses inside one end instead (`sample_stiff_end`).
+STIFF_ENDS: dict[str, tuple[dict[str, tuple[float, float, bool]], dict[str, tuple[float, float, bool]]]] = {
+    "cloth": ({"stretch": (3e2, 3e3, True), "bending": (1e-6, 1e-4, True)},
+              {"stretch": (3e4, 1e5, True), "bending": (1e-3, 1e-2, True)}),
+    "rope": ({"youngs_modulus": (1e3, 1e5, True)}, {"youngs_modulus": (1e8, 1e9, True)}),
+}  # fmt: skip
+
 DEFAULTS: dict[str, dict[str, float]] = {
     "cloth": {"friction": 0.6, "density": 800.0, "stretch": 3e3, "bending": 3e-5},
     "rope": {"friction": 0.6, "youngs_modulus": 3e4, "poisson_ratio": 0.3},
@@ -97,6 +106,15 @@ def sample_properties(material: str, rng: np.random.Generator, ranges: Ranges = 
     for name, (lo, hi, log) in ranges[check_material(material)].items():
         out[name] = float(np.exp(rng.uniform(np.log(lo), np.log(hi)))) if log else float(rng.uniform(lo, hi))
     return out
+
+
+def sample_stiff_end(material: str, rng: np.random.Generator) -> dict[str, float]:
+    """Stiffnesses of ``material`` drawn in one of its two `STIFF_ENDS`, chosen with equal chance ({} for
+    plasticine, which has no ends)."""
+    ends = STIFF_ENDS.get(check_material(material))
+    if ends is None:
+        return {}
+    return sample_properties(material, rng, {material: ends[int(rng.integers(2))]})
 
 
 def check_material(material: str) -> str:

@@ -6,7 +6,7 @@ import pytest
 from models.data.deformable_examples import make_slide_example
 from models.data.deformable_generate import DeformableDataConfig, dataset_body, generate, load_body_file
 from models.deformable.body import DeformableBody
-from models.deformable.materials import RANGES, STIFF_RANGES
+from models.deformable.materials import RANGES, STIFF_ENDS, STIFF_RANGES
 from models.deformable.metrics import shape_score
 from models.deformable.rope import make_rope
 from models.deformable.shapes import make_body
@@ -97,13 +97,37 @@ def test_pushes_first_label_a_card_pushed_from_behind_and_a_handkerchief_pulled_
 
 
 def test_stiff_data_sets_reach_cards_and_sticks_and_old_manifests_keep_their_configuration() -> None:
-    for option in ("slides", "stiff", "slide_margin", "push_first"):
+    for option in ("slides", "stiff", "slide_margin", "push_first", "stiff_ends"):
         assert option not in DeformableDataConfig().to_dict()
     cfg = DeformableDataConfig(materials=("rope",), bodies=40, stiff=True)
     moduli = [dataset_body(cfg, "rope", i).properties["youngs_modulus"] for i in range(40)]
     lo, hi, _ = STIFF_RANGES["rope"]["youngs_modulus"]
     assert lo <= min(moduli) and max(moduli) <= hi
     assert max(moduli) > 1e2 * RANGES["rope"]["youngs_modulus"][1]  # beyond the default range: stick-like
+
+
+def test_stiff_ends_draw_cards_and_handkerchiefs_often_and_leave_the_other_bodies_as_they_were() -> None:
+    plain = DeformableDataConfig(materials=("cloth",), bodies=60, seed=3, stiff=True)
+    ends = DeformableDataConfig(materials=("cloth",), bodies=60, seed=3, stiff=True, stiff_ends=0.5)
+    soft, stiff = STIFF_ENDS["cloth"]
+
+    def inside(box: dict[str, tuple[float, float, bool]], properties: dict[str, float]) -> bool:
+        return all(lo <= properties[name] <= hi for name, (lo, hi, _) in box.items())
+
+    near = {"plain": [0, 0], "ends": [0, 0]}
+    kept = 0
+    for i in range(60):
+        before, after = dataset_body(plain, "cloth", i), dataset_body(ends, "cloth", i)
+        assert np.array_equal(before.points, after.points)  # the same shape, only the properties may move
+        for name, body in (("plain", before), ("ends", after)):
+            near[name][0] += inside(soft, body.properties)
+            near[name][1] += inside(stiff, body.properties)
+        kept += before.properties == after.properties
+        if before.properties != after.properties:  # moved into an end; the other properties stay
+            assert inside(soft, after.properties) or inside(stiff, after.properties)
+            assert after.properties["friction"] == before.properties["friction"]
+    assert near["ends"][1] >= near["plain"][1] + 8 and near["ends"][0] >= near["plain"][0] + 4
+    assert 15 <= kept <= 45  # about half the bodies keep their draw
 
 
 def test_a_data_set_of_slides_holds_slide_examples(tmp_path: Path) -> None:
