@@ -73,6 +73,12 @@ def register(subparsers: Any) -> None:
         help="with --stiff: this fraction of bodies draws its stiffness near a handkerchief's or a card's (a rope's "
         "or a stick's) end of the range, either with equal chance",
     )
+    g.add_argument(
+        "--paired-ends",
+        action="store_true",
+        help="with --stiff (cloth, rope): bodies come in pairs, one shape at the soft and at the stiff end of the "
+        "range, asked the same tasks",
+    )
     g.add_argument("--no-progress", action="store_true")
     g.set_defaults(func=_generate)
     lab = sub.add_parser("labels", help="how much of each object its valid grasps cover, and simple rules' hits")
@@ -95,6 +101,9 @@ def _generate(args: argparse.Namespace) -> int:
         raise SystemExit(f"--materials: unknown {', '.join(unknown)} (rigid, articulated, cloth, rope, plasticine)")
     if not 0.0 <= args.stiff_ends <= 1.0 or (args.stiff_ends and not args.stiff):
         raise SystemExit(f"--stiff-ends: {args.stiff_ends} must lie in [0, 1] and needs --stiff")
+    if args.paired_ends and (not args.stiff or args.stiff_ends or "plasticine" in materials):
+        raise SystemExit("--paired-ends: needs --stiff, not --stiff-ends, and cloth or rope only (plasticine has no "
+                         "ends)")
     if deformable:
         from models.data.deformable_generate import DeformableDataConfig
         from models.data.deformable_generate import generate as generate_deformable
@@ -103,7 +112,8 @@ def _generate(args: argparse.Namespace) -> int:
                                     examples_per_body=args.examples_per_body, seed=args.seed,
                                     verify_moving=args.verify_moving, slides=args.slides,
                                     stiff=args.stiff, slide_margin=args.slide_margin,
-                                    push_first=args.push_first, stiff_ends=args.stiff_ends)  # fmt: skip
+                                    push_first=args.push_first, stiff_ends=args.stiff_ends,
+                                    paired_ends=args.paired_ends)  # fmt: skip
         made = generate_deformable(dcfg, args.out, workers=args.workers, progress=not args.no_progress)
         print(json.dumps(made["totals"], indent=1))
     if not {"rigid", "articulated"} & set(materials):

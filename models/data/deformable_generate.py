@@ -47,11 +47,12 @@ class DeformableDataConfig:
     slide_margin: float = 0.0  # slides: labelled sets also reach a slide this long (× size; make_slide_example)
     push_first: bool = False  # slides: pushes from behind that hold are the labels alone (make_slide_example)
     stiff_ends: float = 0.0  # with `stiff`: this fraction of bodies draws its stiffnesses in one of `STIFF_ENDS`
+    paired_ends: bool = False  # with `stiff`: bodies 2k, 2k+1 are one shape at the soft and the stiff end, same tasks
 
     def to_dict(self) -> dict[str, Any]:
         out = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
         for name, default in (("verify_moving", False), ("slides", 0.0), ("stiff", False), ("slide_margin", 0.0),
-                              ("push_first", False), ("stiff_ends", 0.0)):
+                              ("push_first", False), ("stiff_ends", 0.0), ("paired_ends", False)):
             if out[name] == default:  # data sets made before the option keep their manifests' configuration
                 del out[name]
         return out
@@ -68,32 +69,51 @@ class BodyResult:
 
 
 def dataset_body(cfg: DeformableDataConfig, material: str, i: int) -> DeformableBody:
-    """Body ``i`` of ``material`` in the data set."""
+    """Body ``i`` of ``material`` in the data set.
+
+    With ``paired_ends``, bodies ``2k`` and ``2k + 1`` are body ``2k``'s shape, seed and other properties, with
+    stiffnesses drawn in the soft and in the stiff end of `STIFF_ENDS` (cloth and rope)."""
     kinds = KINDS[material]
-    seed = int(np.random.default_rng([cfg.seed, MATERIALS.index(material), i]).integers(2**31))
-    body = make_body(material, kinds[i % len(kinds)], seed)
+    shape = _shape_index(cfg, i)
+    seed = int(np.random.default_rng([cfg.seed, MATERIALS.index(material), shape]).integers(2**31))
+    body = make_body(material, kinds[shape % len(kinds)], seed)
     if not cfg.stiff:
         return body
     properties = sample_properties(material, np.random.default_rng([seed, 2]), STIFF_RANGES)
-    if cfg.stiff_ends > 0:  # its own stream: bodies outside the ends keep the properties they had without it
+    if cfg.paired_ends:
+        properties.update(sample_stiff_end(material, np.random.default_rng([seed, 3, i % 2]), i % 2))
+    elif cfg.stiff_ends > 0:  # its own stream: bodies outside the ends keep the properties they had without it
         ends = np.random.default_rng([seed, 3])
         if ends.random() < cfg.stiff_ends:
             properties.update(sample_stiff_end(material, ends))
     return body.with_properties(properties)
 
 
+def body_split(cfg: DeformableDataConfig, material: str, i: int) -> str:
+    """Body ``i``'s object split (train/test), fixed by its id — a pair's by its first body's, so that one shape is
+    never both trained on and tested."""
+    from models.data.generate import object_split
+
+    return object_split(dataset_body(cfg, material, _shape_index(cfg, i)).id, cfg.test_fraction)
+
+
+def _shape_index(cfg: DeformableDataConfig, i: int) -> int:
+    """The index whose shape, seed and tasks body ``i`` takes (``i`` itself unless the bodies come in pairs)."""
+    return i - i % 2 if cfg.paired_ends else i
+
+
 def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> BodyResult:
     """Generate and write body ``i`` of ``material``."""
     from models.data.deformable_examples import make_example, make_slide_example
-    from models.data.generate import object_split
-
     t0 = time.perf_counter()
     body = dataset_body(cfg, material, i)
-    split = object_split(body.id, cfg.test_fraction)
-    rng = np.random.default_rng([cfg.seed, MATERIALS.index(material), i, 1])
+    split = body_split(cfg, material, i)
+    rng = np.random.default_rng([cfg.seed, MATERIALS.index(material), _shape_index(cfg, i), 1])
     rows: dict[str, list[Any]] = {}
     counts: dict[str, int] = {}
-    for _ in range(cfg.examples_per_body):
+    for k in range(cfg.examples_per_body):
+        if cfg.paired_ends:  # a stream per example: a pair's labels differ, and so may the draws they take
+            rng = np.random.default_rng([cfg.seed, MATERIALS.index(material), _shape_index(cfg, i), 1, k])
         slide = cfg.slides > 0 and material in ("cloth", "rope") and rng.random() < cfg.slides  # no draw without
         if slide:
             ex = make_slide_example(body, rng, cfg.slide_margin, cfg.push_first)

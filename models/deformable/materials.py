@@ -108,13 +108,13 @@ def sample_properties(material: str, rng: np.random.Generator, ranges: Ranges = 
     return out
 
 
-def sample_stiff_end(material: str, rng: np.random.Generator) -> dict[str, float]:
-    """Stiffnesses of ``material`` drawn in one of its two `STIFF_ENDS`, chosen with equal chance ({} for
-    plasticine, which has no ends)."""
+def sample_stiff_end(material: str, rng: np.random.Generator, end: int | None = None) -> dict[str, float]:
+    """Stiffnesses of ``material`` drawn in its `STIFF_ENDS` ``end`` (0: soft, 1: stiff; None: either, with equal
+    chance); {} for plasticine, which has no ends."""
     ends = STIFF_ENDS.get(check_material(material))
     if ends is None:
         return {}
-    return sample_properties(material, rng, {material: ends[int(rng.integers(2))]})
+    return sample_properties(material, rng, {material: ends[int(rng.integers(2)) if end is None else end]})
 
 
 def check_material(material: str) -> str:

@@ -4,7 +4,13 @@ import numpy as np
 import pytest
 
 from models.data.deformable_examples import make_slide_example
-from models.data.deformable_generate import DeformableDataConfig, dataset_body, generate, load_body_file
+from models.data.deformable_generate import (
+    DeformableDataConfig,
+    body_split,
+    dataset_body,
+    generate,
+    load_body_file,
+)
 from models.deformable.body import DeformableBody
 from models.deformable.materials import RANGES, STIFF_ENDS, STIFF_RANGES
 from models.deformable.metrics import shape_score
@@ -97,7 +103,7 @@ def test_pushes_first_label_a_card_pushed_from_behind_and_a_handkerchief_pulled_
 
 
 def test_stiff_data_sets_reach_cards_and_sticks_and_old_manifests_keep_their_configuration() -> None:
-    for option in ("slides", "stiff", "slide_margin", "push_first", "stiff_ends"):
+    for option in ("slides", "stiff", "slide_margin", "push_first", "stiff_ends", "paired_ends"):
         assert option not in DeformableDataConfig().to_dict()
     cfg = DeformableDataConfig(materials=("rope",), bodies=40, stiff=True)
     moduli = [dataset_body(cfg, "rope", i).properties["youngs_modulus"] for i in range(40)]
@@ -128,6 +134,24 @@ def test_stiff_ends_draw_cards_and_handkerchiefs_often_and_leave_the_other_bodie
             assert after.properties["friction"] == before.properties["friction"]
     assert near["ends"][1] >= near["plain"][1] + 8 and near["ends"][0] >= near["plain"][0] + 4
     assert 15 <= kept <= 45  # about half the bodies keep their draw
+
+
+def test_paired_ends_ask_one_shape_the_same_slide_as_a_soft_and_a_stiff_body(tmp_path: Path) -> None:
+    cfg = DeformableDataConfig(materials=("rope",), bodies=2, examples_per_body=1, seed=4, slides=1.0, stiff=True,
+                               paired_ends=True, test_fraction=0.0)  # fmt: skip
+    soft, stiff = dataset_body(cfg, "rope", 0), dataset_body(cfg, "rope", 1)
+    assert np.array_equal(soft.points, stiff.points)
+    halves = DeformableDataConfig(materials=("rope",), bodies=40, seed=4, stiff=True, paired_ends=True,
+                                  test_fraction=0.5)  # fmt: skip
+    splits = [body_split(halves, "rope", i) for i in range(40)]
+    assert splits[0::2] == splits[1::2] and len(set(splits)) == 2  # a shape is trained on or tested, never both
+    (_, soft_top, _), (stiff_bottom, _, _) = (end["youngs_modulus"] for end in STIFF_ENDS["rope"])
+    assert soft.properties["youngs_modulus"] <= soft_top and stiff.properties["youngs_modulus"] >= stiff_bottom
+    assert soft.properties["friction"] == stiff.properties["friction"]
+    generate(cfg, tmp_path, progress=False)
+    files = [load_body_file(tmp_path / "deformable" / f"rope-0000{i}.npz") for i in (0, 1)]
+    assert all(int(f["num_examples"]) == 1 for f in files)
+    np.testing.assert_array_equal(files[0]["motion"], files[1]["motion"])  # the same slide asked of both
 
 
 def test_a_data_set_of_slides_holds_slide_examples(tmp_path: Path) -> None:
