@@ -108,12 +108,13 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
     t0 = time.perf_counter()
     body = dataset_body(cfg, material, i)
     split = body_split(cfg, material, i)
-    rng = np.random.default_rng([cfg.seed, MATERIALS.index(material), _shape_index(cfg, i), 1])
+    stream = [cfg.seed, MATERIALS.index(material), _shape_index(cfg, i), 1]
+    shared = None if cfg.paired_ends else np.random.default_rng(stream)
     rows: dict[str, list[Any]] = {}
     counts: dict[str, int] = {}
     for k in range(cfg.examples_per_body):
-        if cfg.paired_ends:  # a stream per example: a pair's labels differ, and so may the draws they take
-            rng = np.random.default_rng([cfg.seed, MATERIALS.index(material), _shape_index(cfg, i), 1, k])
+        # paired bodies take a stream per example: a pair's labels differ, and so may the draws they take
+        rng = shared if shared is not None else np.random.default_rng([*stream, k])
         slide = cfg.slides > 0 and material in ("cloth", "rope") and rng.random() < cfg.slides  # no draw without
         if slide:
             ex = make_slide_example(body, rng, cfg.slide_margin, cfg.push_first)
