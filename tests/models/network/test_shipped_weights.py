@@ -53,6 +53,7 @@ def test_shipped_weights_answer_held_out_deformables_themselves_and_reach_their_
     """Their deformable head on six cases of bodies no training saw (the evaluation's own cases): answers from the
     network's own peaks (not the most-moved-points fallback) reach their targets in the simulator by the paper's
     metric in at least four (rope) and three (cloth) (measured 2026-12-05: rope 5 of 5 own answers, cloth 4 of 6;
+    2026-12-06, round 16: rope 6 of 6, cloth 4 of 5;
     the round-12 weights, without verified labels, the motion gain and the read-out loss: rope 3 of 4, cloth 0 of
     4)."""
     from models.data.deformable_generate import DeformableDataConfig
@@ -70,8 +71,8 @@ def test_shipped_weights_pull_a_slid_handkerchief_from_its_front() -> None:
     """The paper's property figure, handkerchief side: eight of its squares (the figure's own shapes and slides,
     seed 0) each slid by 0.3 of its size. Every answer from the network's own peaks puts its contacts' mean ahead
     of the centre along d and reaches the slid square in the simulator, and there are at least four such answers
-    (measured 2026-12-06: round 15, 6 own answers, all ahead and reaching; round 14, 4 own answers, the two
-    behind the centre, −0.37 and −0.67 of the size, folding the square)."""
+    (measured 2026-12-06: round 16, 8 own answers, all ahead and reaching; round 15, 6, all ahead and reaching;
+    round 14, 4 own answers, the two behind the centre, −0.37 and −0.67 of the size, folding the square)."""
     from models.deformable.simulate import simulate
     from models.deformable.slides import along_and_across
     from models.evaluation.deformable import pipeline_network
@@ -89,3 +90,29 @@ def test_shipped_weights_pull_a_slid_handkerchief_from_its_front() -> None:
         own.append((float(along.mean()) / hk.size, reached))
     assert len(own) >= 4, own
     assert all(ahead > 0 and reached for ahead, reached in own), own
+
+
+def test_shipped_weights_push_a_slid_card_from_its_rear() -> None:
+    """The paper's property figure, card side: the same eight squares and slides as the handkerchief's test, each as
+    a card (stretch 10⁵ N/m, bending 10⁻² N·m). Most answers from the network's own peaks put their contacts' mean
+    behind the centre along d — the side the handkerchief is never taken from — and every one of those reaches
+    the slid card in the simulator (measured 2026-12-06: round 16, 8 own answers, all behind, −0.30 to −0.59 of
+    the size, and reaching; round 15, 7 own answers, all ahead, +0.51 to +0.65 — pulled from the front like the
+    handkerchief)."""
+    from models.deformable.simulate import simulate
+    from models.deformable.slides import along_and_across
+    from models.evaluation.deformable import pipeline_network
+    from models.evaluation.property_pairs import figure_cases
+
+    answer = pipeline_network(ContactPredictor.from_checkpoint(WEIGHTS), get_hand("panda_gripper"), seed=0)
+    own = []
+    for _hk, case in figure_cases("cloth", 8, 0):
+        proposal = answer(case)
+        if proposal.source != "network":
+            continue
+        card, d = case.body, case.manipulation.motions[0]
+        along, _ = along_and_across(proposal.points, d, origin=card.points.mean(axis=0))
+        reached = simulate(card, proposal.points, proposal.motions).reaches(card, case.target)
+        own.append((float(along.mean()) / card.size, reached))
+    behind = [reached for along, reached in own if along < 0]
+    assert len(behind) >= 6 and all(behind), own
