@@ -49,6 +49,9 @@ def add_deformable(sub: Any) -> None:
     d.add_argument("--figure", type=int, default=0,
                    help="also run the paper's property figure (the same slide asked of both members) on this many "
                    "shapes")
+    d.add_argument("--figure-samples", type=int, default=0,
+                   help="also answer the figure's shapes with this many latent samples (the service at seeds SEED, "
+                   "SEED + 1, ...) and count every answer's side and success; needs --figure")
     d.add_argument("--json", default=None, help="also write the summary to this JSON file")
     d.add_argument("--no-progress", action="store_true")
     d.set_defaults(func=run_deformable)
@@ -133,7 +136,10 @@ def deformable_figures(args: argparse.Namespace) -> dict[str, Any] | None:
     if not set(splits) <= set(SPLITS) or not set(methods) <= set(METHODS) or args.cases < 1 or args.proposals < 1:
         print(f"--splits from {', '.join(SPLITS)}, --methods from {', '.join(METHODS)}, --cases ≥ 1, --proposals ≥ 1")
         return None
-    network = service = None
+    if args.figure_samples < 0 or (args.figure_samples and args.figure < 1):
+        print("--figure-samples must be ≥ 0 and needs --figure N (the shapes it answers)")
+        return None
+    network = service = predictor = None
     if set(methods) & {"network", *SERVICE_METHODS} or args.figure:
         from lab.weights import load_weights
         from models.robots import get_hand
@@ -197,7 +203,30 @@ def deformable_figures(args: argparse.Namespace) -> dict[str, Any] | None:
         console.print(pairs)
     if args.figure and network is not None:
         figures["figure"] = _print_figure(console, materials, args.figure, args.seed, network)
+    if args.figure_samples and predictor is not None:
+        samples = [pipeline_network(predictor, hand, args.seed + k) for k in range(args.figure_samples)]
+        figures["figure_samples"] = _print_figure_samples(console, materials, args.figure, args.seed, samples)
     return figures
+
+
+def _print_figure_samples(console: Console, materials: list[str], count: int, seed: int,
+                          answers: list[Answer]) -> list[dict[str, object]]:  # fmt: skip
+    """The figure per latent sample (`models.evaluation.property_pairs.figure_per_sample`) as a table; its rows."""
+    from rich.table import Table
+
+    from models.evaluation.property_pairs import SENSITIVITY_PAIRS, figure_per_sample
+
+    table = Table(title=f"property figure per latent sample: {count} shapes a pair × {len(answers)} samples")
+    for col in ("member", "answers", "reach", "ahead of the centre (reaching)", "behind (reaching)"):
+        table.add_column(col, justify="left" if col == "member" else "right")
+    rows: list[dict[str, object]] = []
+    for material in [m for m in materials if m in SENSITIVITY_PAIRS]:
+        for t in figure_per_sample(material, count, seed, answers):
+            table.add_row(t.name, str(t.answers), f"{t.reaches} ({100 * t.reaches / t.answers:.0f} %)",
+                          f"{t.ahead} ({t.ahead_reaching})", f"{t.behind} ({t.behind_reaching})")
+            rows.append(vars(t))
+    console.print(table)
+    return rows
 
 
 def _print_figure(console: Console, materials: list[str], count: int, seed: int, network: Answer) -> list[object]:

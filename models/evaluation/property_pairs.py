@@ -8,7 +8,7 @@ one, a property-blind one ties, one whose answers merely change wins about half.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -178,3 +178,54 @@ def property_figure(material: str, count: int, seed: int, network: Answer) -> li
                 {n: n in reached for n in SET_NAMES}))  # fmt: skip
         out.append((members[0], members[1]))
     return out
+
+
+@dataclass
+class SampleTally:
+    """One member's answers to the figure's shapes over several answer functions (latent samples).
+
+    Attributes:
+        name: handkerchief, card, rope or stick.
+        answers: answers counted (shapes × answer functions), own peaks and fallbacks alike.
+        reaches: of them, those whose rollout on this member reaches the slid body.
+        ahead, ahead_reaching: answers whose contacts' mean lies at or ahead of the centroid along d; reaching.
+        behind, behind_reaching: the same behind the centroid.
+    """
+
+    name: str
+    answers: int = 0
+    reaches: int = 0
+    ahead: int = 0
+    ahead_reaching: int = 0
+    behind: int = 0
+    behind_reaching: int = 0
+
+    def add(self, along: float, reached: bool) -> None:
+        """Count one answer with its contacts' mean ``along`` d (× size) and whether it ``reached``."""
+        self.answers += 1
+        self.reaches += reached
+        if along >= 0:
+            self.ahead, self.ahead_reaching = self.ahead + 1, self.ahead_reaching + reached
+        else:
+            self.behind, self.behind_reaching = self.behind + 1, self.behind_reaching + reached
+
+
+def figure_per_sample(
+    material: str, count: int, seed: int, answers: Sequence[Answer]
+) -> tuple[SampleTally, SampleTally]:
+    """The property figure's ``count`` shapes and slides of ``material`` (`figure_cases`) answered by each of
+    ``answers`` — e.g. the service at several seeds, one latent sample each — for both members; every answer is
+    simulated on its own member. One figure run sees one sample a shape; this says how the samples spread."""
+    from models.deformable.slides import along_and_across
+
+    first_name, _, second_name, _ = SENSITIVITY_PAIRS[material]
+    tallies = (SampleTally(first_name), SampleTally(second_name))
+    for cases in figure_cases(material, count, seed):
+        for tally, case in zip(tallies, cases, strict=True):
+            body, d = case.body, case.manipulation.motions[0]
+            for answer in answers:
+                proposal = answer(case)
+                along, _ = along_and_across(proposal.points, d, origin=body.points.mean(axis=0))
+                reached = _reaches(body, case.target, proposal.points, proposal.motions)
+                tally.add(float(along.mean()) / body.size, reached)
+    return tallies

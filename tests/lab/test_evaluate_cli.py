@@ -93,6 +93,28 @@ def test_eval_deformable_prints_the_property_figure_for_each_member(
     assert set(rows[1][0]["candidates"]) == {"front_pair", "front_one", "centre", "rear_one", "rear_pair", "far_pair"}
 
 
+def test_eval_deformable_counts_the_figure_per_latent_sample_and_refuses_samples_without_shapes(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import json
+
+    from lab.eval_deformable import add_deformable
+
+    p = argparse.ArgumentParser()
+    add_deformable(p.add_subparsers())
+    base = ["deformable", "--materials", "rope", "--splits", "test_uo", "--cases", "1", "--methods", "random_motion"]
+    args = p.parse_args([*base, "--figure-samples", "2"])
+    assert args.func(args) == 2
+    assert "--figure-samples" in capsys.readouterr().out
+    args = p.parse_args([*base, "--figure", "1", "--figure-samples", "2", "--json", str(tmp_path / "f.json")])
+    assert args.func(args) == 0
+    assert "per latent sample" in capsys.readouterr().out
+    rows = json.loads((tmp_path / "f.json").read_text())["figure_samples"]
+    assert [(r["name"], r["answers"]) for r in rows] == [("rope", 2), ("stick", 2)]
+    for r in rows:
+        assert r["ahead"] + r["behind"] == 2 and r["reaches"] == r["ahead_reaching"] + r["behind_reaching"]
+
+
 def test_the_figure_counts_own_answers_ahead_of_and_behind_the_centre_with_their_successes() -> None:
     from lab.eval_deformable import _ahead_behind
     from models.evaluation.property_pairs import FigureMember

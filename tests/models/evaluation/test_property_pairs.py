@@ -7,7 +7,12 @@ import numpy as np
 from models.deformable.slides import slide_candidates
 from models.evaluation.deformable import DeformableCase
 from models.evaluation.deformable_service import Proposal
-from models.evaluation.property_pairs import SENSITIVITY_PAIRS, property_figure, property_sensitivity
+from models.evaluation.property_pairs import (
+    SENSITIVITY_PAIRS,
+    figure_per_sample,
+    property_figure,
+    property_sensitivity,
+)
 
 
 def test_the_property_pairs_credit_an_answer_that_reads_the_properties_and_not_one_that_ignores_them() -> None:
@@ -52,3 +57,25 @@ def test_the_figure_credits_pulling_a_handkerchief_and_pushing_a_card_from_behin
     assert handkerchief.along > 0.3 > -0.3 > card.along
     assert not handkerchief.candidates["rear_one"] and card.candidates["rear_one"]
     assert handkerchief.candidates["front_pair"]
+
+
+def _named_set(name: str):  # type: ignore[no-untyped-def]
+    """An answer that always takes one named slide set (`slide_candidates`), whatever the properties."""
+
+    def answer(case: DeformableCase) -> Proposal:
+        d = case.target[0] - case.body.points[0]
+        [m] = [m for m in slide_candidates(case.body, d) if m.procedure == f"slide_{name}"]
+        return Proposal(case.body.points[m.contacts], m.motions, "network")
+
+    return answer
+
+
+def test_the_figure_per_sample_counts_each_answer_on_its_side_with_whether_it_reached() -> None:
+    """Two answer functions on one square: its front corners and one rear point. The handkerchief follows only
+    the pull (pushed from behind it bunches up), the card follows both; each answer is counted on its side."""
+    handkerchief, card = figure_per_sample("cloth", 1, 0, [_named_set("front_pair"), _named_set("rear_one")])
+    assert (handkerchief.name, card.name) == ("handkerchief", "card")
+    assert (handkerchief.answers, handkerchief.reaches) == (2, 1)
+    assert (handkerchief.ahead, handkerchief.ahead_reaching, handkerchief.behind, handkerchief.behind_reaching) == (
+        1, 1, 1, 0)  # fmt: skip
+    assert (card.answers, card.reaches, card.ahead_reaching, card.behind_reaching) == (2, 2, 1, 1)
