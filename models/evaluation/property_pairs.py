@@ -4,6 +4,10 @@ Each shape gets one random manipulation, and each member's rollout under it is t
 answers each target twice — with the member's own properties and with the other member's — and both answers are
 simulated on the member: a network that reads the properties' meaning makes the own-property answer the better
 one, a property-blind one ties, one whose answers merely change wins about half.
+
+The paper's figure itself (`property_figure`): one shape as both members slid by the same d, each member answered
+with its own properties; `figure_per_sample` answers the same shapes with several latent samples and counts each
+answer's side of the centre and success.
 """
 
 from __future__ import annotations
