@@ -142,6 +142,16 @@ def _reaches(body: DeformableBody, target: np.ndarray, contacts: np.ndarray, mot
     return simulate(body, contacts, motions).reaches(body, target)
 
 
+def _contacts_along(case: DeformableCase, contacts: np.ndarray) -> float:
+    """The mean position of ``contacts`` (H, 3) along the case's slide d from its body's centroid, × size (+ ahead,
+    − behind)."""
+    from models.deformable.slides import along_and_across
+
+    body = case.body
+    along, _ = along_and_across(contacts, case.manipulation.motions[0], origin=body.points.mean(axis=0))
+    return float(along.mean()) / body.size
+
+
 def figure_cases(material: str, count: int, seed: int) -> Iterator[tuple[DeformableCase, DeformableCase]]:
     """The figure's ``count`` shapes of ``material``, each as both members' cases of `SENSITIVITY_PAIRS`: one
     slide d (``FIGURE_SLIDE`` × size, a random heading; the manipulation's one motion) and one target for both,
@@ -164,7 +174,7 @@ def property_figure(material: str, count: int, seed: int, network: Answer) -> li
     each member with its own properties; each answer is simulated on its own member and on the other one, and
     the named candidate sets show what each member's physics allows.
     """
-    from models.deformable.slides import SET_NAMES, along_and_across, reaching_sets
+    from models.deformable.slides import SET_NAMES, reaching_sets
 
     first_name, _, second_name, _ = SENSITIVITY_PAIRS[material]
     out = []
@@ -174,11 +184,10 @@ def property_figure(material: str, count: int, seed: int, network: Answer) -> li
         for i, (name, case) in enumerate(zip((first_name, second_name), cases, strict=True)):
             body, target, d = case.body, case.target, case.manipulation.motions[0]
             own, other = answers[i], answers[1 - i]
-            along, _ = along_and_across(own.points, d, origin=body.points.mean(axis=0))
             reached = {m.procedure.removeprefix("slide_") for m in reaching_sets(body, d)[0]}
             members.append(FigureMember(
                 name, _reaches(body, target, own.points, own.motions),
-                _reaches(body, target, other.points, other.motions), float(along.mean()) / body.size, own.source,
+                _reaches(body, target, other.points, other.motions), _contacts_along(case, own.points), own.source,
                 {n: n in reached for n in SET_NAMES}))  # fmt: skip
         out.append((members[0], members[1]))
     return out
@@ -220,16 +229,12 @@ def figure_per_sample(
     """The property figure's ``count`` shapes and slides of ``material`` (`figure_cases`) answered by each of
     ``answers`` — e.g. the service at several seeds, one latent sample each — for both members; every answer is
     simulated on its own member. One figure run sees one sample a shape; this says how the samples spread."""
-    from models.deformable.slides import along_and_across
-
     first_name, _, second_name, _ = SENSITIVITY_PAIRS[material]
     tallies = (SampleTally(first_name), SampleTally(second_name))
     for cases in figure_cases(material, count, seed):
         for tally, case in zip(tallies, cases, strict=True):
-            body, d = case.body, case.manipulation.motions[0]
             for answer in answers:
                 proposal = answer(case)
-                along, _ = along_and_across(proposal.points, d, origin=body.points.mean(axis=0))
-                reached = _reaches(body, case.target, proposal.points, proposal.motions)
-                tally.add(float(along.mean()) / body.size, reached)
+                reached = _reaches(case.body, case.target, proposal.points, proposal.motions)
+                tally.add(_contacts_along(case, proposal.points), reached)
     return tallies
