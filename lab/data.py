@@ -79,6 +79,12 @@ def register(subparsers: Any) -> None:
         help="with --stiff (cloth, rope): bodies come in pairs, one shape at the soft and at the stiff end of the "
         "range, asked the same tasks",
     )
+    g.add_argument(
+        "--slide-labels",
+        choices=("union", "first"),
+        default="union",
+        help="slides: label the union of the sets that reach (union), or the first of them front to rear alone",
+    )
     g.add_argument("--no-progress", action="store_true")
     g.set_defaults(func=_generate)
     lab = sub.add_parser("labels", help="how much of each object its valid grasps cover, and simple rules' hits")
@@ -113,7 +119,7 @@ def _generate(args: argparse.Namespace) -> int:
                                     verify_moving=args.verify_moving, slides=args.slides,
                                     stiff=args.stiff, slide_margin=args.slide_margin,
                                     push_first=args.push_first, stiff_ends=args.stiff_ends,
-                                    paired_ends=args.paired_ends)  # fmt: skip
+                                    paired_ends=args.paired_ends, slide_labels=args.slide_labels)  # fmt: skip
         made = generate_deformable(dcfg, args.out, workers=args.workers, progress=not args.no_progress)
         print(json.dumps(made["totals"], indent=1))
     if not {"rigid", "articulated"} & set(materials):

@@ -143,7 +143,7 @@ def make_example(body: DeformableBody, rng: np.random.Generator, tries: int = 3,
 
 
 def make_slide_example(body: DeformableBody, rng: np.random.Generator, margin: float = 0.0,
-                       push_first: bool = False) -> DeformableExample | None:  # fmt: skip
+                       push_first: bool = False, first_only: bool = False) -> DeformableExample | None:  # fmt: skip
     """A slide of ``body`` (cloth or rope) labelled by the candidate sets that reach it, or None when none does.
 
     Args:
@@ -153,6 +153,9 @@ def make_slide_example(body: DeformableBody, rng: np.random.Generator, margin: f
             none does (``margin_fallback``).
         push_first: label the pushes from behind alone when they hold (see the module doc; ``pushed``), else
             drop them from the labels.
+        first_only: the heat and motion maps are the first labelled set's alone (front to rear) rather than the
+            union of every labelled set — an answer of a few peaks of a union can take one set's rear point and
+            another's front one, which no set is; the mask still covers every labelled set.
 
     The example's ``contacts`` are the first labelled set's (front to rear), ``label_sets`` how many were labelled.
     """
@@ -170,7 +173,7 @@ def make_slide_example(body: DeformableBody, rng: np.random.Generator, margin: f
     if push_first:
         valid, pushed, more = _pushes_first(body, displacement, valid)
         seconds += more
-    heat, motion_map = labels(body, valid[0]) if len(valid) == 1 else union_labels(body, valid)
+    heat, motion_map = labels(body, valid[0]) if len(valid) == 1 or first_only else union_labels(body, valid)
     every = np.unique(np.concatenate([s.contacts for s in valid]))
     mask = region_mask(body.points, body.points[every], body.size, rng)
     first = valid[0]

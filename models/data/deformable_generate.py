@@ -48,11 +48,13 @@ class DeformableDataConfig:
     push_first: bool = False  # slides: pushes from behind that hold are the labels alone (make_slide_example)
     stiff_ends: float = 0.0  # with `stiff`: this fraction of bodies draws its stiffnesses in one of `STIFF_ENDS`
     paired_ends: bool = False  # with `stiff`: bodies 2k, 2k+1 are one shape at the soft and the stiff end, same tasks
+    slide_labels: str = "union"  # slides: "union" of the labelled sets, or "first": the first (front to rear) alone
 
     def to_dict(self) -> dict[str, Any]:
         out = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
         for name, default in (("verify_moving", False), ("slides", 0.0), ("stiff", False), ("slide_margin", 0.0),
-                              ("push_first", False), ("stiff_ends", 0.0), ("paired_ends", False)):
+                              ("push_first", False), ("stiff_ends", 0.0), ("paired_ends", False),
+                              ("slide_labels", "union")):
             if out[name] == default:  # data sets made before the option keep their manifests' configuration
                 del out[name]
         return out
@@ -117,7 +119,7 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
         rng = shared if shared is not None else np.random.default_rng([*stream, k])
         slide = cfg.slides > 0 and material in ("cloth", "rope") and rng.random() < cfg.slides  # no draw without
         if slide:
-            ex = make_slide_example(body, rng, cfg.slide_margin, cfg.push_first)
+            ex = make_slide_example(body, rng, cfg.slide_margin, cfg.push_first, cfg.slide_labels == "first")
         else:
             ex = make_example(body, rng, verify_moving=cfg.verify_moving)
         if ex is None:

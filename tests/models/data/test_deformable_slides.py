@@ -166,3 +166,25 @@ def test_a_data_set_of_slides_holds_slide_examples(tmp_path: Path) -> None:
     shortfalls = body.get("slide_shortfall", np.zeros((0, 6)))
     assert shortfalls.shape == (int(body["num_examples"]), 6)
     assert np.all(np.nanmin(shortfalls, axis=1) <= 1.0)  # a kept slide is reached by some set
+
+
+def test_first_only_labels_the_first_reaching_set_alone_where_the_union_labels_them_all() -> None:
+    from models.deformable.slides import PUSH_SETS
+    from models.evaluation.property_pairs import pair_bodies
+
+    ((handkerchief, _),) = pair_bodies("cloth", 1, 0)
+    union = make_slide_example(handkerchief, np.random.default_rng(0), push_first=True)
+    first = make_slide_example(handkerchief, np.random.default_rng(0), push_first=True, first_only=True)
+    assert union is not None and first is not None and union.label_sets == first.label_sets >= 2
+    np.testing.assert_array_equal(first.contacts, union.contacts)  # the same slide, the same first set
+    np.testing.assert_array_equal(first.mask, union.mask)
+    d = first.motion[0]
+    names = _reaching(handkerchief, d) - set(PUSH_SETS)  # judged here; a handkerchief's pushes do not hold
+    leading = next(m for m in slide_candidates(handkerchief, d) if m.procedure in names)  # front to rear
+    assert first.pushed is False
+    np.testing.assert_array_equal(first.contacts, leading.contacts)
+    hot = {int(i) for i in np.flatnonzero(first.heat >= 1.0 - 1e-9)}
+    assert hot == {int(i) for i in leading.contacts}
+    union_hot = {int(i) for i in np.flatnonzero(union.heat >= 1.0 - 1e-9)}
+    assert hot < union_hot  # the union also heats the other sets' points
+    np.testing.assert_allclose(first.motion_map[leading.contacts], np.tile(d, (len(leading.contacts), 1)), atol=1e-9)
