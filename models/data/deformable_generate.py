@@ -16,7 +16,7 @@ import os
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -48,7 +48,7 @@ class DeformableDataConfig:
     push_first: bool = False  # slides: pushes from behind that hold are the labels alone (make_slide_example)
     stiff_ends: float = 0.0  # with `stiff`: this fraction of bodies draws its stiffnesses in one of `STIFF_ENDS`
     paired_ends: bool = False  # with `stiff`: bodies 2k, 2k+1 are one shape at the soft and the stiff end, same tasks
-    slide_labels: str = "union"  # slides: "union" of the labelled sets, or "first": the first (front to rear) alone
+    slide_labels: Literal["union", "first"] = "union"  # slides: every labelled set, or the first (front to rear) alone
 
     def to_dict(self) -> dict[str, Any]:
         out = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
