@@ -6,11 +6,7 @@ WORKDIR /app
 
 COPY pyproject.toml README.md ./
 COPY distributions ./distributions
-COPY models ./models
-COPY workers ./workers
-COPY service ./service
-COPY clients ./clients
-COPY lab ./lab
+COPY manifoundation ./manifoundation
 
 # torch pinned first; the client distribution (which the server requires) from its folder, in the same command.
 # Point TORCH_INDEX_URL at a CPU wheel index for a small image (the default index

@@ -9,14 +9,14 @@ PORT ?= 8000
 
 .PHONY: serve test test-slow lint install
 
-$(STAMP): pyproject.toml distributions/client/pyproject.toml
+$(STAMP): pyproject.toml distributions/client/pyproject.toml research/pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	# torch first, pinned: the CPU wheel on disk (an unpinned torch pulls a CUDA build).
 	$(BIN)/python -m pip install -q torch==2.13.0
 	# the client distribution from its folder in the same command: the server requires manifoundation-client
-	# (same version), which no package index has to provide.
-	$(BIN)/python -m pip install -q -e distributions/client -e '.[dev]'
+	# (same version), which no package index has to provide; the research tools (`mani-lab`) beside them.
+	$(BIN)/python -m pip install -q -e distributions/client -e '.[dev]' -e research
 	# A venv made before the split had `mani` from the server distribution: replacing that one removes the script
 	# the client just wrote, so the client (which owns `mani` now) is written once more, without its dependencies.
 	test -x $(BIN)/mani || $(BIN)/python -m pip install -q --no-deps --force-reinstall -e distributions/client
@@ -24,7 +24,7 @@ $(STAMP): pyproject.toml distributions/client/pyproject.toml
 	# so their own dependencies (numba, pinocchio, ...) are not installed.
 	$(BIN)/python -m pip install -q --no-deps 'robosuite>=1.5,<1.6' 'orca-sim>=0.1,<0.2' 'robot-properties-fingers>=2,<3'
 	# the science's compiled loops (numba), compiled once here rather than by the first request
-	$(BIN)/python -m models.compiled
+	$(BIN)/python -m manifoundation.core.compiled
 	touch $(STAMP)
 
 install: $(STAMP)

@@ -17,8 +17,8 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from clients.schemas import TaskIn
-from clients.sdk import Client, delta_pose, force_closure, make_request, object_from_file, wrench
+from manifoundation.contract import TaskIn
+from manifoundation.sdk import Client, delta_pose, force_closure, make_request, object_from_file, wrench
 
 HERE = Path(__file__).resolve().parent
 OBJECTS = ["box.npz", "cylinder.npz", "composite.npz", "convex.npz", "blob.ply"]

@@ -1,6 +1,6 @@
 """Regenerate the small example inputs in ``examples/data/`` (committed; run this only to change them).
 
-Objects come from the project's own seeded generator (`models.objects`), so they are the same shapes the
+Objects come from the project's own seeded generator (`manifoundation.core.objects`), so they are the same shapes the
 evaluation uses; each is saved with its oriented points and its mesh. Needs the full install (trimesh); the
 other examples need only the SDK.
 
@@ -75,7 +75,7 @@ TWO_FINGER_URDF = """<?xml version="1.0" encoding="utf-8"?>
 
 
 def _make(kind: str, size: float, seed: int):  # type: ignore[no-untyped-def]
-    from models.objects import make_object
+    from manifoundation.core.objects import make_object
 
     return make_object(kind, size, seed, NUM_POINTS)
 
@@ -83,9 +83,9 @@ def _make(kind: str, size: float, seed: int):  # type: ignore[no-untyped-def]
 def _deformable_request(material: str, kind: str, seed: int) -> dict[str, object]:
     """A request body: the body's cloud, the motion its procedure gives every point, simulated rollout asked (the
     press: its pushed cluster as given contacts, the motions corrected by up to 6 rollouts)."""
-    from models.deformable.procedures import cloth_fold, plasticine_push, rope_drag
-    from models.deformable.shapes import make_body
-    from models.deformable.simulate import simulate
+    from manifoundation.core.deformable.procedures import cloth_fold, plasticine_push, rope_drag
+    from manifoundation.core.deformable.shapes import make_body
+    from manifoundation.core.deformable.simulate import simulate
 
     body = make_body(material, kind, seed)
     procedure = {"cloth": cloth_fold, "rope": rope_drag, "plasticine": plasticine_push}[material]

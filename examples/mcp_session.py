@@ -87,8 +87,8 @@ async def main() -> int:
     t0 = time.perf_counter()
     if args.stdio:
         env = {**os.environ, **({"MANI_API_KEY": args.api_key} if args.api_key else {})}
-        server: Any = StdioServerParameters(command=sys.executable, args=["-m", "clients.cli.main", "mcp", "--url",
-                                                                         args.url], env=env)  # fmt: skip
+        command = ["-m", "manifoundation.cli.main", "mcp", "--url", args.url]
+        server: Any = StdioServerParameters(command=sys.executable, args=command, env=env)
     else:
         headers = {"Authorization": f"Bearer {args.api_key}"} if args.api_key else {}
         server = streamable_http_client(f"{args.url}/mcp", http_client=create_mcp_http_client(headers=headers))

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from clients.schemas import DeltaPoseTask, ObjectIn, SynthesisResult
-from clients.sdk import Client, JobFailed, RateLimited, TimeoutError, delta_pose, object_from_file
+from manifoundation.contract import DeltaPoseTask, ObjectIn, SynthesisResult
+from manifoundation.sdk import Client, JobFailed, RateLimited, TimeoutError, delta_pose, object_from_file
 
 HERE = Path(__file__).resolve().parent
 

@@ -25,11 +25,11 @@ from pathlib import Path
 import numpy as np
 
 
-def cup_in_box_request(hand_name: str, method: str, seed: int):  # -> models.planning.PlanInput
+def cup_in_box_request(hand_name: str, method: str, seed: int):  # -> manifoundation.core.planning.PlanInput
     """The example's plan request."""
-    from models.planning import BoxObstacle, PlanInput, PlanOptions, Pose, SupportPlane
-    from models.planning.scenes import cup_mesh, open_box, sampled
-    from models.robots import get_hand
+    from manifoundation.core.planning import BoxObstacle, PlanInput, PlanOptions, Pose, SupportPlane
+    from manifoundation.core.planning.scenes import cup_mesh, open_box, sampled
+    from manifoundation.core.robots import get_hand
 
     cup = cup_mesh()
     points, normals = sampled(cup, 1024, seed=0)
@@ -51,12 +51,12 @@ def cup_in_box_request(hand_name: str, method: str, seed: int):  # -> models.pla
     )  # fmt: skip
 
 
-def write_plan_file(inp, folder: Path) -> Path:  # inp: models.planning.PlanInput
+def write_plan_file(inp, folder: Path) -> Path:  # inp: manifoundation.core.planning.PlanInput
     """The request as a plan file for ``mani plan`` (the cup saved beside it as an .npz)."""
     import yaml
 
-    from models.planning import BoxObstacle
-    from models.planning.export import pose_dict
+    from manifoundation.core.planning import BoxObstacle
+    from manifoundation.core.planning.export import pose_dict
 
     folder.mkdir(parents=True, exist_ok=True)
     np.savez(folder / "cup.npz", points=inp.points, normals=inp.normals, vertices=inp.mesh_vertices,
@@ -78,9 +78,9 @@ def write_plan_file(inp, folder: Path) -> Path:  # inp: models.planning.PlanInpu
     return path
 
 
-def wire_request(inp):  # inp: models.planning.PlanInput -> clients.schemas.PlanRequest
+def wire_request(inp):  # inp: manifoundation.core.planning.PlanInput -> manifoundation.contract.PlanRequest
     """The same request in the wire contract's terms (what ``POST /v1/plans`` and the MCP tool take)."""
-    from clients.sdk import box_obstacle, make_plan, object_from_points
+    from manifoundation.sdk import box_obstacle, make_plan, object_from_points
 
     obj = object_from_points(inp.points, inp.normals, mesh={"vertices": inp.mesh_vertices, "faces": inp.mesh_faces},
                              properties=dict(inp.properties))  # fmt: skip
@@ -93,11 +93,11 @@ def wire_request(inp):  # inp: models.planning.PlanInput -> clients.schemas.Plan
     )  # fmt: skip
 
 
-def through_the_service(inp, url: str, api_key: str | None) -> int:  # inp: models.planning.PlanInput
+def through_the_service(inp, url: str, api_key: str | None) -> int:  # inp: manifoundation.core.planning.PlanInput
     """Plan with ``POST /v1/plans`` (the SDK), following the job's stages; print what the local run prints."""
     import time
 
-    from clients.sdk import Client
+    from manifoundation.sdk import Client
 
     with Client(url, api_key) as client:
         t0 = time.perf_counter()
@@ -134,8 +134,8 @@ def main() -> int:
 
     import torch
 
-    from models.planning import plan_manipulation, scene_of
-    from models.planning.export import summary_lines
+    from manifoundation.core.planning import plan_manipulation, scene_of
+    from manifoundation.core.planning.export import summary_lines
 
     torch.set_num_threads(1)
     inp = cup_in_box_request(args.hand, args.method, args.seed)
@@ -145,7 +145,7 @@ def main() -> int:
         return through_the_service(inp, args.url, args.api_key)
     predictor = None
     if args.method == "network":
-        from lab.plan import load_predictor
+        from manifoundation.server.commands.plan import load_predictor
 
         predictor = load_predictor(None)
     plan = plan_manipulation(inp, predictor)
@@ -158,7 +158,7 @@ def main() -> int:
                   f"verified {q.success if q else False}, hand meets {step.hand_collisions or 'nothing'}"
                   + (f" (previous grasp dropped: {step.dropped})" if step.dropped else ""))
     if args.html:
-        from models.planning.view import plan_figure
+        from manifoundation.core.planning.view import plan_figure
 
         plan_figure(plan, scene_of(inp), inp.hand).write_html(str(args.html), include_plotlyjs=True)
         print(f"view: {args.html}")

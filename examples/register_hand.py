@@ -13,7 +13,7 @@ import argparse
 import os
 from pathlib import Path
 
-from clients.sdk import Client, ValidationError, force_closure, object_from_file
+from manifoundation.sdk import Client, ValidationError, force_closure, object_from_file
 
 HERE = Path(__file__).resolve().parent
 

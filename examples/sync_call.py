@@ -12,7 +12,7 @@ import argparse
 import os
 from pathlib import Path
 
-from clients.sdk import Client, ManiError, delta_pose, object_from_file, result_figure, result_to_json
+from manifoundation.sdk import Client, ManiError, delta_pose, object_from_file, result_figure, result_to_json
 
 HERE = Path(__file__).resolve().parent
 

@@ -49,5 +49,5 @@ def test_dockerfile_installs_pinned_torch_and_exposes_api_port() -> None:
     command = COMPOSE["services"]["api"]["command"]
     port = command[command.index("--port") + 1]
     assert re.search(rf"^EXPOSE {port}$", dockerfile, re.M)
-    for package in ("models", "workers", "service", "clients"):
-        assert f"COPY {package} ./{package}" in dockerfile
+    assert "COPY manifoundation ./manifoundation" in dockerfile
+    assert "research" not in dockerfile  # the image holds the product only

@@ -7,19 +7,26 @@ from __future__ import annotations
 import ast
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("clients", "service", "workers", "models", "lab")
+import pytest
 
-MODELS_ORDER = (
-    "errors", "objects", "robots", "geometry", "network", "audit", "refine", "compiled", "deformable", "pipeline",
-    "planning", "data", "training", "evaluation",
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("manifoundation", "research")
+
+CORE_ORDER = (
+    "errors", "objects", "robots", "geometry", "network", "refine", "compiled", "deformable", "pipeline", "planning",
+    "weights",
 )  # fmt: skip
-"""Bottom to top: a subpackage of `models` imports only from those before it (and itself). ``audit`` imports none:
-it is the outside check and shares no code with what it checks."""
+"""Bottom to top: a subpackage of `manifoundation.core` imports only from those before it (and itself)."""
+RESEARCH_ORDER = (
+    "audit", "staged_pipeline", "data", "training", "evaluation", "commands", "bench", "benchmarks", "cli",
+)  # fmt: skip
+"""The same for `research`. ``audit`` imports nothing of the science: it is the outside check and shares no code
+with what it checks."""
 MAX_LINES = 300
 REASON = "Why one module:"
 GENERATED = ("_pb2.py", "_pb2_grpc.py")
-"""protoc's output (`clients/protos/manifoundation`): regenerated, never edited, so no size rule (ruff and mypy
+"""protoc's output (`manifoundation/contract/protos/manifoundation`): regenerated, never edited, so no size rule (ruff
+and mypy
 skip it too)."""
 
 
@@ -104,17 +111,20 @@ def test_no_import_circle() -> None:
     assert _cycles(_graph()) == []
 
 
-def test_models_subpackages_import_only_downwards() -> None:
-    rank = {name: i for i, name in enumerate(MODELS_ORDER)}
+@pytest.mark.parametrize(("package", "order"), [("manifoundation.core", CORE_ORDER), ("research", RESEARCH_ORDER)])
+def test_subpackages_import_only_downwards(package: str, order: tuple[str, ...]) -> None:
+    rank = {name: i for i, name in enumerate(order)}
+    depth = package.count(".") + 1
     offenders = []
     for module, imported in _graph().items():
         parts = module.split(".")
-        if parts[0] != "models" or len(parts) < 2:
+        if not module.startswith(package + ".") or len(parts) <= depth:
             continue
-        assert parts[1] in rank, f"models.{parts[1]} has no place in MODELS_ORDER (tests/test_structure.py)"
+        sub = parts[depth]
+        assert sub in rank, f"{package}.{sub} has no place in its order (tests/test_structure.py)"
         for target in imported:
             tparts = target.split(".")
-            if tparts[0] == "models" and len(tparts) > 1 and rank.get(tparts[1], -1) > rank[parts[1]]:
+            if target.startswith(package + ".") and len(tparts) > depth and rank.get(tparts[depth], -1) > rank[sub]:
                 offenders.append(f"{module} imports {target}")
     assert not offenders, "\n".join(sorted(offenders))
 
@@ -122,8 +132,8 @@ def test_models_subpackages_import_only_downwards() -> None:
 def test_audit_shares_no_code_with_the_science() -> None:
     graph = _graph()
     borrowed = sorted(
-        f"{m} imports {t}" for m, ts in graph.items() if m.startswith("models.audit") for t in ts
-        if t.startswith("models.") and not t.startswith("models.audit")
+        f"{m} imports {t}" for m, ts in graph.items() if m.startswith("research.audit") for t in ts
+        if t.startswith(("manifoundation.", "research.")) and not t.startswith("research.audit")
     )  # fmt: skip
     assert not borrowed, "\n".join(borrowed)
 

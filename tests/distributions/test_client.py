@@ -32,7 +32,7 @@ def test_one_version_and_the_server_requires_exactly_it() -> None:
 def test_clients_ships_once() -> None:
     assert not any(p.startswith("clients") for p in SERVER["tool"]["setuptools"]["packages"]["find"]["include"])
     assert "scripts" not in SERVER["project"]  # `mani` is the client distribution's
-    assert CLIENT["scripts"] == {"mani": "clients.cli.main:main"}
+    assert CLIENT["scripts"] == {"mani": "manifoundation.cli.main:main"}
 
 
 def test_each_command_is_registered_by_the_distribution_that_ships_its_module() -> None:
@@ -41,7 +41,7 @@ def test_each_command_is_registered_by_the_distribution_that_ships_its_module() 
     assert set(client) == CLIENT_COMMANDS and not set(client) & set(server)
     for name, target in client.items():
         module = ROOT.joinpath(*target.partition(":")[0].split("."))
-        assert target.startswith("clients.cli.") and module.with_suffix(".py").is_file(), f"{name}: {target}"
+        assert target.startswith("manifoundation.cli.") and module.with_suffix(".py").is_file(), f"{name}: {target}"
 
 
 def _third_party_imports() -> dict[str, set[str]]:
@@ -71,4 +71,6 @@ def test_every_library_clients_imports_is_a_dependency_of_the_client_distributio
         names = {VIA.get(_name(d), _name(d)) for d in providers.get(module, [module])}
         if not names & declared:
             undeclared[module] = sorted(files)
-    assert not undeclared, f"imported by clients/ but not declared in distributions/client: {undeclared}"
+    assert not undeclared, (
+        f"imported by manifoundation/contract/ but not declared in distributions/client: {undeclared}"
+    )

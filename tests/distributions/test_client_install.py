@@ -27,8 +27,8 @@ from typing import Any
 import httpx
 import pytest
 
-from clients.schemas import SynthesisResult
-from tests.service.server import free_port
+from manifoundation.contract import SynthesisResult
+from tests.api.server import free_port
 
 pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[2]
@@ -74,7 +74,7 @@ def wheels(tmp_path_factory: pytest.TempPathFactory) -> Path:
 def server() -> Iterator[tuple[str, str]]:
     """`mani serve` from the full install on free ports, ready (model loaded); its HTTP URL and gRPC target."""
     port, grpc_port = free_port(), free_port()
-    cmd = [sys.executable, "-m", "clients.cli.main", "serve", "--port", str(port), "--grpc-port", str(grpc_port),
+    cmd = [sys.executable, "-m", "manifoundation.cli.main", "serve", "--port", str(port), "--grpc-port", str(grpc_port),
            "--workers", "1", "--log-level", "WARNING"]  # fmt: skip
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     url = f"http://127.0.0.1:{port}"
@@ -111,11 +111,13 @@ def test_the_server_wheel_ships_no_clients_and_requires_the_client_wheel(wheels:
     with zipfile.ZipFile(server) as archive:
         names = archive.namelist()
         metadata = archive.read(next(n for n in names if n.endswith(".dist-info/METADATA"))).decode()
-    assert not any(n.startswith("clients/") for n in names) and any(n.startswith("service/") for n in names)
+    assert not any(n.startswith("manifoundation/contract/") for n in names) and any(
+        n.startswith("manifoundation/server/api/") for n in names
+    )
     version = client.name.split("-")[1]
     assert re.search(rf"^Requires-Dist: manifoundation-client\[[a-z,]+\]=={re.escape(version)}$", metadata, re.M)
     with zipfile.ZipFile(client) as archive:
-        shipped = {n for n in archive.namelist() if n.startswith("clients/")}
+        shipped = {n for n in archive.namelist() if n.startswith("manifoundation/contract/")}
     tracked = run(["git", "ls-files", "clients"], timeout=60, cwd=ROOT).stdout.split()
     assert shipped == {n for n in tracked if Path(n).suffix in {".py", ".pyi", ".proto", ".typed"}}
 
@@ -140,7 +142,7 @@ def test_the_client_wheel_alone_runs_the_quickstart(wheels: Path, server: tuple[
     probe_out = tmp_path / "modules.jsonl"
     env = {**clean, "PYTHONPATH": str(tmp_path / "probe"), "MANI_URL": url, "MANI_PROBE_OUT": str(probe_out)}
 
-    where = run([str(python), "-c", "import clients, importlib.util as u; print(clients.__file__);"
+    where = run([str(python), "-c", "import clients, importlib.util as u; print(manifoundation.contract.__file__);"
                  "print(sorted(m for m in ('torch', 'service', 'models') if u.find_spec(m)))"],
                 timeout=60, cwd=work, env=env).stdout.split("\n")  # fmt: skip
     assert where[0].startswith(str(venv)) and where[1] == "[]", where
@@ -162,7 +164,7 @@ def test_the_client_wheel_alone_runs_the_quickstart(wheels: Path, server: tuple[
     assert 'Client("http://127.0.0.1:8000")' in snippet
     run([str(python), "-c", snippet.replace("http://127.0.0.1:8000", url)], timeout=300, cwd=work, env=env)
     assert (work / "grasp.html").stat().st_size > 100_000  # plotly.js inlined: the view works offline
-    grpc_call = ("from clients.sdk.grpc_client import GrpcClient\n"
+    grpc_call = ("from manifoundation.sdk.grpc_client import GrpcClient\n"
                  f"with GrpcClient({target!r}) as client:\n    print(len(client.robots()))")  # fmt: skip
     assert int(run([str(python), "-c", grpc_call], timeout=120, cwd=work, env=env).stdout) > 0
 

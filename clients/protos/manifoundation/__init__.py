@@ -1,1 +1,0 @@
-"""Generated code of the `manifoundation.v1` proto (see `service.grpc.codegen`)."""

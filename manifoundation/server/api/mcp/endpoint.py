@@ -1,0 +1,89 @@
+"""``/mcp`` on the service: authorize each request as ``/v1`` does, then hand it to the MCP SDK's app, which is
+started on first use (importing the SDK costs about a second: `mani serve` does not pay it until an agent calls).
+
+The SDK's app and its session manager live in one task (`McpHost._serve`: an anyio task group must be left by the
+task that entered it) from the first ``/mcp`` request to the app's shutdown (`McpHost.close`, from the lifespan).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import importlib
+from typing import Any
+
+from starlette.requests import Request
+from starlette.types import ASGIApp, Receive, Scope, Send
+
+from manifoundation.server.api.deps import authorize
+from manifoundation.server.api.encoding import respond
+from manifoundation.server.api.errors import Unavailable, from_exception
+
+PATH = "/mcp"
+CALLER_KEY = "mani_caller"
+"""Where `McpEndpoint` leaves the request's `Caller` in the ASGI scope's state for the tools."""
+
+
+class McpHost:
+    """The MCP SDK's ASGI app, started on first use and stopped with the service."""
+
+    def __init__(self, state: Any) -> None:
+        self.state = state
+        self._task: asyncio.Task[None] | None = None
+        self._ready = asyncio.Event()
+        self._stop = asyncio.Event()
+        self._app: ASGIApp | None = None
+        self._failure: BaseException | None = None
+
+    async def app(self) -> ASGIApp:
+        """The running app (started now if it is not yet)."""
+        if getattr(self.state, "shutting_down", False) or self._stop.is_set():
+            raise Unavailable("the service is shutting down")
+        if self._task is None:
+            self._task = asyncio.create_task(self._serve(), name="mcp-streamable-http")
+        await self._ready.wait()
+        if self._app is None:
+            raise Unavailable(f"the MCP server did not start: {self._failure}")
+        return self._app
+
+    async def _serve(self) -> None:
+        try:
+            http = await asyncio.to_thread(
+                importlib.import_module, "manifoundation.server.api.mcp.http"
+            )  # off the event loop
+            server, app = http.build_app(self.state)
+            async with server.session_manager.run():
+                self._app = app
+                self._ready.set()
+                await self._stop.wait()
+        except Exception as exc:  # answered as 503 to every caller, never a crash of the service
+            self._failure = exc
+        finally:
+            self._app = None
+            self._ready.set()
+
+    async def close(self) -> None:
+        """Stop the app (the lifespan calls this at shutdown)."""
+        self._stop.set()
+        if self._task is not None:
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+
+
+class McpEndpoint:
+    """The ASGI app behind the ``/mcp`` route: the same keys and limits as ``/v1``, then the SDK's app."""
+
+    def __init__(self, state: Any) -> None:
+        self.state = state
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        request = Request(scope, receive)
+        try:
+            caller = await authorize(request, self.state.settings)
+            app = await self.state.mcp.app()
+        except Exception as exc:
+            error = from_exception(exc)
+            await respond(request, error.body(), status=error.status, headers=error.headers)(scope, receive, send)
+            return
+        scope.setdefault("state", {})[CALLER_KEY] = caller
+        await app(scope, receive, send)

@@ -1,0 +1,126 @@
+"""JSON and msgpack both ways: read a body by its Content-Type, answer in the encoding the Accept header asks for.
+
+Bodies are read here (not by FastAPI) so that msgpack works and the size limit holds while streaming: a body
+over the limit is refused as soon as its Content-Length (or its running size) says so; a sender too slow is cut
+off (408); a large body is decoded off the event loop (`manifoundation.server.api.bodies`). Answers are encoded by
+`manifoundation.server.api.encoding` (re-exported here for the routes).
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import AsyncIterator
+from typing import Any, TypeVar
+
+from pydantic import BaseModel
+from starlette.requests import Request
+
+from manifoundation.contract import FieldError
+from manifoundation.contract.codec import JSON, MSGPACK, media_type
+from manifoundation.contract.validation import summary
+from manifoundation.server.api.bodies import BodyPool, decode
+from manifoundation.server.api.encoding import accepted, respond
+from manifoundation.server.api.errors import (
+    BadRequest,
+    InvalidInput,
+    PayloadTooLarge,
+    RequestTimeout,
+    UnsupportedMediaType,
+)
+
+__all__ = ["accepted", "body_chunks", "body_openapi", "declared_length", "read_bytes", "read_model", "respond"]
+
+ModelT = TypeVar("ModelT", bound=BaseModel)
+BODY_MEDIA_TYPES = (JSON, MSGPACK)
+
+
+def declared_length(request: Request, limit: int) -> int | None:
+    """The body's Content-Length (None when not declared). Raises 400 when malformed, 413 when over ``limit``:
+    both before a byte of the body is read."""
+    declared = request.headers.get("content-length")
+    if declared is None:
+        return None
+    try:
+        size = int(declared)
+    except ValueError as exc:
+        raise BadRequest("Content-Length is not a number") from exc
+    if size < 0:
+        raise BadRequest("Content-Length is negative")
+    if size > limit:
+        raise PayloadTooLarge(f"body of {size} bytes exceeds the limit of {limit} bytes")
+    return size
+
+
+async def body_chunks(request: Request, limit: int, timeout: float = 60.0, idle: float = 10.0) -> AsyncIterator[bytes]:
+    """The raw body chunk by chunk, refusing more than ``limit`` bytes (413) and a sender slower than ``timeout``
+    seconds in all or ``idle`` seconds between two chunks (408: a slow client never holds a connection for ever).
+
+    `asyncio.timeout_at` around each wait, not `asyncio.wait_for`: the latter ends every body with a
+    StopAsyncIteration whose traceback and wait_for's future form a reference cycle holding the reader's frame,
+    and so every chunk of the body, until the garbage collector's rare full pass (one body of RSS per request).
+    """
+    declared_length(request, limit)
+    total = 0
+    loop = asyncio.get_running_loop()
+    end = loop.time() + timeout
+    stream = request.stream()
+    while True:
+        try:
+            async with asyncio.timeout_at(min(end, loop.time() + idle)):
+                chunk = await anext(stream, None)
+        except TimeoutError as exc:
+            why = f"body not received within {timeout:g} s" if loop.time() >= end else f"no body byte for {idle:g} s"
+            raise RequestTimeout(why) from exc
+        if chunk is None:
+            return
+        total += len(chunk)
+        if total > limit:
+            raise PayloadTooLarge(f"body exceeds the limit of {limit} bytes")
+        if chunk:
+            yield chunk
+
+
+async def read_bytes(request: Request, limit: int, timeout: float = 60.0, idle: float = 10.0) -> bytes:
+    """The whole raw body, under `body_chunks`' limits."""
+    return b"".join([chunk async for chunk in body_chunks(request, limit, timeout, idle)])
+
+
+async def read_model(request: Request, cls: type[ModelT], limit: int) -> ModelT:
+    """Read, decode and validate a body of ``cls`` (400 malformed, 408 too slow, 413 too big, 415 other type,
+    422 invalid). A large body waits for a slot and is decoded in a worker process
+    (`manifoundation.server.api.bodies`)."""
+    content_type = request.headers.get("content-type")
+    base = (content_type or JSON).split(";", 1)[0].strip().lower()
+    if base not in (JSON, "text/json") and media_type(base) != MSGPACK and not base.endswith("+json"):
+        raise UnsupportedMediaType(f"Content-Type {base!r} is not supported; use {JSON} or {MSGPACK}")
+    settings = request.app.state.settings
+    bodies: BodyPool | None = getattr(request.app.state, "bodies", None)
+    timeouts = settings.body_timeout, settings.body_idle_timeout
+    if bodies is None or not bodies.large(declared_length(request, limit)):
+        return _answer(decode(cls, await read_bytes(request, limit, *timeouts), content_type))
+    async with bodies.slot():
+        return _answer(await bodies.decode(cls, body_chunks(request, limit, *timeouts), content_type))
+
+
+def _answer(outcome: tuple[str, Any]) -> Any:
+    kind, value = outcome
+    if kind == "ok":
+        return value
+    if kind == "invalid":
+        return_errors: list[FieldError] = value
+        raise InvalidInput(summary(return_errors), detail=return_errors)
+    if kind == "empty":
+        raise BadRequest("empty body; send a JSON or msgpack object")
+    raise BadRequest(str(value))
+
+
+def body_openapi(schema_ref: str, description: str = "") -> dict[str, Any]:
+    """``openapi_extra`` documenting a body of ``#/components/schemas/<schema_ref>`` in both encodings."""
+    ref = {"$ref": f"#/components/schemas/{schema_ref}"}
+    return {
+        "requestBody": {
+            "required": True,
+            "description": description or f"{schema_ref} as JSON, or msgpack with typed-binary arrays.",
+            "content": {JSON: {"schema": ref}, MSGPACK: {"schema": ref}},
+        }
+    }

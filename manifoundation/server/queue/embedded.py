@@ -1,0 +1,288 @@
+"""Embedded backend: an in-process queue feeding N spawned worker processes (the default; NOT durable).
+
+Jobs, results and dead letters live in this process's memory: they are lost when it exits. Results are kept
+``result_ttl`` seconds, at most ``max_results`` finished jobs and ``max_result_bytes`` of their results (oldest
+evicted first: memory stays bounded whatever the results' size); an evicted job still answers state "expired"
+(a bounded list of tombstones), never "unknown". One pump thread talks to the workers over one duplex pipe each
+(`manifoundation.server.worker.child`): it dispatches up to ``batch_size`` queued jobs to an idle worker, takes progress
+and outcomes
+back, and notices a dead worker (EOF): its jobs go back to the queue until they have been delivered
+``max_deliveries`` times, then to the dead letters with the error; a replacement is spawned. A job given back
+that way runs alone (a micro-batch of one), so a job that kills its worker fails no batch-mate.
+
+This module is the queue's asyncio API; the state and the pump thread are `manifoundation.server.queue.embedded_pump`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import threading
+import time
+from collections.abc import Sequence
+from typing import Any
+
+from manifoundation.contract import (
+    DeadLetter,
+    JobPublic,
+    JobRequest,
+    JobState,
+    QueueStats,
+    RobotPublic,
+    RobotRegister,
+    SynthesisRequest,
+    WorkerPublic,
+    kind_of,
+)
+from manifoundation.contract.codec import pack
+from manifoundation.server.queue.base import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
+from manifoundation.server.queue.embedded_parts import JobRecord, WorkerHandle
+from manifoundation.server.queue.embedded_pump import EmbeddedPump
+from manifoundation.server.queue.records import (
+    cancelled_error,
+    new_id,
+    result_expired_error,
+    scoped_robot,
+    shutdown_error,
+    with_answer,
+)
+
+log = logging.getLogger("manifoundation.server.queue.embedded")
+
+
+class EmbeddedQueue(EmbeddedPump, JobQueue):
+    """In-process queue + ``concurrency`` spawned worker processes (see module doc)."""
+
+    backend = "embedded"
+
+    # ---- lifecycle -------------------------------------------------------------------------------------------
+    async def start(self) -> None:
+        if self._running:
+            return
+        self._running = True
+        with self._lock:
+            for _ in range(self.settings.concurrency):
+                self._spawn()
+        self._pump = threading.Thread(target=self._pump_loop, name="mani-embedded-pump", daemon=True)
+        self._pump.start()
+        deadline = time.monotonic() + self.settings.start_timeout
+        while time.monotonic() < deadline and any(w.info is None for w in list(self._workers.values())):
+            await asyncio.sleep(0.02)
+
+    async def close(self) -> None:
+        if not self._running:
+            return
+        self._running = False
+        with self._lock:
+            workers = list(self._workers.values())
+            for job_id in list(self._pending):
+                self._finish(self._jobs[job_id], error=shutdown_error())
+        for worker in workers:
+            with contextlib.suppress(OSError):
+                worker.send({"op": "stop"})
+        self._wake()
+        await asyncio.get_running_loop().run_in_executor(None, self._join, workers)
+        if self._pump is not None:
+            await asyncio.get_running_loop().run_in_executor(None, self._pump.join, 10)
+
+    async def ping(self) -> bool:
+        return self._running
+
+    # ---- submit / observe ------------------------------------------------------------------------------------
+    async def submit(
+        self, requests: Sequence[JobRequest], *, batch_id: str | None = None, deadline: float | None = None,
+        request_id: str | None = None, owner: str | None = None,
+    ) -> list[str]:  # fmt: skip
+        if not self._running:
+            raise QueueUnavailable("the embedded queue is not running")
+        payloads = [pack(r.model_dump(mode="python", exclude_none=True)) for r in requests]
+        with self._lock:
+            if len(self._pending) + len(requests) > self.settings.max_queue:
+                raise QueueFull(f"queue holds {len(self._pending)} jobs (max {self.settings.max_queue})", 1.0)
+            ids = []
+            for request, payload in zip(requests, payloads, strict=True):
+                hand = request.robot.name if request.robot else None
+                kind = kind_of(request)
+                job = JobRecord(new_id(), payload, hand, deadline, batch_id, request_id, owner, kind)
+                self._jobs[job.id] = job
+                self._pending.append(job.id)
+                ids.append(job.id)
+        self._wake()
+        return ids
+
+    @property
+    def capacity(self) -> int | None:
+        return self.settings.max_queue
+
+    async def room(self, count: int = 1) -> bool:
+        with self._lock:
+            return len(self._pending) + count <= self.settings.max_queue
+
+    async def get(self, job_id: str, *, with_result: bool = True, owner: str | None = None) -> JobPublic:
+        with self._lock:
+            job = self._jobs.get(job_id)
+            if job is not None and (owner is None or job.owner == owner):
+                public, raw = job.public(), job.result if with_result else None
+                gone = None
+            else:
+                public, raw = None, None
+                gone = None if job is not None else self._tombstones.get(job_id)
+        if public is not None:
+            return with_answer(public, raw)  # the one validation of a result on the service side, outside the lock
+        if gone is None or (owner is not None and gone[2] != owner):
+            raise JobNotFound(f"no job {job_id}")
+        created, batch, _ = gone
+        return JobPublic(id=job_id, state=JobState.EXPIRED, created_at=created, batch_id=batch,
+                         error=result_expired_error())  # fmt: skip
+
+    async def wait(self, job_id: str, timeout: float) -> JobPublic:
+        loop = asyncio.get_running_loop()
+        future: asyncio.Future[None] = loop.create_future()
+        with self._lock:
+            job = self._jobs.get(job_id)
+            if job is None or job.state.terminal:
+                future = None  # type: ignore[assignment]
+            else:
+                self._waiters.setdefault(job_id, []).append((loop, future))
+        if future is not None:
+            try:
+                await asyncio.wait_for(future, timeout)
+            except TimeoutError:
+                pass
+            finally:
+                with self._lock:
+                    waiters = self._waiters.get(job_id, [])
+                    if (loop, future) in waiters:
+                        waiters.remove((loop, future))
+                    if not waiters:
+                        self._waiters.pop(job_id, None)
+        return await self.get(job_id)
+
+    async def cancel(self, job_id: str, *, owner: str | None = None) -> JobPublic:
+        await self.get(job_id, with_result=False, owner=owner)  # JobNotFound for an unknown or foreign job
+        target: WorkerHandle | None = None
+        with self._lock:
+            job = self._jobs.get(job_id)
+            if job is not None and job.state is JobState.QUEUED:
+                self._finish(job, error=cancelled_error())
+            elif job is not None and job.state is JobState.RUNNING and not job.cancel:
+                job.cancel = True
+                target = self._workers.get(job.worker or "")
+        if target is not None:
+            with contextlib.suppress(OSError):
+                target.send({"op": "cancel", "id": job_id})
+        return await self.get(job_id, with_result=False)
+
+    async def list_recent(self, limit: int = 50, *, owner: str | None = None) -> list[JobPublic]:
+        if limit <= 0:
+            return []
+        with self._lock:
+            out: list[JobPublic] = []
+            for job in reversed(self._jobs.values()):
+                if owner is None or job.owner == owner:
+                    out.append(job.public())
+                    if len(out) == limit:
+                        break
+            return out
+
+    async def create_batch(
+        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None,
+        owner: str | None = None,
+    ) -> str:  # fmt: skip
+        batch_id = new_id()
+        ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id, owner=owner)
+        with self._lock:
+            self._batches[batch_id] = (owner, ids)
+            while len(self._batches) > self.settings.max_results:
+                self._batches.popitem(last=False)
+        return batch_id
+
+    async def batch_job_ids(self, batch_id: str, *, owner: str | None = None) -> list[str]:
+        with self._lock:
+            found = self._batches.get(batch_id)
+        if found is None or (owner is not None and found[0] != owner):
+            raise JobNotFound(f"no batch {batch_id}")
+        return list(found[1])
+
+    async def stats(self) -> QueueStats:
+        with self._lock:
+            by_state = dict.fromkeys(JobState, 0)
+            for job in self._jobs.values():
+                by_state[job.state] += 1
+            return QueueStats(
+                depth=by_state[JobState.QUEUED],
+                running=by_state[JobState.RUNNING],
+                by_state=by_state,
+                completed_total=self._totals["completed"],
+                failed_total=self._totals["failed"],
+                dead_letters=len(self._dead),
+                workers=sum(1 for w in self._workers.values() if w.info),
+            )
+
+    async def workers(self) -> list[WorkerPublic]:
+        with self._lock:
+            out = []
+            for w in self._workers.values():
+                if w.info is not None:
+                    current = next(iter(w.inflight), None)
+                    out.append(w.info.model_copy(update={"current_job": current, "jobs_done": w.jobs_done}))
+            return out
+
+    async def dead_letters(self, limit: int = 50) -> list[DeadLetter]:
+        with self._lock:
+            return list(self._dead)[::-1][:limit]
+
+    async def list_robots(self, *, owner: str | None = None) -> list[RobotPublic]:
+        with self._lock:
+            mine = [r for key, r in self._robots.items() if r.builtin or key == scoped_robot(owner, r.name)]
+        return sorted(mine, key=lambda r: (not r.builtin, r.name))
+
+    async def register_robot(
+        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None
+    ) -> RobotPublic:
+        with self._lock:
+            ready = [w for w in self._workers.values() if w.info is not None]
+            existing = self._robots.get(robot.name)
+        if existing is not None and existing.builtin:
+            raise RobotInvalid(f"name: '{robot.name}' is a built-in hand")
+        if not ready:
+            raise QueueUnavailable("no worker is running to validate the robot")
+        worker = min(ready, key=lambda w: len(w.inflight))
+        rid, loop = new_id(), asyncio.get_running_loop()
+        payload = pack(robot.model_dump(mode="python", exclude_none=True))
+        future: asyncio.Future[dict[str, Any]] = loop.create_future()
+        with self._lock:
+            self._robot_replies[rid] = (loop, future)
+        try:
+            worker.send({"op": "robot", "rid": rid}, payload)
+            reply = await asyncio.wait_for(future, timeout)
+        except TimeoutError as exc:
+            raise QueueUnavailable(f"no worker validated the robot within {timeout} s") from exc
+        finally:
+            with self._lock:
+                self._robot_replies.pop(rid, None)
+        if "error" in reply:
+            raise RobotInvalid(reply["error"])
+        public = RobotPublic.model_validate(reply["robot"])
+        key = scoped_robot(owner, robot.name)
+        with self._lock:
+            self._registered[key] = payload
+            self._robots[key] = public
+        return public
+
+    async def delete_robot(self, name: str, *, owner: str | None = None) -> None:
+        key = scoped_robot(owner, name)
+        with self._lock:
+            robot = self._robots.get(key)
+            if robot is None or robot.builtin:
+                raise JobNotFound(f"no registered robot {name!r}")
+            del self._robots[key]
+            self._registered.pop(key, None)
+
+
+
+
+
+
+

@@ -1,0 +1,60 @@
+"""Error bodies and state rules shared by both backends and the worker side (torch-free).
+
+A job's outcome is a `SynthesisResult` (a plan job's: a `PlanResult`) or an `ErrorBody`; the error's `ErrorType`
+decides the terminal state (`ErrorType.job_state`): ``Cancelled`` → cancelled, ``DeadlineExceeded`` /
+``ResultExpired`` → expired, anything else → failed.
+"""
+
+from __future__ import annotations
+
+import uuid
+
+from manifoundation.contract import ErrorBody, ErrorType, JobKind, JobPublic, JobState, PlanResult, SynthesisResult
+from manifoundation.contract.codec import unpack
+
+
+def state_for_error(error: ErrorBody) -> JobState:
+    """The terminal state a job ends in when its outcome is ``error`` (failed for a type this version does not
+    know)."""
+    kind = error.kind
+    return kind.job_state if kind is not None else JobState.FAILED
+
+
+def with_answer(job: JobPublic, raw: bytes | None) -> JobPublic:
+    """``job`` with its stored answer (msgpack bytes, None: none) validated as its kind's: ``result`` for a
+    synthesis, ``plan`` for a plan. The one validation of an answer on the service side."""
+    if raw is not None and job.kind is JobKind.PLAN:
+        job.plan = PlanResult.model_validate(unpack(raw))
+    elif raw is not None:
+        job.result = SynthesisResult.model_validate(unpack(raw))
+    return job
+
+
+def cancelled_error() -> ErrorBody:
+    return ErrorBody.of(ErrorType.CANCELLED, "job cancelled")
+
+
+def deadline_error(stage: str = "before it started") -> ErrorBody:
+    return ErrorBody.of(ErrorType.DEADLINE_EXCEEDED, f"job deadline passed {stage}")
+
+
+def result_expired_error() -> ErrorBody:
+    return ErrorBody.of(ErrorType.RESULT_EXPIRED, "the job finished but its result expired and was removed")
+
+
+def shutdown_error(detail: str = "queue shut down") -> ErrorBody:
+    return ErrorBody.of(ErrorType.QUEUE_SHUTDOWN, detail)
+
+
+def worker_lost_error(detail: str, delivery: int, max_deliveries: int) -> ErrorBody:
+    return ErrorBody.of(ErrorType.WORKER_LOST, f"{detail} (delivery {delivery} of {max_deliveries})")
+
+
+def new_id() -> str:
+    """A job / batch / worker id: 32 hex characters."""
+    return uuid.uuid4().hex
+
+
+def scoped_robot(owner: str | None, name: str) -> str:
+    """The key of a registered robot in its owner's namespace (hand names never contain "/")."""
+    return f"{owner}/{name}" if owner else name

@@ -1,0 +1,221 @@
+"""Wire ↔ science: `SynthesisRequest` → `manifoundation.core.pipeline.SynthesisInput`, `SynthesisOutput` →
+`SynthesisResult`.
+
+
+Imported in the worker process only (it imports `models`, hence torch).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from manifoundation.contract import (
+    HandMesh,
+    IterationRecord,
+    Method,
+    Proposal,
+    Quality,
+    SynthesisRequest,
+    SynthesisResult,
+)
+from manifoundation.core.pipeline import JointInput, ProposalOutput, SynthesisInput, SynthesisOutput, TaskInput
+
+if TYPE_CHECKING:
+    from manifoundation.core.robots.hand import Hand
+
+_BIG = float(np.finfo(np.float64).max)
+
+
+def method_of(request: SynthesisRequest) -> str:
+    """The pipeline method: "auto" is the given contacts when present, else the network."""
+    if request.options.method is Method.AUTO:
+        return "contacts" if request.contacts is not None else "network"
+    return request.options.method.value
+
+
+def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = None) -> SynthesisInput:
+    """The core input of ``request`` for ``hand`` (a `manifoundation.core.robots.Hand`).
+
+    Args:
+        deadline: unix time after which refinement stops (converted to a `time.monotonic()` value).
+    """
+    obj, task, options = request.object, request.task, request.options
+    joint = None
+    if obj.joint is not None:
+        joint = JointInput(obj.joint.type, obj.joint.axis, obj.joint.origin, obj.joint.part_mask.astype(bool))
+    core_task = TaskInput(
+        kind=task.kind,
+        translation=getattr(task, "translation", None),
+        rotation=getattr(task, "rotation", None),
+        motion=getattr(task, "motion", None),
+        targets=getattr(task, "targets", None),
+        wrench=getattr(task, "wrench", None),
+        delta=getattr(task, "delta", None),
+        correspondence=getattr(task, "correspondence", "index"),
+    )
+    return SynthesisInput(
+        points=obj.points.astype(np.float64),
+        hand=hand,
+        task=core_task,
+        normals=None if obj.normals is None else obj.normals.astype(np.float64),
+        material=obj.material.value,
+        properties=obj.properties.present(),
+        mask=None if obj.region_mask is None else obj.region_mask.astype(bool),
+        joint=joint,
+        mesh_vertices=None if obj.mesh is None else obj.mesh.vertices,
+        mesh_faces=None if obj.mesh is None else obj.mesh.faces,
+        contacts=None if request.contacts is None else request.contacts.points.astype(np.float64),
+        method=method_of(request),
+        num_proposals=options.num_proposals,
+        refine=options.refine,
+        max_iterations=options.max_iterations,
+        seed=options.seed,
+        deadline=None if deadline is None else time.monotonic() + (deadline - time.time()),
+        return_history=options.return_history,
+        simulate_rollout=options.simulate_rollout,
+        handless=request.robot is None,
+        num_contacts=options.num_contacts,
+        hand_key=hand.name,
+        stop_after_verified=options.stop_after_verified,
+        rollout_corrections=options.rollout_corrections,
+    )
+
+
+def _finite(value: float) -> float:
+    return float(value) if np.isfinite(value) else _BIG
+
+
+def hand_spheres(hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The hand's collision spheres at a pose, (S, 4): world centre and radius (what viewers draw)."""
+    import torch
+
+    def row(a: np.ndarray) -> torch.Tensor:
+        return torch.as_tensor(np.asarray(a, dtype=np.float64))[None]
+
+    centres, _ = hand.spheres(row(palm_position), row(palm_quaternion), row(q), jacobian=False)
+    return np.hstack([centres[0].numpy(), np.asarray(hand.sphere_radii, dtype=np.float64)[:, None]])
+
+
+VIEW_FACES_PER_BODY = 400
+"""A body mesh with more faces is drawn as the convex hulls of its parts (LEAP's fingertips: 7 000 faces) ..."""
+VIEW_VERTICES_PER_PART = 48
+"""... each hull of at most this many of the part's vertices (spread by farthest-point sampling)."""
+
+
+def hand_mesh(hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, q: np.ndarray) -> HandMesh:
+    """The hand's collision meshes posed at a proposal, merged into one mesh (world frame) for viewers."""
+    import torch
+
+    def row(a: np.ndarray) -> torch.Tensor:
+        return torch.as_tensor(np.asarray(a, dtype=np.float64))[None]
+
+    with torch.no_grad():
+        poses = hand.link_poses(row(palm_position), row(palm_quaternion), row(q))
+    verts, faces, offset = [], [], 0
+    for body, (v, f) in _view_meshes(hand).items():
+        T = poses[body][0].numpy()
+        verts.append(v @ T[:3, :3].T + T[:3, 3])
+        faces.append(f + offset)
+        offset += len(v)
+    return HandMesh(vertices=np.vstack(verts).astype(np.float64), faces=np.vstack(faces).astype(np.int64))
+
+
+def _view_meshes(hand: Hand) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    cache = hand.__dict__.setdefault("_view_meshes", {})
+    if not cache:
+        for body, mesh in hand.collision_meshes.items():
+            if len(mesh.faces) > VIEW_FACES_PER_BODY:
+                pieces = [p for p in mesh.split(only_watertight=False) if len(p.faces) >= 4] or [mesh]
+                parts = [_coarse_hull(np.asarray(p.vertices)) for p in pieces]
+                v = np.vstack([np.asarray(p.vertices) for p in parts])
+                counts = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
+                f = np.vstack([np.asarray(p.faces) + c for p, c in zip(parts, counts, strict=True)])
+            else:
+                v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
+            cache[body] = (v, f)
+    return cache
+
+
+def _coarse_hull(vertices: np.ndarray) -> Any:
+    """The convex hull of at most ``VIEW_VERTICES_PER_PART`` of ``vertices`` (farthest-point sampling)."""
+    import trimesh
+
+    pick = [0]
+    dist = np.linalg.norm(vertices - vertices[0], axis=1)
+    while len(pick) < min(VIEW_VERTICES_PER_PART, len(vertices)):
+        pick.append(int(np.argmax(dist)))
+        dist = np.minimum(dist, np.linalg.norm(vertices - vertices[pick[-1]], axis=1))
+    return trimesh.convex.convex_hull(vertices[pick])
+
+
+def to_proposal(p: ProposalOutput, hand: Hand | None = None, *, history: bool = False, mesh: bool = False) -> Proposal:
+    """The wire proposal of one of the pipeline's proposals (a single request's, or a plan step's).
+
+    Args:
+        hand: when given, the hand's collision spheres at the proposal's pose (and with ``mesh``, its posed
+            collision meshes) travel with it, for viewers.
+        history: include the refinement's per-iteration record.
+    """
+    q = p.quality
+    quality = Quality(
+        success=bool(q.success), converged=bool(q.converged), reason=q.reason, iterations=int(q.iterations),
+        wrench_residual=_finite(q.wrench_residual), max_tip_distance=_finite(q.max_tip_distance),
+        penetration_depth=_finite(q.penetration_depth), self_collision_depth=_finite(q.self_collision_depth),
+        epsilon=None if q.epsilon is None or not np.isfinite(q.epsilon) else float(q.epsilon),
+        failures=list(q.failures), geometry=q.geometry,
+    )  # fmt: skip
+    records = None
+    if history and p.history is not None:
+        records = [IterationRecord(residual=_finite(h.residual), tip_distance=_finite(h.tip_distance),
+                                   step=_finite(h.step)) for h in p.history]  # fmt: skip
+    posed = None if p.palm_position is None else p.pose()  # no hand pose: a hand-free deformable's answer
+    spheres = posed_mesh = None
+    if hand is not None and posed is not None:
+        spheres = hand_spheres(hand, posed.palm_pos, posed.palm_quat, posed.q)
+        posed_mesh = hand_mesh(hand, posed.palm_pos, posed.palm_quat, posed.q) if mesh else None
+    return Proposal(
+        contact_points=np.asarray(p.contact_points, dtype=np.float64).reshape(-1, 3),
+        contact_normals=np.asarray(p.contact_normals, dtype=np.float64).reshape(-1, 3),
+        forces=np.asarray(p.forces, dtype=np.float64).reshape(-1, 3),
+        fingertips=list(p.fingertips),
+        palm_position=None if posed is None else posed.palm_pos.astype(np.float64),
+        palm_quaternion=None if posed is None else posed.palm_quat.astype(np.float64),
+        joint_names=list(p.joint_names),
+        joint_values=np.zeros(0) if posed is None else posed.q.astype(np.float64),
+        quality=quality,
+        contact_source=p.contact_source,
+        hand_spheres=spheres,
+        hand_mesh=posed_mesh,
+        history=records,
+        contact_motions=None if p.contact_motions is None else np.asarray(p.contact_motions, np.float64),
+        network_sample=p.network_sample,
+        network_forces=None if p.network_forces is None else np.asarray(p.network_forces, np.float64),
+        rollout_points=None if p.rollout_points is None else np.asarray(p.rollout_points, np.float64),
+        shape_error=None if p.shape_error is None else _finite(p.shape_error),
+    )
+
+
+def to_result(
+    output: SynthesisOutput, request: SynthesisRequest, model_version: str, hand: Hand | None = None
+) -> SynthesisResult:
+    """The wire result of ``output`` (maps and history only when the request asked for them).
+
+    With ``hand``, each proposal carries the hand's collision spheres at its pose.
+    """
+    options = request.options
+    proposals = [
+        to_proposal(p, hand, history=options.return_history, mesh=options.return_hand_mesh)
+        for p in output.proposals
+    ]
+    return SynthesisResult(
+        hand=output.hand,
+        model_version=model_version,
+        proposals=proposals,
+        heatmap=output.heatmap if options.return_heatmap and output.heatmap is not None else None,
+        heatmaps=output.heatmaps if options.return_all_heatmaps and output.heatmaps is not None else None,
+        force_map=output.force_map if options.return_force_map and output.force_map is not None else None,
+        timings={k: float(v) for k, v in output.timings.items()},
+    )

@@ -1,2 +1,0 @@
-"""Training the ManiFoundation network (`mani train`): config (`config`), loop, curves and checkpoints
-(`trainer`)."""

@@ -1,0 +1,453 @@
+"""`mani-lab bench faults`: what holds under faults and hostile load, measured (bounded in count and time, loopback
+only).
+
+Five scenarios, each on its own private processes (a `redis-server` on a free port with AOF in a temporary
+directory, `mani worker` / `mani serve` children), all killed at the end:
+
+- soak: N jobs through Redis with 2 workers (batch 4) while workers are killed (kill -9) and Redis is killed and
+  restarted: jobs lost (404), duplicated (two successful outcomes accepted by Redis, each readable by a caller),
+  ran twice (two successful runs, one outcome kept), stuck (not terminal at the end), failed, and the longest
+  redelivery delay (kill → the job's next start).
+- poison: a crashing job in every micro-batch of 4: how many jobs were dead-lettered, and whether all were poison.
+- large bodies: C concurrent valid bodies of S MB against `mani serve`: /healthz latency meanwhile, API RSS.
+- full queue: C concurrent posts (small and large bodies) against a full queue: 429 latency, timed by raw
+  sockets to the status line (`research.bench.probes`); large bodies both pushed at once and sent with
+  ``Expect: 100-continue`` (as curl does), which a refusal answers before any of the body is sent.
+- slow headers: connections sending their request head a byte at a time: how many the server closed, how soon.
+
+Why one module: five scenarios of one benchmark share their process and Redis helpers and one report table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import json
+import os
+import random
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+from research.bench.rss import rss_mb
+from research.bench.service import _free_port, request_body
+
+STAGED = "research.staged_pipeline:StagedPipeline"
+SCENARIOS = ("soak", "poison", "large_bodies", "full_queue", "slow_headers")
+EXAMPLE = """examples (the README's figures):
+  mani-lab bench faults --jobs 120 --kills 4 --restarts 2 --poison-batches 4 --bodies 100 --body-mb 8
+  mani-lab bench faults --only large_bodies,full_queue --bodies 100 --body-mb 50
+  mani-lab bench faults --only slow_headers --slow 300 --slow-interval 15 --slow-seconds 50
+  mani-lab bench faults --only full_queue --rounds 10 --checkouts ../base,.   # two versions side by side"""
+
+
+def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """Add ``faults`` to the ``mani-lab bench`` sub-commands."""
+    parser = subparsers.add_parser(
+        "faults",
+        help="soak with kills and Redis restarts, poison jobs, large bodies, full queue",
+        description=(__doc__ or "").splitlines()[0],
+        epilog=EXAMPLE,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument("--jobs", type=int, default=120, help="soak: jobs (120)")
+    parser.add_argument("--kills", type=int, default=4, help="soak: workers killed with kill -9 (4)")
+    parser.add_argument("--restarts", type=int, default=2, help="soak: Redis kill -9 + restarts (2)")
+    parser.add_argument("--poison-batches", type=int, default=4, help="poison: batches of 4 with one crasher (4)")
+    parser.add_argument("--bodies", type=int, default=100, help="large bodies / full-queue posts at once (100)")
+    parser.add_argument("--body-mb", type=float, default=8.0, help="size of each large body, MB (8; at most 55)")
+    parser.add_argument("--slow", type=int, default=100, help="slow headers: connections (100)")
+    parser.add_argument("--slow-interval", type=float, default=2.0, help="slow headers: s between bytes (2)")
+    parser.add_argument("--slow-seconds", type=float, default=30.0, help="slow headers: s watched (30)")
+    parser.add_argument("--rounds", type=int, default=1, help="full queue: bursts of each kind (1); medians reported")
+    parser.add_argument("--checkouts", metavar="DIRS",
+                        help="full queue: one service per checkout (comma-separated), side by side, bursts alternating")
+    parser.add_argument("--fsync", choices=("always", "everysec"), default="always",
+                        help="soak: the private Redis's appendfsync (always: no acknowledged write lost on kill -9)")
+    parser.add_argument("--only", default=",".join(SCENARIOS), help=f"scenarios to run ({','.join(SCENARIOS)})")
+    parser.add_argument("--budget", type=float, default=240.0, help="seconds per scenario at most (240)")
+    parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
+    parser.set_defaults(func=run)
+
+
+class RedisProcess:
+    """A private redis-server with AOF on a free port (``fsync``: its appendfsync; docker-compose keeps Redis's
+    default, everysec)."""
+
+    def __init__(self, directory: str, fsync: str = "always") -> None:
+        binary = shutil.which("redis-server")
+        if binary is None:
+            raise SystemExit("mani-lab bench faults: redis-server is not installed")
+        self.port = _free_port()
+        self.url = f"redis://127.0.0.1:{self.port}/0"
+        self.cmd = [binary, "--port", str(self.port), "--bind", "127.0.0.1", "--dir", directory, "--save", "",
+                    "--appendonly", "yes", "--appendfsync", fsync]  # fmt: skip
+        self.proc: subprocess.Popen[bytes] | None = None
+
+    def start(self) -> None:
+        import redis
+
+        self.proc = subprocess.Popen(self.cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        end = time.monotonic() + 20
+        while True:
+            with contextlib.suppress(redis.RedisError):
+                if redis.Redis.from_url(self.url, socket_connect_timeout=0.5).ping():
+                    return
+            if time.monotonic() > end:
+                raise RuntimeError("redis-server did not start")
+            time.sleep(0.05)
+
+    def kill(self) -> None:
+        if self.proc is not None and self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait(10)
+
+
+def _stop(proc: subprocess.Popen[bytes], grace: float = 30) -> None:
+    if proc.poll() is None:
+        proc.terminate()
+        try:
+            proc.wait(grace)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+
+
+def _workers(url: str, prefix: str, log: Path, options: dict[str, Any], **env: str) -> subprocess.Popen[bytes]:
+    environ = dict(os.environ, MANI_REDIS_URL=url, MANI_QUEUE_PREFIX=prefix, MANI_PIPELINE=STAGED,
+                   MANI_PIPELINE_OPTIONS=json.dumps(options), MANI_LOG_LEVEL="INFO", MANI_BATCH_SIZE="4",
+                   MANI_HEARTBEAT_INTERVAL="0.5", **env)  # fmt: skip
+    cmd = [sys.executable, "-m", "manifoundation.cli.main", "worker", "--concurrency", "2"]
+    return subprocess.Popen(cmd, env=environ, stdout=subprocess.DEVNULL, stderr=log.open("wb"))
+
+
+def _small(seed: int) -> Any:
+    from manifoundation.contract import SynthesisRequest
+
+    body = request_body(64, "test_gripper", "direct_grasp", seed)
+    body["options"]["max_iterations"] = 2
+    return SynthesisRequest.model_validate(body)
+
+
+async def _all_states(queue: Any, ids: list[str]) -> dict[str, Any]:
+    from manifoundation.server.queue import JobNotFound
+
+    out: dict[str, Any] = {}
+    for job_id in ids:
+        try:
+            out[job_id] = await queue.get(job_id, with_result=False)
+        except JobNotFound:
+            out[job_id] = None
+    return out
+
+
+async def soak(args: argparse.Namespace, directory: str) -> dict[str, Any]:
+    """N jobs, random kill -9 of busy workers and kill -9 + restart of Redis; see the module doc."""
+    from manifoundation.server.queue import QueueUnavailable, create_queue
+
+    server = RedisProcess(directory, args.fsync)
+    server.start()
+    log = Path(directory) / "soak-workers.log"
+    options = {"stage_seconds": 0.02, "iterations": 2}
+    workers = _workers(server.url, "soak:", log, options, MANI_MAX_DELIVERIES="5", MANI_VISIBILITY_TIMEOUT="30")
+    queue = create_queue(server.url, queue_prefix="soak:", max_queue=args.jobs + 10)
+    await queue.start()
+    rng = random.Random(0)
+    kills: list[tuple[float, str]] = []
+    try:
+        while len(await queue.workers()) < 2:
+            await asyncio.sleep(0.1)
+        ids = await queue.submit([_small(i) for i in range(args.jobs)])
+        t0, end = time.monotonic(), time.monotonic() + args.budget
+        events = ["kill"] * args.kills + ["restart"] * args.restarts
+        rng.shuffle(events)
+        pending, states = set(ids), {}
+        while time.monotonic() < end and pending:
+            await asyncio.sleep(rng.uniform(0.5, 1.5))
+            with contextlib.suppress(QueueUnavailable):
+                if events and events[0] == "restart":
+                    events.pop(0)
+                    server.kill()
+                    await asyncio.sleep(2.0)
+                    server.start()
+                elif events:
+                    busy = [w for w in await queue.workers() if w.current_job]
+                    if busy:
+                        victim = rng.choice(busy)
+                        with contextlib.suppress(ProcessLookupError):
+                            os.kill(victim.pid, signal.SIGKILL)
+                            kills.append((time.time(), victim.current_job or ""))
+                            events.pop(0)
+                states = await _all_states(queue, sorted(pending))
+                pending = {i for i, j in states.items() if j is not None and not j.state.terminal}
+        elapsed = time.monotonic() - t0
+        final = await _all_states(queue, ids)
+    finally:
+        await queue.close()
+        _stop(workers)
+        server.kill()
+    finished: Counter[str] = Counter()  # runs that ended in success
+    written: Counter[str] = Counter()  # successful outcomes Redis accepted (a caller could have read each)
+    for line in log.read_text().splitlines():
+        if line.startswith("{"):
+            entry = json.loads(line)
+            if entry.get("state") == "succeeded":
+                if entry.get("msg") == "job finished":
+                    finished[entry["job_id"]] += 1
+                elif entry.get("msg") == "outcome written":
+                    written[entry["job_id"]] += 1
+    delays = [final[j].started_at - t for t, j in kills if final.get(j) and (final[j].started_at or 0) > t]
+    return {
+        "jobs": args.jobs, "kills": len(kills), "restarts": args.restarts, "seconds": round(elapsed, 1),
+        "lost": sum(j is None for j in final.values()),
+        "stuck": sum(j is not None and not j.state.terminal for j in final.values()),
+        "failed": sum(j is not None and j.state.value == "failed" for j in final.values()),
+        "fsync": args.fsync, "duplicated": sum(n > 1 for n in written.values()),
+        "ran_twice": sum(n > 1 for n in finished.values()),
+        "max_redelivery_s": round(max(delays), 2) if delays else None,
+    }  # fmt: skip
+
+
+async def poison(args: argparse.Namespace, directory: str) -> dict[str, Any]:
+    """A crashing job (seed 666) first in every batch of 4, queued before the workers start."""
+    from manifoundation.server.queue import create_queue
+
+    server = RedisProcess(directory)
+    server.start()
+    queue = create_queue(server.url, queue_prefix="poison:")
+    await queue.start()
+    seeds = [666 if i % 4 == 0 else i for i in range(4 * args.poison_batches)]
+    ids = await queue.submit([_small(s) for s in seeds])
+    t0 = time.monotonic()
+    workers = _workers(server.url, "poison:", Path(directory) / "poison-workers.log", {"crash_seed": 666})
+    try:
+        jobs = await asyncio.gather(*(queue.wait(i, args.budget) for i in ids))
+        dead = {d.job_id for d in await queue.dead_letters(limit=1000)}
+    finally:
+        await queue.close()
+        _stop(workers)
+        server.kill()
+    poisoned = {i for i, s in zip(ids, seeds, strict=True) if s == 666}
+    return {
+        "jobs": len(ids), "poison": len(poisoned), "dead_lettered": len(dead), "only_poison": dead == poisoned,
+        "innocent_succeeded": sum(j.state.value == "succeeded" for j in jobs if j.id not in poisoned),
+        "seconds": round(time.monotonic() - t0, 1),
+    }  # fmt: skip
+
+
+def _serve(
+    max_queue: int, stage_seconds: float, checkout: str | None = None, **env: str
+) -> tuple[subprocess.Popen[bytes], str]:
+    """`mani serve` on the staged pipeline; ``checkout``: run that directory's code (PYTHONPATH and working
+    directory: ``python -m`` puts the latter first on sys.path)."""
+    import httpx
+
+    port = _free_port()
+    environ = dict(os.environ, MANI_PIPELINE=STAGED, MANI_PIPELINE_OPTIONS=json.dumps({"stage_seconds": stage_seconds}),
+                   MANI_MAX_QUEUE=str(max_queue), MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING",
+                   MANI_CONCURRENCY="1", MANI_BODY_TIMEOUT="120", **env)  # fmt: skip
+    environ.pop("MANI_REDIS_URL", None)
+    if checkout:
+        environ["PYTHONPATH"] = checkout
+    cmd = [sys.executable, "-m", "manifoundation.cli.main", "serve", "--port", str(port), "--no-grpc"]
+    proc = subprocess.Popen(cmd, env=environ, cwd=checkout, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    base = f"http://127.0.0.1:{port}"
+    end = time.monotonic() + 120
+    while time.monotonic() < end:
+        with contextlib.suppress(httpx.HTTPError):
+            if httpx.get(f"{base}/readyz", timeout=2).status_code == 200:
+                return proc, base
+        time.sleep(0.2)
+    _stop(proc)
+    raise RuntimeError("mani serve did not become ready")
+
+
+# bytes per point of each body layout: rounded points + normals; full-precision points, normals and a per-point
+# motion task; the same pretty-printed (indent 1), as some clients send it. The smallest that reaches the size.
+_LAYOUTS = ((60.0, False, None), (203.0, True, None), (263.0, True, 1))
+
+
+def _large_body(mb: float) -> bytes:
+    """A valid request of about ``mb`` MB (at most 200 000 points: ≈ 12 MB compact, 41 MB full precision with a
+    point-motion task, 53 MB of that pretty-printed)."""
+    import numpy as np
+
+    per_point, full, indent = next((layout for layout in _LAYOUTS if mb * 1e6 / layout[0] <= 200_000), _LAYOUTS[-1])
+    n = min(200_000, max(64, int(mb * 1e6 / per_point)))
+    rng = np.random.default_rng(0)
+    p = rng.normal(size=(n, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    body = request_body(64, "test_gripper", "direct_grasp")
+    if full:
+        body["object"] = {"points": (0.04 * p).tolist(), "normals": p.tolist()}
+        body["task"] = {"kind": "point_motion", "motion": (0.01 * rng.normal(size=(n, 3))).tolist()}
+    else:
+        body["object"] = {"points": (0.04 * p).round(6).tolist(), "normals": p.round(6).tolist()}
+    return json.dumps(body, indent=indent).encode()
+
+
+def _pct(values: list[float], q: float) -> float | None:
+    from manifoundation.server.api.dashboard import percentile
+
+    found = percentile(values, q)
+    return None if found is None else round(found * 1000, 1)
+
+
+async def _posts(base: str, bodies: list[bytes], timeout: float) -> list[tuple[int, float]]:
+    import httpx
+
+    async with httpx.AsyncClient(base_url=base, timeout=timeout, limits=httpx.Limits(max_connections=1000)) as http:
+
+        async def one(data: bytes) -> tuple[int, float]:
+            t0 = time.perf_counter()
+            try:
+                answer = await http.post("/v1/jobs", content=data, headers={"Content-Type": "application/json"})
+                return answer.status_code, time.perf_counter() - t0
+            except httpx.HTTPError:
+                return 0, time.perf_counter() - t0
+
+        return await asyncio.gather(*(one(b) for b in bodies))
+
+
+async def large_bodies(args: argparse.Namespace) -> dict[str, Any]:
+    """``--bodies`` concurrent bodies of ``--body-mb`` MB; /healthz polled every 20 ms meanwhile by a process of
+    its own (this one is busy uploading), API RSS sampled every 20 ms."""
+    import httpx
+
+    from research.bench.probes import health_probe
+
+    data = _large_body(args.body_mb)
+    proc, base = _serve(max_queue=10 * args.bodies, stage_seconds=0.0)
+    try:
+        with health_probe(f"{base}/healthz") as health:
+            posting = asyncio.ensure_future(_posts(base, [data] * args.bodies, args.budget))
+            peak = 0.0
+            while not posting.done():
+                peak = max(peak, rss_mb(proc.pid).get("VmRSS", 0.0))
+                await asyncio.sleep(0.02)
+            answers = posting.result()
+        after = rss_mb(proc.pid)
+        async with httpx.AsyncClient(base_url=base, timeout=60) as http:
+            queued = (await http.get("/dashboard/data")).json()["stats"]["depth"]
+            end = time.monotonic() + args.budget
+            while (await http.get("/dashboard/data")).json()["stats"]["depth"] and time.monotonic() < end:
+                await asyncio.sleep(0.5)
+            await asyncio.sleep(1.0)
+            drained = rss_mb(proc.pid)
+    finally:
+        _stop(proc)
+    return {
+        "bodies": args.bodies, "body_mb": round(len(data) / 1e6, 1), "answers": dict(Counter(s for s, _ in answers)),
+        "healthz_p50_ms": _pct(health, 0.5), "healthz_p99_ms": _pct(health, 0.99),
+        "healthz_max_ms": _pct(health, 1.0), "api_rss_peak_mb": round(max(peak, after.get("VmHWM", 0.0)), 0),
+        "api_rss_after_mb": round(after.get("VmRSS", 0.0), 0), "queued_after": queued,
+        "api_rss_drained_mb": round(drained.get("VmRSS", 0.0), 0),
+        "seconds": round(max((t for _, t in answers), default=0.0), 1),
+    }  # fmt: skip
+
+
+async def full_queue(args: argparse.Namespace) -> dict[str, Any]:
+    """The queue full (10 slow jobs), then ``--bodies`` posts at once of a small body, of a large one pushed at
+    once, and of a large one sent with ``Expect: 100-continue``: 429 latency to the status line, the median over
+    ``--rounds`` bursts of each burst's p50 and p99; with ``--checkouts``, one service per checkout, side by side,
+    their bursts alternating."""
+    import statistics
+
+    import httpx
+
+    from research.bench.probes import raw_posts
+
+    checkouts = args.checkouts.split(",") if args.checkouts else [None]
+    small = json.dumps(request_body(256, "test_gripper", "direct_grasp")).encode()
+    large = _large_body(args.body_mb)
+    servers = []
+    json_type = {"Content-Type": "application/json"}
+    try:
+        for checkout in checkouts:
+            servers.append(_serve(max_queue=10, stage_seconds=30.0, checkout=checkout))
+            with httpx.Client(base_url=servers[-1][1], timeout=30, headers=json_type) as http:
+                while http.post("/v1/jobs", content=small).status_code == 202:
+                    pass
+        figures: dict[str, dict[str, Any]] = {}
+        kinds = (("small", small, False), ("large", large, False), ("large_expect", large, True))
+        for name, data, expect in kinds:
+            bursts: dict[str, list[tuple[int, float | None, float | None]]] = {str(c): [] for c in checkouts}
+            for _ in range(args.rounds):
+                for checkout, (_, base) in zip(checkouts, servers, strict=True):
+                    host, port = base.split("//")[1].rsplit(":", 1)
+                    answers = await raw_posts(host, int(port), "/v1/jobs", data, args.bodies, args.budget,
+                                              expect=expect)  # fmt: skip
+                    refused = [t for s, t in answers if s == 429]
+                    bursts[str(checkout)].append((len(refused), _pct(refused, 0.5), _pct(refused, 0.99)))
+            for checkout, runs in bursts.items():
+                out = figures.setdefault(checkout, {"max_queue": 10, "posts": args.bodies, "rounds": args.rounds,
+                                                    "large_mb": round(len(large) / 1e6, 1)})  # fmt: skip
+                out[f"{name}_429"] = min(n for n, _, _ in runs)
+                for q, values in (("p50", [r[1] for r in runs]), ("p99", [r[2] for r in runs])):
+                    known = [v for v in values if v is not None]
+                    out[f"{name}_{q}_ms"] = round(statistics.median(known), 1) if known else None
+    finally:
+        for proc, _ in servers:
+            _stop(proc)
+    return figures["None"] if checkouts == [None] else figures
+
+
+async def slow_headers(args: argparse.Namespace) -> dict[str, Any]:
+    """``--slow`` connections sending their head a byte every ``--slow-interval`` s for ``--slow-seconds``: how
+    many were closed and when; /healthz on a fresh connection meanwhile."""
+    import httpx
+
+    from research.bench.probes import slow_headers as probe
+
+    proc, base = _serve(max_queue=10, stage_seconds=0.0)
+    host, port = base.split("//")[1].rsplit(":", 1)
+    try:
+        watching = asyncio.ensure_future(probe(host, int(port), args.slow, args.slow_interval, args.slow_seconds))
+        health: list[float] = []
+        async with httpx.AsyncClient(base_url=base, timeout=10) as http:
+            while not watching.done():
+                t0 = time.perf_counter()
+                if (await http.get("/healthz")).status_code == 200:
+                    health.append(time.perf_counter() - t0)
+                await asyncio.sleep(0.25)
+        closed, after = watching.result()
+    finally:
+        _stop(proc)
+    return {
+        "connections": args.slow, "byte_every_s": args.slow_interval, "watched_s": args.slow_seconds,
+        "closed": closed, "closed_after_max_s": round(max(after), 1) if after else None,
+        "healthz_ok": len(health), "healthz_p99_ms": _pct(health, 0.99),
+    }  # fmt: skip
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the scenarios (``--only``) and print a table of what held."""
+    figures: dict[str, Any] = {}
+    chosen = [name for name in SCENARIOS if name in args.only.split(",")]
+    with tempfile.TemporaryDirectory(prefix="mani-bench-faults-") as directory:
+        scenarios = {
+            "soak": lambda: soak(args, tempfile.mkdtemp(dir=directory)),
+            "poison": lambda: poison(args, tempfile.mkdtemp(dir=directory)),
+            "large_bodies": lambda: large_bodies(args),
+            "full_queue": lambda: full_queue(args),
+            "slow_headers": lambda: slow_headers(args),
+        }
+        for name in chosen:
+            figures[name] = asyncio.run(scenarios[name]())
+            print(f"{name}: {figures[name]}", flush=True)
+    print()
+    print("| scenario | figures |")
+    print("|---|---|")
+    for name, values in figures.items():
+        print(f"| {name} | " + ", ".join(f"{k} {v}" for k, v in values.items()) + " |")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(figures, indent=2))
+    return 0

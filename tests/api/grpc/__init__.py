@@ -1,0 +1,1 @@
+"""Tests of the gRPC front end (`manifoundation.server.api.grpc`)."""

@@ -1,1 +1,0 @@
-"""Tests of the gRPC front end (`service.grpc`)."""

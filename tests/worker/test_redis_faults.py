@@ -1,0 +1,150 @@
+"""The Redis backend under faults, each on a private redis-server: Redis restarts while jobs run (with AOF),
+a poison job among innocent batch-mates, a dead worker's jobs redelivered by heartbeat, a hung (SIGSTOPped)
+Redis."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import signal
+import time
+from pathlib import Path
+
+import pytest
+
+from manifoundation.contract import JobState
+from manifoundation.server.queue import QueueUnavailable, create_queue
+from manifoundation.server.queue.redis import RedisQueue
+
+from .helpers import (
+    assert_only_the_poison_dead_lettered,
+    live_workers,
+    redis_workers,
+    run,
+    running,
+    small_request,
+    until,
+)
+from .redis_server import redis_server
+
+FAST = {"heartbeat_interval": 0.2, "visibility_timeout": 1.5}
+
+
+def client(url: str, **options: object) -> RedisQueue:
+    queue = create_queue(url, queue_prefix="mani:", **options)
+    assert isinstance(queue, RedisQueue)
+    return queue
+
+
+@pytest.mark.parametrize(
+    "sig", [signal.SIGTERM, pytest.param(signal.SIGKILL, marks=pytest.mark.slow)], ids=["sigterm", "kill-9"]
+)  # the same recovery path; kill -9 in the slow run
+def test_jobs_running_through_a_redis_restart_finish(tmp_path: Path, sig: int) -> None:
+    """Redis (AOF) goes away while a batch runs and comes back: the worker writes the results it could not
+    write while Redis was down; nothing stays "running" and nothing runs twice."""
+
+    async def main() -> None:
+        with redis_server(tmp_path, appendonly=True) as server:
+            queue = client(server.url)
+            await queue.start()
+            options = {"stage_seconds": 0.1, "iterations": 3}
+            with redis_workers(server.url, "mani:", pipeline_options=options, batch_size=4, **FAST):
+                try:
+                    await live_workers(queue, 1)
+                    ids = await queue.submit([small_request(i) for i in range(4)])
+                    await asyncio.gather(*(until(queue, i, running) for i in ids))
+                    server.stop(sig)
+                    await asyncio.sleep(3.0)  # the batch (≈ 2 s) ends while Redis is down
+                    server.start()
+                    jobs = await asyncio.gather(*(queue.wait(i, 20) for i in ids))
+                    assert [(j.state, j.deliveries) for j in jobs] == [(JobState.SUCCEEDED, 1)] * 4
+                finally:
+                    await queue.close()
+
+    run(main())
+
+
+@pytest.mark.slow  # the embedded twin (tests/worker/test_embedded.py) holds the same rule in the default suite
+def test_poison_job_fails_no_batch_mate(tmp_path: Path) -> None:
+    """A job that kills its worker in a micro-batch of 4: only it is dead-lettered; its batch-mates are
+    re-delivered one at a time, run alone and succeed."""
+
+    async def main() -> None:
+        with redis_server(tmp_path) as server:
+            queue = client(server.url)
+            await queue.start()
+            try:
+                ids = await queue.submit([small_request(s) for s in (1, 2, 666, 3)])  # queued before any worker
+                opts = {"crash_seed": 666}
+                with redis_workers(server.url, "mani:", pipeline_options=opts, batch_size=4, **FAST):
+                    jobs = await asyncio.gather(*(queue.wait(i, 90) for i in ids))
+                await assert_only_the_poison_dead_lettered(queue, list(jobs), ids[2])
+            finally:
+                await queue.close()
+
+    run(main())
+
+
+@pytest.mark.slow  # the API's twin (tests/api/test_faults.py: a hung Redis gives 503) runs in the default suite
+def test_a_hung_redis_answers_unavailable_within_the_timeout(tmp_path: Path) -> None:
+    """SIGSTOPped Redis (the port open, nothing answering): every call fails with QueueUnavailable within
+    OP_ROUNDS × redis_timeout, and the queue works again once Redis resumes."""
+
+    async def main() -> None:
+        with redis_server(tmp_path) as server:
+            queue = client(server.url, redis_timeout=0.5)
+            await queue.start()
+            try:
+                [job_id] = await queue.submit([small_request()])
+                server.pause()
+                t0 = time.monotonic()
+                assert not await queue.ping()
+                assert time.monotonic() - t0 < 1.5
+                calls = {
+                    "submit": queue.submit([small_request()]),
+                    "get": queue.get(job_id),
+                    "list_recent": queue.list_recent(10),
+                    "stats": queue.stats(),
+                    "list_robots": queue.list_robots(),
+                    "room": queue.room(),
+                }
+                for name, call in calls.items():
+                    t0 = time.monotonic()
+                    with pytest.raises(QueueUnavailable):
+                        await call
+                    assert time.monotonic() - t0 < 2.5, name
+                server.resume()
+                assert (await queue.get(job_id)).state is JobState.QUEUED
+                assert len(await queue.submit([small_request()])) == 1
+            finally:
+                server.resume()
+                await queue.close()
+
+    run(main())
+
+
+def test_a_dead_workers_job_is_redelivered_by_heartbeat_not_visibility_timeout(tmp_path: Path) -> None:
+    """kill -9 of the worker running a job, visibility timeout 60 s: a live worker sees the dead one's heartbeat
+    key expire (1 s here) and takes the job over within seconds."""
+
+    async def main() -> None:
+        with redis_server(tmp_path) as server:
+            queue = client(server.url)
+            await queue.start()
+            slow = {"stage_seconds": 0.2, "iterations": 10}
+            settings = {"heartbeat_interval": 0.2, "visibility_timeout": 60, "batch_size": 1}
+            with redis_workers(server.url, "mani:", 2, pipeline_options=slow, **settings):
+                try:
+                    await live_workers(queue, 2)
+                    [job_id] = await queue.submit([small_request(1, max_iterations=3)])
+                    job = await until(queue, job_id, running)
+                    victim = next(w for w in await queue.workers() if w.id == job.worker)
+                    os.kill(victim.pid, signal.SIGKILL)
+                    t0 = time.monotonic()
+                    job = await queue.wait(job_id, 30)
+                    assert job.state is JobState.SUCCEEDED and job.deliveries == 2 and job.worker != victim.id
+                    assert time.monotonic() - t0 < 10, "re-delivered by the visibility timeout, not the heartbeat"
+                finally:
+                    await queue.close()
+
+    run(main())
