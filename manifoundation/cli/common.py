@@ -161,18 +161,28 @@ def print_json(data: Any) -> None:
     sys.stdout.flush()
 
 
+TABLE_WIDTH = 100
+"""Columns a table may use when the output is not a terminal (a pipe or a file: rich would assume 80)."""
+
+
 def stderr_console() -> Any:
     """A rich console on stderr (progress and tables never mix with ``--json`` output on stdout)."""
     from rich.console import Console
 
-    return Console(stderr=True)
+    console = Console(stderr=True)
+    if not console.is_terminal:
+        console.width = TABLE_WIDTH
+    return console
 
 
 def stdout_console() -> Any:
     """A rich console on stdout for human-readable output."""
     from rich.console import Console
 
-    return Console()
+    console = Console()
+    if not console.is_terminal:
+        console.width = TABLE_WIDTH
+    return console
 
 
 __all__ = [

@@ -182,25 +182,28 @@ def wait_with_progress(job: Any, timeout: float, show: bool) -> Any:
 
 def result_table(result: SynthesisResult) -> Any:
     """A rich table of the proposals' quality figures."""
+    from rich import box
     from rich.table import Table
 
-    table = Table(title=f"{result.hand or 'contacts for any gripper'} · model {result.model_version}")
+    title = f"{result.hand or 'contacts for any gripper'} · model {result.model_version}"
+    table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False, padding=(0, 1, 0, 0))
     if any(p.contact_motions is not None for p in result.proposals):
         return _deformable_rows(table, result)
-    for column in ("#", "ok", "reason", "iter", "residual", "tip mm", "pen. mm", "ε", "palm (m)"):
-        table.add_column(column, justify="right" if column not in ("ok", "reason") else "left")
+    for column in ("#", "ok", "reason", "from", "iter", "residual", "tip mm", "pen mm", "ε", "palm x y z (m)"):
+        table.add_column(column, justify="left" if column in ("ok", "reason", "from") else "right", no_wrap=True)
     for i, p in enumerate(result.proposals):
         q = p.quality
         table.add_row(
             str(i),
             "[green]yes[/]" if q.success else "[red]no[/]",
             q.reason,
+            p.contact_source or "-",
             str(q.iterations),
             f"{q.wrench_residual:.1e}",
             f"{q.max_tip_distance * 1e3:.1f}",
             f"{q.penetration_depth * 1e3:.1f}",
             "-" if q.epsilon is None else f"{q.epsilon:.3f}",
-            "-" if p.palm_position is None else ", ".join(f"{v:+.3f}" for v in p.palm_position),
+            "-" if p.palm_position is None else " ".join(f"{v:+.3f}" for v in p.palm_position),
         )
     return table
 

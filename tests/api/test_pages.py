@@ -68,6 +68,7 @@ def test_viewer_draws_the_result(service: str) -> None:
     dom = dump_dom(url, budget_ms=4000)
     assert "could not load" not in dom
     assert "Ferrari–Canny ε" in dom and "converged" in dom and "fake_hand" in dom
+    assert "proposal 0" in dom and "proposal 1" not in dom  # numbered as the CLI and `result.proposals[i]`
     assert "gl-container" in dom and "3D view unavailable" not in dom  # plotly's WebGL scene was drawn
     png = screenshot(url, "viewer.png", budget_ms=4000)
     assert png.stat().st_size > 10_000

@@ -1,5 +1,6 @@
-"""The two distributions of this repository agree: one version, one copy of `clients`, and the client
-distribution declares every library its package imports (distributions/client/pyproject.toml)."""
+"""The two distributions of this repository agree: one version, one copy of the client packages
+(`manifoundation.contract`, `.sdk`, `.cli`), and the client distribution declares every library they import
+(distributions/client/pyproject.toml)."""
 
 from __future__ import annotations
 
@@ -14,8 +15,9 @@ ROOT = Path(__file__).resolve().parents[2]
 CLIENT = tomllib.loads((ROOT / "distributions" / "client" / "pyproject.toml").read_text())["project"]
 SERVER = tomllib.loads((ROOT / "pyproject.toml").read_text())
 CLIENT_COMMANDS = {"synthesize", "batch", "jobs", "robots"}
+CLIENT_PACKAGES = ("manifoundation/contract", "manifoundation/sdk", "manifoundation/cli")
 VIA = {"pydantic-core": "pydantic"}
-"""Libraries `clients` imports that come with a declared one (pydantic pins its core exactly)."""
+"""Libraries the client packages import that come with a declared one (pydantic pins its core exactly)."""
 
 
 def _name(requirement: str) -> str:
@@ -29,8 +31,9 @@ def test_one_version_and_the_server_requires_exactly_it() -> None:
     assert pins == [f"{CLIENT['name']}[grpc,view,mesh]=={CLIENT['version']}"]
 
 
-def test_clients_ships_once() -> None:
-    assert not any(p.startswith("clients") for p in SERVER["tool"]["setuptools"]["packages"]["find"]["include"])
+def test_the_client_packages_ship_once() -> None:
+    server_packages = SERVER["tool"]["setuptools"]["packages"]["find"]["include"]
+    assert server_packages == ["manifoundation.core*", "manifoundation.server*"]
     assert "scripts" not in SERVER["project"]  # `mani` is the client distribution's
     assert CLIENT["scripts"] == {"mani": "manifoundation.cli.main:main"}
 
@@ -45,9 +48,11 @@ def test_each_command_is_registered_by_the_distribution_that_ships_its_module() 
 
 
 def _third_party_imports() -> dict[str, set[str]]:
-    """Top-level module → the files of `clients` that import it (stdlib and `clients` itself left out)."""
+    """Top-level module → the client packages' files that import it (stdlib and `manifoundation` left out)."""
     found: dict[str, set[str]] = {}
-    for path in (ROOT / "clients").rglob("*.py"):
+    paths = [path for package in CLIENT_PACKAGES for path in (ROOT / package).rglob("*.py")]
+    assert len(paths) > 40, "the client packages were not found"
+    for path in paths:
         for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
             names = []
             if isinstance(node, ast.Import):
@@ -56,12 +61,12 @@ def _third_party_imports() -> dict[str, set[str]]:
                 names = [node.module]
             for name in names:
                 top = name.partition(".")[0]
-                if top not in sys.stdlib_module_names and top not in ("clients", "__future__"):
+                if top not in sys.stdlib_module_names and top not in ("manifoundation", "__future__"):
                     found.setdefault(top, set()).add(str(path.relative_to(ROOT)))
     return found
 
 
-def test_every_library_clients_imports_is_a_dependency_of_the_client_distribution() -> None:
+def test_every_library_the_client_imports_is_a_dependency_of_the_client_distribution() -> None:
     declared = {_name(r) for r in CLIENT["dependencies"]}
     for requirements in CLIENT["optional-dependencies"].values():
         declared |= {_name(r) for r in requirements}
@@ -72,5 +77,5 @@ def test_every_library_clients_imports_is_a_dependency_of_the_client_distributio
         if not names & declared:
             undeclared[module] = sorted(files)
     assert not undeclared, (
-        f"imported by manifoundation/contract/ but not declared in distributions/client: {undeclared}"
+        f"imported by the client packages but not declared in distributions/client: {undeclared}"
     )

@@ -32,13 +32,13 @@ from tests.api.server import free_port
 
 pytestmark = pytest.mark.slow
 ROOT = Path(__file__).resolve().parents[2]
-SERVER_PACKAGES = {"torch", "service", "workers", "models", "lab", "fastapi", "uvicorn"}
+SERVER_PACKAGES = {"torch", "manifoundation.server", "manifoundation.core", "research", "fastapi", "uvicorn"}
 MAX_INSTALL_S = 90.0  # goal: well under a minute from the local wheel cache
 MAX_VENV_MB = 150.0
 PROBE = """import atexit, json, os, sys
 def _dump():
     with open(os.environ["MANI_PROBE_OUT"], "a") as out:
-        out.write(json.dumps({"argv": sys.argv, "modules": sorted({m.partition(".")[0] for m in sys.modules})}) + "\\n")
+        out.write(json.dumps({"argv": sys.argv, "modules": sorted(sys.modules)}) + "\\n")
 atexit.register(_dump)
 """
 
@@ -104,21 +104,42 @@ def _venv_megabytes(venv: Path) -> float:
     return int(du) / 1024
 
 
-def test_the_server_wheel_ships_no_clients_and_requires_the_client_wheel(wheels: Path) -> None:
+def _record(wheel: Path) -> list[str]:
+    """The files a wheel installs, from its RECORD (what `pip install` writes into site-packages)."""
+    with zipfile.ZipFile(wheel) as archive:
+        record = archive.read(next(n for n in archive.namelist() if n.endswith(".dist-info/RECORD"))).decode()
+    return [line.split(",")[0] for line in record.splitlines() if line]
+
+
+def test_each_wheel_adds_one_top_level_package_and_the_server_wheel_no_research(wheels: Path) -> None:
     (server,) = wheels.glob("manifoundation-*.whl")
     (client,) = wheels.glob("manifoundation_client-*.whl")
     assert len(list(wheels.glob("*.tar.gz"))) == 2
+    for wheel in (server, client):
+        tops = {name.split("/")[0] for name in _record(wheel) if ".dist-info/" not in name}
+        assert tops == {"manifoundation"}, f"{wheel.name} installs {sorted(tops)}"
+        assert "manifoundation/__init__.py" not in _record(wheel)  # a namespace shared by the two wheels
+    server_files = _record(server)
+    assert {n.split("/")[1] for n in server_files if n.startswith("manifoundation/")} == {"core", "server"}
+    assert not [n for n in server_files if "research" in n.split("/")[:3] or "/bench" in n]
+    assert "manifoundation/core/weights/cpu1k/model.safetensors" in server_files
+
+
+def test_the_server_wheel_ships_no_client_code_and_requires_the_client_wheel(wheels: Path) -> None:
+    (server,) = wheels.glob("manifoundation-*.whl")
+    (client,) = wheels.glob("manifoundation_client-*.whl")
     with zipfile.ZipFile(server) as archive:
         names = archive.namelist()
         metadata = archive.read(next(n for n in names if n.endswith(".dist-info/METADATA"))).decode()
-    assert not any(n.startswith("manifoundation/contract/") for n in names) and any(
-        n.startswith("manifoundation/server/api/") for n in names
-    )
+    assert not any(n.startswith(("manifoundation/contract/", "manifoundation/sdk/", "manifoundation/cli/"))
+                   for n in names)  # fmt: skip
+    assert any(n.startswith("manifoundation/server/api/") for n in names)
     version = client.name.split("-")[1]
     assert re.search(rf"^Requires-Dist: manifoundation-client\[[a-z,]+\]=={re.escape(version)}$", metadata, re.M)
     with zipfile.ZipFile(client) as archive:
-        shipped = {n for n in archive.namelist() if n.startswith("manifoundation/contract/")}
-    tracked = run(["git", "ls-files", "clients"], timeout=60, cwd=ROOT).stdout.split()
+        shipped = {n for n in archive.namelist() if n.startswith("manifoundation/")}
+    client_dirs = ["manifoundation/contract", "manifoundation/sdk", "manifoundation/cli"]
+    tracked = run(["git", "ls-files", *client_dirs], timeout=60, cwd=ROOT).stdout.split()
     assert shipped == {n for n in tracked if Path(n).suffix in {".py", ".pyi", ".proto", ".typed"}}
 
 
@@ -142,8 +163,9 @@ def test_the_client_wheel_alone_runs_the_quickstart(wheels: Path, server: tuple[
     probe_out = tmp_path / "modules.jsonl"
     env = {**clean, "PYTHONPATH": str(tmp_path / "probe"), "MANI_URL": url, "MANI_PROBE_OUT": str(probe_out)}
 
-    where = run([str(python), "-c", "import clients, importlib.util as u; print(manifoundation.contract.__file__);"
-                 "print(sorted(m for m in ('torch', 'service', 'models') if u.find_spec(m)))"],
+    where = run([str(python), "-c", "import manifoundation.contract as c, importlib.util as u; print(c.__file__);"
+                 "print(sorted(m for m in ('torch', 'manifoundation.server', 'manifoundation.core')"
+                 " if u.find_spec(m)))"],
                 timeout=60, cwd=work, env=env).stdout.split("\n")  # fmt: skip
     assert where[0].startswith(str(venv)) and where[1] == "[]", where
 

@@ -189,3 +189,24 @@ def test_corrections_ask_for_rollout_corrections(object_file: Path) -> None:
     assert build_request(args).options.rollout_corrections == 4
     args = build_parser().parse_args(["synthesize", str(object_file), "--rollout"])
     assert build_request(args).options.rollout_corrections == 0
+
+
+def test_the_proposal_table_fits_100_columns_with_the_contact_source(object_points: np.ndarray) -> None:
+    """Piped output (not a terminal) is laid out for 100 columns, nothing cut: source, ε and the palm in full."""
+    import io
+
+    from rich.console import Console
+
+    from manifoundation.cli.synthesize import result_table
+    from tests.api.fakes import fake_result
+
+    request = make_request(object_from_points(object_points), "force_closure", HAND)
+    result = fake_result(request)
+    best = result.proposals[0].model_copy(update={"contact_source": "random_fallback"})
+    result = result.model_copy(update={"proposals": [best, best]})
+    out = io.StringIO()
+    Console(file=out, width=common.TABLE_WIDTH, color_system=None).print(result_table(result))
+    lines = out.getvalue().splitlines()
+    assert max(len(line) for line in lines) <= 100
+    palm = " ".join(f"{v:+.3f}" for v in best.palm_position)
+    assert sum("random_fallback" in line and "0.100" in line and palm in line for line in lines) == 2

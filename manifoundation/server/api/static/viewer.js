@@ -146,10 +146,10 @@ function draw(scene, index) {
   const proposal = result && result.proposals.length ? result.proposals[index] : null;
   if (proposal) {
     const q = proposal.quality;
-    rows("quality", [["success", q.success], ["contacts from", proposal.contact_source || "-"], ["converged", q.converged], ["reason", q.reason],
+    rows("quality", [["verified", q.success ? "yes" : "no"], ["reason", q.reason], ["contacts from", proposal.contact_source || "-"],
       ["iterations", q.iterations], ["wrench residual", fmt(q.wrench_residual)],
       ["max tip distance (m)", fmt(q.max_tip_distance)], ["penetration (m)", fmt(q.penetration_depth)],
-      ["self-collision (m)", fmt(q.self_collision_depth)], ["Ferrari–Canny ε", fmt(q.epsilon)],
+      ["self-collision (m)", fmt(q.self_collision_depth)], ["Ferrari–Canny ε", q.epsilon == null ? "- (not computed)" : fmt(q.epsilon)],
       ["verified on", q.geometry || "-"], ["failed criteria", (q.failures || []).join(", ") || "-"],
       ...(proposal.shape_error == null ? [] : [["shape error (2 m cube)", fmt(proposal.shape_error)]])]);
     rows("hand", proposal.palm_position ? [["hand", result.hand],
@@ -188,7 +188,7 @@ async function load() {
     }
     const select = document.getElementById("proposal");
     const n = job.result ? job.result.proposals.length : 0;
-    select.replaceChildren(...Array.from({ length: n }, (_, i) => new Option("proposal " + (i + 1), String(i))));
+    select.replaceChildren(...Array.from({ length: n }, (_, i) => new Option("proposal " + i, String(i))));
     select.onchange = () => draw(scene, Number(select.value));
     draw(scene, 0);
     if (!["succeeded", "failed", "cancelled", "expired"].includes(job.state)) setTimeout(load, 1000);
