@@ -1,8 +1,10 @@
 """Network configurations: one frozen dataclass per variant, kept in a small registry (timm style).
 
-``paper`` reproduces the size the paper reports (about 5 M parameters); ``cpu`` is the smaller shipped default,
-sized by measurement with ``mani-lab bench network`` (see the README for the figures). Look a configuration up
-with :func:`get_config`; build a model with :func:`manifoundation.core.network.model.create_model`.
+``paper`` reproduces the size the paper reports (about 5 M parameters); ``cpu`` is a smaller one sized by
+measurement with ``mani-lab bench network``, ``cpu1k`` the same on 1 024 points, and the shipped weights'
+configuration is ``cpu1k_deformable_slide_frame`` (``cpu1k`` with the deformable head; its model card names it).
+Look a configuration up with :func:`get_config`; build a model with
+:func:`manifoundation.core.network.model.create_model`.
 """
 
 from __future__ import annotations
@@ -183,7 +185,7 @@ def paper() -> NetworkConfig:
 
 @register_config
 def cpu() -> NetworkConfig:
-    """The shipped default, sized for the latency goals on 2 CPU cores (``mani-lab bench network``).
+    """The CPU configuration, sized for the latency goals on 2 CPU cores (``mani-lab bench network``).
 
     Against the dataclass defaults, measured per object (N = 2048, batch 8, 1 thread, CPU time): no norm
     inside the grouped layers, 16 neighbours at level 1, a 64-wide ε^o and narrower decoders took the cost

@@ -9,7 +9,6 @@ science pipeline is installed, ``test_direct_grasp_with_a_built_in_hand`` also r
 from __future__ import annotations
 
 import contextlib
-import importlib.util
 import socket
 import threading
 import time
@@ -129,8 +128,6 @@ def test_batch_through_worker_processes(url: str) -> None:
 @pytest.mark.slow
 @pytest.mark.timeout(900)
 def test_direct_grasp_with_a_built_in_hand() -> None:
-    if importlib.util.find_spec("manifoundation.server.worker.models_pipeline") is None:
-        pytest.skip("the science pipeline (manifoundation.server.worker.models_pipeline) is not part of this tree yet")
     from pathlib import Path
 
     from manifoundation.sdk import delta_pose, object_from_file

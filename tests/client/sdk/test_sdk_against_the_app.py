@@ -11,10 +11,9 @@ from manifoundation.contract import ErrorBody
 from manifoundation.sdk import Client, JobFailed, NotFound, Unauthorized
 from manifoundation.server.api.app import create_app
 from manifoundation.server.api.settings import Settings
-
-from .fakes import FakeQueue
-from .helpers import sphere
-from .server import serving
+from tests.api.fakes import FakeQueue
+from tests.api.helpers import sphere
+from tests.api.server import serving
 
 KEY = "sdk-test-key-12"
 
