@@ -62,11 +62,6 @@ def register(subparsers: Any) -> None:
         help="slides: label only the sets that also reach the same heading's slide this long (× size; 0: off)",
     )
     g.add_argument(
-        "--push-first",
-        action="store_true",
-        help="slides: label only the pushes from behind where they also reach a 0.4 × size slide (else only pulls)",
-    )
-    g.add_argument(
         "--stiff-ends",
         type=float,
         default=0.0,
@@ -78,12 +73,6 @@ def register(subparsers: Any) -> None:
         action="store_true",
         help="with --stiff (cloth, rope): bodies come in pairs, one shape at the soft and at the stiff end of the "
         "range, asked the same tasks",
-    )
-    g.add_argument(
-        "--slide-labels",
-        choices=("union", "first"),
-        default="union",
-        help="slides: label the union of the sets that reach (union), or the first of them front to rear alone",
     )
     g.add_argument("--no-progress", action="store_true")
     g.set_defaults(func=_generate)
@@ -118,8 +107,8 @@ def _generate(args: argparse.Namespace) -> int:
                                     examples_per_body=args.examples_per_body, seed=args.seed,
                                     verify_moving=args.verify_moving, slides=args.slides,
                                     stiff=args.stiff, slide_margin=args.slide_margin,
-                                    push_first=args.push_first, stiff_ends=args.stiff_ends,
-                                    paired_ends=args.paired_ends, slide_labels=args.slide_labels)  # fmt: skip
+                                    stiff_ends=args.stiff_ends,
+                                    paired_ends=args.paired_ends)  # fmt: skip
         made = generate_deformable(dcfg, args.out, workers=args.workers, progress=not args.no_progress)
         print(json.dumps(made["totals"], indent=1))
     if not {"rigid", "articulated"} & set(materials):

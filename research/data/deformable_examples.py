@@ -24,11 +24,6 @@ reaches a slide depends on the properties (a handkerchief must be pulled from it
 what the property figure asks the network to have learnt. With a margin (``slide_margin``), the labels keep only
 the sets that also reach the same heading's slide at the margin's length: at a sixth of its size a handkerchief
 still follows a push from behind, at a quarter it bunches up, and an open-loop answer should not sit on that edge.
-Pushes first (``push_first``): when a push from behind (`slides.PUSH_SETS`) reaches the slide and also the same
-heading's slide ``PUSH_HOLD`` × size long, the labels are those pushes alone; otherwise the pushes leave the labels
-and the pulls stay. A push needs no grasp — a card lying flat is too thin and stiff to pinch, a handkerchief is not
-(it rucks up into the fingers) — so where both reach, the answer that any hand can give is the one labelled: what the
-paper's figure shows (the card pushed from the rear, the handkerchief pulled by its forward corners).
 Each slide also keeps every named set's `metrics.shortfall` at the slide and at the margin's length
 (``set_shortfall``, ``set_shortfall_margin``; stored as ``slide_shortfall``, NaN rows for other examples), so
 that other labels — the best set alone, a weight by margin — can be drawn from a data set without simulating again.
@@ -48,7 +43,7 @@ from manifoundation.core.deformable.answer import moving_indices
 from manifoundation.core.deformable.body import DeformableBody
 from manifoundation.core.deformable.procedures import Manipulation, random_manipulation
 from manifoundation.core.deformable.simulate import simulate
-from manifoundation.core.deformable.slides import PUSH_HOLD, PUSH_SETS, SET_NAMES, reaching_sets, slide_displacement
+from manifoundation.core.deformable.slides import SET_NAMES, reaching_sets, slide_displacement
 from research.data.labels import heat_and_force, kernel, region_mask
 
 HELD_OUT_HEADINGS = np.deg2rad([45.0, 135.0, 225.0, 315.0])
@@ -71,7 +66,6 @@ class DeformableExample:
     label_sets: int = 1
     moving_checked: bool = False
     margin_fallback: bool = False  # a slide whose labels no set reached with the margin (`make_slide_example`)
-    pushed: bool = False  # a slide labelled by its pushes alone (`make_slide_example`, ``push_first``)
     # slides: each named set's `metrics.shortfall` (`slides.SET_NAMES` order; ≤ 1 reaches, inf unstable, NaN not
     # simulated) at the slide and at the margin's length, so that other labels can be drawn without simulating again
     set_shortfall: np.ndarray | None = None
@@ -146,8 +140,7 @@ def make_example(body: DeformableBody, rng: np.random.Generator, tries: int = 3,
     return None
 
 
-def make_slide_example(body: DeformableBody, rng: np.random.Generator, margin: float = 0.0,
-                       push_first: bool = False, first_only: bool = False) -> DeformableExample | None:  # fmt: skip
+def make_slide_example(body: DeformableBody, rng: np.random.Generator, margin: float = 0.0) -> DeformableExample | None:
     """A slide of ``body`` (cloth or rope) labelled by the candidate sets that reach it, or None when none does.
 
     Args:
@@ -155,11 +148,6 @@ def make_slide_example(body: DeformableBody, rng: np.random.Generator, margin: f
         margin: 0, or a slide length (fraction of the body's size): the labels keep only the sets that also reach
             the same heading's slide of at least this length — an open-loop answer with room to spare — unless
             none does (``margin_fallback``).
-        push_first: label the pushes from behind alone when they hold (see the module doc; ``pushed``), else
-            drop them from the labels.
-        first_only: the heat and motion maps are the first labelled set's alone (front to rear) rather than the
-            union of every labelled set — an answer of a few peaks of a union can take one set's rear point and
-            another's front one, which no set is; the mask still covers every labelled set.
 
     The example's ``contacts`` are the first labelled set's (front to rear), ``label_sets`` how many were labelled.
     """
@@ -173,17 +161,13 @@ def make_slide_example(body: DeformableBody, rng: np.random.Generator, margin: f
         seconds += more
         fallback = not kept
         valid = valid if fallback else kept
-    pushed = False
-    if push_first:
-        valid, pushed, more = _pushes_first(body, displacement, valid)
-        seconds += more
-    heat, motion_map = labels(body, valid[0]) if len(valid) == 1 or first_only else union_labels(body, valid)
+    heat, motion_map = labels(body, valid[0]) if len(valid) == 1 else union_labels(body, valid)
     every = np.unique(np.concatenate([s.contacts for s in valid]))
     mask = region_mask(body.points, body.points[every], body.size, rng)
     first = valid[0]
     return DeformableExample(np.tile(displacement, (len(body.points), 1)), heat, motion_map, mask, first.contacts,
                              first.motions, "slide", is_unseen_motion(first.motions), seconds, len(valid),
-                             margin_fallback=fallback, pushed=pushed, set_shortfall=shortfall,
+                             margin_fallback=fallback, set_shortfall=shortfall,
                              set_shortfall_margin=shortfall_margin)  # fmt: skip
 
 
@@ -199,17 +183,3 @@ def _holding(body: DeformableBody, displacement: np.ndarray, fraction: float,
     names = {m.procedure for m in kept}
     return [m for m in sets if m.procedure in names], shortfalls, seconds
 
-
-def _pushes_first(body: DeformableBody, displacement: np.ndarray,
-                  valid: list[Manipulation]) -> tuple[list[Manipulation], bool, float]:  # fmt: skip
-    """``valid``'s pushes from behind that also reach the slide ``PUSH_HOLD`` × size long, when one does; else
-    ``valid`` without its pushes (all of ``valid`` when it holds nothing else); whether pushes were kept; the
-    rollouts' seconds."""
-    pushes = [m for m in valid if m.procedure in PUSH_SETS]
-    if not pushes:
-        return valid, False, 0.0
-    held, _, seconds = _holding(body, displacement, PUSH_HOLD, pushes)
-    if held:
-        return held, True, seconds
-    pulls = [m for m in valid if m.procedure not in PUSH_SETS]
-    return (pulls or valid), False, seconds

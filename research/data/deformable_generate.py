@@ -16,7 +16,7 @@ import os
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
@@ -45,16 +45,13 @@ class DeformableDataConfig:
     slides: float = 0.0  # cloth and rope: the fraction of examples that are slides (`make_slide_example`)
     stiff: bool = False  # properties drawn in `materials.STIFF_RANGES` (cards and sticks too)
     slide_margin: float = 0.0  # slides: labelled sets also reach a slide this long (× size; make_slide_example)
-    push_first: bool = False  # slides: pushes from behind that hold are the labels alone (make_slide_example)
     stiff_ends: float = 0.0  # with `stiff`: this fraction of bodies draws its stiffnesses in one of `STIFF_ENDS`
     paired_ends: bool = False  # with `stiff`: bodies 2k, 2k+1 are one shape at the soft and the stiff end, same tasks
-    slide_labels: Literal["union", "first"] = "union"  # slides: every labelled set, or the first (front to rear) alone
 
     def to_dict(self) -> dict[str, Any]:
         out = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
         for name, default in (("verify_moving", False), ("slides", 0.0), ("stiff", False), ("slide_margin", 0.0),
-                              ("push_first", False), ("stiff_ends", 0.0), ("paired_ends", False),
-                              ("slide_labels", "union")):
+                              ("stiff_ends", 0.0), ("paired_ends", False)):
             if out[name] == default:  # data sets made before the option keep their manifests' configuration
                 del out[name]
         return out
@@ -119,7 +116,7 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
         rng = shared if shared is not None else np.random.default_rng([*stream, k])
         slide = cfg.slides > 0 and material in ("cloth", "rope") and rng.random() < cfg.slides  # no draw without
         if slide:
-            ex = make_slide_example(body, rng, cfg.slide_margin, cfg.push_first, cfg.slide_labels == "first")
+            ex = make_slide_example(body, rng, cfg.slide_margin)
         else:
             ex = make_example(body, rng, verify_moving=cfg.verify_moving)
         if ex is None:
@@ -131,8 +128,6 @@ def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> 
             continue
         if ex.margin_fallback:
             counts["slide_margin_fallback"] = counts.get("slide_margin_fallback", 0) + 1
-        if ex.pushed:
-            counts["slide_pushed"] = counts.get("slide_pushed", 0) + 1
         if ex.moving_checked:
             key = "moving_valid" if ex.label_sets > 1 else "moving_invalid"
             counts[key] = counts.get(key, 0) + 1

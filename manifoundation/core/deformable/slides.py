@@ -33,7 +33,6 @@ EDGE_FRACTION = 0.1  # the leading (trailing) tenth of the cloud holds the front
 ACROSS_WEIGHT = 0.5  # the single front (rear) point: most leading, less half its distance across d
 SET_NAMES = ("front_pair", "front_one", "centre", "rear_one", "rear_pair", "far_pair")  # `slide_candidates`' order
 PUSH_SETS = ("slide_rear_one", "slide_rear_pair")  # contacts behind the body moved along d: they push it
-PUSH_HOLD = SLIDE[1]  # a push labelled first also reaches the longest slide the data draws (× size)
 
 
 def slide_displacement(body: DeformableBody, rng: np.random.Generator, fraction: float | None = None) -> np.ndarray:

@@ -75,35 +75,8 @@ def test_a_margin_keeps_the_sets_that_also_reach_a_longer_slide_which_drops_a_ha
     assert plain.heat[rear.contacts[0]] == pytest.approx(1.0) and kept.heat[rear.contacts[0]] < 1.0
 
 
-def test_pushes_first_label_a_card_pushed_from_behind_and_a_handkerchief_pulled_from_its_front() -> None:
-    from manifoundation.core.deformable.slides import PUSH_HOLD, PUSH_SETS, along_and_across
-    from research.evaluation.property_pairs import pair_bodies
-
-    ((handkerchief, card),) = pair_bodies("cloth", 1, 0)
-    for body, pushed in ((card, True), (handkerchief, False)):
-        ex = make_slide_example(body, np.random.default_rng(0), push_first=True)
-        assert ex is not None and ex.pushed is pushed
-        d = ex.motion[0]
-        held = d * PUSH_HOLD * body.size / np.linalg.norm(d)
-        hot = {int(i) for i in np.flatnonzero(ex.heat >= 1.0 - 1e-9)}
-        sets = slide_candidates(body, d)
-        pushes = [m for m in sets if m.procedure in PUSH_SETS]
-        push_points = {int(i) for m in pushes for i in m.contacts}
-        pull_points = {int(i) for m in sets if m.procedure not in PUSH_SETS for i in m.contacts}
-        # judged here, by rollouts of their own: which pushes reach the slide, and which also the longest one
-        short, long = _reaching(body, d, set(PUSH_SETS)), _reaching(body, held, set(PUSH_SETS))
-        if pushed:  # the pushes that hold are the labels, and nothing else is
-            holding = [m for m in pushes if m.procedure in short & long]
-            assert holding and hot == {int(i) for m in holding for i in m.contacts}
-        else:  # a push that reaches the short slide but not the long one leaves the labels
-            assert short - long
-            assert hot and hot <= pull_points and not hot & (push_points - pull_points)
-        along, _ = along_and_across(body.points, d)
-        assert bool(np.mean(along[sorted(hot)]) < 0) is pushed  # the card's label heat behind, the handkerchief's ahead
-
-
 def test_stiff_data_sets_reach_cards_and_sticks_and_old_manifests_keep_their_configuration() -> None:
-    for option in ("slides", "stiff", "slide_margin", "push_first", "stiff_ends", "paired_ends"):
+    for option in ("slides", "stiff", "slide_margin", "stiff_ends", "paired_ends"):
         assert option not in DeformableDataConfig().to_dict()
     cfg = DeformableDataConfig(materials=("rope",), bodies=40, stiff=True)
     moduli = [dataset_body(cfg, "rope", i).properties["youngs_modulus"] for i in range(40)]
@@ -166,25 +139,3 @@ def test_a_data_set_of_slides_holds_slide_examples(tmp_path: Path) -> None:
     shortfalls = body.get("slide_shortfall", np.zeros((0, 6)))
     assert shortfalls.shape == (int(body["num_examples"]), 6)
     assert np.all(np.nanmin(shortfalls, axis=1) <= 1.0)  # a kept slide is reached by some set
-
-
-def test_first_only_labels_the_first_reaching_set_alone_where_the_union_labels_them_all() -> None:
-    from manifoundation.core.deformable.slides import PUSH_SETS
-    from research.evaluation.property_pairs import pair_bodies
-
-    ((handkerchief, _),) = pair_bodies("cloth", 1, 0)
-    union = make_slide_example(handkerchief, np.random.default_rng(0), push_first=True)
-    first = make_slide_example(handkerchief, np.random.default_rng(0), push_first=True, first_only=True)
-    assert union is not None and first is not None and union.label_sets == first.label_sets >= 2
-    np.testing.assert_array_equal(first.contacts, union.contacts)  # the same slide, the same first set
-    np.testing.assert_array_equal(first.mask, union.mask)
-    d = first.motion[0]
-    names = _reaching(handkerchief, d) - set(PUSH_SETS)  # judged here; a handkerchief's pushes do not hold
-    leading = next(m for m in slide_candidates(handkerchief, d) if m.procedure in names)  # front to rear
-    assert first.pushed is False
-    np.testing.assert_array_equal(first.contacts, leading.contacts)
-    hot = {int(i) for i in np.flatnonzero(first.heat >= 1.0 - 1e-9)}
-    assert hot == {int(i) for i in leading.contacts}
-    union_hot = {int(i) for i in np.flatnonzero(union.heat >= 1.0 - 1e-9)}
-    assert hot < union_hot  # the union also heats the other sets' points
-    np.testing.assert_allclose(first.motion_map[leading.contacts], np.tile(d, (len(leading.contacts), 1)), atol=1e-9)
