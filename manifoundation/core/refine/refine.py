@@ -35,44 +35,32 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class RefineConfig:
-    """Refinement settings (defaults are the ones evaluated in the README table).
+    """Refinement settings. Why each default is what it is, with the measurements: research/results/refinement.md.
 
     Attributes:
-        max_iterations: paper: 100.
+        max_iterations: at most this many SCP steps (paper: 100).
         residual_tol: ‖r*‖ below this counts as producing the wrench (paper: 1e-6).
-        tip_tol: every |Φ(p_i)| below this (m). The paper and the verification use 5 mm; the SCP measures Φ on
-            the point cloud, which differs from the exact mesh distance the verification measures by up to a few
-            mm on curved faces, so it stops at 3 mm (measured: a grasp converged at 4.9 mm on the cloud failed
-            verification at 5.02 mm on the mesh).
-        region_point_tol: with a region mask, every contact point within this of an allowed sample (m): the
-            verification asks for 5 mm; the SCP's Φ^R measures to the samples' discs, up to 0.75 × the sample
-            spacing less (a masked LEAP grasp converged on Φ^R and failed verification at 5.4 mm).
-        penetration_tol: guard penetration / self-overlap allowed at convergence (m): half the verification's 1 mm,
-            which measures on the meshes (the guards sample them).
+        tip_tol: every |Φ(p_i)| below this (m) at convergence. Tighter than verification's 5 mm: Φ is measured on
+            the point cloud, which can differ from the exact mesh distance by a few mm on curved faces.
+        region_point_tol: with a region mask, every contact within this of an allowed sample (m); tighter than
+            verification's 5 mm for the same reason (Φ^R measures to the samples' discs).
+        penetration_tol: guard penetration / self-overlap allowed at convergence (m): half of verification's 1 mm.
         max_normal_force: bound on each normal force (unit target wrench).
         tip_weight: λ (1/m²) on the squared tip distances.
         penalty: ρ on constraint slacks and in the merit.
-        merit_slack: penetration and self-overlap the merit lets pass (m), far inside ``penetration_tol``: the
-            step keeps its guards' linearisation ≥ 0, and their curvature left a few µm, which at ρ outweighed
-            the tip term's progress near the surface (a single 5 µm guard rejected step after step; 22 % of the
-            iterations were spent crawling the last millimetre).
-        trust_translation, trust_rotation, trust_joint, trust_force: initial trust region s_q, s_f.
-        trust_grow, trust_shrink, trust_max_scale, trust_min_scale: adaptive trust region; ``adaptive=False``
-            keeps the initial region (the paper's fixed s_q, s_f).
+        merit_slack: penetration and self-overlap the merit lets pass (m), far inside ``penetration_tol``, so that
+            the guards' curvature (a few µm) does not reject steps that make progress near the surface.
+        trust_translation, trust_rotation, trust_joint, trust_force: the initial trust region s_q, s_f.
+        adaptive, trust_grow, trust_shrink, trust_max_scale, trust_min_scale: the adaptive trust region;
+            ``adaptive=False`` keeps the initial region (the paper's fixed s_q, s_f).
         stall_window, stall_tolerance: stop ("stalled") when the merit fell by less than this fraction over the
-            last ``stall_window`` iterations (a local minimum: more iterations only cost time).
-        stuck_window, stuck_tolerance, stuck_penetration: stop ("stalled") sooner when the hand is stuck in the
-            object: a guard deeper than ``stuck_penetration`` (m) and the merit fell by less than
-            ``stuck_tolerance`` over the last ``stuck_window`` iterations (counted from the first step's merit).
-            Measured on 129 recorded LEAP lifts (third-party objects, 3 seeds): no attempt that went on to converge
-            ever met it, and the attempts that did spent 179 of their 1 350 iterations stuck (a restart from
-            another approach is what frees them).
-        touch_weight, touch_distance: while a tip is farther than ``touch_distance`` (m) the merit and the step
-            weigh the wrench residual by ``touch_weight``; once every tip is that near, or that phase stalls, by 1.
-            A far finger's contact hops between faces as it moves and the residual jumps with it (0 ↔ 0.3-0.45 on
-            LEAP's stalled attempts): the fingers close first. 0.03 measured on 4 × 258 lifts: LEAP iterations
-            −13 %, Allegro −2 %, verified 933 vs 935, audited 490 vs 491 of 516 (`docs/performance.md`); 1 is
-            the earlier refinement.
+            last ``stall_window`` iterations (a local minimum).
+        stuck_window, stuck_tolerance, stuck_penetration: stop sooner when the hand is stuck in the object: a
+            guard deeper than ``stuck_penetration`` (m) and the merit fell by less than ``stuck_tolerance`` over
+            the last ``stuck_window`` iterations (another approach, not more iterations, frees such an attempt).
+        touch_weight, touch_distance: while a tip is farther than ``touch_distance`` (m), the wrench residual is
+            weighted by ``touch_weight`` in the merit and the step, so the fingers close first (a far finger's
+            contact hops between faces and the residual jumps with it); 1 turns this off.
         verify_within: with an ``accept`` test (verification), it is asked once an iterate meets the convergence
             test with this tip tolerance instead of ``tip_tol`` (`manifoundation.core.refine.ending`).
         solver: ``"clarabel"`` (native, default) or ``"cvxpy"`` (the reference, slow).
