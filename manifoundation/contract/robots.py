@@ -108,8 +108,6 @@ class RobotRegister(WireModel):
         given = [k for k in ("archive", "urdf", "mjcf") if getattr(self, k) is not None]
         if len(given) != 1:
             raise ValueError(f"give exactly one of 'archive', 'urdf' or 'mjcf' (got {', '.join(given) or 'none'})")
-        if self.urdf is not None and not self.fingertips:
-            raise ValueError("fingertips: required with an inline urdf")
         if self.tip_offsets is not None and (not self.fingertips or len(self.tip_offsets) != len(self.fingertips)):
             raise ValueError("tip_offsets: one row per fingertip (name the fingertips)")
         if self.description is not None and self.archive is None:
