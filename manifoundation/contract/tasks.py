@@ -102,3 +102,8 @@ TaskIn = Annotated[
     DeltaPoseTask | PointMotionTask | TargetPointsTask | WrenchTask | ForceClosureTask | JointMotionTask,
     Field(discriminator="kind"),
 ]
+TASK_KINDS: tuple[str, ...] = tuple(
+    str(task.model_fields["kind"].default)
+    for task in (DeltaPoseTask, PointMotionTask, TargetPointsTask, WrenchTask, ForceClosureTask, JointMotionTask)
+)
+"""The ``kind`` tag of every task in `TaskIn`, in its order: the one list of task kinds."""

@@ -12,11 +12,12 @@ import re
 from pydantic import ValidationError
 
 from manifoundation.contract.errors import FieldError
+from manifoundation.contract.tasks import TASK_KINDS
 
 _FIELD_PREFIX = re.compile(r"^(?P<field>[A-Za-z_][\w.]*): (?P<problem>.+)$", re.DOTALL)
 _PYDANTIC_PREFIXES = ("Value error, ", "Assertion failed, ")
 # A discriminated union adds the tag to the location (task.force_closure.…); it is not a field name.
-_TASK_KINDS = frozenset({"delta_pose", "point_motion", "target_points", "wrench", "force_closure", "joint_motion"})
+_TASK_KINDS = frozenset(TASK_KINDS)
 
 
 def field_errors(exc: ValidationError, root: str = "") -> list[FieldError]:

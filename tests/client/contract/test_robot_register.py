@@ -29,7 +29,6 @@ def test_archive_round_trips_in_both_encodings() -> None:
         ({}, "exactly one of 'archive', 'urdf' or 'mjcf'"),
         ({"archive": ZIP, "mjcf": "<mujoco/>"}, "exactly one"),
         ({"archive": "not base64!"}, "base64"),
-        ({"urdf": "<robot/>"}, "fingertips: required"),
         ({"mjcf": "<mujoco/>", "description": "a.xml"}, "description: only with an archive"),
         ({"archive": ZIP, "tip_offsets": [[0, 0, 0]]}, "tip_offsets"),
         ({"archive": b"x" * (MAX_ARCHIVE_BYTES + 1)}, "archive"),
