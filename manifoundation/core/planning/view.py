@@ -1,18 +1,17 @@
 """A plotly figure that plays a plan: the scene, the object's path, and per step (a slider) the object, the hand
-(its links' convex hulls, posed) and the contacts; re-grasp steps are marked on the slider."""
+(its coarse meshes, posed) and the contacts; re-grasp steps are marked on the slider."""
 
 from __future__ import annotations
 
 from typing import Any
 
 import numpy as np
-import torch
-import trimesh
 
 from manifoundation.core.planning.obstacles import SupportPlane
 from manifoundation.core.planning.scene import CollisionScene
 from manifoundation.core.planning.types import PlanOutput, PlanStep
 from manifoundation.core.robots.hand import Hand
+from manifoundation.core.robots.view import posed_mesh
 
 OBSTACLE_COLOUR, OBJECT_COLOUR, HAND_COLOUR = "#9aa0a6", "#e07b39", "#7da7d9"
 
@@ -25,32 +24,11 @@ def _mesh_trace(vertices: np.ndarray, faces: np.ndarray, colour: str, name: str,
                      opacity=opacity, name=name, flatshading=True, hoverinfo="name")  # fmt: skip
 
 
-def _hulls(hand: Hand) -> dict[str, trimesh.Trimesh]:
-    cache: dict[str, trimesh.Trimesh] = hand.__dict__.setdefault("_plan_view_hulls", {})
-    if not cache:
-        for body, mesh in hand.collision_meshes.items():
-            if len(mesh.faces):
-                cache[body] = trimesh.convex.convex_hull(np.asarray(mesh.vertices))
-    return cache
-
-
 def hand_mesh(hand: Hand, step: PlanStep) -> tuple[np.ndarray, np.ndarray]:
-    """The step's hand as one world mesh: vertices (V, 3), faces (F, 3) (the links' convex hulls, posed)."""
+    """The step's hand as one world mesh: vertices (V, 3), faces (F, 3) (`manifoundation.core.robots.view`)."""
     assert step.proposal is not None
     p = step.proposal
-
-    def row(a: np.ndarray | None) -> torch.Tensor:
-        return torch.as_tensor(np.asarray(a, dtype=np.float64))[None]
-
-    with torch.no_grad():
-        poses = hand.link_poses(row(p.palm_position), row(p.palm_quaternion), row(p.joint_values))
-    verts, faces, offset = [], [], 0
-    for body, hull in _hulls(hand).items():
-        T = poses[body][0].numpy()
-        verts.append(np.asarray(hull.vertices) @ T[:3, :3].T + T[:3, 3])
-        faces.append(np.asarray(hull.faces) + offset)
-        offset += len(hull.vertices)
-    return np.vstack(verts), np.vstack(faces)
+    return posed_mesh(hand, np.asarray(p.palm_position), np.asarray(p.palm_quaternion), np.asarray(p.joint_values))
 
 
 def _plane_trace(support: SupportPlane, centre: np.ndarray, half: float) -> Any:

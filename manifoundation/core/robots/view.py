@@ -1,8 +1,12 @@
-"""A hand at its rest pose: a plotly figure (collision meshes, spheres, surface points + normals) and a light preview
-(coarse meshes, spheres, pads, tips) that the service's robot page draws."""
+"""What viewers draw of a hand: its coarse meshes and spheres posed anywhere (a proposal's pose, a plan's step), a
+light preview at rest (coarse meshes, spheres, pads, tips) for the service's robot page, and a plotly figure.
+
+One coarse mesh per body, computed once per hand: the collision mesh itself when it is small, else the convex hulls
+of its parts (LEAP's fingertips have 7 000 faces), each hull of at most ``PART_VERTICES`` spread vertices."""
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -128,19 +132,72 @@ class RestPreview:
     tips: np.ndarray
 
 
-def _coarse_parts(mesh: trimesh.Trimesh) -> list[trimesh.Trimesh]:
+SMALL_MESH_FACES = 400
+"""A body mesh with more faces is drawn as the convex hulls of its parts ..."""
+PART_VERTICES = PREVIEW_PART_VERTICES
+"""... each hull of at most this many of the part's vertices (farthest-point sampling)."""
+MAX_PARTS = 32
+_COARSE: weakref.WeakKeyDictionary[Hand, dict[str, tuple[np.ndarray, np.ndarray]]] = weakref.WeakKeyDictionary()
+
+
+def coarse_meshes(hand: Hand) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Body → its coarse mesh in the body's frame: vertices (V, 3), faces (F, 3); computed once per hand."""
+    if hand not in _COARSE:
+        _COARSE[hand] = {body: _coarse(mesh) for body, mesh in hand.collision_meshes.items() if len(mesh.faces)}
+    return _COARSE[hand]
+
+
+def _coarse(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
+    if len(mesh.faces) <= SMALL_MESH_FACES:
+        return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64)
     from manifoundation.core.robots.spheres import farthest_points
 
     pieces = [p for p in mesh.split(only_watertight=False) if len(p.faces) >= 4] or [mesh]
-    out = []
-    for piece in pieces[:32]:
+    verts: list[np.ndarray] = []
+    faces: list[np.ndarray] = []
+    offset = 0
+    for piece in pieces[:MAX_PARTS]:
         v = np.asarray(piece.vertices)
-        pick = farthest_points(v, PREVIEW_PART_VERTICES)
         try:
-            out.append(trimesh.convex.convex_hull(v[pick]))
+            hull = trimesh.convex.convex_hull(v[farthest_points(v, PART_VERTICES)])
         except Exception:  # a flat piece has no hull: draw nothing of it
             continue
-    return out
+        verts.append(np.asarray(hull.vertices))
+        faces.append(np.asarray(hull.faces) + offset)
+        offset += len(hull.vertices)
+    if not verts:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
+    return np.vstack(verts), np.vstack(faces).astype(np.int64)
+
+
+def _row(a: np.ndarray) -> torch.Tensor:
+    return torch.as_tensor(np.asarray(a, dtype=np.float64))[None]
+
+
+def posed_mesh(hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray,
+               q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The hand's coarse meshes posed (palm (3,), quaternion (4,) w-first, joints (D,)), merged into one world
+    mesh: vertices (V, 3), faces (F, 3)."""
+    with torch.no_grad():
+        poses = hand.link_poses(_row(palm_position), _row(palm_quaternion), _row(q))
+    verts: list[np.ndarray] = []
+    faces: list[np.ndarray] = []
+    offset = 0
+    for body, (v, f) in coarse_meshes(hand).items():
+        T = poses[body][0].numpy()
+        verts.append(v @ T[:3, :3].T + T[:3, 3])
+        faces.append(f + offset)
+        offset += len(v)
+    if not verts:
+        return np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)
+    return np.vstack(verts), np.vstack(faces).astype(np.int64)
+
+
+def posed_spheres(hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The hand's collision spheres at a pose, (S, 4): world centre and radius."""
+    with torch.no_grad():
+        centres, _ = hand.spheres(_row(palm_position), _row(palm_quaternion), _row(q), jacobian=False)
+    return np.hstack([centres[0].numpy(), np.asarray(hand.sphere_radii, dtype=np.float64)[:, None]])
 
 
 def rest_preview(hand: Hand) -> RestPreview:
@@ -148,22 +205,11 @@ def rest_preview(hand: Hand) -> RestPreview:
     d = torch.float64
     pos, quat, q = torch.zeros(1, 3, dtype=d), torch.tensor([[1.0, 0, 0, 0]], dtype=d), torch.as_tensor(hand.rest[None])
     with torch.no_grad():
-        poses = {k: v[0].numpy() for k, v in hand.link_poses(pos, quat, q).items()}
-        centres, _ = hand.spheres(pos, quat, q, jacobian=False)
         surf = hand.contact_surface
         pad = np.flatnonzero(surf.pad)[:: max(1, int(np.ceil(surf.pad.sum() / PREVIEW_PADS)))]
         pts, _, _ = hand.surface_samples(pos, quat, q, index=pad, jacobian=False)
         tips = hand.fingertips(pos, quat, q)[0].numpy()
-    verts, faces, offset = [], [], 0
-    for body, mesh in hand.collision_meshes.items():
-        T = poses[body]
-        for part in _coarse_parts(mesh):
-            verts.append(np.asarray(part.vertices) @ T[:3, :3].T + T[:3, 3])
-            faces.append(np.asarray(part.faces) + offset)
-            offset += len(part.vertices)
-    spheres = np.hstack([centres[0].numpy(), np.asarray(hand.sphere_radii)[:, None]])
-    return RestPreview(
-        vertices=np.vstack(verts) if verts else np.zeros((0, 3)),
-        faces=np.vstack(faces).astype(np.int64) if faces else np.zeros((0, 3), dtype=np.int64),
-        spheres=spheres, pads=pts[0].numpy(), tips=tips,
-    )  # fmt: skip
+    rest = (np.zeros(3), np.array([1.0, 0, 0, 0]), np.asarray(hand.rest, dtype=np.float64))
+    vertices, faces = posed_mesh(hand, *rest)
+    return RestPreview(vertices=vertices, faces=faces, spheres=posed_spheres(hand, *rest), pads=pts[0].numpy(),
+                       tips=tips)  # fmt: skip

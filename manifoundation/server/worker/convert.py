@@ -8,7 +8,7 @@ Imported in the worker process only (it imports `models`, hence torch).
 from __future__ import annotations
 
 import time
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -88,69 +88,6 @@ def _finite(value: float) -> float:
     return float(value) if np.isfinite(value) else _BIG
 
 
-def hand_spheres(hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """The hand's collision spheres at a pose, (S, 4): world centre and radius (what viewers draw)."""
-    import torch
-
-    def row(a: np.ndarray) -> torch.Tensor:
-        return torch.as_tensor(np.asarray(a, dtype=np.float64))[None]
-
-    centres, _ = hand.spheres(row(palm_position), row(palm_quaternion), row(q), jacobian=False)
-    return np.hstack([centres[0].numpy(), np.asarray(hand.sphere_radii, dtype=np.float64)[:, None]])
-
-
-VIEW_FACES_PER_BODY = 400
-"""A body mesh with more faces is drawn as the convex hulls of its parts (LEAP's fingertips: 7 000 faces) ..."""
-VIEW_VERTICES_PER_PART = 48
-"""... each hull of at most this many of the part's vertices (spread by farthest-point sampling)."""
-
-
-def hand_mesh(hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, q: np.ndarray) -> HandMesh:
-    """The hand's collision meshes posed at a proposal, merged into one mesh (world frame) for viewers."""
-    import torch
-
-    def row(a: np.ndarray) -> torch.Tensor:
-        return torch.as_tensor(np.asarray(a, dtype=np.float64))[None]
-
-    with torch.no_grad():
-        poses = hand.link_poses(row(palm_position), row(palm_quaternion), row(q))
-    verts, faces, offset = [], [], 0
-    for body, (v, f) in _view_meshes(hand).items():
-        T = poses[body][0].numpy()
-        verts.append(v @ T[:3, :3].T + T[:3, 3])
-        faces.append(f + offset)
-        offset += len(v)
-    return HandMesh(vertices=np.vstack(verts).astype(np.float64), faces=np.vstack(faces).astype(np.int64))
-
-
-def _view_meshes(hand: Hand) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    cache = hand.__dict__.setdefault("_view_meshes", {})
-    if not cache:
-        for body, mesh in hand.collision_meshes.items():
-            if len(mesh.faces) > VIEW_FACES_PER_BODY:
-                pieces = [p for p in mesh.split(only_watertight=False) if len(p.faces) >= 4] or [mesh]
-                parts = [_coarse_hull(np.asarray(p.vertices)) for p in pieces]
-                v = np.vstack([np.asarray(p.vertices) for p in parts])
-                counts = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
-                f = np.vstack([np.asarray(p.faces) + c for p, c in zip(parts, counts, strict=True)])
-            else:
-                v, f = np.asarray(mesh.vertices), np.asarray(mesh.faces)
-            cache[body] = (v, f)
-    return cache
-
-
-def _coarse_hull(vertices: np.ndarray) -> Any:
-    """The convex hull of at most ``VIEW_VERTICES_PER_PART`` of ``vertices`` (farthest-point sampling)."""
-    import trimesh
-
-    pick = [0]
-    dist = np.linalg.norm(vertices - vertices[0], axis=1)
-    while len(pick) < min(VIEW_VERTICES_PER_PART, len(vertices)):
-        pick.append(int(np.argmax(dist)))
-        dist = np.minimum(dist, np.linalg.norm(vertices - vertices[pick[-1]], axis=1))
-    return trimesh.convex.convex_hull(vertices[pick])
-
-
 def to_proposal(p: ProposalOutput, hand: Hand | None = None, *, history: bool = False, mesh: bool = False) -> Proposal:
     """The wire proposal of one of the pipeline's proposals (a single request's, or a plan step's).
 
@@ -174,8 +111,13 @@ def to_proposal(p: ProposalOutput, hand: Hand | None = None, *, history: bool = 
     posed = None if p.palm_position is None else p.pose()  # no hand pose: a hand-free deformable's answer
     spheres = posed_mesh = None
     if hand is not None and posed is not None:
-        spheres = hand_spheres(hand, posed.palm_pos, posed.palm_quat, posed.q)
-        posed_mesh = hand_mesh(hand, posed.palm_pos, posed.palm_quat, posed.q) if mesh else None
+        from manifoundation.core.robots.view import posed_mesh as posed_hand_mesh
+        from manifoundation.core.robots.view import posed_spheres
+
+        spheres = posed_spheres(hand, posed.palm_pos, posed.palm_quat, posed.q)
+        if mesh:
+            vertices, faces = posed_hand_mesh(hand, posed.palm_pos, posed.palm_quat, posed.q)
+            posed_mesh = HandMesh(vertices=vertices, faces=faces)
     return Proposal(
         contact_points=np.asarray(p.contact_points, dtype=np.float64).reshape(-1, 3),
         contact_normals=np.asarray(p.contact_normals, dtype=np.float64).reshape(-1, 3),
