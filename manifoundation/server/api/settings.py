@@ -99,6 +99,11 @@ class Settings(BaseSettings):
     max_object_store_bytes: int = Field(
         64 * 1024 * 1024, ge=1024, description="Bytes of uploaded objects' arrays per key (409 beyond)."
     )
+    mcp_stream_max_s: float = Field(
+        300.0, gt=0, le=86400, description="A `GET /mcp` event stream is closed after this long, s (the client "
+        "reconnects if it still listens); a stream costs a connection and a file descriptor."
+    )
+    mcp_max_streams: int = Field(8, ge=1, le=10_000, description="Open `GET /mcp` event streams per key (429 beyond).")
 
     # --- observability
     log_level: str = Field("INFO", pattern=r"^(DEBUG|INFO|WARNING|ERROR|CRITICAL)$")

@@ -3,6 +3,10 @@ started on first use (importing the SDK costs about a second: `mani serve` does 
 
 The SDK's app and its session manager live in one task (`McpHost._serve`: an anyio task group must be left by the
 task that entered it) from the first ``/mcp`` request to the app's shutdown (`McpHost.close`, from the lifespan).
+
+A ``GET /mcp`` is a session's event stream, which the SDK keeps open for as long as the client stays: each key may
+hold ``MANI_MCP_MAX_STREAMS`` at once (429 beyond), and each is ended after ``MANI_MCP_STREAM_MAX_S`` by telling
+the SDK's response that the client left (a client that still listens opens a new one, as SSE clients do).
 """
 
 from __future__ import annotations
@@ -10,14 +14,16 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import importlib
+import time
+from collections import Counter
 from typing import Any
 
 from starlette.requests import Request
-from starlette.types import ASGIApp, Receive, Scope, Send
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from manifoundation.server.api.deps import authorize
 from manifoundation.server.api.encoding import respond
-from manifoundation.server.api.errors import Unavailable, from_exception
+from manifoundation.server.api.errors import RateLimited, Unavailable, from_exception
 
 PATH = "/mcp"
 CALLER_KEY = "mani_caller"
@@ -75,15 +81,65 @@ class McpEndpoint:
 
     def __init__(self, state: Any) -> None:
         self.state = state
+        self.streams: Counter[str | None] = Counter()
+        """Open event streams per tenant (None: the service runs without keys)."""
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         request = Request(scope, receive)
+        stream = scope.get("method") == "GET"
         try:
             caller = await authorize(request, self.state.settings)
+            if stream and self.streams[caller.tenant] >= self.state.settings.mcp_max_streams:
+                raise RateLimited(f"at most {self.state.settings.mcp_max_streams} open MCP event streams per key "
+                                  "(MANI_MCP_MAX_STREAMS): close one first", retry_after=5.0)  # fmt: skip
             app = await self.state.mcp.app()
         except Exception as exc:
             error = from_exception(exc)
             await respond(request, error.body(), status=error.status, headers=error.headers)(scope, receive, send)
             return
         scope.setdefault("state", {})[CALLER_KEY] = caller
-        await app(scope, receive, send)
+        if not stream:
+            await app(scope, receive, send)
+            return
+        self.streams[caller.tenant] += 1
+        try:
+            ending = _EndingStream(receive, send, self.state.settings.mcp_stream_max_s)
+            await app(scope, ending.receive, ending.send)
+        finally:
+            self.streams[caller.tenant] -= 1
+            if not self.streams[caller.tenant]:
+                del self.streams[caller.tenant]
+
+
+class _EndingStream:
+    """An event stream's ``receive`` and ``send`` that end it cleanly after ``seconds``: the response's body is
+    closed (its last, empty chunk: a client sees the stream end, not a broken connection), then the app is told
+    that the client left, which stops it as a disconnect does; whatever it still sends is dropped."""
+
+    def __init__(self, receive: Receive, send: Send, seconds: float) -> None:
+        self._receive, self._send = receive, send
+        self._deadline = time.monotonic() + seconds
+        self._lock = asyncio.Lock()
+        self._started = self._ended = False
+
+    async def send(self, message: Message) -> None:
+        async with self._lock:
+            if self._ended:
+                return
+            self._started = self._started or message["type"] == "http.response.start"
+            if message["type"] == "http.response.body" and not message.get("more_body", False):
+                self._ended = True
+            await self._send(message)
+
+    async def receive(self) -> Message:
+        left = self._deadline - time.monotonic()
+        if left > 0:
+            try:
+                return await asyncio.wait_for(self._receive(), timeout=left)
+            except TimeoutError:
+                pass
+        async with self._lock:
+            if self._started and not self._ended:
+                self._ended = True
+                await self._send({"type": "http.response.body", "body": b"", "more_body": False})
+        return {"type": "http.disconnect"}
