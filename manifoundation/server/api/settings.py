@@ -104,6 +104,10 @@ class Settings(BaseSettings):
         "reconnects if it still listens); a stream costs a connection and a file descriptor."
     )
     mcp_max_streams: int = Field(8, ge=1, le=10_000, description="Open `GET /mcp` event streams per key (429 beyond).")
+    mcp_max_body_bytes: int = Field(
+        8 * 1024 * 1024, ge=1024, le=MAX_BODY_BYTES, description="Body limit of `POST /mcp` (413 beyond): the MCP "
+        "SDK parses JSON on the event loop, so large clouds belong on `/v1` (msgpack, decoded in a worker process)."
+    )
 
     # --- observability
     log_level: str = Field("INFO", pattern=r"^(DEBUG|INFO|WARNING|ERROR|CRITICAL)$")

@@ -68,3 +68,15 @@ def test_a_key_holds_at_most_its_streams_and_another_key_is_not_affected(base: s
     again: list[int] = []
     _open(base, KEYS[0], [], again)  # the ended streams were counted off
     assert again == [200]
+
+
+def test_a_body_declared_over_the_mcp_limit_is_refused_before_it_is_read(base: str) -> None:
+    """MANI_MCP_MAX_BODY_BYTES (8 MiB by default): the SDK parses bodies on the event loop, so big ones are refused
+    with a 413 that says where large clouds go, before the body is read."""
+    limit = Settings().mcp_max_body_bytes
+    headers = {"Authorization": f"Bearer {KEYS[0]}", "Content-Type": "application/json",
+               "Accept": "application/json, text/event-stream"}  # fmt: skip
+    started = time.monotonic()
+    answer = httpx.post(f"{base}/mcp", content=b" " * (limit + 1), headers=headers, timeout=30)
+    assert answer.status_code == 413 and "MANI_MCP_MAX_BODY_BYTES" in answer.json()["error"]
+    assert "/v1" in answer.json()["error"] and time.monotonic() - started < 5

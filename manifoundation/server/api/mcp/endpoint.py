@@ -7,6 +7,11 @@ task that entered it) from the first ``/mcp`` request to the app's shutdown (`Mc
 A ``GET /mcp`` is a session's event stream, which the SDK keeps open for as long as the client stays: each key may
 hold ``MANI_MCP_MAX_STREAMS`` at once (429 beyond), and each is ended after ``MANI_MCP_STREAM_MAX_S`` by telling
 the SDK's response that the client left (a client that still listens opens a new one, as SSE clients do).
+
+A ``POST /mcp`` body is parsed by the SDK on the event loop: bodies are limited to ``MANI_MCP_MAX_BODY_BYTES`` (413
+before reading, when declared larger), and a large one (over ``MANI_PARSE_OFFLOAD_BYTES``, or of unknown length)
+holds one of the service's large-body slots while the SDK reads and parses it, so that a few of them at once cannot
+stall every other request.
 """
 
 from __future__ import annotations
@@ -23,7 +28,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from manifoundation.server.api.deps import authorize
 from manifoundation.server.api.encoding import respond
-from manifoundation.server.api.errors import RateLimited, Unavailable, from_exception
+from manifoundation.server.api.errors import PayloadTooLarge, RateLimited, Unavailable, from_exception
 
 PATH = "/mcp"
 CALLER_KEY = "mani_caller"
@@ -87,28 +92,47 @@ class McpEndpoint:
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         request = Request(scope, receive)
         stream = scope.get("method") == "GET"
-        try:
-            caller = await authorize(request, self.state.settings)
-            if stream and self.streams[caller.tenant] >= self.state.settings.mcp_max_streams:
-                raise RateLimited(f"at most {self.state.settings.mcp_max_streams} open MCP event streams per key "
-                                  "(MANI_MCP_MAX_STREAMS): close one first", retry_after=5.0)  # fmt: skip
-            app = await self.state.mcp.app()
-        except Exception as exc:
-            error = from_exception(exc)
-            await respond(request, error.body(), status=error.status, headers=error.headers)(scope, receive, send)
-            return
-        scope.setdefault("state", {})[CALLER_KEY] = caller
-        if not stream:
-            await app(scope, receive, send)
-            return
-        self.streams[caller.tenant] += 1
-        try:
-            ending = _EndingStream(receive, send, self.state.settings.mcp_stream_max_s)
-            await app(scope, ending.receive, ending.send)
-        finally:
-            self.streams[caller.tenant] -= 1
-            if not self.streams[caller.tenant]:
-                del self.streams[caller.tenant]
+        async with contextlib.AsyncExitStack() as held:
+            try:
+                caller = await authorize(request, self.state.settings)
+                self._check(caller.tenant, stream, _declared_length(request))
+                if not stream and self.state.bodies.large(_declared_length(request)):
+                    await held.enter_async_context(self.state.bodies.slot())  # 503 after MANI_BODY_TIMEOUT
+                app = await self.state.mcp.app()
+            except Exception as exc:
+                error = from_exception(exc)
+                await respond(request, error.body(), status=error.status, headers=error.headers)(scope, receive, send)
+                return
+            scope.setdefault("state", {})[CALLER_KEY] = caller
+            if not stream:
+                await app(scope, receive, send)
+                return
+            self.streams[caller.tenant] += 1
+            try:
+                ending = _EndingStream(receive, send, self.state.settings.mcp_stream_max_s)
+                await app(scope, ending.receive, ending.send)
+            finally:
+                self.streams[caller.tenant] -= 1
+                if not self.streams[caller.tenant]:
+                    del self.streams[caller.tenant]
+
+    def _check(self, tenant: str | None, stream: bool, declared: int | None) -> None:
+        """Refuse a body declared over the MCP limit (413) and an event stream over the key's count (429)."""
+        settings = self.state.settings
+        if declared is not None and declared > settings.mcp_max_body_bytes:
+            raise PayloadTooLarge(
+                f"MCP bodies are limited to {settings.mcp_max_body_bytes} bytes (MANI_MCP_MAX_BODY_BYTES); send "
+                "large clouds to /v1 (msgpack), or upload a file through `mani mcp` (stdio)"
+            )
+        if stream and self.streams[tenant] >= settings.mcp_max_streams:
+            raise RateLimited(f"at most {settings.mcp_max_streams} open MCP event streams per key "
+                              "(MANI_MCP_MAX_STREAMS): close one first", retry_after=5.0)  # fmt: skip
+
+
+def _declared_length(request: Request) -> int | None:
+    """The body's declared length, or None (no or a malformed Content-Length: the SDK's own limit still holds)."""
+    value = request.headers.get("content-length")
+    return int(value) if value is not None and value.isdigit() else None
 
 
 class _EndingStream:

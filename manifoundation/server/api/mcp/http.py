@@ -46,7 +46,7 @@ def build_app(state: Any) -> tuple[MCPServer, ASGIApp]:
     server = build_server(state.objects, session_maker(state))
     app = server.streamable_http_app(
         streamable_http_path=PATH, stateless_http=True, json_response=True,
-        max_request_body_size=state.settings.max_body_bytes,
+        max_request_body_size=state.settings.mcp_max_body_bytes,
         transport_security=TransportSecuritySettings(enable_dns_rebinding_protection=False),
     )  # fmt: skip
     return server, app
