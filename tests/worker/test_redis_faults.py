@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import re
 import signal
 import time
 from pathlib import Path
@@ -148,3 +149,26 @@ def test_a_dead_workers_job_is_redelivered_by_heartbeat_not_visibility_timeout(t
                     await queue.close()
 
     run(main())
+
+
+def test_redis_at_maxmemory_is_said_plainly_without_its_internals(tmp_path: Path) -> None:
+    """A Redis out of memory refuses the submission script's writes: the caller's 503 says so in plain words, not
+    with the Lua script's SHA (issue 62, item 9)."""
+
+    async def main() -> str:
+        with redis_server(tmp_path, extra=("--maxmemory", "2mb", "--maxmemory-policy", "noeviction")) as server:
+            queue = client(server.url)
+            await queue.start()
+            try:
+                big = [small_request(i) for i in range(64)]
+                for _ in range(200):
+                    await queue.submit(big)
+            except QueueUnavailable as exc:
+                return str(exc)
+            finally:
+                await queue.close()
+        raise AssertionError("Redis never refused a write")
+
+    message = asyncio.run(main())
+    assert "out of memory" in message and "maxmemory" in message, message
+    assert not re.search(r"[0-9a-f]{40}", message) and "script" not in message, message

@@ -21,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import re
 import time
 from collections.abc import AsyncIterator, Sequence
 from typing import Any
@@ -29,7 +30,7 @@ import redis.asyncio as aioredis
 from redis.asyncio.retry import Retry
 from redis.backoff import ExponentialBackoff
 from redis.exceptions import ConnectionError as RedisConnectionError
-from redis.exceptions import RedisError, ResponseError
+from redis.exceptions import OutOfMemoryError, RedisError, ResponseError
 from redis.exceptions import TimeoutError as RedisTimeoutError
 
 from manifoundation.contract import (
@@ -104,6 +105,18 @@ def job_from_hash(job_id: str, h: dict[bytes, bytes], result: bytes | None, has_
     )  # fmt: skip
     return with_answer(job, result or None)
 
+
+
+_SCRIPT_DETAIL = re.compile(r"[.,]?\s*script: [0-9a-f]{40}.*$", re.DOTALL)
+
+
+def public_reason(exc: BaseException) -> str:
+    """What a caller may read of a Redis failure: Redis's own words, without the server's internals (a Lua
+    script's SHA and source line); an out-of-memory refusal said plainly."""
+    text = str(exc)
+    if isinstance(exc, OutOfMemoryError) or text.startswith("OOM"):
+        return "Redis is out of memory (its maxmemory is reached): nothing can be written until memory is freed"
+    return _SCRIPT_DETAIL.sub("", text).strip() or type(exc).__name__
 
 class RedisQueue(JobQueue):
     """Client side of the Redis Streams backend (the service's queue with ``MANI_REDIS_URL``)."""
@@ -188,7 +201,7 @@ class RedisQueue(JobQueue):
         except TimeoutError as exc:
             raise QueueUnavailable(f"Redis did not answer within {limit:g} s") from exc
         except (RedisError, OSError) as exc:
-            raise QueueUnavailable(f"Redis unavailable: {exc}") from exc
+            raise QueueUnavailable(f"Redis unavailable: {public_reason(exc)}") from exc
 
     # ---- submit / observe ------------------------------------------------------------------------------------
     async def submit(
