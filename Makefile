@@ -6,6 +6,8 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 HOST ?= 127.0.0.1
 PORT ?= 8000
+# gRPC's port; unset: 50051, or a free port printed at start when 50051 is taken (`make serve GRPC_PORT=50052`)
+GRPC_PORT ?=
 
 .PHONY: serve test test-slow lint install
 
@@ -30,7 +32,7 @@ $(STAMP): pyproject.toml distributions/client/pyproject.toml research/pyproject.
 install: $(STAMP)
 
 serve: $(STAMP)
-	$(BIN)/mani serve --host $(HOST) --port $(PORT)
+	$(BIN)/mani serve --host $(HOST) --port $(PORT) $(if $(GRPC_PORT),--grpc-port $(GRPC_PORT))
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

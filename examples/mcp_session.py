@@ -74,7 +74,8 @@ async def session(client: Any, hand: str) -> int:
 
 async def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--url", default="http://127.0.0.1:8000")
+    parser.add_argument("--url", default=os.environ.get("MANI_URL", "http://127.0.0.1:8000"),
+                        help="the service (env MANI_URL; default %(default)s)")  # fmt: skip
     parser.add_argument("--api-key", default=os.environ.get("MANI_API_KEY"))
     parser.add_argument("--stdio", action="store_true", help="run `mani mcp` as a subprocess instead of HTTP")
     parser.add_argument("--hand", default="allegro")

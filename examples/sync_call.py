@@ -21,7 +21,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("object", nargs="?", default=HERE / "data" / "box.npz", type=Path)
     parser.add_argument("--hand", default="leap")
-    parser.add_argument("--method", default="direct_grasp")
+    parser.add_argument("--method", default="auto", help="auto (default): the service's best for the request")
     parser.add_argument("--url", default=os.environ.get("MANI_URL", "http://127.0.0.1:8000"))
     parser.add_argument("--api-key", default=os.environ.get("MANI_API_KEY"))
     args = parser.parse_args()

@@ -51,7 +51,14 @@ from manifoundation.contract.plans import (
     SupportPlaneIn,
     WaypointRepair,
 )
-from manifoundation.contract.requests import ContactsIn, Method, SynthesisOptions, SynthesisRequest
+from manifoundation.contract.requests import (
+    DEFAULT_TIMEOUT_S,
+    MAX_PROPOSALS,
+    ContactsIn,
+    Method,
+    SynthesisOptions,
+    SynthesisRequest,
+)
 from manifoundation.contract.results import HandMesh, IterationRecord, Proposal, Quality, SynthesisResult
 from manifoundation.contract.robots import (
     MAX_ARCHIVE_BYTES,
@@ -83,11 +90,13 @@ from manifoundation.contract.tasks import (
 )
 
 __all__ = [
+    "DEFAULT_TIMEOUT_S",
     "MATERIAL_PROPERTIES",
     "MAX_ARCHIVE_BYTES",
     "MAX_BATCH_SIZE",
     "MAX_OBSTACLES",
     "MAX_POINTS",
+    "MAX_PROPOSALS",
     "MAX_URDF_BYTES",
     "MAX_WAYPOINTS",
     "MIN_POINTS",

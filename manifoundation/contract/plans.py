@@ -18,7 +18,7 @@ from pydantic import Field, model_validator
 from manifoundation.contract.arrays import spec
 from manifoundation.contract.common import Faces, Quaternion, Rows3, Vec3, WireModel
 from manifoundation.contract.objects import Material, ObjectIn
-from manifoundation.contract.requests import MAX_TIMEOUT_S
+from manifoundation.contract.requests import MAX_PROPOSALS, MAX_TIMEOUT_S
 from manifoundation.contract.results import Proposal
 from manifoundation.contract.robots import RobotIn
 
@@ -126,7 +126,7 @@ class PlanOptions(WireModel):
     max_repair_distance: float = Field(0.10, gt=0, le=2.0, description="How far a waypoint may be moved, m.")
     contacts: bool = Field(True, description="Synthesise contacts for every step (off: the trajectory only).")
     method: PlanMethod = PlanMethod.NETWORK
-    num_proposals: int = Field(4, ge=1, le=16, description="Hand proposals per new grasp.")
+    num_proposals: int = Field(4, ge=1, le=MAX_PROPOSALS, description="Hand proposals per new grasp.")
     max_iterations: int = Field(100, ge=1, le=500)
     max_contact_shift: float = Field(0.01, gt=0, le=1.0, description="A grasp is kept while its contacts move "
                                      "at most this far on the object, m.")  # fmt: skip

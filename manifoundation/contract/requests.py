@@ -12,6 +12,10 @@ from manifoundation.contract.robots import RobotIn
 from manifoundation.contract.tasks import JointMotionTask, PointMotionTask, TargetPointsTask, TaskIn
 
 MAX_TIMEOUT_S = 600.0
+DEFAULT_TIMEOUT_S = 30.0
+"""How long a caller waits for a synchronous answer unless it says (``options.timeout``; gRPC's unset field too)."""
+MAX_PROPOSALS = 16
+"""Most hand proposals one request (or one plan's new grasp) may ask for: ``num_proposals``, ``stop_after_verified``."""
 
 
 class Method(StrEnum):
@@ -28,16 +32,18 @@ class SynthesisOptions(WireModel):
     """How to run the synthesis."""
 
     method: Method = Method.AUTO
-    num_proposals: int = Field(1, ge=1, le=16, description="Hand proposals to return (K latent samples).")
+    num_proposals: int = Field(
+        1, ge=1, le=MAX_PROPOSALS, description="Hand proposals to return (K latent samples)."
+    )
     stop_after_verified: int | None = Field(
-        None, ge=1, le=16, description="Stop once this many proposals are verified: the later ones are neither "
-        "refined nor returned, so fewer than `num_proposals` may come back (a caller that needs one grasp, with "
-        "fallbacks, waits only for the first good one). Unset: all `num_proposals`.",
+        None, ge=1, le=MAX_PROPOSALS, description="Stop once this many proposals are verified: the later ones are "
+        "neither refined nor returned, so fewer than `num_proposals` may come back (a caller that needs one grasp, "
+        "with fallbacks, waits only for the first good one). Unset: all `num_proposals`.",
     )
     refine: bool = Field(True, description="Run the SOCP pose refinement (off: initial pose only).")
     max_iterations: int = Field(100, ge=1, le=500)
     seed: int = Field(0, ge=0, le=2**31 - 1, description="Seeds sampling; same seed, same answer.")
-    timeout: float = Field(30.0, gt=0, le=MAX_TIMEOUT_S, description="Seconds the caller will wait.")
+    timeout: float = Field(DEFAULT_TIMEOUT_S, gt=0, le=MAX_TIMEOUT_S, description="Seconds the caller will wait.")
     return_heatmap: bool = False
     return_force_map: bool = False
     return_history: bool = False

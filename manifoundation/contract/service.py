@@ -71,6 +71,10 @@ class DashboardPublic(WireModel):
     throughput_per_s: float = Field(0.0, description="Jobs finished per second over the last minute.")
     latency_p50: float | None = Field(None, description="Submission → finish of recent jobs, s.")
     latency_p99: float | None = None
+    finished_jobs: int = Field(0, description="Synthesis jobs among the recent ones (`recent`'s window, up to 200) "
+                               "that finished: succeeded or failed.")  # fmt: skip
+    verified_grasps: int = Field(0, description="Of `finished_jobs`, those whose best proposal is verified.")
+    verified_rate: float | None = Field(None, description="verified_grasps / finished_jobs; None: none finished.")
     series: list[Sample] = Field(default_factory=list)
     workers: list[WorkerPublic] = Field(default_factory=list)
     recent: list[JobPublic] = Field(default_factory=list)

@@ -9,6 +9,7 @@ lines.
 
 from __future__ import annotations
 
+import os
 import random
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -63,6 +64,8 @@ ModelT = TypeVar("ModelT", bound=BaseModel)
 Encoding = Literal["msgpack", "json"]
 
 DEFAULT_BASE_URL = "http://127.0.0.1:8000"
+URL_VARIABLE = "MANI_URL"
+"""The environment variable naming the service when a client is given no URL (the `mani` CLI reads it too)."""
 USER_AGENT = "manifoundation-sdk/0.1"
 # Seconds added to the server-side wait of /v1/synthesize before the HTTP read gives up.
 READ_MARGIN_S = 10.0
@@ -72,6 +75,11 @@ _ERROR_STATES = {
     "DeadlineExceeded": JobState.EXPIRED,
     "ResultExpired": JobState.EXPIRED,
 }
+
+
+def default_base_url() -> str:
+    """The service a client given no URL talks to: ``MANI_URL`` when set (and not empty), else the local default."""
+    return os.environ.get(URL_VARIABLE) or DEFAULT_BASE_URL
 
 
 @dataclass
@@ -87,7 +95,8 @@ class BaseClient:
     """Configuration and all the I/O-free logic of `Client` and `AsyncClient`.
 
     Args:
-        base_url: where the service listens, e.g. ``"http://127.0.0.1:8000"``; ``MANI_URL`` by default in the CLI.
+        base_url: where the service listens, e.g. ``"http://127.0.0.1:8000"``; None (default): the environment's
+            ``MANI_URL``, else ``DEFAULT_BASE_URL``.
         api_key: bearer token sent as ``Authorization: Bearer ...`` (None: no auth).
         timeout: default timeout for one HTTP exchange, seconds (or an ``httpx.Timeout``).
         retries: a `RetryPolicy`, or the number of retries with the default backoff.
@@ -98,7 +107,7 @@ class BaseClient:
 
     def __init__(
         self,
-        base_url: str = DEFAULT_BASE_URL,
+        base_url: str | None = None,
         api_key: str | None = None,
         *,
         timeout: float | httpx.Timeout = 30.0,
@@ -109,7 +118,7 @@ class BaseClient:
     ) -> None:
         if encoding not in ("msgpack", "json"):
             raise ValueError(f"encoding must be 'msgpack' or 'json', not {encoding!r}")
-        self.base_url = str(base_url).rstrip("/")
+        self.base_url = str(base_url or default_base_url()).rstrip("/")
         self.api_key = api_key
         self.timeout = timeout if isinstance(timeout, httpx.Timeout) else httpx.Timeout(timeout)
         self.retry_policy = retries if isinstance(retries, RetryPolicy) else RetryPolicy(max_retries=int(retries))

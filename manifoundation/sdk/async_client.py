@@ -59,7 +59,7 @@ class AsyncClient(BaseClient):
 
     def __init__(
         self,
-        base_url: str = "http://127.0.0.1:8000",
+        base_url: str | None = None,
         api_key: str | None = None,
         *,
         transport: httpx.AsyncBaseTransport | None = None,

@@ -61,7 +61,7 @@ class Client(BaseClient):
 
     def __init__(
         self,
-        base_url: str = "http://127.0.0.1:8000",
+        base_url: str | None = None,
         api_key: str | None = None,
         *,
         transport: httpx.BaseTransport | None = None,

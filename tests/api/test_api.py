@@ -278,6 +278,27 @@ def test_scene_and_pages(client: TestClient) -> None:
     assert data["recent"][0]["id"] == job_id
 
 
+def test_dashboard_data_has_the_verified_grasp_rate() -> None:
+    """Of the recent synthesis jobs that finished (succeeded or failed), the share whose best proposal is verified;
+    a succeeded job without a verified proposal counts against it (it is not 'succeeded' in the user's sense)."""
+    queue = FakeQueue(hold=True)
+    with make_client(queue) as client:
+        assert client.get("/dashboard/data").json().get("verified_rate") is None  # nothing finished yet (omitted)
+        ids = [client.post("/v1/jobs", json=request_body(seed=k)).json()["id"] for k in range(4)]
+        queue.finish(ids[0])  # verified
+        queue.finish(ids[1])  # succeeded, but its only proposal failed verification
+        result = queue.jobs[ids[1]].result
+        assert result is not None
+        result.proposals[0].quality.success = False
+        queue.finish(ids[2], ErrorBody(error="boom", type="InternalError"))  # failed
+        # ids[3] still queued: not finished, not counted
+        for _ in range(2):  # the second answer comes from what the first remembered
+            data = client.get("/dashboard/data").json()
+            assert (data["verified_grasps"], data["finished_jobs"]) == (1, 3)
+            assert data["verified_rate"] == pytest.approx(1 / 3)
+        assert "verified_rate" in client.get("/static/dashboard.js").text
+
+
 def test_sse_events_over_uvicorn() -> None:
     queue = FakeQueue(hold=True)
     with serving(create_app(Settings(sse_interval=0.05), queue=queue)) as base:

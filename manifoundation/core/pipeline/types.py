@@ -18,6 +18,7 @@ if TYPE_CHECKING:
     from manifoundation.core.robots.hand import Hand
 
 METHODS = ("network", "contacts", "direct_grasp", "random_contacts")
+MAX_PROPOSALS = 16  # the contract's MAX_PROPOSALS (tests/test_contract_mirrors.py holds the copies equal)
 TASK_KINDS = ("delta_pose", "point_motion", "target_points", "wrench", "force_closure", "joint_motion")
 MATERIALS = ("rigid", "articulated", "cloth", "rope", "plasticine")
 

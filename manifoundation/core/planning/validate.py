@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from manifoundation.core.pipeline.types import MAX_PROPOSALS
 from manifoundation.core.planning.obstacles import BoxObstacle, MeshObstacle, PointCloudObstacle
 from manifoundation.core.planning.poses import Pose
 from manifoundation.core.planning.types import REPAIR_MODES, InvalidPlan, PlanInput, PlanOptions
@@ -49,8 +50,8 @@ def check_options(opt: PlanOptions) -> None:
         raise InvalidPlan(f"options.repair: {opt.repair!r} is not one of {', '.join(REPAIR_MODES)}")
     if opt.method not in PLAN_METHODS:
         raise InvalidPlan(f"options.method: {opt.method!r} is not one of {', '.join(PLAN_METHODS)}")
-    if not 1 <= opt.num_proposals <= 16:
-        raise InvalidPlan(f"options.num_proposals: {opt.num_proposals} is outside 1..16")
+    if not 1 <= opt.num_proposals <= MAX_PROPOSALS:
+        raise InvalidPlan(f"options.num_proposals: {opt.num_proposals} is outside 1..{MAX_PROPOSALS}")
     if not 1 <= opt.max_iterations <= 500:
         raise InvalidPlan(f"options.max_iterations: {opt.max_iterations} is outside 1..500")
     if not 1 <= opt.new_grasp_attempts <= 8:

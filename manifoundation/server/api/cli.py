@@ -13,6 +13,8 @@ EXAMPLE = """examples:
   mani serve --port 9000 --workers 4
   mani serve --redis redis://localhost:6379/0 # API only; run `mani worker --redis ...` elsewhere
   mani serve --grpc-port 50052                # gRPC on another port (default 50051; --no-grpc: HTTP only)
+ports: both are checked before anything loads. A taken HTTP port is an error; a taken default gRPC port (50051)
+  is replaced by a free one, printed at start; a gRPC port you set (--grpc-port, MANI_GRPC_PORT) must be free.
 environment: MANI_HOST, MANI_PORT, MANI_GRPC_PORT, MANI_GRPC_MAX_MESSAGE_BYTES, MANI_CONCURRENCY,
   MANI_REDIS_URL, MANI_API_KEYS, MANI_RATE_LIMIT_PER_S, ..."""
 
@@ -58,6 +60,63 @@ def settings_from(args: argparse.Namespace) -> Any:
     )
 
 
+class PortTaken(Exception):
+    """A port `mani serve` was told to use cannot be listened on; the message is the one line to print."""
+
+
+def _cannot_listen(host: str, port: int) -> str | None:
+    """Why ``host:port`` cannot be listened on now (another process holds it, or the address is not ours); None: it
+    can. Bound the way uvicorn and gRPC bind (``SO_REUSEADDR``, no ``SO_REUSEPORT``) and released at once."""
+    import socket
+
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    with socket.socket(family, socket.SOCK_STREAM) as sock:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        try:
+            sock.bind((host, port))
+        except OSError as exc:
+            return exc.strerror or str(exc)
+    return None
+
+
+def _free_port(host: str, avoid: int) -> int:
+    """A port the system has free on ``host`` now, other than ``avoid`` (the HTTP port, not bound yet)."""
+    import socket
+
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    while True:
+        with socket.socket(family, socket.SOCK_STREAM) as sock:
+            sock.bind((host, 0))
+            port = int(sock.getsockname()[1])
+        if port != avoid:
+            return port
+
+
+def check_ports(settings: Any) -> tuple[Any, str | None]:
+    """``settings`` once both ports are known to be free, and a line to print when gRPC moved; `PortTaken` when the
+    HTTP port, or a gRPC port the user set (``--grpc-port`` / ``MANI_GRPC_PORT``), cannot be listened on. Run before
+    anything loads, so a busy port costs a second, not the model loading."""
+    if settings.port:
+        why = _cannot_listen(settings.host, settings.port)
+        if why:
+            raise PortTaken(f"mani serve: cannot listen on {settings.host}:{settings.port} ({why}): choose another "
+                            "port with --port or MANI_PORT (make serve PORT=...)")  # fmt: skip
+    if not settings.grpc_port:
+        return settings, None
+    host = settings.grpc_host or settings.host
+    same = settings.port and settings.grpc_port == settings.port and host == settings.host
+    why = "the HTTP port" if same else _cannot_listen(host, settings.grpc_port)
+    if not why:
+        return settings, None
+    if "grpc_port" in settings.model_fields_set:
+        raise PortTaken(f"mani serve: cannot listen for gRPC on {host}:{settings.grpc_port} ({why}): choose another "
+                        "port with --grpc-port or MANI_GRPC_PORT (make serve GRPC_PORT=...), or --no-grpc")  # fmt: skip
+    port = _free_port(host, settings.port)
+    note = (f"mani serve: gRPC port {settings.grpc_port} is taken ({why}); gRPC listens on {host}:{port} instead "
+            "(choose with --grpc-port or MANI_GRPC_PORT, make serve GRPC_PORT=...; --no-grpc: none)")  # fmt: skip
+    return settings.model_copy(update={"grpc_port": port}), note
+
+
 def uvicorn_config(app: Any, settings: Any) -> Any:
     """uvicorn's configuration for ``app``: X-Forwarded-For believed only from ``forwarded_allow_ips`` (uvicorn's
     default believes it from 127.0.0.1, so any local client could pose as any address); request heads bounded
@@ -85,16 +144,23 @@ def serve(args: argparse.Namespace) -> int:
     """Run uvicorn until SIGINT/SIGTERM; new `/v1` requests get 503 as soon as shutdown starts."""
     import sys
 
-    import uvicorn
     from pydantic import ValidationError
 
-    from manifoundation.server.api.app import configure_logging, create_app
-
     try:
-        settings = settings_from(args)
+        settings, moved = check_ports(settings_from(args))
     except ValidationError as exc:
         print(f"mani serve: invalid settings:\n{exc}", file=sys.stderr)
         return 2
+    except PortTaken as exc:
+        print(exc, file=sys.stderr)
+        return 2
+    if moved:
+        print(moved, file=sys.stderr, flush=True)
+
+    import uvicorn
+
+    from manifoundation.server.api.app import configure_logging, create_app
+
     configure_logging(settings)
     app = create_app(settings, grpc=True)
 

@@ -1,7 +1,10 @@
-"""`mani serve` serves gRPC beside HTTP in its one process (default on), `--no-grpc` turns it off."""
+"""`mani serve` serves gRPC beside HTTP in its one process (default on), `--no-grpc` turns it off; busy ports are
+found before anything loads (the HTTP one and a gRPC one the user set: one line and exit 2; the default gRPC one:
+a free port instead, printed)."""
 
 from __future__ import annotations
 
+import errno
 import os
 import signal
 import socket
@@ -17,16 +20,30 @@ from grpc_health.v1 import health_pb2, health_pb2_grpc
 
 from manifoundation.server.api.cli import settings_from
 from manifoundation.server.api.grpc.server import SERVICE_NAME
+from manifoundation.server.api.settings import Settings
 
 from ..server import free_port
 
 ROOT = Path(__file__).resolve().parents[3]
 
 
-def _serve(*flags: str, grpc_port: int | None = None) -> tuple[subprocess.Popen[bytes], int]:
-    port = free_port()
+def _env(**extra: str | None) -> dict[str, str]:
+    """The environment of a `mani serve` under test (fast staged pipeline, embedded queue); None removes a name."""
     env = dict(os.environ, MANI_PIPELINE="research.staged_pipeline:StagedPipeline", MANI_LOG_LEVEL="WARNING")
     env.pop("MANI_REDIS_URL", None)
+    for name, value in extra.items():
+        if value is None:
+            env.pop(name, None)
+        else:
+            env[name] = value
+    return env
+
+
+def _serve(
+    *flags: str, grpc_port: int | None = None, env: dict[str, str] | None = None
+) -> tuple[subprocess.Popen[bytes], int]:
+    port = free_port()
+    env = env if env is not None else _env()
     ports = ["--grpc-port", str(grpc_port)] if grpc_port else []
     cmd = [
         sys.executable,
@@ -88,7 +105,7 @@ def test_mani_serve_serves_grpc_and_stops_cleanly() -> None:
 
 def test_no_grpc_serves_http_only() -> None:
     grpc_port = free_port()
-    proc, _ = _serve("--no-grpc")
+    proc, _ = _serve("--no-grpc", env=_env(MANI_GRPC_PORT=str(grpc_port)))  # the flag beats the environment
     try:
         with grpc.insecure_channel(f"127.0.0.1:{grpc_port}") as channel:
             try:
@@ -100,14 +117,68 @@ def test_no_grpc_serves_http_only() -> None:
         _stop(proc)
 
 
-def test_a_busy_grpc_port_is_a_clear_error() -> None:
-    with socket.socket() as taken:
-        taken.bind(("127.0.0.1", 0))
-        taken.listen()
+def _held() -> socket.socket:
+    """A socket listening on a free port of 127.0.0.1, as another program would hold it."""
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    sock.listen()
+    return sock
+
+
+def _refused(*flags: str, env: dict[str, str]) -> tuple[subprocess.CompletedProcess[str], float]:
+    cmd = [sys.executable, "-m", "manifoundation.cli.main", "serve", "--workers", "1", *flags]
+    start = time.monotonic()
+    done = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
+    return done, time.monotonic() - start
+
+
+# Under a second on an idle machine (Python's start and the settings); the bound leaves room for a loaded one and
+# is still far below the model loading (~40 s) that a busy port used to cost.
+FAST_S = 5.0
+
+
+def test_a_busy_http_port_fails_at_once_with_one_line() -> None:
+    with _held() as taken:
         port = taken.getsockname()[1]
-        env = dict(os.environ, MANI_PIPELINE="research.staged_pipeline:StagedPipeline", MANI_LOG_LEVEL="WARNING")
-        cmd = [sys.executable, "-m", "manifoundation.cli.main", "serve", "--port", str(free_port()), "--workers", "1",
-               "--grpc-port", str(port)]  # fmt: skip
-        done = subprocess.run(cmd, cwd=ROOT, env=env, capture_output=True, text=True, timeout=60)
-    assert done.returncode != 0
-    assert f"cannot listen on 127.0.0.1:{port}" in done.stderr, done.stderr[-2000:]
+        done, seconds = _refused("--port", str(port), env=_env())
+    assert done.returncode == 2 and seconds < FAST_S, (seconds, done.stderr[-2000:])
+    line = done.stderr.strip()
+    assert "\n" not in line and f"127.0.0.1:{port}" in line and "--port" in line and "PORT" in line, line
+
+
+def test_a_busy_grpc_port_that_was_set_fails_at_once_with_one_line() -> None:
+    with _held() as taken:
+        port = taken.getsockname()[1]
+        done, seconds = _refused("--port", str(free_port()), "--grpc-port", str(port), env=_env())
+        by_env, _ = _refused("--port", str(free_port()), env=_env(MANI_GRPC_PORT=str(port)))
+    assert done.returncode == 2 and seconds < FAST_S, (seconds, done.stderr[-2000:])
+    line = done.stderr.strip()
+    assert "\n" not in line and f"cannot listen for gRPC on 127.0.0.1:{port}" in line, line
+    assert all(word in line for word in ("--grpc-port", "GRPC_PORT", "--no-grpc")), line
+    assert by_env.returncode == 2 and by_env.stderr.strip() == line
+
+
+def test_a_busy_default_grpc_port_is_replaced_by_a_free_one() -> None:
+    default = Settings.model_fields["grpc_port"].default
+    holder = socket.socket()
+    try:
+        holder.bind(("127.0.0.1", default))
+        holder.listen()
+    except OSError as exc:  # another program holds it already: just as busy
+        assert exc.errno == errno.EADDRINUSE, exc
+    try:
+        proc, _ = _serve(env=_env(MANI_GRPC_PORT=None))  # neither flag nor environment: the default
+        try:
+            assert proc.stderr is not None
+            line = proc.stderr.readline().decode()
+            assert f"gRPC port {default} is taken" in line and "GRPC_PORT" in line, line
+            moved = int(line.split("gRPC listens on 127.0.0.1:")[1].split()[0])
+            assert moved != default
+            with grpc.insecure_channel(f"127.0.0.1:{moved}") as channel:
+                health = health_pb2_grpc.HealthStub(channel)
+                reply = health.Check(health_pb2.HealthCheckRequest(service=SERVICE_NAME), timeout=5)
+                assert reply.status == health_pb2.HealthCheckResponse.SERVING
+        finally:
+            _stop(proc)
+    finally:
+        holder.close()

@@ -210,3 +210,22 @@ def test_batch_tracker_reports_every_item_exactly_once(total: int, page_size: in
     states = [s if s.terminal else JobState.SUCCEEDED for s in states]
     reported += _tracker_round(tracker, states)
     assert tracker.done and sorted(reported) == list(range(total))
+
+
+def test_a_client_given_no_url_reads_mani_url_then_the_local_default(monkeypatch: pytest.MonkeyPatch) -> None:
+    import asyncio
+
+    from manifoundation.sdk import AsyncClient, Client
+
+    monkeypatch.setenv("MANI_URL", "http://grasps.example:9000/")
+    with Client() as client:
+        assert client.base_url == "http://grasps.example:9000"
+    asynchronous = AsyncClient()
+    assert asynchronous.base_url == "http://grasps.example:9000"
+    asyncio.run(asynchronous.aclose())
+    with Client("http://127.0.0.1:9001") as client:  # a URL given wins
+        assert client.base_url == "http://127.0.0.1:9001"
+    monkeypatch.setenv("MANI_URL", "")  # set but empty: as if unset
+    assert BaseClient().base_url == "http://127.0.0.1:8000"
+    monkeypatch.delenv("MANI_URL")
+    assert BaseClient().base_url == "http://127.0.0.1:8000"

@@ -20,6 +20,7 @@ from typing import Any
 import grpc
 
 from manifoundation.contract import (
+    DEFAULT_TIMEOUT_S,
     MAX_BATCH_SIZE,
     BatchItem,
     ErrorBody,
@@ -33,13 +34,15 @@ from manifoundation.contract.protos.convert import to_proto
 from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
 from manifoundation.contract.protos.v1 import manifoundation_pb2_grpc as pb_grpc
 from manifoundation.server.api.batch_pages import batch_page
-from manifoundation.server.api.errors import Conflict, InvalidInput, PayloadTooLarge, Unavailable
+from manifoundation.server.api.errors import Conflict, InvalidInput, PayloadTooLarge
 from manifoundation.server.api.grpc.calls import GrpcMetrics, send_initial_metadata, streaming, unary
 from manifoundation.server.api.grpc.errors import JobFailed
 from manifoundation.server.api.grpc.submit import Submission
 from manifoundation.server.api.security import Caller
+from manifoundation.server.api.waiting import wait_for_job
 
 log = logging.getLogger("manifoundation.server.api.grpc")
+EXPIRY_NOTICE_S = 10.0  # a job past its deadline is expired by the queue within this
 DEADLINE_SLACK_S = 0.05  # a call that ends this close to its job's deadline let the deadline expire the job
 _WITHOUT_ERROR = {
     JobState.CANCELLED: "Cancelled",
@@ -65,7 +68,7 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
     @unary
     async def Synthesize(self, request: pb.SynthesisRequest, context: Any, caller: Caller) -> pb.SynthesisResult:
         """Submit, wait for the end, answer the result (or the job's error as the call's status)."""
-        timeout = request.options.timeout if request.options.HasField("timeout") else 30.0
+        timeout = request.options.timeout if request.options.HasField("timeout") else DEFAULT_TIMEOUT_S
         call_deadline = _call_deadline(context)
         deadline = min(time.time() + max(0.0, timeout), call_deadline or float("inf"))
         _, job_id = await self.submission.one(request, caller, context, kind="sync", deadline=deadline)
@@ -85,13 +88,8 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
 
     async def _wait(self, job_id: str, deadline: float) -> JobPublic:
         """The job once terminal; its deadline bounds the wait (plus the queue's time to notice it)."""
-        give_up = deadline + 10.0
-        while True:
-            if getattr(self.state, "shutting_down", False):
-                raise Unavailable(f"the service is shutting down; job {job_id} may be fetched with GetJob")
-            job: JobPublic = await self.state.queue.wait(job_id, max(0.0, min(1.0, give_up - time.time())))
-            if job.state.terminal or time.time() >= give_up:
-                return job
+        seconds = deadline + EXPIRY_NOTICE_S - time.time()
+        return await wait_for_job(self.state, self.state.queue, job_id, seconds, fetch_with="with GetJob")
 
     @unary
     async def SubmitJob(self, request: pb.SynthesisRequest, context: Any, caller: Caller) -> pb.JobCreated:

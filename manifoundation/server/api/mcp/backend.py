@@ -12,7 +12,6 @@ and validation has one (the contract's, then the service's own checks):
 
 from __future__ import annotations
 
-import time
 from typing import Any, Protocol
 
 from manifoundation.contract import BatchPublic, ErrorBody, JobPublic, PlanRequest, RobotPublic, SynthesisRequest
@@ -22,6 +21,7 @@ from manifoundation.server.api.batch_pages import batch_page
 from manifoundation.server.api.errors import from_exception
 from manifoundation.server.api.security import Caller
 from manifoundation.server.api.submission import Submitter, running_queue
+from manifoundation.server.api.waiting import wait_for_job
 
 
 class Backend(Protocol):
@@ -104,10 +104,8 @@ class ServiceBackend:
     async def job(self, job_id: str, wait: float = 0.0) -> JobPublic:
         queue, owner = self.queue, self.caller.scope
         job: JobPublic = await queue.get(job_id, owner=owner)  # NotFound for another tenant's job
-        end = time.monotonic() + max(0.0, wait)
-        while not job.state.terminal and time.monotonic() < end:
-            await queue.wait(job_id, min(1.0, end - time.monotonic()))
-            job = await queue.get(job_id, owner=owner)
+        if not job.state.terminal and wait > 0:
+            job = await wait_for_job(self.state, queue, job_id, wait, fetch_with="with get_job")
         self.state.metrics.observe_job(job)
         return job
 
@@ -150,4 +148,3 @@ class ClientBackend:
 
     def view_url(self, job_id: str) -> str | None:
         return f"{self.client.base_url.rstrip('/')}/view/{job_id}"
-

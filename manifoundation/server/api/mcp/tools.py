@@ -22,7 +22,7 @@ from mcp.server.mcpserver import Context, MCPServer
 from mcp.server.mcpserver.exceptions import ToolError
 from pydantic import Field
 
-from manifoundation.contract import ErrorBody, ErrorType, ObjectIn, PlanRequest, SynthesisRequest
+from manifoundation.contract import MAX_PROPOSALS, ErrorBody, ErrorType, ObjectIn, PlanRequest, SynthesisRequest
 from manifoundation.server.api.mcp.backend import Backend, error_body
 from manifoundation.server.api.mcp.objects import ObjectStore
 from manifoundation.server.api.mcp.shapes import primitive
@@ -124,7 +124,7 @@ def build_server(objects: ObjectStore, session_of: SessionFn, *, name: str = "ma
         hand: str = "allegro",
         task: dict[str, Any] | None = None,
         method: Literal["auto", "network", "random_contacts", "direct_grasp"] = "auto",
-        num_proposals: Annotated[int, Field(ge=1, le=16)] = 4,
+        num_proposals: Annotated[int, Field(ge=1, le=MAX_PROPOSALS)] = 4,
         seed: int = 0,
         wait_s: Wait = 30.0,
     ) -> dict[str, Any]:

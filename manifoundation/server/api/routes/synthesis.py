@@ -2,19 +2,17 @@
 
 from __future__ import annotations
 
-import asyncio
 import logging
-import time
 
 from fastapi import APIRouter, Request
 from starlette.responses import Response
 
 from manifoundation.contract import ErrorBody, ErrorType, JobCreated, JobPublic, JobState, SynthesisResult
-from manifoundation.server.api.deps import Authorized, QueueDep
-from manifoundation.server.api.errors import Unavailable
+from manifoundation.server.api.deps import Authorized
 from manifoundation.server.api.negotiation import body_openapi, respond
 from manifoundation.server.api.responses import ERRORS
 from manifoundation.server.api.submission import Admitted, SubmitterDep, read_and_submit
+from manifoundation.server.api.waiting import wait_for_job
 
 router = APIRouter(prefix="/v1", tags=["synthesis"], dependencies=[Authorized])
 log = logging.getLogger("manifoundation.server.api.synthesis")
@@ -50,7 +48,7 @@ async def synthesize(request: Request, submitter: SubmitterDep) -> Response:
     body, job_id = await read_and_submit(request, submitter, "sync", deadline_from_timeout=True)
     queue, metrics = submitter.queue, submitter.metrics
     wait = min(body.options.timeout, submitter.settings.sync_wait_max)
-    job = await wait_for(request, queue, job_id, wait)
+    job = await wait_for_job(request.app.state, queue, job_id, wait, fetch_with="from another replica")
     if not job.state.terminal:
         return job_created(request, job_id, job)
     metrics.observe_job(job)
@@ -62,19 +60,6 @@ async def synthesize(request: Request, submitter: SubmitterDep) -> Response:
     if status >= 500:
         log.warning("job failed", extra={"job_id": job_id, "type": error.type, "error": error.error})
     return respond(request, error, status=status, headers=headers)
-
-
-async def wait_for(request: Request, queue: QueueDep, job_id: str, timeout: float) -> JobPublic:
-    """`queue.wait` in slices, giving up early (503) when the service starts shutting down."""
-    end = time.monotonic() + timeout
-    while True:
-        left = end - time.monotonic()
-        job = await queue.wait(job_id, max(0.0, min(left, 1.0)))
-        if job.state.terminal or left <= 1.0:
-            return job
-        if getattr(request.app.state, "shutting_down", False):
-            raise Unavailable(f"the service is shutting down; job {job_id} may be fetched from another replica")
-        await asyncio.sleep(0)
 
 
 @router.post(

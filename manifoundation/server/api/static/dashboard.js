@@ -53,6 +53,8 @@ function render(data) {
   document.getElementById("p99").textContent = mani.seconds(data.latency_p99);
   document.getElementById("nworkers").textContent = data.workers.length;
   document.getElementById("totals").textContent = mani.text(s.completed_total) + " / " + mani.text(s.failed_total);
+  document.getElementById("verified").textContent = data.verified_rate == null ? "–"
+    : Math.round(100 * data.verified_rate) + " % (" + data.verified_grasps + "/" + data.finished_jobs + ")";
   document.getElementById("ndead").textContent = mani.text(s.dead_letters);
   fill("workers", data.workers, (tr, w) => {
     mani.cell(tr, w.id, "mono");

@@ -1,0 +1,31 @@
+"""Waiting for a job to end, for every front end that answers when the job is done: HTTP's `POST /v1/synthesize`,
+gRPC's `Synthesize` and MCP's ``wait_s``. One loop, so each notices the end, its time limit and a shutdown the same
+way; how long each waits is its own (the request's ``options.timeout``, default the contract's
+``DEFAULT_TIMEOUT_S``)."""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from typing import Any
+
+from manifoundation.contract import JobPublic
+from manifoundation.server.api.errors import Unavailable
+
+WAIT_SLICE_S = 1.0
+"""The longest single `queue.wait`: a shutdown is noticed within this."""
+
+
+async def wait_for_job(state: Any, queue: Any, job_id: str, seconds: float, *, fetch_with: str) -> JobPublic:
+    """The job once it ended, or as it is after ``seconds``. `Unavailable` (503 / UNAVAILABLE) when the service
+    starts shutting down meanwhile (``state.shutting_down``): the message tells the caller to fetch the job
+    ``fetch_with`` (e.g. "with GetJob")."""
+    end = time.monotonic() + max(0.0, seconds)
+    while True:
+        left = end - time.monotonic()
+        job: JobPublic = await queue.wait(job_id, max(0.0, min(left, WAIT_SLICE_S)))
+        if job.state.terminal or left <= WAIT_SLICE_S:
+            return job
+        if getattr(state, "shutting_down", False):
+            raise Unavailable(f"the service is shutting down; job {job_id} may be fetched {fetch_with}")
+        await asyncio.sleep(0)
