@@ -6,6 +6,7 @@ from __future__ import annotations
 from manifoundation.contract import MAX_PROPOSALS, Material, Method
 from manifoundation.contract.plans import PlanOptions
 from manifoundation.contract.requests import SynthesisOptions
+from manifoundation.contract.tasks import TASK_KINDS
 from manifoundation.core.pipeline import types as science
 
 
@@ -13,6 +14,7 @@ def test_the_science_copies_equal_the_contract() -> None:
     assert science.MAX_PROPOSALS == MAX_PROPOSALS
     assert set(science.METHODS) == {m.value for m in Method} - {Method.AUTO.value}
     assert set(science.MATERIALS) == {m.value for m in Material}
+    assert set(science.TASK_KINDS) == set(TASK_KINDS)
 
 
 def test_every_num_proposals_range_is_the_contract_constant() -> None:
