@@ -16,10 +16,16 @@ import uuid
 from collections.abc import Iterator
 
 import pytest
+from hypothesis import settings
 
 # `mani serve` listens for gRPC on 50051 by default; the `mani serve` processes tests start (each on a free HTTP
 # port) would race for that one port, so they serve HTTP only unless a test asks for gRPC (`--grpc-port`).
 os.environ.setdefault("MANI_GRPC_PORT", "0")
+
+# No per-example deadline: the suite shares two cores with servers, workers and other runs, where a 200 ms deadline
+# fails a correct example at random (hypothesis's FlakyFailure). Tests that care about time measure it themselves.
+settings.register_profile("shared-cores", deadline=None)
+settings.load_profile("shared-cores")
 
 
 def _free_port() -> int:
