@@ -25,7 +25,9 @@ from manifoundation.server.queue.base import (
     QueueFull,
     QueueUnavailable,
     RobotInvalid,
+    RobotLimitReached,
 )
+from manifoundation.server.queue.robot_quota import RobotLimits
 from manifoundation.server.worker.settings import QueueSettings
 
 
@@ -65,6 +67,8 @@ __all__ = [
     "QueueSettings",
     "QueueUnavailable",
     "RobotInvalid",
+    "RobotLimitReached",
+    "RobotLimits",
     "create_queue",
     "queue_settings",
 ]

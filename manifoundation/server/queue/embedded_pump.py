@@ -70,6 +70,7 @@ class EmbeddedPump:
         self._robots: dict[str, RobotPublic] = {}  # by `scoped_robot(owner, name)`; built-ins by name
         self._registered: dict[str, bytes] = {}  # owner-scoped name -> msgpack of its RobotRegister
         self._robot_replies: dict[str, tuple[asyncio.AbstractEventLoop, asyncio.Future[dict[str, Any]]]] = {}
+        self._robot_reservations: dict[str, tuple[str | None, str, int]] = {}  # rid -> (owner, name, bytes)
         self._dead: deque[DeadLetter] = deque(maxlen=1000)
         self._totals = {"completed": 0, "failed": 0}
         self._wake_r, self._wake_w = mp.Pipe(duplex=False)
