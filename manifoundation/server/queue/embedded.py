@@ -218,14 +218,18 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
                 completed_total=self._totals["completed"],
                 failed_total=self._totals["failed"],
                 dead_letters=len(self._dead),
-                workers=sum(1 for w in self._workers.values() if w.info),
+                workers=sum(1 for w in self._workers.values() if self._live(w)),
             )
+
+    def _live(self, worker: WorkerHandle) -> bool:
+        """Ready and heard from within ``heartbeat_timeout`` (a silent worker is not live, as on Redis)."""
+        return worker.info is not None and time.monotonic() - worker.last_seen <= self.settings.heartbeat_timeout
 
     async def workers(self) -> list[WorkerPublic]:
         with self._lock:
             out = []
             for w in self._workers.values():
-                if w.info is not None:
+                if self._live(w) and w.info is not None:
                     current = next(iter(w.inflight), None)
                     out.append(w.info.model_copy(update={"current_job": current, "jobs_done": w.jobs_done}))
             return out

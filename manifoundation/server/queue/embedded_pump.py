@@ -110,6 +110,8 @@ class EmbeddedPump:
             if time.monotonic() - last_sweep > 0.05:
                 last_sweep = time.monotonic()
                 self._sweep()
+                if self._running:
+                    self._replace_silent()
             if self._running:
                 self._dispatch()
             elif not any(w.process.is_alive() for w in list(self._workers.values())):
@@ -125,6 +127,7 @@ class EmbeddedPump:
             worker.process.join(1)
             self._lost(worker, f"worker process exited (code {worker.process.exitcode}) while running the job")
             return
+        worker.last_seen = time.monotonic()
         op = msg["op"]
         result = None
         if op == "done" and msg.get("state") == JobState.SUCCEEDED.value:
@@ -157,6 +160,18 @@ class EmbeddedPump:
             elif op == "robot" and (reply := self._robot_replies.get(msg["rid"])):
                 loop, future = reply
                 loop.call_soon_threadsafe(settle, future, msg)
+
+    def _replace_silent(self) -> None:
+        """Kill every ready worker not heard from for ``heartbeat_timeout`` (stopped, hung in native code, swapped
+        out) and treat it as lost: its jobs are re-delivered and a replacement spawned, as a Redis worker's jobs are
+        once its heartbeat key expires. Its heartbeat thread writes every ``heartbeat_interval`` while it works."""
+        limit, now = self.settings.heartbeat_timeout, time.monotonic()
+        for worker in [w for w in list(self._workers.values()) if w.info is not None and now - w.last_seen > limit]:
+            silent = now - worker.last_seen
+            log.warning("worker %s silent for %.1f s (no heartbeat): killed, its jobs re-delivered", worker.id, silent)
+            worker.process.kill()
+            worker.process.join(1)
+            self._lost(worker, f"worker sent no heartbeat for {silent:.1f} s (hung or stopped) and was replaced")
 
     def _lost(self, worker: WorkerHandle, detail: str) -> None:
         with self._lock:
