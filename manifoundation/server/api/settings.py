@@ -15,7 +15,7 @@ from manifoundation.contract import MAX_BATCH_SIZE
 from manifoundation.contract.codec import MAX_BODY_BYTES
 
 if TYPE_CHECKING:
-    from manifoundation.server.queue.robot_quota import RobotLimits
+    from manifoundation.server.queue.base import RobotLimits
     from manifoundation.server.worker.settings import QueueSettings
 
 
@@ -139,7 +139,7 @@ class Settings(BaseSettings):
 
     def robot_limits(self) -> RobotLimits:
         """What one key may register (``max_robots``, ``max_robot_store_bytes``), for every front end."""
-        from manifoundation.server.queue.robot_quota import RobotLimits
+        from manifoundation.server.queue.base import RobotLimits
 
         return RobotLimits(max_robots=self.max_robots, max_bytes=self.max_robot_store_bytes)
 

@@ -26,8 +26,8 @@ from manifoundation.server.queue.base import (
     QueueUnavailable,
     RobotInvalid,
     RobotLimitReached,
+    RobotLimits,
 )
-from manifoundation.server.queue.robot_quota import RobotLimits
 from manifoundation.server.worker.settings import QueueSettings
 
 

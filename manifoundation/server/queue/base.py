@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import AsyncIterator, Sequence
-from typing import TYPE_CHECKING
+from dataclasses import dataclass
 
 from manifoundation.contract import (
     DeadLetter,
@@ -26,9 +26,6 @@ from manifoundation.contract import (
     SynthesisRequest,
     WorkerPublic,
 )
-
-if TYPE_CHECKING:
-    from manifoundation.server.queue.robot_quota import RobotLimits
 
 
 class QueueError(Exception):
@@ -53,6 +50,15 @@ class RobotInvalid(QueueError):
 
 class RobotLimitReached(QueueError):
     """A key already holds as many registered robots, or as many of their bytes, as its limits allow."""
+
+
+@dataclass(frozen=True)
+class RobotLimits:
+    """What one key may hold: ``max_robots`` registered hands, ``max_bytes`` of descriptions and archives (the rule:
+    `manifoundation.server.queue.robot_quota`)."""
+
+    max_robots: int
+    max_bytes: int
 
 
 class QueueUnavailable(QueueError):

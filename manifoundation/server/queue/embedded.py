@@ -36,7 +36,14 @@ from manifoundation.contract import (
     kind_of,
 )
 from manifoundation.contract.codec import pack
-from manifoundation.server.queue.base import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
+from manifoundation.server.queue.base import (
+    JobNotFound,
+    JobQueue,
+    QueueFull,
+    QueueUnavailable,
+    RobotInvalid,
+    RobotLimits,
+)
 from manifoundation.server.queue.embedded_parts import JobRecord, WorkerHandle
 from manifoundation.server.queue.embedded_pump import EmbeddedPump
 from manifoundation.server.queue.records import (
@@ -47,7 +54,6 @@ from manifoundation.server.queue.records import (
     shutdown_error,
     with_answer,
 )
-from manifoundation.server.queue.robot_quota import RobotLimits, check
 
 log = logging.getLogger("manifoundation.server.queue.embedded")
 
@@ -221,10 +227,6 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
                 workers=sum(1 for w in self._workers.values() if self._live(w)),
             )
 
-    def _live(self, worker: WorkerHandle) -> bool:
-        """Ready and heard from within ``heartbeat_timeout`` (a silent worker is not live, as on Redis)."""
-        return worker.info is not None and time.monotonic() - worker.last_seen <= self.settings.heartbeat_timeout
-
     async def workers(self) -> list[WorkerPublic]:
         with self._lock:
             out = []
@@ -244,13 +246,9 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
         return sorted(mine, key=lambda r: (not r.builtin, r.name))
 
     async def register_robot(
-        self,
-        robot: RobotRegister,
-        timeout: float = 30.0,
-        *,
-        owner: str | None = None,
+        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None,
         limits: RobotLimits | None = None,
-    ) -> RobotPublic:
+    ) -> RobotPublic:  # fmt: skip
         with self._lock:
             ready = [w for w in self._workers.values() if w.info is not None]
             existing = self._robots.get(robot.name)
@@ -262,11 +260,9 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
         rid, loop = new_id(), asyncio.get_running_loop()
         payload = pack(robot.model_dump(mode="python", exclude_none=True))
         future: asyncio.Future[dict[str, Any]] = loop.create_future()
-        with self._lock:  # the limits' check and the reservation: one step under the lock
-            if limits is not None:
-                self._check_robot_limits(robot, owner, limits)
+        with self._lock:
+            self._reserve_robot(rid, robot, owner, limits)
             self._robot_replies[rid] = (loop, future)
-            self._robot_reservations[rid] = (owner, robot.name, robot.stored_bytes)
         try:
             worker.send({"op": "robot", "rid": rid}, payload)
             reply = await asyncio.wait_for(future, timeout)
@@ -284,16 +280,6 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
             self._registered[key] = payload
             self._robots[key] = public
         return public
-
-    def _check_robot_limits(self, robot: RobotRegister, owner: str | None, limits: RobotLimits) -> None:
-        """`robot_quota.check` on ``owner``'s registered robots and reservations (call with the lock held)."""
-        registered = {
-            r.name: r.stored_bytes or 0
-            for key, r in self._robots.items()
-            if not r.builtin and key == scoped_robot(owner, r.name)
-        }
-        pending = [(name, size) for who, name, size in self._robot_reservations.values() if who == owner]
-        check(registered, pending, robot.name, robot.stored_bytes, limits)
 
     async def delete_robot(self, name: str, *, owner: str | None = None) -> None:
         key = scoped_robot(owner, name)

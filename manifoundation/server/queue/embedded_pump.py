@@ -29,10 +29,12 @@ from manifoundation.contract import (
     JobProgress,
     JobState,
     RobotPublic,
+    RobotRegister,
     Stage,
     WorkerPublic,
 )
 from manifoundation.contract.codec import unpack
+from manifoundation.server.queue.base import RobotLimits
 from manifoundation.server.queue.embedded_parts import ChildProcess, JobRecord, WorkerHandle, settle
 from manifoundation.server.queue.records import (
     cancelled_error,
@@ -43,6 +45,7 @@ from manifoundation.server.queue.records import (
     state_for_error,
     worker_lost_error,
 )
+from manifoundation.server.queue.robot_quota import check_in_memory
 from manifoundation.server.worker.settings import QueueSettings
 from manifoundation.server.worker.supervisor import spawn, stop_all
 
@@ -76,6 +79,18 @@ class EmbeddedPump:
         self._wake_r, self._wake_w = mp.Pipe(duplex=False)
         self._pump: threading.Thread | None = None
         self._running = False
+
+    def _live(self, worker: WorkerHandle) -> bool:
+        """Ready and heard from within ``heartbeat_timeout`` (a silent worker is not live, as on Redis)."""
+        return worker.info is not None and time.monotonic() - worker.last_seen <= self.settings.heartbeat_timeout
+
+    def _reserve_robot(self, rid: str, robot: RobotRegister, owner: str | None, limits: RobotLimits | None) -> None:
+        """Check ``owner``'s limits (`robot_quota.check`) on its registered robots and registrations in flight, and
+        reserve this one's slot and bytes under ``rid`` (call with the lock held: check and reservation are one step).
+        """
+        if limits is not None:
+            check_in_memory(self._robots, self._robot_reservations.values(), owner, robot, limits)
+        self._robot_reservations[rid] = (owner, robot.name, robot.stored_bytes)
 
     def _join(self, workers: list[WorkerHandle]) -> None:
         """Wait for workers told to stop (they finish their batch), killing those that outlive the grace."""

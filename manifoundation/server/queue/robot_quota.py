@@ -13,19 +13,12 @@ cannot all pass a check that each made alone.
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
 
-from manifoundation.server.queue.base import RobotLimitReached
+from manifoundation.contract import RobotPublic, RobotRegister
+from manifoundation.server.queue.base import RobotLimitReached, RobotLimits
+from manifoundation.server.queue.records import scoped_robot
 
 COUNT, BYTES = 1, 2  # codes of a refusal (also the Lua script's)
-
-
-@dataclass(frozen=True)
-class RobotLimits:
-    """What one key may hold: ``max_robots`` registered hands, ``max_bytes`` of descriptions and archives."""
-
-    max_robots: int
-    max_bytes: int
 
 
 def refusal(code: int, held: int, size: int, limits: RobotLimits) -> RobotLimitReached:
@@ -64,6 +57,22 @@ def check(
         raise refusal(COUNT, len(others), size, limits)
     if sum(others.values()) + size > limits.max_bytes:
         raise refusal(BYTES, sum(others.values()), size, limits)
+
+
+def check_in_memory(
+    robots: Mapping[str, RobotPublic],
+    pending: Iterable[tuple[str | None, str, int]],
+    owner: str | None,
+    robot: RobotRegister,
+    limits: RobotLimits,
+) -> None:
+    """`check` on the embedded queue's store: ``robots`` by `scoped_robot` key (built-ins by name), ``pending``
+    the registrations in flight as (owner, name, bytes). Raises `RobotLimitReached`."""
+    registered = {
+        r.name: r.stored_bytes or 0 for key, r in robots.items() if not r.builtin and key == scoped_robot(owner, r.name)
+    }
+    mine = [(name, size) for who, name, size in pending if who == owner]
+    check(registered, mine, robot.name, robot.stored_bytes, limits)
 
 
 # KEYS: robots (hash), robot sizes (hash), the owner's reservations (hash rid → "until_ms size name").
