@@ -70,9 +70,17 @@ class Proposal(WireModel):
     quality: Quality
     contact_source: str | None = Field(
         None,
-        description="Where the contacts came from: network, given, random, direct_grasp, random_fallback "
+        description="Where the contacts came from: network, given (the caller's contacts, each within 5 mm of "
+        "its given point: see `contact_shift`), given_moved (the caller's contacts, at least one moved farther "
+        "than 5 mm by the refinement), random, direct_grasp, random_fallback "
         "(the network's heatmap had no point above the selection threshold, so random contacts were refined) "
         "or motion_fallback (a deformable's flat heatmap: the points the task moves most, with its motion).",
+    )
+    contact_shift: Vector | None = Field(
+        None,
+        description="Method 'contacts': how far (m) each contact lies from the caller's point of the same index "
+        "(`contacts.points` order; never more contacts than given). Over 5 mm anywhere: `contact_source` is "
+        "given_moved. Unset for the other methods.",
     )
     hand_spheres: Annotated[np.ndarray, spec("S", 4)] | None = Field(
         None, description="The hand's collision spheres at this pose: centre (world, m) and radius, for viewers."

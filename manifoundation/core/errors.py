@@ -7,6 +7,7 @@ out of the science is a fault of the service (``InternalError``), never blamed o
     ScienceError                  InternalError
     ├── InvalidInput              ValidationError   the input cannot be processed (the message names the field)
     │   ├── InvalidPointCloud     ValidationError   points/normals/mask malformed or too few for a surface
+    │   ├── InvalidContacts       ValidationError   given contacts unusable (e.g. off the object): ``contacts.points``
     │   ├── HandLoadError         RobotInvalid      a robot description is malformed, unsafe or inconsistent
     │   └── PlanningError         ValidationError   (manifoundation.core.planning) a plan that cannot be planned; of it:
     │       ├── InfeasibleWaypoint  InfeasibleWaypoint  a start / waypoint in collision, not repaired
@@ -36,6 +37,12 @@ class InvalidInput(ScienceError, ValueError):
 
 class InvalidPointCloud(InvalidInput):
     """Points/normals/mask of the wrong shape, non-finite, or too few to define a surface."""
+
+
+class InvalidContacts(InvalidInput):
+    """Given contacts (method "contacts") that cannot be used, e.g. far from the object's surface."""
+
+    field: ClassVar[str] = "contacts.points"  # the wire field the worker names in the error's detail
 
 
 class HandLoadError(InvalidInput):

@@ -28,7 +28,8 @@ from manifoundation.contract import (
     SynthesisResult,
     WorkerPublic,
 )
-from manifoundation.server.queue import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
+from manifoundation.server.queue import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid, RobotLimits
+from manifoundation.server.queue.robot_quota import check
 
 HAND = RobotPublic(
     name="fake_hand",
@@ -217,8 +218,16 @@ class FakeQueue(JobQueue):
         return [r for r in self.robots if r.builtin or self.owners.get("robot:" + r.name) == owner]
 
     async def register_robot(
-        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None
+        self,
+        robot: RobotRegister,
+        timeout: float = 30.0,
+        *,
+        owner: str | None = None,
+        limits: RobotLimits | None = None,
     ) -> RobotPublic:
+        if limits is not None:  # the real rule, on this fake's robots (nothing runs concurrently here)
+            mine = [r for r in self.robots if not r.builtin and self.owners.get("robot:" + r.name) == owner]
+            check({r.name: r.stored_bytes or 0 for r in mine}, [], robot.name, robot.stored_bytes, limits)
         if robot.urdf is not None and "<robot" not in robot.urdf:
             raise RobotInvalid("malformed URDF: no <robot> element")
         public = RobotPublic(
@@ -230,6 +239,7 @@ class FakeQueue(JobQueue):
             upper=[],
             fingertips=list(robot.fingertips or []),
             source="user",
+            stored_bytes=robot.stored_bytes,
         )
         self.robots.append(public)
         self.owners["robot:" + robot.name] = owner

@@ -139,3 +139,29 @@ def test_the_shipped_network_and_refinement_through_the_api(base: str) -> None:
             hand = trimesh.Trimesh(proposal.hand_mesh.vertices, proposal.hand_mesh.faces, process=False)
             _, gap, _ = trimesh.proximity.closest_point(hand, proposal.contact_points)
             assert np.all(gap < 5e-3), gap
+
+
+def test_given_contacts_come_back_one_each_with_how_far_they_moved(base: str) -> None:
+    """Issue 62 #8: three contacts chosen on a 6 cm box for Allegro (four fingertips). Before: four contacts came
+    back, 7-55 mm from the chosen ones, all "given"; a point 1 m off the object was accepted (200)."""
+    import numpy as np
+
+    from .science import box_object
+
+    given = [[0.0, -0.03, 0.0], [0.015, 0.03, 0.0], [-0.015, 0.03, 0.0]]
+    body = {
+        "object": box_object(512, (0.06, 0.06, 0.06)), "task": {"kind": "force_closure"}, "robot": {"name": HAND},
+        "contacts": {"points": given},
+        "options": {"method": "contacts", "num_proposals": 2, "max_iterations": 20, "timeout": 120},
+    }  # fmt: skip
+    response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=180)
+    assert response.status_code == 200, response.text[:2000]
+    for p in SynthesisResult.model_validate(response.json()).proposals:
+        assert p.contact_points.shape == (3, 3) and p.forces.shape == (3, 3) and len(p.fingertips) == 3
+        assert p.contact_shift is not None
+        assert np.allclose(p.contact_shift, np.linalg.norm(p.contact_points - np.array(given), axis=1), atol=1e-9)
+        assert p.contact_source == ("given" if p.contact_shift.max() <= 0.005 else "given_moved")
+    body["contacts"] = {"points": [[1.0, 0.0, 0.0], *given[1:]]}
+    far = httpx.post(f"{base}/v1/synthesize", json=body, timeout=60)
+    assert far.status_code == 422, far.text[:500]
+    assert far.json()["detail"][0]["field"] == "contacts.points" and "0.970 m" in far.json()["error"]

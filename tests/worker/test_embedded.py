@@ -235,3 +235,34 @@ def test_cancel_of_an_unknown_job_answers_and_leaves_the_queue_usable() -> None:
     thread.join(30)
     assert not thread.is_alive(), "EmbeddedQueue.cancel deadlocked"
     assert outcome == ["answered"]
+
+
+def test_a_silent_worker_is_replaced_and_its_jobs_redelivered() -> None:
+    """Issue 62 #6: a SIGSTOPped embedded worker held its jobs "running" for good and counted as live. Now a worker
+    without a heartbeat for `heartbeat_timeout` is killed, dropped from `workers()` and its jobs re-delivered, as on
+    Redis."""
+
+    async def main() -> None:
+        queue = embedded(pipeline_options={"stage_seconds": 0.1, "iterations": 20}, heartbeat_interval=0.3)
+        await queue.start()
+        stopped = None
+        try:
+            [job_id] = await queue.submit([small_request(1, max_iterations=10)])
+            await until(queue, job_id, running)
+            [worker] = await queue.workers()
+            stopped = worker.pid
+            os.kill(stopped, signal.SIGSTOP)
+            start = time.monotonic()
+            job = await queue.wait(job_id, 30)
+            assert job.state is JobState.SUCCEEDED and job.deliveries == 2 and job.worker != worker.id
+            assert time.monotonic() - start < 10  # heartbeat timeout (1 s) + the job (about 1.3 s) + a respawn
+            assert worker.id not in {w.id for w in await queue.workers()}
+            assert subprocess.run(["ps", "-o", "stat=", "-p", str(stopped)], capture_output=True).stdout.strip() \
+                in (b"", b"Z")  # killed (reaped, or a zombie until then)  # fmt: skip
+            stopped = None
+        finally:
+            if stopped is not None:  # the test failed: never leave our stopped process behind
+                os.kill(stopped, signal.SIGKILL)
+            await queue.close()
+
+    run(main())

@@ -9,6 +9,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from manifoundation.core.errors import InvalidContacts
 from manifoundation.core.geometry.object import DEFAULT_DENSITY, DEFAULT_FRICTION, ObjectGeometry
 from manifoundation.core.geometry.spread import spread_contacts
 from manifoundation.core.pipeline.object_cache import ObjectCache, PreparedObject, default_cache, digest
@@ -17,6 +18,8 @@ from manifoundation.core.pipeline.types import MATERIALS, METHODS, InvalidInput,
 from manifoundation.core.refine.field import PointCloudField
 from manifoundation.core.refine.surface_samples import object_field
 from manifoundation.core.refine.wrench import WrenchTask
+
+MAX_GIVEN_OFFSET = 0.01  # m: a given contact farther than this from the object's surface is refused (422)
 
 
 @dataclass
@@ -95,6 +98,13 @@ def prepare(inp: SynthesisInput, cache: ObjectCache | None = None) -> Prepared:
         if not 1 <= len(contacts) <= inp.hand.num_fingertips:
             raise InvalidInput(
                 f"contacts: {len(contacts)} contacts for a hand with {inp.hand.num_fingertips} fingertips"
+            )
+        off = np.abs(cloud.signed_distance(contacts)[0])
+        if float(off.max()) > MAX_GIVEN_OFFSET:
+            i = int(np.argmax(off))
+            raise InvalidContacts(
+                f"contacts.points: point {i} lies {off[i]:.3f} m from the object's surface, more than "
+                f"{MAX_GIVEN_OFFSET} m: given contacts must be on the object"
             )
     return Prepared(inp, cloud, exact, centre, mp.mass, inertia, task, mu, tip_field, time.perf_counter() - t0)
 

@@ -51,6 +51,7 @@ from manifoundation.core.refine.state import HandPose
 from manifoundation.core.refine.strategy import refine_from_start
 from manifoundation.core.refine.verify import Verification, verify
 
+GIVEN_TOLERANCE = 0.005  # m: a given contact that moved farther is reported "given_moved", not "given"
 Progress = Callable[[str, float], None]
 CancelCheck = Callable[[], bool]
 
@@ -102,13 +103,18 @@ class _Verifier:
     def __init__(self, prep: Prepared) -> None:
         self.prep = prep
         self.seen: dict[bytes, Verification] = {}
+        inp = prep.inp
+        given = inp.method == "contacts" and inp.initial_pose is None and inp.contacts is not None
+        self.given = np.asarray(inp.contacts, dtype=np.float64).reshape(-1, 3) if given else None
 
     def __call__(self, pose: HandPose, complete: bool = True) -> Verification:
         key = np.concatenate([pose.palm_pos, pose.palm_quat, pose.q]).tobytes()
         known = self.seen.get(key)
         if known is None or (complete and not known.complete):
             p = self.prep
-            self.seen[key] = verify(p.inp.hand, pose, p.cloud, p.task, p.mu, p.mesh, complete=complete)
+            self.seen[key] = verify(
+                p.inp.hand, pose, p.cloud, p.task, p.mu, p.mesh, complete=complete, given=self.given
+            )
         return self.seen[key]
 
 
@@ -135,6 +141,10 @@ def _proposal(
         failures=list(ver.failures),
         geometry=ver.geometry,
     )
+    shift = None
+    if verified.given is not None:  # the caller's contacts: say how far each moved, "given" only if none did
+        shift = np.linalg.norm(ver.contacts - verified.given, axis=1)
+        source = "given" if float(shift.max()) <= GIVEN_TOLERANCE else "given_moved"
     return ProposalOutput(
         contact_points=ver.contacts,
         contact_normals=ver.normals,
@@ -147,6 +157,7 @@ def _proposal(
         quality=quality,
         contact_source=source,
         history=history,
+        contact_shift=shift,
     )
 
 

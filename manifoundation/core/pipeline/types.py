@@ -173,8 +173,9 @@ class ProposalOutput:
     joint_names: list[str]
     joint_values: np.ndarray | None
     quality: QualityOutput
-    contact_source: str = "given"  # given|random|network|random_fallback|motion_fallback|direct_grasp|initial_pose
+    contact_source: str = "given"  # given|given_moved|random|network|random_fallback|motion_fallback|direct_grasp|...
     history: list[IterationOutput] | None = None
+    contact_shift: np.ndarray | None = None  # (H,) method "contacts": each contact's distance from its given point, m
     contact_motions: np.ndarray | None = None  # (H, 3) post-contact motion per contact (deformables), m
     network_forces: np.ndarray | None = None  # (H, 3) the network's force prediction at its contacts (model units)
     network_sample: int | None = None  # which of the network's K latent samples the contacts came from

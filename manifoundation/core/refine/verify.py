@@ -117,6 +117,7 @@ def verify(
     max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE,
     collisions: bool = True,
     complete: bool = True,
+    given: np.ndarray | None = None,
 ) -> Verification:
     """Verify ``pose`` (see module doc).
 
@@ -131,14 +132,21 @@ def verify(
         collisions: measure penetration and self-collision with fcl (False: skip, reported as 0).
         complete: False stops once the wrench or tip-distance test fails (a pass or fail is all the caller needs:
             the refinement asking whether to stop) — the same verdict, without the collision tests.
+        given: (H, 3) the caller's contacts, H ≤ fingertips: only the H fingertips nearest them (one each, least
+            total distance) are contacts, in ``given``'s order; the others touch nothing the answer counts on
+            (zero force). None: every fingertip.
     """
     region = cloud.region_distance if cloud.mask is not None else None
     found = surface_contacts(hand, pose.tensors(), cloud, region, jacobian=False, guards=False)
     samples = found.points
     contacts = mesh_triangles(mesh).closest(samples)[0] if mesh is not None else found.object_points(cloud)
     contacts = np.asarray(contacts, dtype=np.float64)
-    normals = cloud.given_normal(contacts)
     finger = finger_surface_distances(hand, pose, contacts)
+    links = [str(hand.contact_surface.link[k]) or hand.fingertip_links[i] for i, k in enumerate(found.sample)]
+    if given is not None:
+        keep = nearest_fingertips(contacts, given)
+        samples, contacts, finger, links = samples[keep], contacts[keep], finger[keep], [links[i] for i in keep]
+    normals = cloud.given_normal(contacts)
     tip_dist = finger.copy()
     if cloud.mask is not None:
         tip_dist = np.maximum(tip_dist, cloud.region_point_distance(contacts))
@@ -179,11 +187,22 @@ def verify(
         contacts=contacts,
         normals=np.asarray(normals, dtype=np.float64),
         geometry="mesh" if mesh is not None else "points",
-        links=[str(hand.contact_surface.link[k]) or hand.fingertip_links[i] for i, k in enumerate(found.sample)],
+        links=links,
         finger_distances=finger,
         failures=failures,
         complete=complete or not failures,
     )
+
+
+def nearest_fingertips(contacts: np.ndarray, given: np.ndarray) -> np.ndarray:
+    """Indices (H,) of the fingertip contacts (m, 3) that serve the given points (H, 3), H ≤ m: one fingertip each,
+    the least total distance (Hungarian assignment), in ``given``'s order."""
+    from scipy.optimize import linear_sum_assignment
+
+    given = np.asarray(given, dtype=np.float64).reshape(-1, 3)
+    cost = np.linalg.norm(given[:, None, :] - contacts[None, :, :], axis=2)
+    rows, cols = linear_sum_assignment(cost)
+    return np.asarray(cols[np.argsort(rows)], dtype=np.int64)
 
 
 def finger_surface_distances(hand: Hand, pose: HandPose, points: np.ndarray) -> np.ndarray:

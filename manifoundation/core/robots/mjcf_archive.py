@@ -4,7 +4,9 @@ MuJoCo opens every file a model names (meshes, textures, included files, plugins
 before MuJoCo sees it:
 
 1. parsed with ``defusedxml`` (no DTDs or entities), capped in size;
-2. ``<include file>`` elements replaced by the children of the included member (depth ≤ ``MAX_INCLUDE_DEPTH``);
+2. ``<include file>`` elements replaced by the children of the included member (depth ≤ ``MAX_INCLUDE_DEPTH``),
+   counted as they are read (``MAX_INCLUDES`` includes, ``MAX_EXPANDED_BYTES`` of included text and
+   ``MAX_ELEMENTS`` elements over all documents), so an include bomb is refused before it is inlined;
 3. ``<compiler meshdir/assetdir/texturedir>`` applied to each ``<mesh file>`` (relative to the main document's
    folder, as MuJoCo does), the member checked with the mesh caps (:mod:`manifoundation.core.robots.archive_meshes`) and
    the
@@ -22,6 +24,7 @@ from __future__ import annotations
 
 import posixpath
 import xml.etree.ElementTree as ET
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from defusedxml import DefusedXmlException
@@ -37,7 +40,9 @@ if TYPE_CHECKING:
 
 MAX_MJCF_BYTES = MAX_URDF_BYTES
 MAX_INCLUDE_DEPTH = 8
-MAX_ELEMENTS = 50_000
+MAX_ELEMENTS = 50_000  # in the main document and every included one, counted as they are read
+MAX_INCLUDES = 1_000  # <include> elements resolved, in all
+MAX_EXPANDED_BYTES = 4 * MAX_MJCF_BYTES  # text of every included member read, in all
 REFUSED_TAGS = ("plugin", "extension", "model", "instance")
 DROPPED_TAGS = ("texture", "skin", "hfield")
 
@@ -58,19 +63,59 @@ def _parse(data: bytes, what: str) -> ET.Element:
     return root
 
 
-def _inline_includes(root: ET.Element, archive: HandArchive, base: str, depth: int = 0) -> None:
+@dataclass
+class _Expansion:
+    """What inlining has cost so far, over every document read (checked before each member is parsed or inlined)."""
+
+    elements: int = 0
+    includes: int = 0
+    read_bytes: int = 0
+
+    def add_document(self, root: ET.Element, what: str) -> None:
+        self.elements += sum(1 for _ in root.iter())
+        if self.elements > MAX_ELEMENTS:
+            raise HandLoadError(
+                f"MJCF: <include> expansion passes {MAX_ELEMENTS} elements at {what} (limit MAX_ELEMENTS); refused "
+                "before inlining"
+            )
+
+    def add_include(self, size: int, what: str) -> None:
+        self.includes += 1
+        self.read_bytes += size
+        if self.includes > MAX_INCLUDES:
+            raise HandLoadError(f"MJCF: more than {MAX_INCLUDES} <include> elements in all (limit MAX_INCLUDES)")
+        if self.read_bytes > MAX_EXPANDED_BYTES:
+            raise HandLoadError(
+                f"MJCF: <include> of {what} brings the included text to {self.read_bytes} bytes, over the "
+                f"{MAX_EXPANDED_BYTES}-byte limit"
+            )
+
+
+def _inline_includes(root: ET.Element, archive: HandArchive, base: str, cost: _Expansion, depth: int = 0) -> None:
+    """Replace each ``<include>`` below ``root`` by the children of its (expanded) member, in document order.
+
+    Every member is counted (includes, bytes, elements) before it is parsed or inlined, so a file that includes
+    another many times over is refused after at most ``MAX_ELEMENTS`` elements of work, whatever its depth.
+    """
     for parent in list(root.iter()):
-        for i, child in enumerate(list(parent)):
+        children = list(parent)
+        if not any(child.tag == "include" for child in children):
+            continue
+        expanded: list[ET.Element] = []
+        for child in children:
             if child.tag != "include":
+                expanded.append(child)
                 continue
             if depth >= MAX_INCLUDE_DEPTH:
-                raise HandLoadError(f"<include>: nested deeper than {MAX_INCLUDE_DEPTH}")
+                raise HandLoadError(f"MJCF: <include> nested deeper than {MAX_INCLUDE_DEPTH} (limit MAX_INCLUDE_DEPTH)")
             member = archive.resolve(child.get("file") or "", base)
-            sub = _parse(archive.files[member], f"included {member!r}")
-            _inline_includes(sub, archive, base, depth + 1)  # MuJoCo resolves every path against the main file
-            parent.remove(child)
-            for k, grand in enumerate(list(sub)):
-                parent.insert(i + k, grand)
+            data = archive.files[member]
+            cost.add_include(len(data), repr(member))
+            sub = _parse(data, f"included {member!r}")
+            cost.add_document(sub, f"included {member!r}")
+            _inline_includes(sub, archive, base, cost, depth + 1)  # MuJoCo resolves every path against the main file
+            expanded.extend(sub)
+        parent[:] = expanded
 
 
 def _folders(root: ET.Element) -> tuple[str, str]:
@@ -100,10 +145,9 @@ def sanitised_mjcf(archive: HandArchive, member: str, meshes: ArchiveMeshes) -> 
     """
     base = posixpath.dirname(member)
     root = _parse(archive.files[member], f"MJCF {member!r}")
-    _inline_includes(root, archive, base)
-    count = sum(1 for _ in root.iter())
-    if count > MAX_ELEMENTS:
-        raise HandLoadError(f"MJCF: {count} elements, over the {MAX_ELEMENTS}-element limit")
+    cost = _Expansion()
+    cost.add_document(root, f"MJCF {member!r}")
+    _inline_includes(root, archive, base, cost)
     meshdir, _ = _folders(root)
     dropped: dict[str, int] = {}
     for parent in list(root.iter()):

@@ -16,8 +16,9 @@ Each class is one member of the contract's `ErrorType`, which also gives its HTT
     ├── RateLimited         429   per-key token bucket empty (Retry-After)
     └── Unavailable         503   shutting down / queue unreachable (Retry-After)
 
-Queue errors (`QueueFull`, `JobNotFound`, `RobotInvalid`, `QueueUnavailable`), pydantic's `ValidationError`
-and FastAPI's own request validation are mapped here too, so routes raise and never build error bodies.
+Queue errors (`QueueFull`, `JobNotFound`, `RobotInvalid`, `RobotLimitReached` → 409, `QueueUnavailable`), pydantic's
+`ValidationError` and FastAPI's own request validation are mapped here too, so routes raise and never build error
+bodies.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from starlette.responses import Response
 from manifoundation.contract import ErrorBody, ErrorType, FieldError
 from manifoundation.contract.validation import field_errors, summary
 from manifoundation.server.api.encoding import respond
-from manifoundation.server.queue import JobNotFound, QueueFull, QueueUnavailable, RobotInvalid
+from manifoundation.server.queue import JobNotFound, QueueFull, QueueUnavailable, RobotInvalid, RobotLimitReached
 
 log = logging.getLogger("manifoundation.server.api.errors")
 
@@ -161,6 +162,8 @@ def from_exception(exc: Exception) -> ApiError:
         if sep and field.replace("_", "").replace(".", "").isalnum():  # the worker named the field already
             return RobotRejected(message, detail=[FieldError(field=field, problem=problem)])
         return RobotRejected(f"urdf: {message}", detail=[FieldError(field="urdf", problem=message)])
+    if isinstance(exc, RobotLimitReached):
+        return Conflict(str(exc))
     if isinstance(exc, QueueUnavailable):
         return Unavailable(str(exc) or "queue unavailable")
     if isinstance(exc, StarletteHTTPException):
@@ -225,6 +228,7 @@ def install(app: FastAPI) -> None:
         QueueFull,
         JobNotFound,
         RobotInvalid,
+        RobotLimitReached,
         QueueUnavailable,
         Exception,
     ):

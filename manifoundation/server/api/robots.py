@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import time
 
-from manifoundation.contract import FieldError, JobRequest, RobotPublic
-from manifoundation.server.api.errors import UnknownHand
-from manifoundation.server.queue import JobQueue
+from manifoundation.contract import FieldError, JobRequest, RobotPublic, RobotRegister
+from manifoundation.server.api.errors import Conflict, UnknownHand
+from manifoundation.server.queue import JobQueue, RobotLimits
 
 
 class RobotCatalog:
@@ -53,6 +53,26 @@ class RobotCatalog:
                 f"{field}: unknown hand {name!r} (known: {known})",
                 detail=[FieldError(field=field, problem=f"unknown hand {name!r}")],
             )
+
+    async def register(
+        self, robot: RobotRegister, owner: str | None, *, limits: RobotLimits, timeout: float
+    ) -> RobotPublic:
+        """Register ``robot`` for ``owner``: the one path of every front end (HTTP, gRPC, MCP).
+
+        No built-in name; ``owner``'s count and bytes (``limits``) reserved atomically in the queue's store, so
+        concurrent registrations cannot overshoot them; validated and stored by a worker.
+
+        Raises:
+            Conflict: a built-in name (409).
+            RobotLimitReached: over ``limits`` (409 at every edge); `RobotInvalid`, `QueueUnavailable` as the queue.
+        """
+        existing = await self.find(robot.name, owner)
+        if existing is not None and existing.builtin:
+            raise Conflict(f"name: {robot.name!r} is a built-in hand; choose another name")
+        try:
+            return await self.queue.register_robot(robot, timeout=timeout, owner=owner, limits=limits)
+        finally:
+            self.forget(owner)
 
     def forget(self, owner: str | None = None) -> None:
         """Drop ``owner``'s cache (after a registration or removal)."""

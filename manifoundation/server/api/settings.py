@@ -15,6 +15,7 @@ from manifoundation.contract import MAX_BATCH_SIZE
 from manifoundation.contract.codec import MAX_BODY_BYTES
 
 if TYPE_CHECKING:
+    from manifoundation.server.queue.base import RobotLimits
     from manifoundation.server.worker.settings import QueueSettings
 
 
@@ -144,6 +145,12 @@ class Settings(BaseSettings):
     def all_keys(self) -> list[str]:
         """Every accepted key: the tenants' and the operators'."""
         return [*self.api_keys, *(k for k in self.admin_keys if k not in self.api_keys)]
+
+    def robot_limits(self) -> RobotLimits:
+        """What one key may register (``max_robots``, ``max_robot_store_bytes``), for every front end."""
+        from manifoundation.server.queue.base import RobotLimits
+
+        return RobotLimits(max_robots=self.max_robots, max_bytes=self.max_robot_store_bytes)
 
     def queue_settings(self) -> QueueSettings:
         """The queue's settings: env ``MANI_*`` for its knobs, the command line's ``queue`` overrides on top."""

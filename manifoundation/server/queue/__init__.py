@@ -25,6 +25,8 @@ from manifoundation.server.queue.base import (
     QueueFull,
     QueueUnavailable,
     RobotInvalid,
+    RobotLimitReached,
+    RobotLimits,
 )
 from manifoundation.server.worker.settings import QueueSettings
 
@@ -65,6 +67,8 @@ __all__ = [
     "QueueSettings",
     "QueueUnavailable",
     "RobotInvalid",
+    "RobotLimitReached",
+    "RobotLimits",
     "create_queue",
     "queue_settings",
 ]

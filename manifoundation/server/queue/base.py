@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import AsyncIterator, Sequence
+from dataclasses import dataclass
 
 from manifoundation.contract import (
     DeadLetter,
@@ -45,6 +46,19 @@ class JobNotFound(QueueError):
 
 class RobotInvalid(QueueError):
     """A worker rejected a robot description (hardened URDF loader); the message says why."""
+
+
+class RobotLimitReached(QueueError):
+    """A key already holds as many registered robots, or as many of their bytes, as its limits allow."""
+
+
+@dataclass(frozen=True)
+class RobotLimits:
+    """What one key may hold: ``max_robots`` registered hands, ``max_bytes`` of descriptions and archives (the rule:
+    `manifoundation.server.queue.robot_quota`)."""
+
+    max_robots: int
+    max_bytes: int
 
 
 class QueueUnavailable(QueueError):
@@ -156,13 +170,22 @@ class JobQueue(ABC):
 
     @abstractmethod
     async def register_robot(
-        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None
+        self,
+        robot: RobotRegister,
+        timeout: float = 30.0,
+        *,
+        owner: str | None = None,
+        limits: RobotLimits | None = None,
     ) -> RobotPublic:
         """Have a worker validate the URDF with the hardened loader, then store it in ``owner``'s namespace for
         every worker (registering a name again replaces that owner's robot of that name).
 
+        With ``limits``, ``owner``'s slot and bytes are reserved atomically in the store before the worker is
+        asked (`manifoundation.server.queue.robot_quota`), and released when it answers.
+
         Raises:
             RobotInvalid: the description was rejected (message says why).
+            RobotLimitReached: ``owner`` holds as many robots or bytes as ``limits`` allow.
         """
 
     async def delete_robot(self, name: str, *, owner: str | None = None) -> None:

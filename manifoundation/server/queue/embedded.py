@@ -36,7 +36,14 @@ from manifoundation.contract import (
     kind_of,
 )
 from manifoundation.contract.codec import pack
-from manifoundation.server.queue.base import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
+from manifoundation.server.queue.base import (
+    JobNotFound,
+    JobQueue,
+    QueueFull,
+    QueueUnavailable,
+    RobotInvalid,
+    RobotLimits,
+)
 from manifoundation.server.queue.embedded_parts import JobRecord, WorkerHandle
 from manifoundation.server.queue.embedded_pump import EmbeddedPump
 from manifoundation.server.queue.records import (
@@ -217,14 +224,14 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
                 completed_total=self._totals["completed"],
                 failed_total=self._totals["failed"],
                 dead_letters=len(self._dead),
-                workers=sum(1 for w in self._workers.values() if w.info),
+                workers=sum(1 for w in self._workers.values() if self._live(w)),
             )
 
     async def workers(self) -> list[WorkerPublic]:
         with self._lock:
             out = []
             for w in self._workers.values():
-                if w.info is not None:
+                if self._live(w) and w.info is not None:
                     current = next(iter(w.inflight), None)
                     out.append(w.info.model_copy(update={"current_job": current, "jobs_done": w.jobs_done}))
             return out
@@ -239,8 +246,9 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
         return sorted(mine, key=lambda r: (not r.builtin, r.name))
 
     async def register_robot(
-        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None
-    ) -> RobotPublic:
+        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None,
+        limits: RobotLimits | None = None,
+    ) -> RobotPublic:  # fmt: skip
         with self._lock:
             ready = [w for w in self._workers.values() if w.info is not None]
             existing = self._robots.get(robot.name)
@@ -253,6 +261,7 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
         payload = pack(robot.model_dump(mode="python", exclude_none=True))
         future: asyncio.Future[dict[str, Any]] = loop.create_future()
         with self._lock:
+            self._reserve_robot(rid, robot, owner, limits)
             self._robot_replies[rid] = (loop, future)
         try:
             worker.send({"op": "robot", "rid": rid}, payload)
@@ -262,6 +271,7 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
         finally:
             with self._lock:
                 self._robot_replies.pop(rid, None)
+                self._robot_reservations.pop(rid, None)
         if "error" in reply:
             raise RobotInvalid(reply["error"])
         public = RobotPublic.model_validate(reply["robot"])

@@ -97,6 +97,7 @@ class WorkerHandle:
         self.info: WorkerPublic | None = None
         self.inflight: set[str] = set()
         self.jobs_done = 0
+        self.last_seen = time.monotonic()  # any message (hello, heartbeat, progress, outcome) read from it
 
     def send(self, message: dict[str, Any], *frames: bytes) -> None:
         """``message``, then the payload frames it announces (see `manifoundation.server.worker.child`)."""

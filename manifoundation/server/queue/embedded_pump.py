@@ -29,10 +29,12 @@ from manifoundation.contract import (
     JobProgress,
     JobState,
     RobotPublic,
+    RobotRegister,
     Stage,
     WorkerPublic,
 )
 from manifoundation.contract.codec import unpack
+from manifoundation.server.queue.base import RobotLimits
 from manifoundation.server.queue.embedded_parts import ChildProcess, JobRecord, WorkerHandle, settle
 from manifoundation.server.queue.records import (
     cancelled_error,
@@ -43,6 +45,7 @@ from manifoundation.server.queue.records import (
     state_for_error,
     worker_lost_error,
 )
+from manifoundation.server.queue.robot_quota import check_in_memory
 from manifoundation.server.worker.settings import QueueSettings
 from manifoundation.server.worker.supervisor import spawn, stop_all
 
@@ -70,11 +73,24 @@ class EmbeddedPump:
         self._robots: dict[str, RobotPublic] = {}  # by `scoped_robot(owner, name)`; built-ins by name
         self._registered: dict[str, bytes] = {}  # owner-scoped name -> msgpack of its RobotRegister
         self._robot_replies: dict[str, tuple[asyncio.AbstractEventLoop, asyncio.Future[dict[str, Any]]]] = {}
+        self._robot_reservations: dict[str, tuple[str | None, str, int]] = {}  # rid -> (owner, name, bytes)
         self._dead: deque[DeadLetter] = deque(maxlen=1000)
         self._totals = {"completed": 0, "failed": 0}
         self._wake_r, self._wake_w = mp.Pipe(duplex=False)
         self._pump: threading.Thread | None = None
         self._running = False
+
+    def _live(self, worker: WorkerHandle) -> bool:
+        """Ready and heard from within ``heartbeat_timeout`` (a silent worker is not live, as on Redis)."""
+        return worker.info is not None and time.monotonic() - worker.last_seen <= self.settings.heartbeat_timeout
+
+    def _reserve_robot(self, rid: str, robot: RobotRegister, owner: str | None, limits: RobotLimits | None) -> None:
+        """Check ``owner``'s limits (`robot_quota.check`) on its registered robots and registrations in flight, and
+        reserve this one's slot and bytes under ``rid`` (call with the lock held: check and reservation are one step).
+        """
+        if limits is not None:
+            check_in_memory(self._robots, self._robot_reservations.values(), owner, robot, limits)
+        self._robot_reservations[rid] = (owner, robot.name, robot.stored_bytes)
 
     def _join(self, workers: list[WorkerHandle]) -> None:
         """Wait for workers told to stop (they finish their batch), killing those that outlive the grace."""
@@ -109,6 +125,8 @@ class EmbeddedPump:
             if time.monotonic() - last_sweep > 0.05:
                 last_sweep = time.monotonic()
                 self._sweep()
+                if self._running:
+                    self._replace_silent()
             if self._running:
                 self._dispatch()
             elif not any(w.process.is_alive() for w in list(self._workers.values())):
@@ -124,6 +142,7 @@ class EmbeddedPump:
             worker.process.join(1)
             self._lost(worker, f"worker process exited (code {worker.process.exitcode}) while running the job")
             return
+        worker.last_seen = time.monotonic()
         op = msg["op"]
         result = None
         if op == "done" and msg.get("state") == JobState.SUCCEEDED.value:
@@ -156,6 +175,18 @@ class EmbeddedPump:
             elif op == "robot" and (reply := self._robot_replies.get(msg["rid"])):
                 loop, future = reply
                 loop.call_soon_threadsafe(settle, future, msg)
+
+    def _replace_silent(self) -> None:
+        """Kill every ready worker not heard from for ``heartbeat_timeout`` (stopped, hung in native code, swapped
+        out) and treat it as lost: its jobs are re-delivered and a replacement spawned, as a Redis worker's jobs are
+        once its heartbeat key expires. Its heartbeat thread writes every ``heartbeat_interval`` while it works."""
+        limit, now = self.settings.heartbeat_timeout, time.monotonic()
+        for worker in [w for w in list(self._workers.values()) if w.info is not None and now - w.last_seen > limit]:
+            silent = now - worker.last_seen
+            log.warning("worker %s silent for %.1f s (no heartbeat): killed, its jobs re-delivered", worker.id, silent)
+            worker.process.kill()
+            worker.process.join(1)
+            self._lost(worker, f"worker sent no heartbeat for {silent:.1f} s (hung or stopped) and was replaced")
 
     def _lost(self, worker: WorkerHandle, detail: str) -> None:
         with self._lock:

@@ -56,6 +56,7 @@ from manifoundation.server.queue.base import JobNotFound, JobQueue, QueueFull, Q
 from manifoundation.server.queue.persistence import check_persistence_async
 from manifoundation.server.queue.records import new_id, result_expired_error, scoped_robot, with_answer
 from manifoundation.server.queue.redis_lua import CANCEL, GROUP, SUBMIT, Keys
+from manifoundation.server.queue.robot_quota import RESERVE_ROBOT, RobotLimits, refusal
 from manifoundation.server.worker.settings import QueueSettings
 
 log = logging.getLogger("manifoundation.server.queue.redis")
@@ -152,6 +153,7 @@ class RedisQueue(JobQueue):
                 await check_persistence_async(self._client, _safe_url(self.settings.redis_url))
         self._submit = self._client.register_script(SUBMIT)
         self._cancel = self._client.register_script(CANCEL)
+        self._reserve_robot = self._client.register_script(RESERVE_ROBOT)
         self._listener = asyncio.create_task(self._listen(), name="mani-redis-queue-listener")
 
     async def close(self) -> None:
@@ -370,7 +372,12 @@ class RedisQueue(JobQueue):
         return sorted(robots, key=lambda r: (not r.builtin, r.name))
 
     async def register_robot(
-        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None
+        self,
+        robot: RobotRegister,
+        timeout: float = 30.0,
+        *,
+        owner: str | None = None,
+        limits: RobotLimits | None = None,
     ) -> RobotPublic:
         async with self._guard():
             existing = await self._client.hget(self.keys.robots, robot.name)
@@ -379,6 +386,32 @@ class RedisQueue(JobQueue):
         if not await self.workers():
             raise QueueUnavailable("no worker is running to validate the robot")
         rid = new_id()
+        if limits is not None:
+            await self._reserve(robot, rid, owner, limits, timeout)
+        try:
+            return await self._validated(robot, rid, owner, timeout)
+        finally:
+            if limits is not None:
+                async with self._guard():
+                    await self._client.hdel(self.keys.robot_reservations(owner), rid)
+
+    async def _reserve(
+        self, robot: RobotRegister, rid: str, owner: str | None, limits: RobotLimits, ttl: float
+    ) -> None:
+        """Check ``owner``'s limits and reserve the registration's slot and bytes in one script (expires after
+        ``ttl`` + 5 s if this process dies before it releases it). Raises `RobotLimitReached`."""
+        keys = [self.keys.robots, self.keys.robot_size, self.keys.robot_reservations(owner)]
+        args = [
+            f"{owner}/" if owner else "", robot.name, robot.stored_bytes, rid, int((ttl + 5) * 1000),
+            limits.max_robots, limits.max_bytes,
+        ]  # fmt: skip
+        async with self._guard():
+            code, held = await self._reserve_robot(keys=keys, args=args)
+        if code:
+            raise refusal(int(code), int(held), robot.stored_bytes, limits)
+
+    async def _validated(self, robot: RobotRegister, rid: str, owner: str | None, timeout: float) -> RobotPublic:
+        """Send the registration to a worker and wait for its verdict (stored by the worker when accepted)."""
         payload = pack(robot.model_dump(mode="python", exclude_none=True))
         loop, end = asyncio.get_running_loop(), time.monotonic() + timeout
         async with self._guard():
@@ -407,4 +440,5 @@ class RedisQueue(JobQueue):
             blob = await self._client.hget(self.keys.robots, key)
             if blob is None or RobotPublic.model_validate(unpack(blob)).builtin:
                 raise JobNotFound(f"no registered robot {name!r}")
-            await self._client.pipeline().hdel(self.keys.robots, key).hdel(self.keys.robot_urdf, key).execute()
+            pipe = self._client.pipeline().hdel(self.keys.robots, key).hdel(self.keys.robot_urdf, key)
+            await pipe.hdel(self.keys.robot_size, key).execute()

@@ -7,9 +7,10 @@ XLEN = queued + running), ``P:job:ID`` (hash: the job's record, ``request_id`` a
 known, TTL ``record_ttl``), ``P:result:ID`` (msgpack result, TTL ``result_ttl``), ``P:recent`` (zset of ids by
 submit order, ``P:seq``) and ``P:recent:OWNER`` (the same per owner), ``P:batch:ID`` (list) + ``P:batchowner:ID``,
 ``P:dead`` (stream of dead letters), ``P:counts`` (hash of totals), ``P:workers`` (zset by last heartbeat) +
-``P:worker:ID`` (msgpack, TTL), ``P:robots`` / ``P:robot_urdf`` (hashes; field = the hand's name, ``OWNER/name`` for
-a tenant's registered hand), ``P:robotreply:RID``; channel ``P:done`` announces finished job ids (and
-``robot:RID``).
+``P:worker:ID`` (msgpack, TTL), ``P:robots`` / ``P:robot_urdf`` / ``P:robot_size`` (hashes; field = the hand's
+name, ``OWNER/name`` for a tenant's registered hand; sizes in bytes, for the key's quota), ``P:robotpending:OWNER``
+(hash: registrations in flight, see `manifoundation.server.queue.robot_quota`), ``P:robotreply:RID``; channel
+``P:done`` announces finished job ids (and ``robot:RID``).
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ class Keys:
         self.workers = f"{prefix}workers"
         self.robots = f"{prefix}robots"
         self.robot_urdf = f"{prefix}robot_urdf"
+        self.robot_size = f"{prefix}robot_size"
         self.done = f"{prefix}done"
 
     def job(self, job_id: str) -> str:
@@ -52,6 +54,9 @@ class Keys:
 
     def robot_reply(self, rid: str) -> str:
         return f"{self.prefix}robotreply:{rid}"
+
+    def robot_reservations(self, owner: str | None) -> str:
+        return f"{self.prefix}robotpending:{owner or ''}"
 
 
 # KEYS: stream, recent. ARGV: prefix, max_queue, record_ttl, now, n, result_ttl (ms: the submitter decides how long

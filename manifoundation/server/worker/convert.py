@@ -137,6 +137,7 @@ def to_proposal(p: ProposalOutput, hand: Hand | None = None, *, history: bool = 
         network_forces=None if p.network_forces is None else np.asarray(p.network_forces, np.float64),
         rollout_points=None if p.rollout_points is None else np.asarray(p.rollout_points, np.float64),
         shape_error=None if p.shape_error is None else _finite(p.shape_error),
+        contact_shift=None if p.contact_shift is None else np.asarray(p.contact_shift, np.float64),
     )
 
 

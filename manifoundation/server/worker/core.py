@@ -105,8 +105,12 @@ class WorkerCore:
         return self.pipeline.robots()
 
     def validate_robot(self, raw: bytes) -> RobotPublic:
-        """A user's robot registration, loaded with the hardened loader. Raises with the reason when refused."""
-        return self.pipeline.validate_robot(RobotRegister.model_validate(unpack(raw)))
+        """A user's robot registration, loaded with the hardened loader. Raises with the reason when refused.
+
+        Its ``stored_bytes`` are the registration's own (what the key's byte quota counts), whatever the pipeline.
+        """
+        robot = RobotRegister.model_validate(unpack(raw))
+        return self.pipeline.validate_robot(robot).model_copy(update={"stored_bytes": robot.stored_bytes})
 
     def run(self, raw_jobs: list[RawJob], sink: ProgressSink, should_cancel: CancelFn) -> list[Finished]:
         """Decode, run and encode one micro-batch; one outcome per job, in order; never raises.

@@ -419,6 +419,7 @@ class RedisWorker:
             pipe = self.r.pipeline()
             pipe.hset(self.keys.robots, key, pack(answer["robot"]))
             pipe.hset(self.keys.robot_urdf, key, fields[b"p"])
+            pipe.hset(self.keys.robot_size, key, public.stored_bytes or 0)
             pipe.execute()
         except Exception as exc:
             answer = {"error": str(exc) or exc.__class__.__name__}

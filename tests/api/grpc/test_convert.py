@@ -129,7 +129,9 @@ def test_result_and_job_to_proto() -> None:
                               max_tip_distance=0, penetration_depth=0, self_collision_depth=0)  # fmt: skip
     proposal = schemas.Proposal(contact_points=rows, contact_normals=rows, forces=rows, fingertips=["a", "b", "c"],
                                 palm_position=np.zeros(3), palm_quaternion=np.array([1.0, 0, 0, 0]),
-                                joint_names=["j"], joint_values=np.array([0.5]), quality=quality)  # fmt: skip
+                                joint_names=["j"], joint_values=np.array([0.5]), quality=quality,
+                                contact_source="given_moved",
+                                contact_shift=np.array([0.001, 0.002, 0.007]))  # fmt: skip
     result = SynthesisResult(hand="h", model_version="m", proposals=[proposal], timings={"network": 0.25})
     job = JobPublic(id="j1", state=schemas.JobState.SUCCEEDED, created_at=1.0, result=result)
     message = to_proto(job, pb.JobPublic)
@@ -138,6 +140,8 @@ def test_result_and_job_to_proto() -> None:
     back = from_proto(message, JobPublic, answer=True)
     assert back.result is not None and np.array_equal(back.result.proposals[0].forces, rows)
     assert back.result.proposals[0].quality == quality
+    shift = back.result.proposals[0].contact_shift  # issue 62: per-contact shift of given contacts, over gRPC too
+    assert shift is not None and np.array_equal(shift, [0.001, 0.002, 0.007])
     assert to_data(pb.BatchPublic(counts={"queued": 2}))["counts"] == {"queued": 2}
 
 
@@ -153,4 +157,5 @@ def test_contacts_without_a_robot_come_back_without_a_hand() -> None:
     [got] = back.proposals
     assert back.hand is None and got.palm_position is None and got.palm_quaternion is None
     assert got.fingertips == [] and len(got.joint_values) == 0 and got.shape_error == 0.1
+    assert got.contact_shift is None  # optional: unset for methods other than "contacts"
     assert got.rollout_points is not None and np.array_equal(got.rollout_points, rows)

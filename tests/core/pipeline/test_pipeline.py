@@ -49,13 +49,15 @@ def test_contacts_closure_end_to_end(box, gripper):
     assert best.history is not None and len(best.history) == best.quality.iterations
     assert {"initialisation", "refinement", "verification"} <= set(stages)
     assert {"network", "initialisation", "refinement", "verification"} <= set(out.timings)
-    assert best.contact_source == "given"
+    # the refinement may slide the given contacts over the face: the answer says how far (issue 62)
+    assert best.contact_shift is not None and best.contact_shift.shape == (2,)
+    assert best.contact_source == ("given" if best.contact_shift.max() <= 0.005 else "given_moved")
 
 
 def test_repeated_contacts_start_from_different_finger_assignments(box, gripper):
     out = run_pipeline(_inp(box, gripper, num_proposals=2, refine=False))
     a, b = out.proposals
-    assert a.contact_source == b.contact_source == "given"
+    assert {a.contact_source, b.contact_source} <= {"given", "given_moved"}
     # the same two contacts, but the second proposal swaps the fingers: a different palm pose
     assert not np.allclose(a.palm_quaternion, b.palm_quaternion, atol=1e-3)
 

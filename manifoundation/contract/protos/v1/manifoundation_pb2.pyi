@@ -237,7 +237,7 @@ class HandMesh(_message.Message):
     def __init__(self, vertices: _Optional[_Union[Array, _Mapping]] = ..., faces: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class Proposal(_message.Message):
-    __slots__ = ("contact_points", "contact_normals", "forces", "fingertips", "palm_position", "palm_quaternion", "joint_names", "joint_values", "quality", "contact_source", "hand_spheres", "hand_mesh", "history", "contact_motions", "network_sample", "network_forces", "rollout_points", "shape_error")
+    __slots__ = ("contact_points", "contact_normals", "forces", "fingertips", "palm_position", "palm_quaternion", "joint_names", "joint_values", "quality", "contact_source", "hand_spheres", "hand_mesh", "history", "contact_motions", "network_sample", "network_forces", "rollout_points", "shape_error", "contact_shift")
     CONTACT_POINTS_FIELD_NUMBER: _ClassVar[int]
     CONTACT_NORMALS_FIELD_NUMBER: _ClassVar[int]
     FORCES_FIELD_NUMBER: _ClassVar[int]
@@ -256,6 +256,7 @@ class Proposal(_message.Message):
     NETWORK_FORCES_FIELD_NUMBER: _ClassVar[int]
     ROLLOUT_POINTS_FIELD_NUMBER: _ClassVar[int]
     SHAPE_ERROR_FIELD_NUMBER: _ClassVar[int]
+    CONTACT_SHIFT_FIELD_NUMBER: _ClassVar[int]
     contact_points: Array
     contact_normals: Array
     forces: Array
@@ -274,7 +275,8 @@ class Proposal(_message.Message):
     network_forces: Array
     rollout_points: Array
     shape_error: float
-    def __init__(self, contact_points: _Optional[_Union[Array, _Mapping]] = ..., contact_normals: _Optional[_Union[Array, _Mapping]] = ..., forces: _Optional[_Union[Array, _Mapping]] = ..., fingertips: _Optional[_Iterable[str]] = ..., palm_position: _Optional[_Iterable[float]] = ..., palm_quaternion: _Optional[_Iterable[float]] = ..., joint_names: _Optional[_Iterable[str]] = ..., joint_values: _Optional[_Iterable[float]] = ..., quality: _Optional[_Union[Quality, _Mapping]] = ..., contact_source: _Optional[str] = ..., hand_spheres: _Optional[_Union[Array, _Mapping]] = ..., hand_mesh: _Optional[_Union[HandMesh, _Mapping]] = ..., history: _Optional[_Iterable[_Union[IterationRecord, _Mapping]]] = ..., contact_motions: _Optional[_Union[Array, _Mapping]] = ..., network_sample: _Optional[int] = ..., network_forces: _Optional[_Union[Array, _Mapping]] = ..., rollout_points: _Optional[_Union[Array, _Mapping]] = ..., shape_error: _Optional[float] = ...) -> None: ...
+    contact_shift: Array
+    def __init__(self, contact_points: _Optional[_Union[Array, _Mapping]] = ..., contact_normals: _Optional[_Union[Array, _Mapping]] = ..., forces: _Optional[_Union[Array, _Mapping]] = ..., fingertips: _Optional[_Iterable[str]] = ..., palm_position: _Optional[_Iterable[float]] = ..., palm_quaternion: _Optional[_Iterable[float]] = ..., joint_names: _Optional[_Iterable[str]] = ..., joint_values: _Optional[_Iterable[float]] = ..., quality: _Optional[_Union[Quality, _Mapping]] = ..., contact_source: _Optional[str] = ..., hand_spheres: _Optional[_Union[Array, _Mapping]] = ..., hand_mesh: _Optional[_Union[HandMesh, _Mapping]] = ..., history: _Optional[_Iterable[_Union[IterationRecord, _Mapping]]] = ..., contact_motions: _Optional[_Union[Array, _Mapping]] = ..., network_sample: _Optional[int] = ..., network_forces: _Optional[_Union[Array, _Mapping]] = ..., rollout_points: _Optional[_Union[Array, _Mapping]] = ..., shape_error: _Optional[float] = ..., contact_shift: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class SynthesisResult(_message.Message):
     __slots__ = ("hand", "model_version", "proposals", "heatmap", "force_map", "timings", "heatmaps")

@@ -34,7 +34,7 @@ from manifoundation.contract.protos.convert import to_proto
 from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
 from manifoundation.contract.protos.v1 import manifoundation_pb2_grpc as pb_grpc
 from manifoundation.server.api.batch_pages import batch_page
-from manifoundation.server.api.errors import Conflict, InvalidInput, PayloadTooLarge
+from manifoundation.server.api.errors import InvalidInput, PayloadTooLarge
 from manifoundation.server.api.grpc.calls import GrpcMetrics, send_initial_metadata, streaming, unary
 from manifoundation.server.api.grpc.errors import JobFailed
 from manifoundation.server.api.grpc.submit import Submission
@@ -170,22 +170,15 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
 
     @unary
     async def RegisterRobot(self, request: pb.RobotRegister, context: Any, caller: Caller) -> pb.RobotPublic:
-        """The HTTP route's rules: no built-in name, at most ``max_robots`` per key, validated by a worker."""
-        settings, robots = self.state.settings, self.state.robots
+        """The HTTP route's path (`RobotCatalog.register`): no built-in name, the key's count and bytes reserved
+        atomically, validated by a worker."""
+        settings = self.state.settings
         if request.ByteSize() > settings.max_robot_bytes:
             raise PayloadTooLarge(
                 f"{request.ByteSize()} bytes, more than MANI_MAX_ROBOT_BYTES={settings.max_robot_bytes}"
             )
         body = await self.submission.validate(request, RobotRegister)
-        existing = await robots.find(body.name, caller.tenant)
-        if existing is not None and existing.builtin:
-            raise Conflict(f"name: {body.name!r} is a built-in hand; choose another name")
-        if existing is None:
-            mine = [r for r in await robots.all(caller.tenant, fresh=True) if not r.builtin]
-            if len(mine) >= settings.max_robots:
-                raise Conflict(f"{len(mine)} hands registered, at most {settings.max_robots} per key (MANI_MAX_ROBOTS)")
-        robot = await self.submission.queue.register_robot(
-            body, timeout=settings.robot_register_timeout, owner=caller.tenant
+        robot = await self.state.robots.register(
+            body, caller.tenant, limits=settings.robot_limits(), timeout=settings.robot_register_timeout
         )
-        robots.forget(caller.tenant)
         return to_proto(robot, pb.RobotPublic)

@@ -79,30 +79,18 @@ def _summary(robot: RobotPublic) -> str:
     status_code=201,
     summary="Register a hand: a URDF or MJCF, alone or in a zip/tar with its meshes; `palm` cuts it from a robot",
     openapi_extra=body_openapi("RobotRegister"),
-    responses={201: {"model": RobotPublic}, 409: {"model": ErrorBody, "description": "A built-in name"}, **ERRORS},
+    responses={
+        201: {"model": RobotPublic},
+        409: {"model": ErrorBody, "description": "A built-in name, or the key's robot count or bytes reached"},
+        **ERRORS,
+    },
 )
-async def register_robot(
-    request: Request, queue: QueueDep, robots: RobotsDep, settings: SettingsDep, caller: CallerDep
-) -> Response:
+async def register_robot(request: Request, robots: RobotsDep, settings: SettingsDep, caller: CallerDep) -> Response:
     """Registered in the caller's namespace: another key's hand of the same name is another hand."""
     body = await read_model(request, RobotRegister, settings.max_robot_bytes)
-    existing = await robots.find(body.name, caller.tenant)
-    if existing is not None and existing.builtin:
-        raise Conflict(f"name: {body.name!r} is a built-in hand; choose another name")
-    mine = [r for r in await robots.all(caller.tenant, fresh=True) if not r.builtin and r.name != body.name]
-    if existing is None and len(mine) >= settings.max_robots:
-        raise Conflict(
-            f"{len(mine)} hands registered, at most {settings.max_robots} per key (MANI_MAX_ROBOTS); "
-            "DELETE /v1/robots/{name} one first"
-        )
-    used = sum(r.stored_bytes or 0 for r in mine)
-    if used + body.stored_bytes > settings.max_robot_store_bytes:
-        raise Conflict(
-            f"archive: {body.stored_bytes} bytes would bring this key's hands to {used + body.stored_bytes} bytes, "
-            f"over {settings.max_robot_store_bytes} (MANI_MAX_ROBOT_STORE_BYTES); DELETE /v1/robots/{{name}} one first"
-        )
-    robot = await queue.register_robot(body, timeout=settings.robot_register_timeout, owner=caller.tenant)
-    robots.forget(caller.tenant)
+    robot = await robots.register(
+        body, caller.tenant, limits=settings.robot_limits(), timeout=settings.robot_register_timeout
+    )
     meshes = sorted(set(MESH_FILE.findall(body.urdf))) if body.urdf is not None else []
     if meshes:  # the hardened loader never opens files: say so rather than drop them silently
         shown = ", ".join(meshes[:5]) + (f" and {len(meshes) - 5} more" if len(meshes) > 5 else "")
