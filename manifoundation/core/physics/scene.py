@@ -55,6 +55,7 @@ def build_scene(
 ) -> Scene:
     """Compile the scene (palm pose wxyz in the world frame; the object's pieces in the world frame)."""
     spec = mujoco.MjSpec()
+    spec.compiler.degree = False  # joint ranges in radians (MJCF's default is degrees)
     opt = spec.option
     opt.timestep = protocol.timestep
     opt.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST

@@ -107,3 +107,31 @@ def test_physics_imports_nothing_from_the_optimiser() -> None:
             names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
             names += [node.module or ""] if isinstance(node, ast.ImportFrom) else []
             assert not any(n.startswith(banned) for n in names), (path.name, names)
+
+
+@pytest.mark.parametrize("name", ["allegro", "leap_hand"])
+def test_scene_has_the_hands_kinematics_and_limits(name: str) -> None:
+    import mujoco
+    import torch
+
+    from manifoundation.core.physics.hand_model import PREFIX
+    from manifoundation.core.physics.scene import build_scene
+
+    hand = get_hand(name)
+    rng = np.random.default_rng(1)
+    pos, quat = rng.normal(size=3) * 0.1, rng.normal(size=4)
+    quat /= np.linalg.norm(quat)
+    q = hand.lower + rng.random(hand.dof) * (hand.upper - hand.lower)
+    far = trimesh.creation.box(extents=[0.01] * 3)
+    far.apply_translation([1.0, 1.0, 1.0])
+    sc = build_scene(hand, pos, quat, from_mesh(far.vertices, far.faces), Protocol())
+    sc.set_joints(q)
+    mujoco.mj_forward(sc.model, sc.data)
+    poses = hand.link_poses(torch.tensor(pos[None]), torch.tensor(quat[None]), torch.tensor(q[None]))
+    for link in [lk for lk in poses if PREFIX + lk in sc.hand.bodies]:
+        b = sc.model.body(PREFIX + link).id
+        assert np.allclose(sc.data.xpos[b], poses[link][0, :3, 3].numpy(), atol=1e-9)
+        assert np.allclose(sc.data.xmat[b].reshape(3, 3), poses[link][0, :3, :3].numpy(), atol=1e-9)
+    for i, joint in enumerate(hand.joint_names):  # limits in radians, as the description gives them
+        lo, hi = sc.model.jnt_range[sc.model.joint(joint).id]
+        assert lo <= hand.lower[i] + 1e-9 and hi >= hand.upper[i] - 1e-9 and hi - lo < 2 * np.pi + 1e-9
