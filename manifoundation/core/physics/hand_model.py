@@ -9,6 +9,7 @@ and the armature dominates it.
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from dataclasses import dataclass, field
 
 import mujoco
@@ -21,7 +22,8 @@ PREFIX = "hand/"
 LINK_MASS = 0.03
 LINK_INERTIA = 1e-5
 EXCLUDE_HOPS = 2
-"""Hand bodies at most this many tree edges apart never collide with each other (covers overlapping at joints)."""
+"""Hand bodies at most this many tree edges apart never collide with each other (covers overlapping at joints);
+nor do bodies whose meshes already overlap at the rest pose (`overlapping_at_rest`)."""
 HAND_SOLREF = (0.005, 1.0)
 HAND_SOLIMP = (0.5, 0.99, 0.0001)
 
@@ -56,9 +58,10 @@ class HandModel:
 
 def add_hand(
     spec: mujoco.MjSpec, desc: RobotDescription, free_joints: list[str], palm_position: np.ndarray,
-    palm_quaternion: np.ndarray, protocol: Protocol,
+    palm_quaternion: np.ndarray, protocol: Protocol, exclude: Collection[tuple[str, str]] = (),
 ) -> HandModel:  # fmt: skip
-    """Add the hand ``desc`` (rooted at its palm) to ``spec`` with the palm welded at the given pose (wxyz)."""
+    """Add the hand ``desc`` (rooted at its palm) to ``spec`` with the palm welded at the given pose (wxyz);
+    ``exclude``: more pairs of body names (without the prefix) that never collide."""
     children: dict[str, list[JointSpec]] = {}
     for j in desc.joints:
         children.setdefault(j.parent, []).append(j)
@@ -101,8 +104,30 @@ def add_hand(
         kind = spec.joint(name).type
         kp = protocol.kp_prismatic if kind == mujoco.mjtJoint.mjJNT_SLIDE else protocol.kp_revolute
         act.set_to_position(kp=kp)
-    _exclude_near(spec, depth)
+    near = _exclude_near(spec, depth)
+    for a, b in exclude:
+        pair = (PREFIX + a, PREFIX + b)
+        if pair not in near and pair[::-1] not in near:
+            spec.add_exclude(bodyname1=pair[0], bodyname2=pair[1])
     return model
+
+
+def overlapping_at_rest(desc: RobotDescription, free_joints: list[str], rest: np.ndarray) -> set[tuple[str, str]]:
+    """Pairs of body names (without the prefix) whose meshes overlap at the rest pose ``rest`` (D,): parts
+    designed to interpenetrate (covers, knuckles), never a collision the grasp caused."""
+    spec = mujoco.MjSpec()
+    spec.compiler.degree = False
+    hm = add_hand(spec, desc, free_joints, np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0]), Protocol())
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    for name, value in hm.joint_values(rest).items():
+        data.qpos[model.jnt_qposadr[model.joint(name).id]] = value
+    mujoco.mj_forward(model, data)
+    out = set()
+    for c in data.contact[: data.ncon]:
+        a, b = (model.body(int(model.geom_bodyid[g])).name.removeprefix(PREFIX) for g in c.geom)
+        out.add((a, b))
+    return out
 
 
 def _inertia(body: mujoco.MjsBody) -> None:
@@ -135,8 +160,9 @@ def _add_geoms(spec: mujoco.MjSpec, body: mujoco.MjsBody, link: str, desc: Robot
         g.group = 1
 
 
-def _exclude_near(spec: mujoco.MjSpec, chains: dict[str, tuple[str, ...]]) -> None:
+def _exclude_near(spec: mujoco.MjSpec, chains: dict[str, tuple[str, ...]]) -> set[tuple[str, str]]:
     names = list(chains)
+    out = set()
     for a in range(len(names)):
         for b in range(a + 1, len(names)):
             ca, cb = chains[names[a]], chains[names[b]]
@@ -146,3 +172,5 @@ def _exclude_near(spec: mujoco.MjSpec, chains: dict[str, tuple[str, ...]]) -> No
             hops = len(ca) + len(cb) - 2 * common
             if hops <= EXCLUDE_HOPS:
                 spec.add_exclude(bodyname1=names[a], bodyname2=names[b])
+                out.add((names[a], names[b]))
+    return out

@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
-from manifoundation.core.physics.hand_model import PREFIX, HandModel, add_hand
+from manifoundation.core.physics.hand_model import PREFIX, HandModel, add_hand, overlapping_at_rest
 from manifoundation.core.physics.object_model import OBJECT, ObjectShape, add_object
 from manifoundation.core.physics.protocol import Protocol
 from manifoundation.core.physics.visual import physics_description
@@ -50,6 +51,11 @@ class Scene:
         return C
 
 
+@functools.lru_cache(maxsize=32)
+def _rest_overlaps(hand: Hand) -> frozenset[tuple[str, str]]:
+    return frozenset(overlapping_at_rest(physics_description(hand), list(hand.joint_names), hand.rest))
+
+
 def build_scene(
     hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, shape: ObjectShape, protocol: Protocol
 ) -> Scene:
@@ -63,9 +69,10 @@ def build_scene(
     opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     opt.impratio = protocol.impratio
     opt.noslip_iterations = 2
+    desc = physics_description(hand)
     hm = add_hand(
-        spec, physics_description(hand), list(hand.joint_names), np.asarray(palm_position, float),
-        np.asarray(palm_quaternion, float), protocol,
+        spec, desc, list(hand.joint_names), np.asarray(palm_position, float), np.asarray(palm_quaternion, float),
+        protocol, _rest_overlaps(hand),
     )  # fmt: skip
     add_object(spec, shape, protocol)
     for g in spec.geoms:

@@ -135,3 +135,43 @@ def test_scene_has_the_hands_kinematics_and_limits(name: str) -> None:
     for i, joint in enumerate(hand.joint_names):  # limits in radians, as the description gives them
         lo, hi = sc.model.jnt_range[sc.model.joint(joint).id]
         assert lo <= hand.lower[i] + 1e-9 and hi >= hand.upper[i] - 1e-9 and hi - lo < 2 * np.pi + 1e-9
+
+
+# an answer of the service (LEAP, method network, force closure, seed 0) on robosuite's lemon that holds
+LEMON_PALM = np.array([0.055274, -0.15415, -0.008793])
+LEMON_QUAT = np.array([-0.124115, 0.056122, 0.697861, -0.703161])
+LEMON_Q = np.array([
+    -0.354185, 0.014864, -0.732659, -0.657742, -0.304747, -0.005819, -0.66224, -0.126277, -0.412771, -0.050414,
+    -0.770975, -0.699337, -1.38284, -0.318407, -1.337145, 0.404485,
+])  # fmt: skip
+LEMON_CONTACTS = np.array([
+    [-0.011601, -0.009115, -0.032215], [-0.039032, -0.005401, 0.004456], [0.003321, -0.008789, 0.033728],
+    [0.021637, -0.021534, -0.019689],
+])  # fmt: skip
+LEMON_NORMALS = np.array([
+    [-0.351144, -0.129277, -0.927354], [-0.95391, -0.299622, 0.016805], [0.141551, -0.379196, 0.914425],
+    [0.492267, -0.611053, -0.619909],
+])  # fmt: skip
+
+
+def _lemon():  # type: ignore[no-untyped-def]
+    from research.audit.objects import load_third_party, site_packages
+
+    path = site_packages() / "robosuite/models/assets/objects/meshes/lemon.stl"
+    if not path.exists():
+        pytest.skip("robosuite's lemon mesh is not installed")
+    obj = load_third_party("lemon", path)
+    assert obj is not None
+    return from_mesh(obj.mesh.vertices, obj.mesh.faces)
+
+
+def test_a_four_finger_answer_that_holds_and_the_same_hand_pulled_back_that_does_not() -> None:
+    hand, shape = get_hand("leap"), _lemon()
+    r = simulate_grasp(
+        hand, LEMON_PALM, LEMON_QUAT, LEMON_Q, LEMON_CONTACTS, LEMON_NORMALS, hand.fingertip_links, shape
+    )
+    assert r.success, r.trials
+    back = -LEMON_PALM / np.linalg.norm(LEMON_PALM)  # the object sits near the origin: away from it
+    r = simulate_grasp(hand, LEMON_PALM - 0.02 * back, LEMON_QUAT, LEMON_Q, LEMON_CONTACTS - 0.02 * back, LEMON_NORMALS,
+                       hand.fingertip_links, shape)  # fmt: skip
+    assert not r.success and max(r.tip_gaps) > 0.005
