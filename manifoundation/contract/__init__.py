@@ -52,7 +52,15 @@ from manifoundation.contract.plans import (
     WaypointRepair,
 )
 from manifoundation.contract.requests import ContactsIn, Method, SynthesisOptions, SynthesisRequest
-from manifoundation.contract.results import HandMesh, IterationRecord, Proposal, Quality, SynthesisResult
+from manifoundation.contract.results import (
+    HandMesh,
+    IterationRecord,
+    PhysicsQuality,
+    PhysicsTrial,
+    Proposal,
+    Quality,
+    SynthesisResult,
+)
 from manifoundation.contract.robots import (
     MAX_ARCHIVE_BYTES,
     MAX_URDF_BYTES,
@@ -125,6 +133,8 @@ __all__ = [
     "ObjectIn",
     "ObstacleIn",
     "PhysicalProperties",
+    "PhysicsQuality",
+    "PhysicsTrial",
     "PlanMethod",
     "PlanOptions",
     "PlanRequest",
