@@ -39,24 +39,35 @@ def add_physics_parser(sub: Any) -> None:
     a.add_argument("--method", default="network", help="request method (network = auto without contacts)")
     a.add_argument("--weights", default=str(WEIGHTS), help="network weights (method network)")
     a.add_argument("--seed", type=int, default=0)
+    a.add_argument("--kp-revolute", type=float, default=None, help="position gain of revolute joints, N·m/rad "
+                   "(default: Protocol's 3, MuJoCo Menagerie's LEAP Hand; its Allegro has 10)")
+    a.add_argument("--damping-revolute", type=float, default=None, help="revolute joint damping, N·m·s/rad "
+                   "(default: Protocol's 0.1; Menagerie's Allegro has 1)")
     a.add_argument("--json", default=None, help="also write every proposal's record to this file")
     a.set_defaults(func=run_physics)
 
 
 def run_physics(args: argparse.Namespace) -> int:
     """Run every (hand, object) and print the table; exit 1 when a proposal called verified fails physics."""
+    from dataclasses import replace
+
     import numpy as np
     import torch
     from rich.console import Console
     from rich.table import Table
     from tqdm import tqdm
 
-    from manifoundation.core.physics import from_mesh, simulate_grasp
+    from manifoundation.core.physics import Protocol, from_mesh, simulate_grasp
     from manifoundation.core.pipeline import SynthesisInput, TaskInput, run_pipeline
     from manifoundation.core.robots import get_hand
     from research.audit import third_party_objects
 
     torch.set_num_threads(1)
+    protocol = Protocol()
+    if args.kp_revolute is not None:
+        protocol = replace(protocol, kp_revolute=args.kp_revolute)
+    if args.damping_revolute is not None:
+        protocol = replace(protocol, damping_revolute=args.damping_revolute)
     hands = [h for h in args.hand.split(",") if h]
     every = third_party_objects()
     pick = np.unique(np.linspace(0, len(every) - 1, min(args.objects, len(every))).round().astype(int))
@@ -86,7 +97,7 @@ def run_physics(args: argparse.Namespace) -> int:
             assert p.palm_position is not None and p.palm_quaternion is not None and p.joint_values is not None
             r = simulate_grasp(
                 hand, p.palm_position, p.palm_quaternion, p.joint_values, p.contact_points, p.contact_normals,
-                p.fingertips, shapes[obj.name],
+                p.fingertips, shapes[obj.name], protocol,
             )  # fmt: skip
             records.append({
                 "hand": hand_name, "object": obj.name, "proposal": k, "verified": bool(p.quality.success),
@@ -97,7 +108,8 @@ def run_physics(args: argparse.Namespace) -> int:
             })  # fmt: skip
     table = Table(
         title=f"simulated grasp test of the service's answers: {len(objects)} third-party objects, "
-        f"force closure, method {args.method}, {args.geometry} sent, {args.proposals} proposal(s)"
+        f"force closure, method {args.method}, {args.geometry} sent, {args.proposals} proposal(s), "
+        f"kp {protocol.kp_revolute:g} N·m/rad, damping {protocol.damping_revolute:g}"
     )
     for col in ("hand", "proposals", "verified", "verified & hold", "hold", "median tip gap mm",
                 "tips ≤ 0.5 mm", "none touching", "physics s"):  # fmt: skip
