@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
+import trimesh
 
 from manifoundation.core.physics.protocol import Protocol
 from manifoundation.core.robots.description import JointSpec, RobotDescription
@@ -151,7 +152,7 @@ def _add_geoms(spec: mujoco.MjSpec, body: mujoco.MjsBody, link: str, desc: Robot
     for k, mesh in enumerate(desc.links.get(link, [])):
         if len(mesh.vertices) < 4 or mesh.extents.min() < 1e-5:
             continue  # degenerate: nothing to collide
-        v = mesh.vertices @ T[:3, :3].T + T[:3, 3]
+        v = _hull_vertices(mesh) @ T[:3, :3].T + T[:3, 3]  # MuJoCo collides the hull: send only its vertices
         name = f"{PREFIX}{link}/{k}"
         spec.add_mesh(name=name, uservert=v.astype(np.float32).reshape(-1).tolist())
         g = body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name)
@@ -174,3 +175,12 @@ def _exclude_near(spec: mujoco.MjSpec, chains: dict[str, tuple[str, ...]]) -> se
                 spec.add_exclude(bodyname1=names[a], bodyname2=names[b])
                 out.add((names[a], names[b]))
     return out
+
+
+def _hull_vertices(mesh: trimesh.Trimesh) -> np.ndarray:
+    """(k, 3) the vertices of the mesh's convex hull (trimesh caches the hull on the mesh), or all vertices when
+    qhull fails (flat parts)."""
+    try:
+        return np.asarray(mesh.convex_hull.vertices)
+    except Exception:  # qhull on degenerate input
+        return np.asarray(mesh.vertices)
