@@ -39,6 +39,8 @@ def add_physics_parser(sub: Any) -> None:
     a.add_argument("--method", default="network", help="request method (network = auto without contacts)")
     a.add_argument("--weights", default=str(WEIGHTS), help="network weights (method network)")
     a.add_argument("--seed", type=int, default=0)
+    a.add_argument("--judge", choices=("mesh", "points"), default="mesh",
+                   help="the object the physics test builds: the exact mesh (default) or the sent points' patches")
     a.add_argument("--kp-revolute", type=float, default=None, help="position gain of revolute joints, N·m/rad "
                    "(default: Protocol's 3, MuJoCo Menagerie's LEAP Hand; its Allegro has 10)")
     a.add_argument("--damping-revolute", type=float, default=None, help="revolute joint damping, N·m·s/rad "
@@ -57,7 +59,7 @@ def run_physics(args: argparse.Namespace) -> int:
     from rich.table import Table
     from tqdm import tqdm
 
-    from manifoundation.core.physics import Protocol, from_mesh, simulate_grasp
+    from manifoundation.core.physics import Protocol, from_mesh, from_points, simulate_grasp
     from manifoundation.core.pipeline import SynthesisInput, TaskInput, run_pipeline
     from manifoundation.core.robots import get_hand
     from research.audit import third_party_objects
@@ -77,7 +79,11 @@ def run_physics(args: argparse.Namespace) -> int:
         from manifoundation.core.network import ContactPredictor
 
         predictor = ContactPredictor.from_checkpoint(args.weights)
-    shapes = {o.name: from_mesh(o.mesh.vertices, o.mesh.faces) for o in objects}
+    shapes = {
+        o.name: from_mesh(o.mesh.vertices, o.mesh.faces) if args.judge == "mesh"
+        else from_points(*o.sample(args.points, args.seed))
+        for o in objects
+    }  # fmt: skip
     records: list[dict[str, Any]] = []
     jobs = [(h, o) for h in hands for o in objects]
     for hand_name, obj in tqdm(jobs, desc="requests"):
@@ -109,7 +115,7 @@ def run_physics(args: argparse.Namespace) -> int:
     table = Table(
         title=f"simulated grasp test of the service's answers: {len(objects)} third-party objects, "
         f"force closure, method {args.method}, {args.geometry} sent, {args.proposals} proposal(s), "
-        f"kp {protocol.kp_revolute:g} N·m/rad, damping {protocol.damping_revolute:g}"
+        f"kp {protocol.kp_revolute:g} N·m/rad, damping {protocol.damping_revolute:g}, judged on the {args.judge}"
     )
     for col in ("hand", "proposals", "verified", "verified & hold", "hold", "median tip gap mm",
                 "tips ≤ 0.5 mm", "none touching", "physics s"):  # fmt: skip
