@@ -13,8 +13,8 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("manifoundation", "research")
 
 CORE_ORDER = (
-    "errors", "objects", "robots", "geometry", "network", "refine", "compiled", "deformable", "pipeline", "planning",
-    "weights",
+    "errors", "objects", "robots", "geometry", "physics", "network", "refine", "compiled", "deformable", "pipeline",
+    "planning", "weights",
 )  # fmt: skip
 """Bottom to top: a subpackage of `manifoundation.core` imports only from those before it (and itself)."""
 RESEARCH_ORDER = (

@@ -59,7 +59,15 @@ from manifoundation.contract.requests import (
     SynthesisOptions,
     SynthesisRequest,
 )
-from manifoundation.contract.results import HandMesh, IterationRecord, Proposal, Quality, SynthesisResult
+from manifoundation.contract.results import (
+    HandMesh,
+    IterationRecord,
+    PhysicsQuality,
+    PhysicsTrial,
+    Proposal,
+    Quality,
+    SynthesisResult,
+)
 from manifoundation.contract.robots import (
     MAX_ARCHIVE_BYTES,
     MAX_URDF_BYTES,
@@ -134,6 +142,8 @@ __all__ = [
     "ObjectIn",
     "ObstacleIn",
     "PhysicalProperties",
+    "PhysicsQuality",
+    "PhysicsTrial",
     "PlanMethod",
     "PlanOptions",
     "PlanRequest",

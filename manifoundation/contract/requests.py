@@ -66,6 +66,13 @@ class SynthesisOptions(WireModel):
         "rebuilt from the points, resting on a table under its lowest point) and judge success by the paper's "
         "shape metric against the target; returns `rollout_points`. About 0.5-2 s a proposal.",
     )
+    simulate: bool = Field(
+        False,
+        description="Rigid objects with a robot: run the simulated grasp test (MuJoCo, DexGraspBench's protocol: "
+        "pregrasp → grasp → squeeze, then 1 N pushes along ±x, ±y, ±z for 2 s; docs/physics.md) on each "
+        "proposal; `quality.physics` carries it and `quality.success` requires that the object held. About "
+        "0.1-0.6 s a proposal.",
+    )
     rollout_corrections: int = Field(
         0, ge=0, le=8, description="Deformables with `simulate_rollout`: a proposal whose rollout misses the "
         "target may spend up to this many more rollouts correcting its post-contact motions (closed loop through "

@@ -11,6 +11,37 @@ from manifoundation.contract.arrays import spec
 from manifoundation.contract.common import PerPoint, Points, Quaternion, Rows3, Vec3, Vector, WireModel
 
 
+class PhysicsTrial(WireModel):
+    """One push of the simulated grasp test: the force's direction and how far the object moved and turned."""
+
+    direction: str = Field(..., description="Where the external force pushed: -x, +x, -y, +y, -z or +z (world).")
+    translation: float = Field(..., ge=0, description="How far the object's centre of mass moved, m.")
+    rotation: float = Field(..., ge=0, description="How far the object turned, degrees.")
+    held: bool = Field(..., description="Moved < 5 cm and turned < 15°.")
+
+
+class PhysicsQuality(WireModel):
+    """The simulated grasp test (``options.simulate``; MuJoCo, DexGraspBench's protocol, docs/physics.md)."""
+
+    held: bool = Field(..., description="The object held in all six directions.")
+    reason: str = Field(..., description="held, moved (a push moved or turned it too far) or penetration (the "
+                        "pregrasp penetrates more than 1 cm).")
+    trials: list[PhysicsTrial] = Field(default_factory=list, description="The six pushes (none after penetration).")
+    penetration: float = Field(..., ge=0, description="Deepest hand-object or hand-hand penetration at the "
+                               "pregrasp, m.")
+    tip_gaps: list[float] = Field(default_factory=list, description="Per fingertip, the signed distance from its "
+                                  "real mesh to the object at the grasp pose, m (negative: penetrating).")
+    touching_after_squeeze: int = Field(..., ge=0, description="Hand bodies touching the object after the squeeze "
+                                        "(first push).")
+    pregrasp: list[float] = Field(default_factory=list, description="Joint targets of the pregrasp (contacts 1 cm "
+                                  "out), in `joint_names` order.")
+    squeeze: list[float] = Field(default_factory=list, description="Joint targets of the squeeze (2 × grasp − "
+                                 "pregrasp).")
+    seconds: float = Field(..., ge=0, description="Wall time of the test.")
+    object_pieces: str = Field(..., description="How the object was built: hull (the sent mesh, convex), "
+                               "mesh_patches (non-convex mesh) or point_patches (points only).")
+
+
 class Quality(WireModel):
     """Verification figures of one proposal (docs/evaluation.md)."""
 
@@ -34,6 +65,10 @@ class Quality(WireModel):
         None,
         description="The object surface verification measured on: 'mesh' (the sent mesh) or 'points' (the "
         "oriented points' surface, which keeps concavities).",
+    )
+    physics: PhysicsQuality | None = Field(
+        None, description="With `options.simulate`: the simulated grasp test; `success` then also requires that "
+        "the object held (a failed test adds 'physics' to `failures`).",
     )
 
 

@@ -64,6 +64,8 @@ class Hand:
         approach_axis: np.ndarray | list[float] | None = None,
     ) -> None:
         self.name = name
+        self.description = desc
+        """The description the hand was built from (links with their collision meshes; physics builds from it)."""
         self.tree = tree = KinematicTree(desc, palm)
         self.joint_names = list(tree.joint_names)
         self.lower, self.upper = tree.lower.copy(), tree.upper.copy()

@@ -161,6 +161,19 @@ def _kinova3f() -> Hand:
     return Hand(desc, name="kinova3f", fingertips=tips, tip_offsets=offsets, rest=rest, approach_axis=[0, 0, 1.0])
 
 
+def urdf_source(name: str) -> tuple[bytes, MeshLoader] | None:
+    """The URDF document and its mesh loader of a built-in hand described by a URDF with mesh files (a physics
+    model reads its visual meshes from it); None for the other hands."""
+    name = ALIASES.get(name, name)
+    if name == "allegro":
+        path = _erd("allegro_hand_description", "urdf", "allegro_right_hand.urdf")
+    elif name == "panda_gripper":
+        path = _erd("panda_description", "urdf", "panda.urdf")
+    else:
+        return None
+    return path.read_bytes(), _package_loader(path.parent, _erd().parent)
+
+
 BUILTINS: dict[str, Callable[[], Hand]] = {
     "allegro": _allegro,
     "panda_gripper": _panda_gripper,

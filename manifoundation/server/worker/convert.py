@@ -16,6 +16,8 @@ from manifoundation.contract import (
     HandMesh,
     IterationRecord,
     Method,
+    PhysicsQuality,
+    PhysicsTrial,
     Proposal,
     Quality,
     SynthesisRequest,
@@ -88,21 +90,64 @@ def _finite(value: float) -> float:
     return float(value) if np.isfinite(value) else _BIG
 
 
-def to_proposal(p: ProposalOutput, hand: Hand | None = None, *, history: bool = False, mesh: bool = False) -> Proposal:
+def simulate(request: SynthesisRequest, hand: Hand, proposals: list[ProposalOutput]) -> list[PhysicsQuality | None]:
+    """The simulated grasp test (`manifoundation.core.physics`) of each proposal with a hand pose: on the sent mesh,
+    else on the points (and their normals, estimated when not sent)."""
+    from scipy.spatial import cKDTree
+
+    from manifoundation.core.geometry.object import estimate_normals
+    from manifoundation.core.physics import ObjectShape, from_mesh, from_points, simulate_grasp
+
+    obj = request.object
+    shape: ObjectShape | None = None
+    out: list[PhysicsQuality | None] = []
+    for p in proposals:
+        if p.palm_position is None or p.palm_quaternion is None or p.joint_values is None or not p.fingertips:
+            out.append(None)
+            continue
+        if shape is None:
+            if obj.mesh is not None:
+                shape = from_mesh(np.asarray(obj.mesh.vertices, float), np.asarray(obj.mesh.faces, np.int64))
+            else:
+                pts = np.asarray(obj.points, np.float64)
+                nrm = estimate_normals(pts, cKDTree(pts)) if obj.normals is None else np.asarray(obj.normals, float)
+                shape = from_points(pts, nrm)
+        r = simulate_grasp(hand, p.palm_position, p.palm_quaternion, p.joint_values, p.contact_points,
+                           p.contact_normals, p.fingertips, shape)  # fmt: skip
+        out.append(PhysicsQuality(
+            held=r.success, reason=r.reason, penetration=_finite(r.penetration),
+            trials=[PhysicsTrial(direction=t.direction, translation=_finite(t.translation),
+                                 rotation=_finite(t.rotation), held=t.held) for t in r.trials],
+            tip_gaps=[_finite(g) for g in r.tip_gaps], touching_after_squeeze=r.contacts_after_squeeze,
+            pregrasp=[float(v) for v in r.pregrasp], squeeze=[float(v) for v in r.squeeze], seconds=r.seconds,
+            object_pieces=shape.source,
+        ))  # fmt: skip
+    return out
+
+
+def to_proposal(
+    p: ProposalOutput, hand: Hand | None = None, *, history: bool = False, mesh: bool = False,
+    physics: PhysicsQuality | None = None,
+) -> Proposal:  # fmt: skip
     """The wire proposal of one of the pipeline's proposals (a single request's, or a plan step's).
 
     Args:
         hand: when given, the hand's collision spheres at the proposal's pose (and with ``mesh``, its posed
             collision meshes) travel with it, for viewers.
         history: include the refinement's per-iteration record.
+        physics: the simulated grasp test's figures (`simulate`): success then also requires that it held.
     """
     q = p.quality
+    failures = list(q.failures)
+    if physics is not None and not physics.held:
+        failures.append("physics")
     quality = Quality(
-        success=bool(q.success), converged=bool(q.converged), reason=q.reason, iterations=int(q.iterations),
-        wrench_residual=_finite(q.wrench_residual), max_tip_distance=_finite(q.max_tip_distance),
-        penetration_depth=_finite(q.penetration_depth), self_collision_depth=_finite(q.self_collision_depth),
+        success=bool(q.success) and (physics is None or physics.held), converged=bool(q.converged), reason=q.reason,
+        iterations=int(q.iterations), wrench_residual=_finite(q.wrench_residual),
+        max_tip_distance=_finite(q.max_tip_distance), penetration_depth=_finite(q.penetration_depth),
+        self_collision_depth=_finite(q.self_collision_depth),
         epsilon=None if q.epsilon is None or not np.isfinite(q.epsilon) else float(q.epsilon),
-        failures=list(q.failures), geometry=q.geometry,
+        failures=failures, geometry=q.geometry, physics=physics,
     )  # fmt: skip
     records = None
     if history and p.history is not None:
@@ -146,12 +191,17 @@ def to_result(
 ) -> SynthesisResult:
     """The wire result of ``output`` (maps and history only when the request asked for them).
 
-    With ``hand``, each proposal carries the hand's collision spheres at its pose.
+    With ``hand``, each proposal carries the hand's collision spheres at its pose; with ``options.simulate`` (a
+    rigid object and a robot) each proposal's ``quality.physics`` is the simulated grasp test (`simulate`).
     """
     options = request.options
+    rigid = request.object.material.value == "rigid"
+    physics: list[PhysicsQuality | None] = [None] * len(output.proposals)
+    if options.simulate and hand is not None and rigid and request.robot is not None:
+        physics = simulate(request, hand, output.proposals)
     proposals = [
-        to_proposal(p, hand, history=options.return_history, mesh=options.return_hand_mesh)
-        for p in output.proposals
+        to_proposal(p, hand, history=options.return_history, mesh=options.return_hand_mesh, physics=ph)
+        for p, ph in zip(output.proposals, physics, strict=True)
     ]
     return SynthesisResult(
         hand=output.hand,

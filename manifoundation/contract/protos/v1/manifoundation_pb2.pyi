@@ -139,7 +139,7 @@ class RobotIn(_message.Message):
     def __init__(self, name: _Optional[str] = ..., urdf: _Optional[str] = ..., fingertips: _Optional[_Iterable[str]] = ..., tip_offsets: _Optional[_Union[Array, _Mapping]] = ...) -> None: ...
 
 class SynthesisOptions(_message.Message):
-    __slots__ = ("method", "num_proposals", "refine", "max_iterations", "seed", "timeout", "return_heatmap", "return_force_map", "return_history", "return_hand_mesh", "simulate_rollout", "num_contacts", "return_all_heatmaps", "stop_after_verified", "rollout_corrections")
+    __slots__ = ("method", "num_proposals", "refine", "max_iterations", "seed", "timeout", "return_heatmap", "return_force_map", "return_history", "return_hand_mesh", "simulate_rollout", "num_contacts", "return_all_heatmaps", "stop_after_verified", "rollout_corrections", "simulate")
     METHOD_FIELD_NUMBER: _ClassVar[int]
     NUM_PROPOSALS_FIELD_NUMBER: _ClassVar[int]
     REFINE_FIELD_NUMBER: _ClassVar[int]
@@ -155,6 +155,7 @@ class SynthesisOptions(_message.Message):
     RETURN_ALL_HEATMAPS_FIELD_NUMBER: _ClassVar[int]
     STOP_AFTER_VERIFIED_FIELD_NUMBER: _ClassVar[int]
     ROLLOUT_CORRECTIONS_FIELD_NUMBER: _ClassVar[int]
+    SIMULATE_FIELD_NUMBER: _ClassVar[int]
     method: str
     num_proposals: int
     refine: bool
@@ -170,7 +171,8 @@ class SynthesisOptions(_message.Message):
     return_all_heatmaps: bool
     stop_after_verified: int
     rollout_corrections: int
-    def __init__(self, method: _Optional[str] = ..., num_proposals: _Optional[int] = ..., refine: _Optional[bool] = ..., max_iterations: _Optional[int] = ..., seed: _Optional[int] = ..., timeout: _Optional[float] = ..., return_heatmap: _Optional[bool] = ..., return_force_map: _Optional[bool] = ..., return_history: _Optional[bool] = ..., return_hand_mesh: _Optional[bool] = ..., simulate_rollout: _Optional[bool] = ..., num_contacts: _Optional[int] = ..., return_all_heatmaps: _Optional[bool] = ..., stop_after_verified: _Optional[int] = ..., rollout_corrections: _Optional[int] = ...) -> None: ...
+    simulate: bool
+    def __init__(self, method: _Optional[str] = ..., num_proposals: _Optional[int] = ..., refine: _Optional[bool] = ..., max_iterations: _Optional[int] = ..., seed: _Optional[int] = ..., timeout: _Optional[float] = ..., return_heatmap: _Optional[bool] = ..., return_force_map: _Optional[bool] = ..., return_history: _Optional[bool] = ..., return_hand_mesh: _Optional[bool] = ..., simulate_rollout: _Optional[bool] = ..., num_contacts: _Optional[int] = ..., return_all_heatmaps: _Optional[bool] = ..., stop_after_verified: _Optional[int] = ..., rollout_corrections: _Optional[int] = ..., simulate: _Optional[bool] = ...) -> None: ...
 
 class ContactsIn(_message.Message):
     __slots__ = ("points",)
@@ -193,7 +195,7 @@ class SynthesisRequest(_message.Message):
     def __init__(self, object: _Optional[_Union[ObjectIn, _Mapping]] = ..., task: _Optional[_Union[TaskIn, _Mapping]] = ..., robot: _Optional[_Union[RobotIn, _Mapping]] = ..., options: _Optional[_Union[SynthesisOptions, _Mapping]] = ..., contacts: _Optional[_Union[ContactsIn, _Mapping]] = ...) -> None: ...
 
 class Quality(_message.Message):
-    __slots__ = ("success", "converged", "reason", "iterations", "wrench_residual", "max_tip_distance", "penetration_depth", "self_collision_depth", "epsilon", "failures", "geometry")
+    __slots__ = ("success", "converged", "reason", "iterations", "wrench_residual", "max_tip_distance", "penetration_depth", "self_collision_depth", "epsilon", "failures", "geometry", "physics")
     SUCCESS_FIELD_NUMBER: _ClassVar[int]
     CONVERGED_FIELD_NUMBER: _ClassVar[int]
     REASON_FIELD_NUMBER: _ClassVar[int]
@@ -205,6 +207,7 @@ class Quality(_message.Message):
     EPSILON_FIELD_NUMBER: _ClassVar[int]
     FAILURES_FIELD_NUMBER: _ClassVar[int]
     GEOMETRY_FIELD_NUMBER: _ClassVar[int]
+    PHYSICS_FIELD_NUMBER: _ClassVar[int]
     success: bool
     converged: bool
     reason: str
@@ -216,7 +219,44 @@ class Quality(_message.Message):
     epsilon: float
     failures: _containers.RepeatedScalarFieldContainer[str]
     geometry: str
-    def __init__(self, success: _Optional[bool] = ..., converged: _Optional[bool] = ..., reason: _Optional[str] = ..., iterations: _Optional[int] = ..., wrench_residual: _Optional[float] = ..., max_tip_distance: _Optional[float] = ..., penetration_depth: _Optional[float] = ..., self_collision_depth: _Optional[float] = ..., epsilon: _Optional[float] = ..., failures: _Optional[_Iterable[str]] = ..., geometry: _Optional[str] = ...) -> None: ...
+    physics: PhysicsQuality
+    def __init__(self, success: _Optional[bool] = ..., converged: _Optional[bool] = ..., reason: _Optional[str] = ..., iterations: _Optional[int] = ..., wrench_residual: _Optional[float] = ..., max_tip_distance: _Optional[float] = ..., penetration_depth: _Optional[float] = ..., self_collision_depth: _Optional[float] = ..., epsilon: _Optional[float] = ..., failures: _Optional[_Iterable[str]] = ..., geometry: _Optional[str] = ..., physics: _Optional[_Union[PhysicsQuality, _Mapping]] = ...) -> None: ...
+
+class PhysicsTrial(_message.Message):
+    __slots__ = ("direction", "translation", "rotation", "held")
+    DIRECTION_FIELD_NUMBER: _ClassVar[int]
+    TRANSLATION_FIELD_NUMBER: _ClassVar[int]
+    ROTATION_FIELD_NUMBER: _ClassVar[int]
+    HELD_FIELD_NUMBER: _ClassVar[int]
+    direction: str
+    translation: float
+    rotation: float
+    held: bool
+    def __init__(self, direction: _Optional[str] = ..., translation: _Optional[float] = ..., rotation: _Optional[float] = ..., held: _Optional[bool] = ...) -> None: ...
+
+class PhysicsQuality(_message.Message):
+    __slots__ = ("held", "reason", "trials", "penetration", "tip_gaps", "touching_after_squeeze", "pregrasp", "squeeze", "seconds", "object_pieces")
+    HELD_FIELD_NUMBER: _ClassVar[int]
+    REASON_FIELD_NUMBER: _ClassVar[int]
+    TRIALS_FIELD_NUMBER: _ClassVar[int]
+    PENETRATION_FIELD_NUMBER: _ClassVar[int]
+    TIP_GAPS_FIELD_NUMBER: _ClassVar[int]
+    TOUCHING_AFTER_SQUEEZE_FIELD_NUMBER: _ClassVar[int]
+    PREGRASP_FIELD_NUMBER: _ClassVar[int]
+    SQUEEZE_FIELD_NUMBER: _ClassVar[int]
+    SECONDS_FIELD_NUMBER: _ClassVar[int]
+    OBJECT_PIECES_FIELD_NUMBER: _ClassVar[int]
+    held: bool
+    reason: str
+    trials: _containers.RepeatedCompositeFieldContainer[PhysicsTrial]
+    penetration: float
+    tip_gaps: _containers.RepeatedScalarFieldContainer[float]
+    touching_after_squeeze: int
+    pregrasp: _containers.RepeatedScalarFieldContainer[float]
+    squeeze: _containers.RepeatedScalarFieldContainer[float]
+    seconds: float
+    object_pieces: str
+    def __init__(self, held: _Optional[bool] = ..., reason: _Optional[str] = ..., trials: _Optional[_Iterable[_Union[PhysicsTrial, _Mapping]]] = ..., penetration: _Optional[float] = ..., tip_gaps: _Optional[_Iterable[float]] = ..., touching_after_squeeze: _Optional[int] = ..., pregrasp: _Optional[_Iterable[float]] = ..., squeeze: _Optional[_Iterable[float]] = ..., seconds: _Optional[float] = ..., object_pieces: _Optional[str] = ...) -> None: ...
 
 class IterationRecord(_message.Message):
     __slots__ = ("residual", "tip_distance", "step")

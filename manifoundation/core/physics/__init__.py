@@ -1,0 +1,11 @@
+"""The simulated grasp test (MuJoCo), the field's meaning of "verified" (DexGraspBench / BODex protocol).
+
+Independent of the optimiser: it reads the hand's description and real meshes (`visual`), builds its own MuJoCo
+model (`hand_model`, `object_model`, `scene`) and runs the six-direction test (`trial`, settings in `protocol`).
+"""
+
+from manifoundation.core.physics.object_model import ObjectShape, from_mesh, from_points
+from manifoundation.core.physics.protocol import PhysicsResult, Protocol, Trial
+from manifoundation.core.physics.trial import simulate_grasp
+
+__all__ = ["ObjectShape", "PhysicsResult", "Protocol", "Trial", "from_mesh", "from_points", "simulate_grasp"]

@@ -1,0 +1,88 @@
+"""One MuJoCo scene of the test: the protocol's options, the hand welded at the answer's palm pose, the object."""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+from manifoundation.core.physics.hand_model import PREFIX, HandModel, add_hand, overlapping_at_rest
+from manifoundation.core.physics.object_model import OBJECT, ObjectShape, add_object
+from manifoundation.core.physics.protocol import Protocol
+from manifoundation.core.physics.visual import physics_description
+
+if TYPE_CHECKING:
+    from manifoundation.core.robots.hand import Hand
+
+
+@dataclass
+class Scene:
+    """The compiled model and the indices the test needs.
+
+    Attributes:
+        hand_qpos: (n,) qpos address of each moving hand joint, in ``hand.joints`` order.
+        hand_dof: (n,) its dof address. object_qpos: the object's free-joint qpos address (7 values).
+        object_body: its body id; hand_bodies: ids of the hand's bodies.
+    """
+
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    hand: HandModel
+    hand_qpos: np.ndarray
+    hand_dof: np.ndarray
+    object_qpos: int
+    object_body: int
+    hand_bodies: np.ndarray
+
+    def set_joints(self, q: np.ndarray) -> None:
+        """Every hand joint from the free joint values q (D,)."""
+        values = self.hand.joint_values(q)
+        for (name, *_), adr in zip(self.hand.joints, self.hand_qpos, strict=True):
+            self.data.qpos[adr] = values[name]
+
+    def coupling(self) -> np.ndarray:
+        """(nv, D): d qvel / d q̇_free (the mimic multipliers)."""
+        C = np.zeros((self.model.nv, len(self.hand.free_joints)))
+        for (_, src, mult, _), dof in zip(self.hand.joints, self.hand_dof, strict=True):
+            C[dof, src] = mult
+        return C
+
+
+@functools.lru_cache(maxsize=32)
+def _rest_overlaps(hand: Hand) -> frozenset[tuple[str, str]]:
+    return frozenset(overlapping_at_rest(physics_description(hand), list(hand.joint_names), hand.rest))
+
+
+def build_scene(
+    hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, shape: ObjectShape, protocol: Protocol
+) -> Scene:
+    """Compile the scene (palm pose wxyz in the world frame; the object's pieces in the world frame)."""
+    spec = mujoco.MjSpec()
+    spec.compiler.degree = False  # joint ranges in radians (MJCF's default is degrees)
+    opt = spec.option
+    opt.timestep = protocol.timestep
+    opt.integrator = mujoco.mjtIntegrator.mjINT_IMPLICITFAST
+    opt.disableflags = int(mujoco.mjtDisableBit.mjDSBL_GRAVITY)
+    opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    opt.impratio = protocol.impratio
+    opt.noslip_iterations = 2
+    desc = physics_description(hand)
+    hm = add_hand(
+        spec, desc, list(hand.joint_names), np.asarray(palm_position, float), np.asarray(palm_quaternion, float),
+        protocol, _rest_overlaps(hand),
+    )  # fmt: skip
+    add_object(spec, shape, protocol)
+    for g in spec.geoms:
+        g.friction = [protocol.friction[0], protocol.friction[1], 0.0001]
+        g.condim = 4
+    model = spec.compile()
+    data = mujoco.MjData(model)
+    qadr = np.array([model.jnt_qposadr[model.joint(name).id] for name, *_ in hm.joints], dtype=np.int64)
+    dadr = np.array([model.jnt_dofadr[model.joint(name).id] for name, *_ in hm.joints], dtype=np.int64)
+    obj_joint = model.joint(OBJECT + "/free").id
+    bodies = np.array([model.body(b).id for b in hm.bodies], dtype=np.int64)
+    assert all(model.body(int(b)).name.startswith(PREFIX) for b in bodies)
+    return Scene(model, data, hm, qadr, dadr, int(model.jnt_qposadr[obj_joint]), int(model.body(OBJECT).id), bodies)

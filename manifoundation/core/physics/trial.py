@@ -1,0 +1,163 @@
+"""The test itself: pregrasp / squeeze targets, the start checks, and the six pushes (see `protocol`)."""
+
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING
+
+import mujoco
+import numpy as np
+
+from manifoundation.core.physics.object_model import ObjectShape
+from manifoundation.core.physics.protocol import DIRECTION_NAMES, DIRECTIONS, PhysicsResult, Protocol, Trial
+from manifoundation.core.physics.scene import Scene, build_scene
+
+if TYPE_CHECKING:
+    from manifoundation.core.robots.hand import Hand
+
+GAP_RANGE = 0.05
+"""Fingertip gaps are measured up to this distance (m); farther tips report it."""
+
+
+def simulate_grasp(
+    hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, joints: np.ndarray,
+    contact_points: np.ndarray, contact_normals: np.ndarray, fingertips: list[str], shape: ObjectShape,
+    protocol: Protocol | None = None,
+) -> PhysicsResult:  # fmt: skip
+    """Judge one grasp.
+
+    Args:
+        hand: the hand (its description is read, not its optimiser geometry).
+        palm_position: (3,) and palm_quaternion: (4,) wxyz, world frame; joints: (D,) the grasp's free joints.
+        contact_points, contact_normals: (m, 3) the answer's contacts and the object's outward normals there,
+            one per fingertip link in ``fingertips``: the pregrasp moves each of them ``pregrasp_distance`` outward.
+        shape: the object (`object_model`).
+        protocol: settings (default: the benchmark's).
+    """
+    p = protocol or Protocol()
+    t0 = time.perf_counter()
+    sc = build_scene(hand, palm_position, palm_quaternion, shape, p)
+    q = np.asarray(joints, float)
+    pre = pregrasp(sc, q, np.asarray(contact_points, float), np.asarray(contact_normals, float), fingertips, p)
+    lo, hi = hand.lower, hand.upper
+    pre = np.clip(pre, lo, hi)
+    squeeze = 2 * q - pre
+    _reset(sc, q)
+    gaps = tip_gaps(sc, fingertips)
+    _reset(sc, pre)
+    pen = _penetration(sc)
+    trials: list[Trial] = []
+    touching = 0
+    if pen > p.max_penetration:
+        return PhysicsResult(False, [], "penetration", pen, gaps, 0, pre, squeeze, time.perf_counter() - t0)
+    for i, (d, name) in enumerate(zip(DIRECTIONS, DIRECTION_NAMES, strict=True)):
+        trial, n = _push(sc, pre, q, squeeze, d, name, p)
+        touching = n if i == 0 else touching
+        trials.append(trial)
+        if not trial.held and p.stop_at_first_failure:
+            break
+    ok = len(trials) == len(DIRECTIONS) and all(t.held for t in trials)
+    return PhysicsResult(ok, trials, "held" if ok else "moved", pen, gaps, touching, pre, squeeze,
+                         time.perf_counter() - t0)  # fmt: skip
+
+
+def pregrasp(
+    sc: Scene, q: np.ndarray, points: np.ndarray, normals: np.ndarray, fingertips: list[str], p: Protocol
+) -> np.ndarray:
+    """(D,) joints that move each contact point ``p.pregrasp_distance`` along its outward normal (damped least
+    squares on MuJoCo's point Jacobians at the grasp)."""
+    _reset(sc, q)
+    C = sc.coupling()
+    rows, rhs = [], []
+    jac = np.zeros((3, sc.model.nv))
+    for x, n, link in zip(points, normals, fingertips, strict=True):
+        body = sc.model.body(sc.hand.link_body[link]).id
+        mujoco.mj_jac(sc.model, sc.data, jac, None, x, body)
+        rows.append(jac @ C)
+        rhs.append(p.pregrasp_distance * n / max(np.linalg.norm(n), 1e-12))
+    if not rows:
+        return q.copy()
+    J, b = np.vstack(rows), np.concatenate(rhs)
+    lam = 1e-6
+    dq = np.linalg.solve(J.T @ J + lam * np.eye(J.shape[1]), J.T @ b)
+    return np.asarray(q + dq)
+
+
+def tip_gaps(sc: Scene, fingertips: list[str]) -> list[float]:
+    """Per fingertip link, the signed distance (m) from its body's geoms to the object's (at the current state)."""
+    m, d = sc.model, sc.data
+    obj = [g for g in range(m.ngeom) if m.geom_bodyid[g] == sc.object_body]
+    out = []
+    for link in fingertips:
+        body = m.body(sc.hand.link_body[link]).id
+        best = GAP_RANGE
+        for g in (g for g in range(m.ngeom) if m.geom_bodyid[g] == body):
+            for h in obj:
+                best = min(best, float(mujoco.mj_geomDistance(m, d, g, h, GAP_RANGE, None)))
+        out.append(best)
+    return out
+
+
+def _reset(sc: Scene, q: np.ndarray) -> None:
+    mujoco.mj_resetData(sc.model, sc.data)
+    sc.set_joints(q)
+    sc.data.ctrl[:] = q
+    mujoco.mj_forward(sc.model, sc.data)
+
+
+def _penetration(sc: Scene) -> float:
+    """Deepest hand-object or hand-hand penetration now (m, ≥ 0)."""
+    m, d = sc.model, sc.data
+    hand = set(sc.hand_bodies.tolist())
+    deepest = 0.0
+    for c in d.contact[: d.ncon]:
+        b1, b2 = int(m.geom_bodyid[c.geom[0]]), int(m.geom_bodyid[c.geom[1]])
+        involved = {b1, b2}
+        if involved <= hand | {sc.object_body} and involved & hand:
+            deepest = max(deepest, -float(c.dist))
+    return deepest
+
+
+def _touching(sc: Scene) -> int:
+    m, d = sc.model, sc.data
+    bodies = set()
+    for c in d.contact[: d.ncon]:
+        b1, b2 = int(m.geom_bodyid[c.geom[0]]), int(m.geom_bodyid[c.geom[1]])
+        if sc.object_body in (b1, b2):
+            bodies.add(b2 if b1 == sc.object_body else b1)
+    return len(bodies)
+
+
+def _drive(sc: Scene, a: np.ndarray, b: np.ndarray, p: Protocol) -> None:
+    for j in range(p.interp_outer):
+        sc.data.ctrl[:] = a + (b - a) * (j + 1) / p.interp_outer
+        mujoco.mj_step(sc.model, sc.data, nstep=p.interp_inner)
+
+
+def _push(
+    sc: Scene, pre: np.ndarray, q: np.ndarray, squeeze: np.ndarray, direction: np.ndarray, name: str, p: Protocol
+) -> tuple[Trial, int]:
+    _reset(sc, pre)
+    a = sc.object_qpos
+    start_pos = sc.data.xipos[sc.object_body].copy()
+    start_quat = sc.data.qpos[a + 3 : a + 7].copy()
+    _drive(sc, pre, q, p)
+    _drive(sc, q, squeeze, p)
+    touching = _touching(sc)
+    sc.data.xfrc_applied[sc.object_body, :3] = p.force_factor * p.mass * direction
+    steps = round(p.hold_seconds / p.timestep)
+    moved, turned = 0.0, 0.0
+    for _ in range(max(1, steps // p.check_every)):
+        mujoco.mj_step(sc.model, sc.data, nstep=p.check_every)
+        moved = float(np.linalg.norm(sc.data.xipos[sc.object_body] - start_pos))
+        turned = _angle(start_quat, sc.data.qpos[a + 3 : a + 7])
+        if moved >= p.max_translation or turned >= p.max_rotation or not np.isfinite(moved):
+            break
+    held = bool(np.isfinite(moved) and moved < p.max_translation and turned < p.max_rotation)
+    return Trial(name, moved, turned, held), touching
+
+
+def _angle(q1: np.ndarray, q2: np.ndarray) -> float:
+    """Angle between two wxyz orientations, degrees."""
+    dot = abs(float(np.dot(q1, q2)) / max(float(np.linalg.norm(q1) * np.linalg.norm(q2)), 1e-12))
+    return float(np.degrees(2 * np.arccos(min(1.0, dot))))

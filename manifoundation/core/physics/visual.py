@@ -1,0 +1,67 @@
+"""The hand's geometry as the physics test sees it: real (visual) meshes wherever a link's collision geometry is
+only a primitive cover.
+
+A URDF link whose ``<collision>`` elements are all primitives (box, sphere, cylinder, capsule) and that has a
+``<visual>`` mesh is read from its visual meshes (Allegro's boxes and tip spheres become its real links); links whose
+collision geometry is a mesh keep it (the Panda's STL meshes). Hands without such a source (MJCF hands, user hands,
+``leap_kaizen`` whose description already is its visual meshes' hulls) keep the geometry they were built from.
+MuJoCo collides each mesh as its convex hull.
+"""
+
+from __future__ import annotations
+
+import functools
+import xml.etree.ElementTree as ET
+from typing import TYPE_CHECKING
+
+from defusedxml.ElementTree import fromstring
+
+from manifoundation.core.robots.description import RobotDescription
+from manifoundation.core.robots.urdf import parse_urdf
+
+if TYPE_CHECKING:
+    from manifoundation.core.robots.hand import Hand
+
+PRIMITIVES = ("box", "sphere", "cylinder", "capsule")
+
+
+def prefer_visual(urdf: bytes) -> bytes:
+    """The URDF with the collision elements dropped from every link that collides only through primitives and
+    has a visual mesh (read with ``use_visual`` the link then takes its visual meshes)."""
+    root = fromstring(urdf, forbid_dtd=True, forbid_entities=True, forbid_external=True)
+    for link in root.findall("link"):
+        cols = link.findall("collision")
+        visual_mesh = any(v.find("geometry/mesh") is not None for v in link.findall("visual"))
+        primitive = all(
+            (g := c.find("geometry")) is not None and len(g) > 0 and all(child.tag in PRIMITIVES for child in g)
+            for c in cols
+        )
+        if cols and visual_mesh and primitive:
+            for c in cols:
+                link.remove(c)
+    return bytes(ET.tostring(root))
+
+
+@functools.cache
+def _cached(name: str, palm: str) -> RobotDescription | None:
+    from manifoundation.core.robots.registry import urdf_source
+
+    src = urdf_source(name)
+    if src is None:
+        return None
+    data, loader = src
+    full = parse_urdf(prefer_visual(data), mesh_loader=loader, use_visual=True, only_links=None)
+    return full.subtree(palm) if palm in full.links else full
+
+
+def physics_description(hand: Hand) -> RobotDescription:
+    """The hand below its palm, with the meshes the physics test collides (see module doc)."""
+    palm = hand.tree.body_names[0]
+    from manifoundation.core.robots.registry import get_hand, list_hands
+
+    builtin = hand.name in list_hands(aliases=True) and get_hand(hand.name) is hand
+    desc = _cached(hand.name, palm) if builtin else None
+    if desc is None:
+        base = hand.description
+        desc = base.subtree(palm) if palm != base.root else base
+    return desc

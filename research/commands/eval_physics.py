@@ -1,0 +1,140 @@
+"""`mani-lab eval physics`: the service's answers judged by the field's simulated grasp test.
+
+For each hand, the served pipeline (`manifoundation.core.pipeline.run_pipeline`, the path the worker takes; method
+``network`` with the worker's default weights is what ``auto`` means without given contacts) answers force closure
+on third-party objects (meshes that installed packages ship, `research.audit.third_party_objects`, spread evenly over
+the 43 candidates), sent as surface points + normals (``--geometry mesh`` sends the mesh too). Every proposal is then
+run through `manifoundation.core.physics` (MuJoCo, DexGraspBench's protocol: six 1 N pushes for 2 s after pregrasp →
+grasp → squeeze; holds when the object moves < 5 cm and turns < 15° in all six) on the object's exact mesh.
+
+Columns: proposals, how many the service called verified, how many of those hold, how many of all hold, the median
+fingertip gap at the grasp pose (signed distance from each fingertip body's real mesh to the object), the share of
+fingertips within 0.5 mm, and how often no finger touches the object after the squeeze.
+
+Example:
+    mani-lab eval physics --hand leap,allegro,panda_gripper --objects 10 --json physics.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
+WEIGHTS = Path(__file__).resolve().parents[2] / "manifoundation" / "core" / "weights" / "cpu1k"
+
+
+def add_physics_parser(sub: Any) -> None:
+    """The ``eval physics`` sub-command."""
+    a = sub.add_parser("physics", help="third-party objects: the service's answers in the simulated grasp test",
+                       description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
+    a.add_argument("--hand", default="leap,allegro,panda_gripper", help="hand name(s), comma separated")
+    a.add_argument("--objects", type=int, default=10, help="third-party objects, spread over the candidates (≤ 43)")
+    a.add_argument("--proposals", type=int, default=1, help="proposals per request (each is simulated)")
+    a.add_argument("--points", type=int, default=2048, help="surface points sent")
+    a.add_argument("--geometry", choices=("points", "mesh"), default="points", help="what the caller sends")
+    a.add_argument("--method", default="network", help="request method (network = auto without contacts)")
+    a.add_argument("--weights", default=str(WEIGHTS), help="network weights (method network)")
+    a.add_argument("--seed", type=int, default=0)
+    a.add_argument("--judge", choices=("mesh", "points"), default="mesh",
+                   help="the object the physics test builds: the exact mesh (default) or the sent points' patches")
+    a.add_argument("--kp-revolute", type=float, default=None, help="position gain of revolute joints, N·m/rad "
+                   "(default: Protocol's 3, MuJoCo Menagerie's LEAP Hand; its Allegro has 10)")
+    a.add_argument("--damping-revolute", type=float, default=None, help="revolute joint damping, N·m·s/rad "
+                   "(default: Protocol's 0.1; Menagerie's Allegro has 1)")
+    a.add_argument("--json", default=None, help="also write every proposal's record to this file")
+    a.set_defaults(func=run_physics)
+
+
+def run_physics(args: argparse.Namespace) -> int:
+    """Run every (hand, object) and print the table; exit 1 when a proposal called verified fails physics."""
+    from dataclasses import replace
+
+    import numpy as np
+    import torch
+    from rich.console import Console
+    from rich.table import Table
+    from tqdm import tqdm
+
+    from manifoundation.core.physics import Protocol, from_mesh, from_points, simulate_grasp
+    from manifoundation.core.pipeline import SynthesisInput, TaskInput, run_pipeline
+    from manifoundation.core.robots import get_hand
+    from research.audit import third_party_objects
+
+    torch.set_num_threads(1)
+    protocol = Protocol()
+    if args.kp_revolute is not None:
+        protocol = replace(protocol, kp_revolute=args.kp_revolute)
+    if args.damping_revolute is not None:
+        protocol = replace(protocol, damping_revolute=args.damping_revolute)
+    hands = [h for h in args.hand.split(",") if h]
+    every = third_party_objects()
+    pick = np.unique(np.linspace(0, len(every) - 1, min(args.objects, len(every))).round().astype(int))
+    objects = [every[i] for i in pick]
+    predictor = None
+    if args.method == "network":
+        from manifoundation.core.network import ContactPredictor
+
+        predictor = ContactPredictor.from_checkpoint(args.weights)
+    shapes = {
+        o.name: from_mesh(o.mesh.vertices, o.mesh.faces) if args.judge == "mesh"
+        else from_points(*o.sample(args.points, args.seed))
+        for o in objects
+    }  # fmt: skip
+    records: list[dict[str, Any]] = []
+    jobs = [(h, o) for h in hands for o in objects]
+    for hand_name, obj in tqdm(jobs, desc="requests"):
+        hand = get_hand(hand_name)
+        points, normals = obj.sample(args.points, args.seed)
+        send = args.geometry == "mesh"
+        inp = SynthesisInput(
+            points=points, normals=normals, hand=hand, task=TaskInput("force_closure"), method=args.method,
+            num_proposals=args.proposals, seed=args.seed, hand_key=hand.name,
+            mesh_vertices=np.asarray(obj.mesh.vertices) if send else None,
+            mesh_faces=np.asarray(obj.mesh.faces) if send else None,
+        )  # fmt: skip
+        t0 = time.perf_counter()
+        out = run_pipeline(inp, predictor=predictor)
+        seconds = time.perf_counter() - t0
+        for k, p in enumerate(out.proposals):
+            assert p.palm_position is not None and p.palm_quaternion is not None and p.joint_values is not None
+            r = simulate_grasp(
+                hand, p.palm_position, p.palm_quaternion, p.joint_values, p.contact_points, p.contact_normals,
+                p.fingertips, shapes[obj.name], protocol,
+            )  # fmt: skip
+            records.append({
+                "hand": hand_name, "object": obj.name, "proposal": k, "verified": bool(p.quality.success),
+                "source": p.contact_source, "holds": r.success, "reason": r.reason, "tip_gaps": r.tip_gaps,
+                "touching_after_squeeze": r.contacts_after_squeeze, "penetration": r.penetration,
+                "trials": [[t.direction, t.translation, t.rotation, t.held] for t in r.trials],
+                "pipeline_s": seconds, "physics_s": r.seconds, "object_pieces": shapes[obj.name].source,
+            })  # fmt: skip
+    table = Table(
+        title=f"simulated grasp test of the service's answers: {len(objects)} third-party objects, "
+        f"force closure, method {args.method}, {args.geometry} sent, {args.proposals} proposal(s), "
+        f"kp {protocol.kp_revolute:g} N·m/rad, damping {protocol.damping_revolute:g}, judged on the {args.judge}"
+    )
+    for col in ("hand", "proposals", "verified", "verified & hold", "hold", "median tip gap mm",
+                "tips ≤ 0.5 mm", "none touching", "physics s"):  # fmt: skip
+        table.add_column(col, justify="right" if col != "hand" else "left")
+    false_claims = 0
+    for hand_name in hands:
+        rows = [r for r in records if r["hand"] == hand_name]
+        gaps = np.array([g for r in rows for g in r["tip_gaps"]])
+        ver = [r for r in rows if r["verified"]]
+        false_claims += sum(not r["holds"] for r in ver)
+        table.add_row(
+            hand_name, str(len(rows)), str(len(ver)), f"{sum(r['holds'] for r in ver)}/{len(ver)}",
+            f"{sum(r['holds'] for r in rows)}/{len(rows)}", f"{1000 * np.median(gaps):.1f}" if len(gaps) else "-",
+            f"{100 * np.mean(np.abs(gaps) <= 5e-4):.0f} %" if len(gaps) else "-",
+            f"{sum(r['touching_after_squeeze'] == 0 for r in rows)}/{len(rows)}",
+            f"{np.median([r['physics_s'] for r in rows]):.2f}" if rows else "-",
+        )  # fmt: skip
+    Console(width=160).print(table)
+    print("objects:", ", ".join(o.name for o in objects))
+    if args.json:
+        Path(args.json).write_text(json.dumps(records, indent=1))
+    return EXIT_FAILED if false_claims else EXIT_OK

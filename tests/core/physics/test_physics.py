@@ -1,0 +1,177 @@
+"""The simulated grasp test (manifoundation.core.physics) on cases whose answer is known without it."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from manifoundation.core.physics import PhysicsResult, Protocol, from_mesh, from_points, simulate_grasp
+from manifoundation.core.physics.visual import physics_description, prefer_visual
+from manifoundation.core.robots import get_hand
+
+PALM_POS, PALM_QUAT = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
+PAD_Z = 0.1  # the Panda's pads span z 0.0585-0.112 in the palm frame; at joint value q they sit at y = ±q
+HALF = 0.02  # the box is 3 x 4 x 3 cm: its ±y faces 2 cm from its centre
+
+
+def _box(centre_y: float = 0.0) -> trimesh.Trimesh:
+    box = trimesh.creation.box(extents=[0.03, 2 * HALF, 0.03])
+    box.apply_translation([0.0, centre_y, PAD_Z])
+    return box
+
+
+def _grasp(q: float, box: trimesh.Trimesh, centre_y: float = 0.0, points: bool = False) -> PhysicsResult:
+    hand = get_hand("panda_gripper")
+    contacts = np.array([[0.0, centre_y + HALF, PAD_Z], [0.0, centre_y - HALF, PAD_Z]])
+    normals = np.array([[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]])
+    if points:
+        pts, face = trimesh.sample.sample_surface_even(box, 1500, seed=0)
+        shape = from_points(np.asarray(pts), box.face_normals[face])
+    else:
+        shape = from_mesh(box.vertices, box.faces)
+    return simulate_grasp(hand, PALM_POS, PALM_QUAT, np.array([q]), contacts, normals, hand.fingertip_links, shape)
+
+
+def test_protocol_is_the_benchmarks() -> None:
+    p = Protocol()
+    assert (p.mass, p.friction, p.impratio, p.timestep) == (0.1, (0.6, 0.02), 10.0, 0.004)
+    assert p.force_factor * p.mass == pytest.approx(1.0)  # DexGraspBench: 10 x mass, no g
+    assert (p.max_translation, p.max_rotation, p.max_penetration) == (0.05, 15.0, 0.01)
+
+
+def test_gripper_squeezing_a_box_holds_in_all_six_directions() -> None:
+    r = _grasp(HALF, _box())
+    assert r.success and r.reason == "held"
+    assert [t.direction for t in r.trials] == ["-x", "+x", "-y", "+y", "-z", "+z"]
+    assert all(t.translation < 0.005 and t.rotation < 2.0 for t in r.trials)
+    assert np.allclose(r.pregrasp, [HALF + 0.01], atol=1e-6)  # each pad 1 cm outward
+    assert np.allclose(r.squeeze, [HALF - 0.01], atol=1e-6)  # 2 x grasp - pregrasp
+    assert max(abs(g) for g in r.tip_gaps) < 5e-4 and r.contacts_after_squeeze == 2
+
+
+def test_gripper_squeezing_a_box_rebuilt_from_points_holds() -> None:
+    r = _grasp(HALF, _box(), points=True)
+    assert r.success, r.trials
+
+
+def test_open_gripper_two_cm_from_the_box_fails() -> None:
+    r = _grasp(HALF + 0.02, _box())
+    assert not r.success and r.reason == "moved"
+    assert min(r.tip_gaps) > 0.019 and r.contacts_after_squeeze == 0
+    failed = {t.direction for t in r.trials if not t.held}
+    assert {"-x", "+x", "+z"} <= failed  # nothing stops it there
+
+
+def test_one_finger_off_the_object_fails_in_some_direction() -> None:
+    # the box sits against the left pad; the right pad is 3 cm from its face and 2 cm after the squeeze
+    r = _grasp(0.035, _box(0.015), centre_y=0.015)
+    assert r.tip_gaps[0] < 5e-4 and r.tip_gaps[1] > 0.02
+    assert not r.success
+    assert any(not t.held for t in r.trials if t.direction in ("-x", "+x", "-z", "+z"))
+
+
+def test_penetrating_pregrasp_fails_at_once() -> None:
+    # closed on a box 2 cm wider than the pads' gap: the pads sit 1 cm inside it already at the pregrasp
+    hand = get_hand("panda_gripper")
+    box = _box()
+    box.apply_scale([1.0, 0.06 / (2 * HALF), 1.0])  # 6 cm wide (z: its centre stays at the pads)
+    shape = from_mesh(box.vertices, box.faces)
+    r = simulate_grasp(
+        hand, PALM_POS, PALM_QUAT, np.array([0.005]), np.array([[0, 0.005, PAD_Z], [0, -0.005, PAD_Z]]),
+        np.array([[0, 1.0, 0], [0, -1.0, 0]]), hand.fingertip_links, shape,
+    )  # fmt: skip
+    assert not r.success and r.reason == "penetration" and r.penetration > 0.01 and r.trials == []
+
+
+def test_allegro_collides_with_its_real_link_meshes() -> None:
+    desc = physics_description(get_hand("allegro"))
+    distal = desc.links["link_3.0"]
+    assert distal and all(len(m.vertices) > 8 for m in distal)  # the visual STL, not the 8-vertex box
+    urdf = b'<robot name="r"><link name="a"><visual><geometry><mesh filename="a.stl"/></geometry></visual>'
+    urdf += b'<collision><geometry><box size="1 1 1"/></geometry></collision></link>'
+    urdf += b'<link name="b"><visual><geometry><mesh filename="b.stl"/></geometry></visual>'
+    urdf += b'<collision><geometry><mesh filename="b_col.stl"/></geometry></collision></link></robot>'
+    out = prefer_visual(urdf)
+    assert out.count(b"<collision>") == 1 and b"b_col.stl" in out
+
+
+def test_physics_imports_nothing_from_the_optimiser() -> None:
+    root = Path(__file__).resolve().parents[3] / "manifoundation" / "core" / "physics"
+    banned = ("manifoundation.core.refine", "manifoundation.core.robots.pads", "manifoundation.core.robots.spheres")
+    for path in root.glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
+            names += [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            assert not any(n.startswith(banned) for n in names), (path.name, names)
+
+
+@pytest.mark.parametrize("name", ["allegro", "leap_hand"])
+def test_scene_has_the_hands_kinematics_and_limits(name: str) -> None:
+    import mujoco
+    import torch
+
+    from manifoundation.core.physics.hand_model import PREFIX
+    from manifoundation.core.physics.scene import build_scene
+
+    hand = get_hand(name)
+    rng = np.random.default_rng(1)
+    pos, quat = rng.normal(size=3) * 0.1, rng.normal(size=4)
+    quat /= np.linalg.norm(quat)
+    q = hand.lower + rng.random(hand.dof) * (hand.upper - hand.lower)
+    far = trimesh.creation.box(extents=[0.01] * 3)
+    far.apply_translation([1.0, 1.0, 1.0])
+    sc = build_scene(hand, pos, quat, from_mesh(far.vertices, far.faces), Protocol())
+    sc.set_joints(q)
+    mujoco.mj_forward(sc.model, sc.data)
+    poses = hand.link_poses(torch.tensor(pos[None]), torch.tensor(quat[None]), torch.tensor(q[None]))
+    for link in [lk for lk in poses if PREFIX + lk in sc.hand.bodies]:
+        b = sc.model.body(PREFIX + link).id
+        assert np.allclose(sc.data.xpos[b], poses[link][0, :3, 3].numpy(), atol=1e-9)
+        assert np.allclose(sc.data.xmat[b].reshape(3, 3), poses[link][0, :3, :3].numpy(), atol=1e-9)
+    for i, joint in enumerate(hand.joint_names):  # limits in radians, as the description gives them
+        lo, hi = sc.model.jnt_range[sc.model.joint(joint).id]
+        assert lo <= hand.lower[i] + 1e-9 and hi >= hand.upper[i] - 1e-9 and hi - lo < 2 * np.pi + 1e-9
+
+
+# an answer of the service (LEAP, method network, force closure, seed 0) on robosuite's lemon that holds
+LEMON_PALM = np.array([0.055274, -0.15415, -0.008793])
+LEMON_QUAT = np.array([-0.124115, 0.056122, 0.697861, -0.703161])
+LEMON_Q = np.array([
+    -0.354185, 0.014864, -0.732659, -0.657742, -0.304747, -0.005819, -0.66224, -0.126277, -0.412771, -0.050414,
+    -0.770975, -0.699337, -1.38284, -0.318407, -1.337145, 0.404485,
+])  # fmt: skip
+LEMON_CONTACTS = np.array([
+    [-0.011601, -0.009115, -0.032215], [-0.039032, -0.005401, 0.004456], [0.003321, -0.008789, 0.033728],
+    [0.021637, -0.021534, -0.019689],
+])  # fmt: skip
+LEMON_NORMALS = np.array([
+    [-0.351144, -0.129277, -0.927354], [-0.95391, -0.299622, 0.016805], [0.141551, -0.379196, 0.914425],
+    [0.492267, -0.611053, -0.619909],
+])  # fmt: skip
+
+
+def _lemon():  # type: ignore[no-untyped-def]
+    from research.audit.objects import load_third_party, site_packages
+
+    path = site_packages() / "robosuite/models/assets/objects/meshes/lemon.stl"
+    if not path.exists():
+        pytest.skip("robosuite's lemon mesh is not installed")
+    obj = load_third_party("lemon", path)
+    assert obj is not None
+    return from_mesh(obj.mesh.vertices, obj.mesh.faces)
+
+
+def test_a_four_finger_answer_that_holds_and_the_same_hand_pulled_back_that_does_not() -> None:
+    hand, shape = get_hand("leap"), _lemon()
+    r = simulate_grasp(
+        hand, LEMON_PALM, LEMON_QUAT, LEMON_Q, LEMON_CONTACTS, LEMON_NORMALS, hand.fingertip_links, shape
+    )
+    assert r.success, r.trials
+    back = -LEMON_PALM / np.linalg.norm(LEMON_PALM)  # the object sits near the origin: away from it
+    r = simulate_grasp(hand, LEMON_PALM - 0.02 * back, LEMON_QUAT, LEMON_Q, LEMON_CONTACTS - 0.02 * back, LEMON_NORMALS,
+                       hand.fingertip_links, shape)  # fmt: skip
+    assert not r.success and max(r.tip_gaps) > 0.005

@@ -1,0 +1,29 @@
+"""`mani-lab eval physics` runs end to end: the served pipeline's answers, the simulated test, the table, the JSON."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import pytest
+
+from research.commands.eval_physics import add_physics_parser
+
+
+def test_eval_physics_prints_the_table_and_writes_every_proposal(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    p = argparse.ArgumentParser()
+    add_physics_parser(p.add_subparsers())
+    out = tmp_path / "physics.json"
+    args = p.parse_args(["physics", "--hand", "panda_gripper", "--objects", "2", "--method", "random_contacts",
+                         "--json", str(out)])  # fmt: skip
+    code = args.func(args)
+    records = json.loads(out.read_text())
+    assert len(records) == 2 and {r["hand"] for r in records} == {"panda_gripper"}
+    assert all(len(r["tip_gaps"]) == 2 and r["reason"] in ("held", "moved", "penetration") for r in records)
+    false_claims = sum(r["verified"] and not r["holds"] for r in records)
+    assert code == (1 if false_claims else 0)
+    text = capsys.readouterr().out
+    assert "verified & hold" in text and "panda_gripper" in text

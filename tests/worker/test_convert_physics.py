@@ -1,0 +1,65 @@
+"""``options.simulate``: the worker's conversion runs the simulated grasp test and reports it in ``quality.physics``."""
+
+from __future__ import annotations
+
+import numpy as np
+import trimesh
+
+from manifoundation.contract import SynthesisRequest, SynthesisResult
+from manifoundation.core.pipeline import ProposalOutput, QualityOutput, SynthesisOutput
+from manifoundation.core.robots import get_hand
+from manifoundation.server.worker.convert import to_result
+
+PAD_Z, HALF = 0.1, 0.02  # the Panda's pads at joint value q sit at y = ±q, z 0.0585-0.112 in the palm frame
+
+
+def _request(simulate: bool, mesh: bool) -> SynthesisRequest:
+    box = trimesh.creation.box(extents=[0.03, 2 * HALF, 0.03])
+    box.apply_translation([0.0, 0.0, PAD_Z])
+    pts, face = trimesh.sample.sample_surface_even(box, 600, seed=0)
+    obj: dict[str, object] = {"points": np.asarray(pts).tolist(), "normals": box.face_normals[face].tolist()}
+    if mesh:
+        obj["mesh"] = {"vertices": box.vertices.tolist(), "faces": box.faces.tolist()}
+    return SynthesisRequest.model_validate({
+        "object": obj, "task": {"kind": "force_closure"}, "robot": {"name": "panda_gripper"},
+        "options": {"method": "direct_grasp", "simulate": simulate},
+    })  # fmt: skip
+
+
+def _output(q: float) -> SynthesisOutput:
+    hand = get_hand("panda_gripper")
+    proposal = ProposalOutput(
+        contact_points=np.array([[0.0, HALF, PAD_Z], [0.0, -HALF, PAD_Z]]),
+        contact_normals=np.array([[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]]), forces=np.zeros((2, 3)),
+        fingertips=list(hand.fingertip_links), palm_position=np.zeros(3), palm_quaternion=np.array([1.0, 0, 0, 0]),
+        joint_names=list(hand.joint_names), joint_values=np.array([q]),
+        quality=QualityOutput(True, True, "converged", 3, 0.0, 0.0, 0.0, 0.0, 0.1),
+    )  # fmt: skip
+    return SynthesisOutput(hand="panda_gripper", proposals=[proposal])
+
+
+def _physics(result: SynthesisResult) -> tuple[bool, list[str], object]:
+    quality = result.proposals[0].quality
+    return quality.success, quality.failures, quality.physics
+
+
+def test_simulate_reports_a_grasp_that_holds() -> None:
+    for mesh in (True, False):
+        result = to_result(_output(HALF), _request(True, mesh), "test", get_hand("panda_gripper"))
+        success, failures, physics = _physics(result)
+        assert success and failures == [] and physics is not None
+        assert result.proposals[0].quality.physics is not None
+        p = result.proposals[0].quality.physics
+        assert p.held and len(p.trials) == 6 and p.object_pieces == ("hull" if mesh else "point_patches")
+        assert np.allclose(p.pregrasp, [HALF + 0.01]) and np.allclose(p.squeeze, [HALF - 0.01])
+
+
+def test_simulate_turns_a_verified_grasp_that_drops_into_a_failure() -> None:
+    result = to_result(_output(HALF + 0.02), _request(True, True), "test", get_hand("panda_gripper"))
+    success, failures, physics = _physics(result)
+    assert not success and failures == ["physics"] and physics is not None
+
+
+def test_without_simulate_nothing_changes() -> None:
+    result = to_result(_output(HALF + 0.02), _request(False, True), "test", get_hand("panda_gripper"))
+    assert _physics(result) == (True, [], None)
