@@ -13,7 +13,7 @@ import os
 import random
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Generic, Literal, TypeVar
+from typing import Any, Generic, Literal, TypedDict, TypeVar
 
 import httpx
 import pydantic
@@ -80,6 +80,16 @@ _ERROR_STATES = {
 def default_base_url() -> str:
     """The service a client given no URL talks to: ``MANI_URL`` when set (and not empty), else the local default."""
     return os.environ.get(URL_VARIABLE) or DEFAULT_BASE_URL
+
+
+class HttpSettings(TypedDict, total=False):
+    """The keyword settings of the HTTP clients (see `BaseClient`)."""
+
+    timeout: float | httpx.Timeout
+    retries: RetryPolicy | int
+    encoding: Encoding
+    headers: dict[str, str] | None
+    poll_interval: float
 
 
 @dataclass
