@@ -98,8 +98,8 @@ grpc_client_factory: Callable[[argparse.Namespace], GrpcClient] = make_grpc_clie
 def job_client(args: argparse.Namespace) -> Client | GrpcClient:
     """The client of a command that runs jobs over either transport: gRPC with ``--grpc``, else HTTP.
 
-    Both have ``submit`` and ``job`` with handles that ``status`` and ``cancel``, with the same results, so the
-    command's output is the same whichever carried it.
+    Both are the SDK's one synchronous surface (`manifoundation.sdk._api.SyncAPI`): the same calls, handles and
+    results, so the command's output is the same whichever carried it.
     """
     return grpc_client_factory(args) if getattr(args, "grpc", None) else client_factory(args)
 

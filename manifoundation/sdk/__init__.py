@@ -12,7 +12,7 @@ Quick start::
 Public names:
 
 - clients: `Client`, `AsyncClient` (same calls, awaited), `RetryPolicy`; handles `Job`, `AsyncJob`, `Batch`,
-  `AsyncBatch`.
+  `AsyncBatch`. Sync clients close with ``close()``, async ones with ``aclose()`` (or ``with`` / ``async with``).
 - inputs: `object_from_points`, `object_from_mesh`, `object_from_file`, `save_object`, `delta_pose`,
   `target_points`, `force_closure`, `wrench`, `make_request`, `robot_registration`; hands: `hand_registration`
   (an archive, folder or URDF/MJCF file, cut at a ``palm``), `zip_folder`; plans (``client.plan``,
@@ -20,11 +20,14 @@ Public names:
 - outputs: `result_to_dict`, `result_to_json`, `load_result`, `result_figure`.
 - errors: `ManiError` › `RequestError` › (`ValidationError`, `Unauthorized`, `NotFound`, `RateLimited`,
   `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed`; `IncompatibleService` (another major version of the
-  contract); `MissingExtra` (an optional part not installed); the warning `ContractWarning` (a newer minor version:
+  contract); `MissingExtra` (an optional part not installed); `NeedsHttp` (a call only HTTP serves, made on a
+  gRPC client); the warning `ContractWarning` (a newer minor version:
   docs/compatibility.md).
 - gRPC: `GrpcClient` and its `GrpcJob` in ``manifoundation.sdk.grpc_client``, `AsyncGrpcClient` and its `AsyncGrpcJob`
-  (the same calls, awaited) in ``manifoundation.sdk.grpc_async_client``: the same results and errors over the service's
-  gRPC port. They need the ``[grpc]`` extra, so they are imported from their modules, not from here (importing
+  (the same calls, awaited) in ``manifoundation.sdk.grpc_async_client``: the same surface, results and errors over
+  the service's gRPC port (one base, `manifoundation.sdk._api` / ``_async_api``, over each transport); the calls
+  with no RPC (``jobs``, ``robot_preview``, ``delete_robot``, ``health``, ``ready``) raise `NeedsHttp`. They
+  need the ``[grpc]`` extra, so they are imported from their modules, not from here (importing
   ``manifoundation.sdk`` never loads grpcio).
 
 The wire models (`SynthesisRequest`, `SynthesisResult`, `JobPublic`, ...) live in `manifoundation.contract`. The SDK
@@ -39,6 +42,7 @@ from manifoundation.sdk.errors import (
     JobFailed,
     ManiError,
     MissingExtra,
+    NeedsHttp,
     NotFound,
     RateLimited,
     RequestError,
@@ -68,6 +72,7 @@ __all__ = [
     "JobFailed",
     "ManiError",
     "MissingExtra",
+    "NeedsHttp",
     "NotFound",
     "RateLimited",
     "RequestError",

@@ -1,10 +1,12 @@
-"""The I/O-free half of the SDK: building requests, reading answers, deciding retries.
+"""The I/O-free half of the HTTP transports: building requests, reading answers, deciding retries.
 
-`Client` and `AsyncClient` share everything here and differ only in how they send (the httpx pattern). Nothing
-in this module opens a connection or sleeps, so all of it is testable with plain values.
+`HttpTransport` (`Client`'s) and `AsyncHttpTransport` (`AsyncClient`'s) share everything here and differ only in
+how they send (the httpx pattern); what a call means (waiting, polling, arguments) is the clients' one surface
+(`manifoundation.sdk._api`). Nothing in this module opens a connection or sleeps, so all of it is testable with
+plain values.
 
-Why one module: every request the SDK can make is built and read here, once for both clients; each part is a few
-lines.
+Why one module: every HTTP request the SDK can make is built and read here, once for both transports; each part
+is a few lines.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import os
 import random
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Generic, Literal, TypeVar
+from typing import Any, Generic, Literal, TypedDict, TypeVar
 
 import httpx
 import pydantic
@@ -82,6 +84,16 @@ def default_base_url() -> str:
     return os.environ.get(URL_VARIABLE) or DEFAULT_BASE_URL
 
 
+class HttpSettings(TypedDict, total=False):
+    """The keyword settings of the HTTP clients (see `BaseClient`)."""
+
+    timeout: float | httpx.Timeout
+    retries: RetryPolicy | int
+    encoding: Encoding
+    headers: dict[str, str] | None
+    poll_interval: float
+
+
 @dataclass
 class Call(Generic[T]):
     """One API call: the request to send and how to read its answer."""
@@ -92,7 +104,8 @@ class Call(Generic[T]):
 
 
 class BaseClient:
-    """Configuration and all the I/O-free logic of `Client` and `AsyncClient`.
+    """Configuration and all the I/O-free logic of `HttpTransport` and `AsyncHttpTransport` (`Client`'s and
+    `AsyncClient`'s settings).
 
     Args:
         base_url: where the service listens, e.g. ``"http://127.0.0.1:8000"``; None (default): the environment's

@@ -10,32 +10,51 @@ from __future__ import annotations
 
 import contextlib
 import random
+import warnings
 from collections.abc import Iterator
-from typing import Any, TypedDict
+from typing import Any, Protocol, TypedDict
 
 import grpc
+import pydantic
 from google.protobuf.message import Message
 
-from manifoundation.contract import ContactsIn, JobPublic, RobotPublic, SynthesisRequest, SynthesisResult
-from manifoundation.contract.plans import PlanRequest
+from manifoundation.contract import (
+    BatchCreate,
+    BatchItem,
+    BatchPublic,
+    JobPublic,
+    PlanRequest,
+    RobotPublic,
+    RobotRegister,
+    SynthesisRequest,
+    SynthesisResult,
+)
 from manifoundation.contract.protos import metadata as keys
 from manifoundation.contract.protos.convert import from_proto, to_proto
 from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
 from manifoundation.sdk.compat import VersionCheck
-from manifoundation.sdk.errors import TimeoutError
+from manifoundation.sdk.errors import TimeoutError, local_validation_error
 from manifoundation.sdk.grpc_errors import RETRYABLE, error_from, pairs, retry_after, sent_by_service
-from manifoundation.sdk.objects import ObjectLike
-from manifoundation.sdk.plans import PoseLike, make_plan
-from manifoundation.sdk.requests import RobotLike, make_request
 from manifoundation.sdk.retry import DEFAULT_RETRY, RetryPolicy
-from manifoundation.sdk.tasks import TaskLike
 
 DEFAULT_TARGET = "127.0.0.1:50051"
 MAX_MESSAGE_BYTES = 64 * 1024 * 1024
 """Largest message sent or received: the service's default limit (``MANI_GRPC_MAX_MESSAGE_BYTES``)."""
 USER_AGENT = "manifoundation-sdk/0.1"
-PLAN_GRACE = 60.0
-"""How much longer than a plan's ``options.timeout`` `plan` waits by default, seconds."""
+
+
+class StreamCall(Protocol):
+    """What `GrpcBase.following` needs of a streaming call (``grpc`` and ``grpc.aio`` ones have it)."""
+
+    def cancel(self) -> bool: ...
+
+
+class UnaryRpc(Protocol):
+    """A blocking unary method of a ``grpc`` stub."""
+
+    def with_call(
+        self, request: Message, *, timeout: float | None, metadata: tuple[tuple[str, str], ...]
+    ) -> tuple[Message, grpc.Call]: ...
 
 
 class GrpcSettings(TypedDict, total=False):
@@ -106,16 +125,19 @@ class GrpcBase:
         return None
 
     @contextlib.contextmanager
-    def following(self, call: Any, job_id: str, timeout: float | None) -> Iterator[None]:
-        """Around the reading of a ``WatchJob`` stream: its failure as the SDK's exception (past its ``timeout``:
-        `TimeoutError` naming the job), and the stream cancelled however the reading ends."""
+    def following(
+        self, call: StreamCall, subject: str, timeout: float | None, job_id: str | None = None
+    ) -> Iterator[None]:
+        """Around the reading of a ``WatchJob`` or ``WatchBatch`` stream: its failure as the SDK's exception (past
+        its ``timeout``: `TimeoutError` naming ``subject``, e.g. ``"job <id>"``, and ``job_id``), and the stream
+        cancelled however the reading ends."""
         try:
             yield
         except grpc.RpcError as exc:
             self.check_failed(exc)
             failure = error_from(exc, self.target, job_id)
             if isinstance(failure, TimeoutError):
-                raise TimeoutError(f"job {job_id} still running after {timeout} s", job_id=job_id) from exc
+                raise TimeoutError(f"{subject} still running after {timeout} s", job_id=job_id) from exc
             raise failure from exc
         finally:
             call.cancel()
@@ -133,37 +155,32 @@ class GrpcBase:
 # ---- messages -----------------------------------------------------------------------------------------------
 
 
-def synthesis(
-    object: ObjectLike | SynthesisRequest,
-    task: TaskLike,
-    robot: RobotLike,
-    contacts: ContactsIn | dict[str, Any] | None,
-    options: dict[str, Any],
-) -> tuple[SynthesisRequest, pb.SynthesisRequest]:
-    """A synthesis request (`make_request`'s checks) and its message.
+def synthesis_message(request: SynthesisRequest) -> pb.SynthesisRequest:
+    """The ``Synthesize`` / ``SubmitJob`` request."""
+    return to_proto(request, pb.SynthesisRequest)
+
+
+def plan_message(request: PlanRequest) -> pb.PlanRequest:
+    """The ``SubmitPlan`` request."""
+    return to_proto(request, pb.PlanRequest)
+
+
+def batch_message(requests: list[SynthesisRequest]) -> pb.BatchCreate:
+    """The ``SubmitBatch`` request, checked as `Client`'s (1 to `MAX_BATCH_SIZE` requests) before sending.
 
     Raises:
-        ValidationError: invalid input, before anything is sent.
+        ValidationError: too few or too many requests.
     """
-    request = make_request(object, task, robot, contacts=contacts, **options)
-    return request, to_proto(request, pb.SynthesisRequest)
+    try:
+        body = BatchCreate(requests=requests)
+    except pydantic.ValidationError as exc:
+        raise local_validation_error(exc) from exc
+    return to_proto(body, pb.BatchCreate)
 
 
-def planning(
-    object: ObjectLike | PlanRequest,
-    start: PoseLike | None,
-    waypoints: list[PoseLike] | None,
-    robot: RobotLike,
-    fields: dict[str, Any],
-) -> tuple[PlanRequest, pb.PlanRequest]:
-    """A plan request (`make_plan`'s checks) and its message."""
-    request = make_plan(object, start, waypoints or [], robot, **fields)
-    return request, to_proto(request, pb.PlanRequest)
-
-
-def plan_wait(request: PlanRequest, wait: float | None) -> float:
-    """How long `plan` waits for its job: ``wait``, else the plan's ``options.timeout`` and `PLAN_GRACE`."""
-    return request.options.timeout + PLAN_GRACE if wait is None else wait
+def robot_message(body: RobotRegister) -> pb.RobotRegister:
+    """The ``RegisterRobot`` request."""
+    return to_proto(body, pb.RobotRegister)
 
 
 def get_job(job_id: str, with_result: bool) -> pb.GetJobRequest:
@@ -181,6 +198,22 @@ def watch_job(job_id: str, cancel_on_disconnect: bool) -> pb.WatchJobRequest:
     return pb.WatchJobRequest(id=job_id, cancel_on_disconnect=cancel_on_disconnect)
 
 
+def get_batch(batch_id: str, offset: int, limit: int) -> pb.GetBatchRequest:
+    """The ``GetBatch`` request."""
+    return pb.GetBatchRequest(id=batch_id, offset=offset, limit=limit)
+
+
+def batch_ref(batch_id: str) -> pb.BatchRef:
+    """The ``WatchBatch`` request."""
+    return pb.BatchRef(id=batch_id)
+
+
+def created_id(reply: Message) -> str:
+    """The job id of a ``JobCreated`` answer (the message has no ``url``: the HTTP answer's link)."""
+    assert isinstance(reply, pb.JobCreated)
+    return reply.id
+
+
 def as_result(reply: Message) -> SynthesisResult:
     """A ``SynthesisResult`` message as the contract's model."""
     return from_proto(reply, SynthesisResult, answer=True)
@@ -191,6 +224,27 @@ def as_job(reply: Message) -> JobPublic:
     return from_proto(reply, JobPublic, answer=True)
 
 
-def as_robots(reply: pb.RobotList) -> list[RobotPublic]:
+def as_batch(reply: Message) -> BatchPublic:
+    """A ``BatchPublic`` message as the contract's model."""
+    return from_proto(reply, BatchPublic, answer=True)
+
+
+def as_batch_item(reply: Message) -> BatchItem:
+    """A ``BatchItem`` message as the contract's model."""
+    return from_proto(reply, BatchItem, answer=True)
+
+
+def as_robot(reply: Message) -> RobotPublic:
+    """A ``RobotPublic`` message as the contract's model."""
+    return from_proto(reply, RobotPublic, answer=True)
+
+
+def as_robots(reply: Message) -> list[RobotPublic]:
     """A ``RobotList`` message as the contract's hands."""
+    assert isinstance(reply, pb.RobotList)
     return [from_proto(robot, RobotPublic, answer=True) for robot in reply.robots]
+
+
+def deprecated(old: str, new: str) -> None:
+    """Warn once per call site that ``old`` is going (one release): use ``new``."""
+    warnings.warn(f"{old} is deprecated and goes in the next release: use {new}", DeprecationWarning, stacklevel=3)

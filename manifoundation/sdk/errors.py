@@ -13,7 +13,8 @@
     ├── TimeoutError              waited longer than the caller allowed (also a builtin ``TimeoutError``)
     ├── JobFailed                 a job ended failed, cancelled or expired; ``job`` and ``error`` say why
     ├── IncompatibleService       the service speaks another major version of the contract
-    └── MissingExtra              an optional part ([grpc], [view], [mesh]) is not installed (an ImportError)
+    ├── MissingExtra              an optional part ([grpc], [view], [mesh]) is not installed (an ImportError)
+    └── NeedsHttp                 the call has no gRPC counterpart: use `Client`/`AsyncClient` (a NotImplementedError)
 
     ContractWarning (a UserWarning): the service's contract is a newer minor version than this SDK's
 """
@@ -164,6 +165,21 @@ class MissingExtra(ManiError, ImportError):
     def __init__(self, message: str, *, extra: str) -> None:
         super().__init__(message)
         self.extra = extra
+
+
+class NeedsHttp(ManiError, NotImplementedError):
+    """A client call the gRPC service has no RPC for (e.g. ``delete_robot``): make it with `Client` or
+    `AsyncClient` over HTTP. Raised before anything is sent.
+
+    Attributes:
+        method: the client method called (e.g. ``"delete_robot"``).
+        reason: why gRPC cannot serve it.
+    """
+
+    def __init__(self, method: str, reason: str) -> None:
+        super().__init__(f"{method}() needs the HTTP transport ({reason}): use Client or AsyncClient for it")
+        self.method = method
+        self.reason = reason
 
 
 class ContractWarning(UserWarning):

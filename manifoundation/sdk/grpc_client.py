@@ -1,9 +1,9 @@
 """`GrpcClient`: the SDK over the service's gRPC port (``mani serve`` answers gRPC on 50051 beside HTTP).
 
-The same inputs (`make_request`), results (`SynthesisResult`, `JobPublic`, `RobotPublic`, numpy arrays) and
-exceptions (`manifoundation.sdk.errors`, mapped once in `manifoundation.sdk.grpc_errors`) as `Client`; messages are
-converted
-by the contract's one conversion (`manifoundation.contract.protos.convert`). Needs the ``[grpc]`` extra::
+The one surface of `Client` (`manifoundation.sdk._api.SyncAPI`: the same calls, inputs, results, handles and
+exceptions) over a `GrpcTransport`, which only sends each call as its RPC and converts the answer with the
+contract's one conversion (`manifoundation.contract.protos.convert`); failures are mapped once in
+`manifoundation.sdk.grpc_errors`. Needs the ``[grpc]`` extra::
 
     pip install 'manifoundation-client[grpc]'
 
@@ -14,7 +14,7 @@ by the contract's one conversion (`manifoundation.contract.protos.convert`). Nee
 
 Deadlines: `synthesize` gives its call the request's ``options.timeout``, which the service makes the job's
 deadline too (the job ends *expired* when the call gives up: `TimeoutError` names it); the other unary calls get
-the client's ``timeout``; streams run until their job ends unless given a ``timeout`` for the whole stream.
+the client's ``timeout``; streams run until their job (batch) ends unless given a ``timeout`` for the whole stream.
 Refusals the service sends (a full queue, a rate limit, shutting down) are retried with the `RetryPolicy`, honouring
 its retry delay; a service that cannot be reached is retried for the calls that change nothing.
 """
@@ -24,7 +24,7 @@ from __future__ import annotations
 import itertools
 import time
 from collections.abc import Callable, Iterator
-from typing import Any, Unpack
+from typing import Unpack
 
 from manifoundation.sdk.extras import missing_extra
 
@@ -34,172 +34,71 @@ try:
 except ModuleNotFoundError as exc:  # the [grpc] extra is not installed
     raise missing_extra(exc, "grpc", "GrpcClient") from exc
 
-from manifoundation.contract import ContactsIn, JobPublic, RobotPublic, SynthesisRequest, SynthesisResult
-from manifoundation.contract.plans import PlanRequest, PlanResult
+from manifoundation.contract import (
+    BatchItem,
+    BatchPublic,
+    JobPublic,
+    PlanRequest,
+    RobotPublic,
+    RobotRegister,
+    SynthesisRequest,
+    SynthesisResult,
+)
 from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
 from manifoundation.contract.protos.v1 import manifoundation_pb2_grpc as pb_grpc
 from manifoundation.sdk import _grpc_core as core
-from manifoundation.sdk._grpc_core import DEFAULT_TARGET, MAX_MESSAGE_BYTES, GrpcBase, GrpcSettings
+from manifoundation.sdk._api import SyncAPI, Transport
+from manifoundation.sdk._grpc_core import DEFAULT_TARGET, MAX_MESSAGE_BYTES, GrpcBase, GrpcSettings, UnaryRpc
 from manifoundation.sdk.grpc_job import GrpcJob
-from manifoundation.sdk.objects import ObjectLike
-from manifoundation.sdk.plans import PoseLike
-from manifoundation.sdk.requests import RobotLike
-from manifoundation.sdk.tasks import TaskLike
 
-__all__ = ["DEFAULT_TARGET", "MAX_MESSAGE_BYTES", "GrpcClient", "GrpcJob"]
+__all__ = ["DEFAULT_TARGET", "MAX_MESSAGE_BYTES", "GrpcClient", "GrpcJob", "GrpcTransport"]
 
 
-class GrpcClient(GrpcBase):
-    """Talk to a ManiFoundation service over gRPC, from synchronous code.
+class GrpcTransport(GrpcBase, Transport):
+    """`GrpcClient`'s transport: each call its RPC on one blocking channel, retried as `GrpcBase` decides; jobs and
+    batches are followed on ``WatchJob`` / ``WatchBatch``.
 
     Args:
-        target: ``host:port`` of the service's gRPC port.
-        api_key: sent as ``authorization: Bearer ...`` metadata (None: no auth).
+        target, api_key, settings: see `GrpcBase`.
+        channel: a ``grpc.Channel`` to send through (default: one made for ``target``, plaintext or with
+            ``credentials``); the transport closes it.
         credentials: ``grpc.ssl_channel_credentials(...)`` for TLS (None: plaintext).
-        sleep: how to wait between retries (tests may record instead).
-        settings: ``timeout`` (of one unary call other than `synthesize`, seconds; default 30), ``retries`` (a
-            `RetryPolicy`, or the number of retries with the default backoff), ``max_message_bytes``: see
-            `manifoundation.sdk._grpc_core.GrpcBase`.
+        sleep: how to wait between retries.
     """
+
+    streams = True
 
     def __init__(
         self,
         target: str = DEFAULT_TARGET,
         api_key: str | None = None,
         *,
+        channel: grpc.Channel | None = None,
         credentials: grpc.ChannelCredentials | None = None,
         sleep: Callable[[float], None] = time.sleep,
         **settings: Unpack[GrpcSettings],
     ) -> None:
         super().__init__(target, api_key, **settings)
-        if credentials is None:
-            self._channel = grpc.insecure_channel(target, options=self.options)
-        else:
-            self._channel = grpc.secure_channel(target, credentials, options=self.options)
-        self._stub = pb_grpc.ManiFoundationStub(self._channel)
+        if channel is None:
+            if credentials is None:
+                channel = grpc.insecure_channel(target, options=self.options)
+            else:
+                channel = grpc.secure_channel(target, credentials, options=self.options)
+        self._channel = channel
+        self._stub = pb_grpc.ManiFoundationStub(channel)
         self._sleep = sleep
+
+    def sleep(self, seconds: float) -> None:
+        """Wait between retries."""
+        self._sleep(seconds)
 
     def close(self) -> None:
         """Close the channel."""
         self._channel.close()
 
-    def __enter__(self) -> GrpcClient:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-    # ---- synthesis ------------------------------------------------------------------------------------------
-
-    def synthesize(
-        self,
-        object: ObjectLike | SynthesisRequest,
-        task: TaskLike = "force_closure",
-        robot: RobotLike = "leap",
-        *,
-        contacts: ContactsIn | dict[str, Any] | None = None,
-        **options: Any,
-    ) -> SynthesisResult:
-        """Synthesise contacts, forces and a hand pose, and wait for the answer (arguments as `Client.synthesize`).
-
-        Raises:
-            ValidationError: invalid input (checked before sending, and by the service).
-            TimeoutError: no result within ``options.timeout`` (``exc.job_id``: the job, which then expired).
-            JobFailed: the job failed, was cancelled or expired.
-        """
-        request, message = core.synthesis(object, task, robot, contacts, options)
-        reply = self._unary(self._stub.Synthesize, message, timeout=request.options.timeout, idempotent=False)
-        return core.as_result(reply)
-
-    def submit(
-        self,
-        object: ObjectLike | SynthesisRequest,
-        task: TaskLike = "force_closure",
-        robot: RobotLike = "leap",
-        *,
-        contacts: ContactsIn | dict[str, Any] | None = None,
-        **options: Any,
-    ) -> GrpcJob:
-        """Queue a synthesis and return at once with its `GrpcJob` (same arguments as `synthesize`)."""
-        _, message = core.synthesis(object, task, robot, contacts, options)
-        return GrpcJob(self, self._unary(self._stub.SubmitJob, message, idempotent=False).id)
-
-    def submit_plan(
-        self,
-        object: ObjectLike | PlanRequest,
-        start: PoseLike | None = None,
-        waypoints: list[PoseLike] | None = None,
-        robot: RobotLike = "allegro",
-        **fields: Any,
-    ) -> GrpcJob:
-        """Queue a manipulation plan (``SubmitPlan``) and return at once with its `GrpcJob` (``job.plan_result()``
-        waits for it). Arguments as `manifoundation.sdk.make_plan` (or one whole `PlanRequest`)."""
-        _, message = core.planning(object, start, waypoints, robot, fields)
-        return GrpcJob(self, self._unary(self._stub.SubmitPlan, message, idempotent=False).id)
-
-    def plan(
-        self,
-        object: ObjectLike | PlanRequest,
-        start: PoseLike | None = None,
-        waypoints: list[PoseLike] | None = None,
-        robot: RobotLike = "allegro",
-        *,
-        wait: float | None = None,
-        **fields: Any,
-    ) -> PlanResult:
-        """Plan a manipulation and wait for it (as `Client.plan`: the dense trajectory, the repaired waypoints
-        and a verified contact answer per step).
-
-        Raises:
-            ValidationError: invalid input; JobFailed: e.g. ``InfeasibleWaypoint`` / ``NoPathFound``;
-                TimeoutError: not finished within ``wait`` (default: the plan's ``options.timeout`` + 60 s).
-        """
-        request, _ = core.planning(object, start, waypoints, robot, fields)
-        return self.submit_plan(request).plan_result(core.plan_wait(request, wait))
-
-    def job(self, job_id: str) -> GrpcJob:
-        """A handle on an existing job (submitted over either transport)."""
-        return GrpcJob(self, job_id)
-
-    def get(self, job_id: str, *, with_result: bool = True) -> JobPublic:
-        """The job now: state, stage and progress, timings, and its result or error when finished."""
-        return core.as_job(self._unary(self._stub.GetJob, core.get_job(job_id, with_result)))
-
-    def cancel(self, job_id: str) -> JobPublic:
-        """Ask the service to cancel the job (no effect when it already finished)."""
-        return core.as_job(self._unary(self._stub.CancelJob, core.job_ref(job_id)))
-
-    def watch(
-        self, job_id: str, *, timeout: float | None = None, cancel_on_disconnect: bool = False
-    ) -> Iterator[JobPublic]:
-        """The job on every change of state or stage, ending with it in full once it finished.
-
-        Args:
-            timeout: for the whole stream, seconds (None: until the job ends).
-            cancel_on_disconnect: cancel the job when this stream is dropped before it ends.
-
-        Raises:
-            TimeoutError: the job had not ended after ``timeout``.
-        """
-        request = core.watch_job(job_id, cancel_on_disconnect)
-        call = self._stub.WatchJob(request, timeout=timeout, metadata=self.metadata)
-        with self.following(call, job_id, timeout):
-            self.check(call.initial_metadata())
-            for message in call:
-                job = core.as_job(message)
-                yield job
-                if job.state.terminal:
-                    return
-
-    # ---- robots ---------------------------------------------------------------------------------------------
-
-    def robots(self) -> list[RobotPublic]:
-        """The built-in hands and the ones this key registered."""
-        return core.as_robots(self._unary(self._stub.ListRobots, pb.ListRobotsRequest()))
-
-    # ---- plumbing -------------------------------------------------------------------------------------------
-
-    def _unary(self, rpc: Any, request: Message, *, timeout: float | None = None, idempotent: bool = True) -> Any:
+    def unary(
+        self, rpc: UnaryRpc, request: Message, *, timeout: float | None = None, idempotent: bool = True
+    ) -> Message:
         """One unary call with retries; its answer, or the SDK's exception for its failure."""
         for attempt in itertools.count():
             try:
@@ -210,3 +109,118 @@ class GrpcClient(GrpcBase):
             self.check(call.initial_metadata())
             return reply
         raise AssertionError("unreachable")
+
+    # ---- the calls (`Transport`) ----------------------------------------------------------------------------
+
+    def synthesize(self, request: SynthesisRequest) -> SynthesisResult:
+        message = core.synthesis_message(request)
+        return core.as_result(
+            self.unary(self._stub.Synthesize, message, timeout=request.options.timeout, idempotent=False)
+        )
+
+    def submit(self, request: SynthesisRequest) -> str:
+        return core.created_id(self.unary(self._stub.SubmitJob, core.synthesis_message(request), idempotent=False))
+
+    def submit_plan(self, request: PlanRequest) -> str:
+        return core.created_id(self.unary(self._stub.SubmitPlan, core.plan_message(request), idempotent=False))
+
+    def job(self, job_id: str, with_result: bool = True) -> JobPublic:
+        return core.as_job(self.unary(self._stub.GetJob, core.get_job(job_id, with_result)))
+
+    def cancel(self, job_id: str) -> JobPublic:
+        return core.as_job(self.unary(self._stub.CancelJob, core.job_ref(job_id)))
+
+    def events(self, job_id: str, timeout: float | None, cancel_on_disconnect: bool = False) -> Iterator[JobPublic]:
+        """``WatchJob``: the job on every change of state or stage, ending with it in full once it finished;
+        ``timeout`` for the whole stream (`TimeoutError` naming the job)."""
+        call = self._stub.WatchJob(
+            core.watch_job(job_id, cancel_on_disconnect), timeout=timeout, metadata=self.metadata
+        )
+        with self.following(call, f"job {job_id}", timeout, job_id):
+            self.check(call.initial_metadata())
+            for message in call:
+                job = core.as_job(message)
+                yield job
+                if job.state.terminal:
+                    return
+
+    def submit_batch(self, requests: list[SynthesisRequest]) -> str:
+        return core.as_batch(self.unary(self._stub.SubmitBatch, core.batch_message(requests), idempotent=False)).id
+
+    def batch(self, batch_id: str, offset: int, limit: int) -> BatchPublic:
+        return core.as_batch(self.unary(self._stub.GetBatch, core.get_batch(batch_id, offset, limit)))
+
+    def batch_items(self, batch_id: str, timeout: float | None) -> Iterator[BatchItem]:
+        """``WatchBatch``: each item with its result or error as its job ends, until every job has."""
+        call = self._stub.WatchBatch(core.batch_ref(batch_id), timeout=timeout, metadata=self.metadata)
+        with self.following(call, f"batch {batch_id}", timeout):
+            self.check(call.initial_metadata())
+            for message in call:
+                yield core.as_batch_item(message)
+
+    def robots(self) -> list[RobotPublic]:
+        return core.as_robots(self.unary(self._stub.ListRobots, pb.ListRobotsRequest()))
+
+    def register_robot(self, body: RobotRegister) -> RobotPublic:
+        return core.as_robot(self.unary(self._stub.RegisterRobot, core.robot_message(body), idempotent=False))
+
+
+class GrpcClient(SyncAPI):
+    """Talk to a ManiFoundation service over gRPC, from synchronous code: the calls of `Client`.
+
+    ``synthesize``, ``submit``, ``submit_plan``, ``plan``, ``job`` (a `GrpcJob`: ``status``, ``cancel``, ``wait``,
+    ``events``, ``plan_result``, ``finished``), ``submit_batch`` and ``batch`` (a `Batch`, its items followed on
+    ``WatchBatch``), ``robots``, ``robot`` (found in ``ListRobots``), ``register_robot`` and ``add_robot``
+    (``RegisterRobot``). ``jobs``, ``robot_preview``, ``delete_robot``, ``health`` and ``ready`` have no RPC: they
+    raise `NeedsHttp` before sending (`manifoundation.sdk._api.HTTP_ONLY` says why; for a probe use
+    ``grpc.health.v1``). Close it with ``close()`` or a ``with`` block. Deprecated (one release): ``get(id)``
+    (use ``job(id).status()``), ``cancel(id)`` (``job(id).cancel()``), ``watch(id)`` (``job(id).events()``).
+
+    Args:
+        target: ``host:port`` of the service's gRPC port.
+        api_key: sent as ``authorization: Bearer ...`` metadata (None: no auth).
+        channel: a ``grpc.Channel`` to send through instead of one made for ``target`` (the client closes it).
+        credentials: ``grpc.ssl_channel_credentials(...)`` for TLS (None: plaintext).
+        sleep: how to wait between retries (tests may record instead).
+        settings: ``timeout`` (of one unary call other than `synthesize`, seconds; default 30), ``retries`` (a
+            `RetryPolicy`, or the number of retries with the default backoff), ``max_message_bytes``: see
+            `manifoundation.sdk._grpc_core.GrpcBase`.
+    """
+
+    _job_type = GrpcJob
+
+    def __init__(
+        self,
+        target: str = DEFAULT_TARGET,
+        api_key: str | None = None,
+        *,
+        channel: grpc.Channel | None = None,
+        credentials: grpc.ChannelCredentials | None = None,
+        sleep: Callable[[float], None] = time.sleep,
+        **settings: Unpack[GrpcSettings],
+    ) -> None:
+        self._grpc = GrpcTransport(target, api_key, channel=channel, credentials=credentials, sleep=sleep, **settings)
+        super().__init__(self._grpc)
+        self.target = target
+
+    def __repr__(self) -> str:
+        return f"GrpcClient(target={self.target!r})"
+
+    # ---- deprecated -----------------------------------------------------------------------------------------
+
+    def get(self, job_id: str, *, with_result: bool = True) -> JobPublic:
+        """Deprecated: ``job(id).status()``. The job now (``GetJob``)."""
+        core.deprecated("GrpcClient.get(id)", "GrpcClient.job(id).status()")
+        return self._grpc.job(job_id, with_result)
+
+    def cancel(self, job_id: str) -> JobPublic:
+        """Deprecated: ``job(id).cancel()``. Ask the service to cancel the job (``CancelJob``)."""
+        core.deprecated("GrpcClient.cancel(id)", "GrpcClient.job(id).cancel()")
+        return self._grpc.cancel(job_id)
+
+    def watch(
+        self, job_id: str, *, timeout: float | None = None, cancel_on_disconnect: bool = False
+    ) -> Iterator[JobPublic]:
+        """Deprecated: ``job(id).events()``. The job on every change (``WatchJob``)."""
+        core.deprecated("GrpcClient.watch(id)", "GrpcClient.job(id).events()")
+        return self._grpc.events(job_id, timeout, cancel_on_disconnect)

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from operator import attrgetter
 
 import pydantic
 
@@ -109,3 +111,19 @@ def parse_event(data: str) -> JobPublic:
         return JobPublic.model_validate_json(data, context=ANSWER_CONTEXT)
     except pydantic.ValidationError as exc:
         raise ServerError(f"unreadable job event: {exc}", type="ProtocolError") from exc
+
+
+Answer = Callable[[JobPublic], object]
+"""What a succeeded job must carry to be complete (its result, its plan)."""
+RESULT: Answer = attrgetter("result")
+PLAN: Answer = attrgetter("plan")
+
+
+def settled(last: JobPublic | None, answer: Answer | None) -> JobPublic | None:
+    """The last job a stream gave when it is final and complete; None: read the job once more (the stream
+    ended early, or its final job came without ``answer``)."""
+    if last is None or not last.state.terminal:
+        return None
+    if last.state is JobState.SUCCEEDED and answer is not None and answer(last) is None:
+        return None
+    return last

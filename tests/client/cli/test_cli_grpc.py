@@ -58,7 +58,7 @@ def test_synthesize_over_grpc_prints_and_writes_what_http_does(
     written = {name: json.loads(path.read_text()) for name, path in outs.items()}
     assert without_timings(written["grpc"]) == without_timings(written["http"])
     with GrpcClient(service.target, KEY) as client:  # the gRPC run's job is the service's own
-        assert client.get(grpc["job_id"]).state is JobState.SUCCEEDED
+        assert client.job(grpc["job_id"]).status().state is JobState.SUCCEEDED
 
 
 def test_jobs_show_and_cancel_over_grpc(

@@ -11,11 +11,20 @@ from typing import Any, TypeVar
 import numpy as np
 import pytest
 
-from manifoundation.contract import JobPublic, JobState, PlanRequest, SynthesisRequest, SynthesisResult
+from manifoundation.contract import (
+    BatchItem,
+    JobPublic,
+    JobState,
+    PlanRequest,
+    RobotPublic,
+    SynthesisRequest,
+    SynthesisResult,
+)
 from manifoundation.contract.versions import CONTRACT_VERSION
 from manifoundation.sdk import (
     JobFailed,
     ManiError,
+    NeedsHttp,
     NotFound,
     RateLimited,
     TimeoutError,
@@ -25,7 +34,7 @@ from manifoundation.sdk import (
 )
 from manifoundation.sdk.grpc_async_client import AsyncGrpcClient, AsyncGrpcJob
 from manifoundation.sdk.grpc_client import GrpcClient
-from tests.api.grpc.conftest import FAIL_SEED, HAND, KEY, Service, running
+from tests.api.grpc.conftest import FAIL_SEED, HAND, KEY, OTHER, Service, running
 from tests.api.helpers import request_body, sphere
 from tests.api.server import free_port
 
@@ -67,7 +76,8 @@ def test_submit_watch_get_and_wait(service: Service) -> None:
         job = await client.submit(synthesis(max_iterations=4))
         updates = [update async for update in job.events(timeout=30)]
         result = await job.wait(timeout=30)
-        return job, updates, result, await client.get(job.id, with_result=False)
+        with pytest.warns(DeprecationWarning):  # the old name, for one release
+            return job, updates, result, await client.get(job.id, with_result=False)
 
     job, updates, result, without = run(service.target, body)
     assert updates[-1].state is JobState.SUCCEEDED and updates[-1].result is not None
@@ -95,7 +105,7 @@ def test_errors_are_the_sync_clients(service: Service) -> None:
     async def body(client: AsyncGrpcClient) -> dict[str, ManiError]:
         raised: dict[str, ManiError] = {}
         for name, call in (
-            ("missing", lambda: client.get("no-such-job")),
+            ("missing", lambda: client.job("no-such-job").status()),
             ("hand", lambda: client.synthesize(synthesis("no_such_hand"))),
             ("local", lambda: client.synthesize(np.zeros((10, 3)))),
             ("invalid", lambda: client.synthesize(unchecked)),
@@ -174,3 +184,36 @@ def test_plan(service: Service) -> None:
         return plan.waypoint_indices, repr(client)
 
     assert run(service.target, body) == ([1, 2], f"AsyncGrpcClient(target={service.target!r})")
+
+
+def test_batches(service: Service) -> None:
+    async def body(client: AsyncGrpcClient) -> tuple[int, list[int], list[BatchItem], int, str]:
+        batch = await client.submit_batch([synthesis(seed=s) for s in range(2)] + [synthesis(seed=FAIL_SEED)])
+        seen = sorted([item.index async for item in batch.as_completed(timeout=30)])  # WatchBatch
+        items = await batch.wait(timeout=30)
+        with pytest.raises(JobFailed):
+            await batch.results(timeout=30)
+        again = await client.batch(batch.id)  # GetBatch: reads its size
+        return batch.total, seen, items, again.total, (await again.status(limit=1)).id
+
+    total, seen, items, again, batch_id = run(service.target, body)
+    assert total == again == 3 and seen == [0, 1, 2] and batch_id
+    assert [i.state for i in items] == [JobState.SUCCEEDED, JobState.SUCCEEDED, JobState.FAILED]
+    assert items[0].result is not None and items[0].result.hand == HAND
+
+
+def test_robot_registration(service: Service) -> None:
+    urdf = '<robot name="r"><link name="base"/><link name="tip"/></robot>'
+
+    async def body(client: AsyncGrpcClient) -> tuple[RobotPublic, RobotPublic, NeedsHttp]:
+        mine = await client.register_robot(urdf.encode(), ["tip"], name="sdk_async_hand")  # RegisterRobot
+        found = await client.robot("sdk_async_hand")  # from ListRobots
+        with pytest.raises(NotFound):
+            await client.robot("no_such_hand")
+        with pytest.raises(NeedsHttp) as preview:
+            await client.robot_preview("sdk_async_hand")
+        return mine, found, preview.value
+
+    mine, found, preview = run(service.target, body, key=OTHER)  # another key: the module's key sees one hand
+    assert mine.name == found.name == "sdk_async_hand" and found.fingertips == ["tip"] and not found.builtin
+    assert preview.method == "robot_preview"

@@ -20,6 +20,7 @@ from manifoundation.sdk import (
     ContractWarning,
     IncompatibleService,
     JobFailed,
+    NeedsHttp,
     NotFound,
     RateLimited,
     TimeoutError,
@@ -29,7 +30,7 @@ from manifoundation.sdk import (
 )
 from manifoundation.sdk.grpc_client import GrpcClient
 from manifoundation.server.api.versions import Versions
-from tests.api.grpc.conftest import FAIL_SEED, HAND, KEY, Service, running
+from tests.api.grpc.conftest import FAIL_SEED, HAND, KEY, OTHER, Service, running
 from tests.api.helpers import request_body
 from tests.api.server import free_port
 
@@ -76,7 +77,8 @@ def test_submit_watch_get_and_wait(client: GrpcClient) -> None:
     assert updates[-1].state is JobState.SUCCEEDED and updates[-1].result is not None
     assert "refinement" in {u.progress.stage for u in updates[:-1]}
     assert job.wait(timeout=30).hand == HAND
-    without = client.get(job.id, with_result=False)
+    with pytest.warns(DeprecationWarning, match=r"job\(id\)\.status\(\)"):  # the old name, for one release
+        without = client.get(job.id, with_result=False)
     assert without.state is JobState.SUCCEEDED and without.result is None
 
 
@@ -90,7 +92,7 @@ def test_cancel(client: GrpcClient) -> None:
 
 def test_errors_are_the_http_sdks(service: Service, client: GrpcClient) -> None:
     with pytest.raises(NotFound) as missing:
-        client.get("no-such-job")
+        client.job("no-such-job").status()
     assert missing.value.type == "NotFound" and missing.value.status_code is None
     with pytest.raises(NotFound, match="no_such_hand"):
         client.synthesize(synthesis("no_such_hand"))  # the service's UnknownHand
@@ -117,7 +119,7 @@ def test_the_timeout_is_the_calls_and_the_jobs_deadline(client: GrpcClient) -> N
         client.synthesize(synthesis(max_iterations=20, timeout=0.4))  # about 1.2 s of work
     assert time.monotonic() - started < 1.0 and caught.value.job_id
     end = time.monotonic() + 10
-    while (job := client.get(caught.value.job_id)).state is not JobState.EXPIRED and time.monotonic() < end:
+    while (job := client.job(caught.value.job_id).status()).state is not JobState.EXPIRED and time.monotonic() < end:
         time.sleep(0.05)
     assert job.state is JobState.EXPIRED
 
@@ -144,7 +146,7 @@ def test_another_major_version_is_refused(service: Service, client: GrpcClient) 
         with pytest.raises(IncompatibleService, match=f"{MAJOR + 1}.0"):
             client.robots()
         with pytest.raises(IncompatibleService):  # a failed call names the version in its trailers
-            client.get("no-such-job")
+            client.job("no-such-job").status()
 
 
 def test_a_newer_minor_version_warns_once(service: Service, client: GrpcClient) -> None:
@@ -168,6 +170,53 @@ def test_plan_through_the_grpc_client(client: GrpcClient) -> None:
     plan = client.plan(request, wait=30)
     assert plan.positions.shape == (3, 3) and plan.waypoint_indices == [1, 2]
     job = client.submit_plan(request)
-    assert client.get(job.id).kind == "plan" and job.plan_result(30).waypoint_indices == [1, 2]
+    assert job.status().kind == "plan" and job.plan_result(30).waypoint_indices == [1, 2]
     with pytest.raises(JobFailed):  # a plan job carries no synthesis result
         job.wait(30)
+
+
+def test_batches_over_grpc(client: GrpcClient) -> None:
+    batch = client.submit_batch([synthesis(seed=s) for s in range(3)] + [synthesis(seed=FAIL_SEED)])  # SubmitBatch
+    assert batch.total == 4 and repr(batch) == f"Batch({batch.id!r})"
+    seen = list(batch.as_completed(timeout=30))  # WatchBatch: each item as its job ends
+    assert sorted(i.index for i in seen) == [0, 1, 2, 3]
+    items = batch.wait(timeout=30)
+    assert [i.index for i in items] == [0, 1, 2, 3] and [i.state for i in items[:3]] == [JobState.SUCCEEDED] * 3
+    assert all(i.result is not None and i.result.hand == HAND for i in items[:3])
+    assert items[3].state is JobState.FAILED and items[3].error is not None
+    with pytest.raises(JobFailed) as failed:  # results(): the first item without one
+        batch.results(timeout=30)
+    assert failed.value.job_id == items[3].job_id
+    page = client.batch(batch.id).status(offset=1, limit=2)  # GetBatch
+    assert page.done and page.total == 4 and [i.index for i in page.items] == [1, 2]
+    assert client.batch(batch.id).total == 4
+    assert client.job(items[0].job_id).status().batch_id == batch.id
+    slow = client.submit_batch([synthesis(max_iterations=20) for _ in range(2)])
+    with pytest.raises(TimeoutError, match=f"batch {slow.id}: 0/2 done"):
+        list(slow.as_completed(timeout=0.2))
+    for item in slow.status().items:
+        client.job(item.job_id).cancel()
+    with pytest.raises(ValidationError):  # checked before sending, as by `Client`
+        client.submit_batch([])
+
+
+def test_robot_registration_over_grpc(service: Service, tmp_path: Any) -> None:
+    urdf = '<robot name="r"><link name="base"/><link name="tip"/></robot>'
+    with GrpcClient(service.target, OTHER) as other:  # another key: its own namespace, the module's key untouched
+        mine = other.register_robot(urdf, ["tip"], name="sdk_grpc_hand")  # RegisterRobot
+        assert mine.name == "sdk_grpc_hand" and not mine.builtin and mine.fingertips == ["tip"]
+        (tmp_path / "hand.urdf").write_text(urdf)
+        added = other.add_robot(tmp_path / "hand.urdf", fingertips=["tip"], name="sdk_grpc_hand_2")
+        assert added.name == "sdk_grpc_hand_2" and added.fingertips == ["tip"]
+        assert {"sdk_grpc_hand", "sdk_grpc_hand_2"} <= {r.name for r in other.robots()}
+        found = other.robot("sdk_grpc_hand")  # from ListRobots
+        assert found.name == "sdk_grpc_hand" and found.preview is None
+        with pytest.raises(NotFound, match="no_such_hand") as unknown:
+            other.robot("no_such_hand")
+        assert unknown.value.type == "UnknownHand"
+        with pytest.raises(ValidationError):  # the service's validation, as over HTTP
+            other.register_robot(urdf, ["no_such_link"], name="sdk_bad_hand")
+        with pytest.raises(NeedsHttp, match="delete_robot"):
+            other.delete_robot("sdk_grpc_hand")
+    with GrpcClient(service.target, KEY) as client:
+        assert "sdk_grpc_hand" not in {r.name for r in client.robots()}

@@ -23,7 +23,7 @@ DOCUMENTED = {
     "result_to_dict", "result_to_json", "load_result", "result_figure",
     # errors
     "ManiError", "RequestError", "ValidationError", "Unauthorized", "NotFound", "RateLimited", "ServerError",
-    "Unreachable", "TimeoutError", "JobFailed", "IncompatibleService", "MissingExtra",
+    "Unreachable", "TimeoutError", "JobFailed", "IncompatibleService", "MissingExtra", "NeedsHttp",
     "ContractWarning",
 }  # fmt: skip
 
