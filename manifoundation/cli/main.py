@@ -18,22 +18,28 @@ EXIT_UNREACHABLE = 3
 EXIT_INTERRUPTED = 130
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Build the `mani` parser with every installed subcommand."""
-    parser = argparse.ArgumentParser(
-        prog="mani",
-        description="ManiFoundation Service: contact synthesis for robot manipulation.",
-        epilog="Run `mani COMMAND --help` for a command's options and an example.",
-    )
+def plugin_parser(prog: str, description: str, group: str) -> argparse.ArgumentParser:
+    """A command line whose subcommands are the ``register`` functions of the entry-point ``group``."""
+    epilog = f"Run `{prog} COMMAND --help` for a command's options and an example."
+    parser = argparse.ArgumentParser(prog=prog, description=description, epilog=epilog)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for register in load_plugins("mani.commands").values():
+    for register in load_plugins(group).values():
         register(sub)
     return parser
 
 
+def build_parser() -> argparse.ArgumentParser:
+    """Build the `mani` parser with every installed subcommand."""
+    return plugin_parser("mani", "ManiFoundation Service: contact synthesis for robot manipulation.", "mani.commands")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run `mani` with ``argv`` (default: ``sys.argv[1:]``) and return its exit code."""
-    parser = build_parser()
+    return run(build_parser(), argv)
+
+
+def run(parser: argparse.ArgumentParser, argv: list[str] | None = None) -> int:
+    """Parse ``argv`` with ``parser`` and run the chosen command's ``func``; usage (exit 2) without one."""
     args = parser.parse_args(argv)
     func = getattr(args, "func", None)
     if func is None:

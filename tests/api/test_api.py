@@ -195,10 +195,10 @@ def test_queue_full_and_unavailable(queue: FakeQueue, client: TestClient) -> Non
 
 
 def test_shutting_down_answers_503(client: TestClient) -> None:
-    client.app.state.shutting_down = True  # type: ignore[attr-defined]
+    client.app.state.services.shutting_down = True  # type: ignore[attr-defined]
     assert_error(client.post("/v1/jobs", json=request_body()), 503, "Unavailable")
     assert client.get("/healthz").status_code == 200
-    client.app.state.shutting_down = False  # type: ignore[attr-defined]
+    client.app.state.services.shutting_down = False  # type: ignore[attr-defined]
 
 
 def test_auth_on() -> None:

@@ -38,7 +38,7 @@ class Service:
 
     def set(self, **changes: Any) -> None:
         """Change settings of the running app (read per request)."""
-        self.app.state.settings = self.app.state.settings.model_copy(update=changes)
+        self.app.state.services.settings = self.app.state.services.settings.model_copy(update=changes)
 
 
 @pytest.fixture(scope="module", params=["embedded", "redis"])
@@ -170,11 +170,11 @@ def test_errors(service: Service) -> None:
         service.set(max_body_bytes=64 * 1024 * 1024)
     never = error_of(http.post("/v1/batches", json={"requests": [body()] * 60}), 422, "ValidationError")
     assert "50" in never.error  # a batch larger than the queue can never fit: named, not 429 for ever
-    service.app.state.shutting_down = True
+    service.app.state.services.shutting_down = True
     try:
         error_of(http.post("/v1/jobs", json=body()), 503, "Unavailable")
     finally:
-        service.app.state.shutting_down = False
+        service.app.state.services.shutting_down = False
 
 
 def test_auth_on_and_off(service: Service) -> None:
@@ -192,12 +192,12 @@ def test_auth_on_and_off(service: Service) -> None:
 def test_rate_limit(service: Service) -> None:
     from manifoundation.server.api.security import RateLimiter
 
-    previous = service.app.state.limiter
-    service.app.state.limiter = RateLimiter(0.2, 2)
+    previous = service.app.state.services.limiter
+    service.app.state.services.limiter = RateLimiter(0.2, 2)
     try:
         codes = [service.http.get("/v1/jobs").status_code for _ in range(3)]
     finally:
-        service.app.state.limiter = previous
+        service.app.state.services.limiter = previous
     assert codes == [200, 200, 429]
 
 

@@ -1,4 +1,4 @@
-"""The FastAPI application: `create_app(settings)`; the queue and friends live on ``app.state`` (lifespan)."""
+"""The FastAPI application: `create_app(settings)`; what its front ends share is one `AppServices`."""
 
 from __future__ import annotations
 
@@ -15,19 +15,17 @@ from starlette.routing import Route
 
 from manifoundation.contract import BatchCreate, ErrorBody, PlanRequest, RobotRegister, SynthesisRequest
 from manifoundation.server.api import errors, logs
-from manifoundation.server.api.bodies import BodyPool
 from manifoundation.server.api.dashboard import History
 from manifoundation.server.api.mcp.endpoint import PATH as MCP_PATH
-from manifoundation.server.api.mcp.endpoint import McpEndpoint, McpHost
-from manifoundation.server.api.mcp.objects import ObjectStore
+from manifoundation.server.api.mcp.endpoint import McpEndpoint
+from manifoundation.server.api.mcp.host import McpHost
 from manifoundation.server.api.metrics import Metrics
 from manifoundation.server.api.middleware import RequestContext
 from manifoundation.server.api.robots import RobotCatalog
 from manifoundation.server.api.routes import batches, health, jobs, pages, plans, robots, synthesis
-from manifoundation.server.api.scenes import SceneStore
-from manifoundation.server.api.security import RateLimiter
+from manifoundation.server.api.services import AppServices
 from manifoundation.server.api.settings import Settings
-from manifoundation.server.api.versions import SERVICE_VERSION, Versions
+from manifoundation.server.api.versions import SERVICE_VERSION
 from manifoundation.server.queue import JobQueue
 
 log = logging.getLogger("manifoundation.server.api.app")
@@ -48,39 +46,40 @@ def build_queue(settings: Settings) -> JobQueue:
 def create_app(settings: Settings | None = None, *, queue: JobQueue | None = None, grpc: bool = False) -> FastAPI:
     """The app. ``queue``: an already-built queue (tests); the lifespan starts and closes it either way.
     ``grpc``: also serve gRPC on ``settings.grpc_port`` (unless 0) from the lifespan, over the same queue
-    (`mani serve` asks for it; `app.state.grpc` is the running `manifoundation.server.api.grpc.server.GrpcServer`)."""
+    (`mani serve` asks for it; `AppServices.grpc` is the running `manifoundation.server.api.grpc.server.GrpcServer`)."""
     settings = settings or Settings()
     metrics = Metrics()
+    services = AppServices.build(settings, metrics)
 
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         the_queue = queue or build_queue(settings)
         await the_queue.start()
         history = History(the_queue, settings.dashboard_sample_s, settings.dashboard_history)
-        app.state.queue = the_queue
-        app.state.robots = RobotCatalog(the_queue, settings.robots_cache_s)
-        app.state.history = history
-        app.state.shutting_down = False  # an app started again after a shutdown serves again
-        app.state.mcp = McpHost(app.state)  # started by the first /mcp request
+        services.queue = the_queue
+        services.robots = RobotCatalog(the_queue, settings.robots_cache_s)
+        services.history = history
+        services.shutting_down = False  # an app started again after a shutdown serves again
+        services.mcp = McpHost(services)  # started by the first /mcp request
         sampler = asyncio.create_task(history.run(), name="dashboard-sampler")
-        app.state.grpc = None
+        services.grpc = None
         if grpc and settings.grpc_port:
             from manifoundation.server.api.grpc.server import start_grpc
 
-            app.state.grpc = await start_grpc(app.state, settings)
+            services.grpc = await start_grpc(services, settings)
         log.info("service started", extra={"backend": the_queue.backend})
         try:
             yield
         finally:
-            app.state.shutting_down = True
-            await app.state.mcp.close()
-            if app.state.grpc is not None:
-                await app.state.grpc.stop()
+            services.shutting_down = True
+            await services.mcp.close()
+            if services.grpc is not None:
+                await services.grpc.stop()
             sampler.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await sampler
             await the_queue.close()
-            app.state.bodies.close()
+            services.bodies.close()
             log.info("service stopped")
 
     app = FastAPI(
@@ -90,15 +89,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
         lifespan=lifespan,
         docs_url=None,  # served by `pages.docs` from the installed Swagger UI bundle: no CDN
     )
-    app.state.settings = settings
-    app.state.metrics = metrics
-    app.state.limiter = RateLimiter(settings.rate_limit_per_s, settings.rate_limit_burst)
-    app.state.auth_failures = RateLimiter(settings.auth_failures_per_s, settings.auth_failures_burst)
-    app.state.scenes = SceneStore()
-    app.state.objects = ObjectStore(settings.object_ttl_s, settings.max_objects, settings.max_object_store_bytes)
-    app.state.bodies = BodyPool(settings.parse_offload_bytes, settings.large_body_slots, settings.body_timeout)
-    app.state.shutting_down = False
-    app.state.versions = Versions()  # reported on every answer (manifoundation/server/api/versions.py)
+    app.state.services = services
     errors.install(app)
     for router in (
         health.router,
@@ -112,8 +103,8 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
     ):
         app.include_router(router)
     if settings.mcp:
-        app.router.routes.append(Route(MCP_PATH, McpEndpoint(app.state), methods=["GET", "POST", "DELETE"]))
-    app.add_middleware(RequestContext, metrics=metrics, state=app.state)
+        app.router.routes.append(Route(MCP_PATH, McpEndpoint(services), methods=["GET", "POST", "DELETE"]))
+    app.add_middleware(RequestContext, metrics=metrics, services=services)
     app.openapi = lambda: _openapi(app)  # type: ignore[method-assign]
     return app
 

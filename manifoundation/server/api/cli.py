@@ -160,13 +160,14 @@ def serve(args: argparse.Namespace) -> int:
     import uvicorn
 
     from manifoundation.server.api.app import configure_logging, create_app
+    from manifoundation.server.api.services import services_of
 
     configure_logging(settings)
     app = create_app(settings, grpc=True)
 
     class Server(uvicorn.Server):
         def handle_exit(self, sig: int, frame: Any) -> None:
-            app.state.shutting_down = True
+            services_of(app).shutting_down = True
             super().handle_exit(sig, frame)
 
     server = Server(uvicorn_config(app, settings))

@@ -1,4 +1,4 @@
-"""Dependencies of the routes: ``Annotated`` aliases over what the lifespan put on ``app.state``."""
+"""Dependencies of the routes: ``Annotated`` aliases over the app's `AppServices`."""
 
 from __future__ import annotations
 
@@ -10,32 +10,39 @@ from manifoundation.server.api.dashboard import History
 from manifoundation.server.api.errors import RateLimited, Unauthorized, Unavailable
 from manifoundation.server.api.metrics import Metrics
 from manifoundation.server.api.robots import RobotCatalog
-from manifoundation.server.api.security import Caller, RateLimiter, check_key, tenant_of
+from manifoundation.server.api.security import Caller, check_key, tenant_of
+from manifoundation.server.api.services import services_of
 from manifoundation.server.api.settings import Settings
 from manifoundation.server.queue import JobQueue
 
 
 async def get_settings(request: Request) -> Settings:
-    return request.app.state.settings
+    return services_of(request).settings
 
 
 async def get_queue(request: Request) -> JobQueue:
-    queue = getattr(request.app.state, "queue", None)
+    queue = services_of(request).queue
     if queue is None:
         raise Unavailable("the queue is not running")
     return queue
 
 
 async def get_metrics(request: Request) -> Metrics:
-    return request.app.state.metrics
+    return services_of(request).metrics
 
 
 async def get_robots(request: Request) -> RobotCatalog:
-    return request.app.state.robots
+    robots = services_of(request).robots
+    if robots is None:
+        raise Unavailable("the service is not started")
+    return robots
 
 
 async def get_history(request: Request) -> History:
-    return request.app.state.history
+    history = services_of(request).history
+    if history is None:
+        raise Unavailable("the service is not started")
+    return history
 
 
 async def get_request_id(request: Request) -> str:
@@ -56,7 +63,7 @@ async def authorize(request: Request, settings: SettingsDep) -> Caller:
     identity = request.client.host if request.client else "unknown"
     caller = Caller()
     if settings.auth_enabled and request.url.path not in settings.open_paths:
-        failures: RateLimiter = request.app.state.auth_failures
+        failures = services_of(request).auth_failures
         if wait := failures.blocked(identity):  # too many wrong keys from this address: no more guesses
             raise RateLimited("too many requests with a wrong API key from this address", wait)
         try:
@@ -66,7 +73,7 @@ async def authorize(request: Request, settings: SettingsDep) -> Caller:
             raise
         identity = "key:" + key
         caller = Caller(tenant=tenant_of(key), admin=key in settings.admin_keys)
-    limiter: RateLimiter = request.app.state.limiter
+    limiter = services_of(request).limiter
     limiter.take(identity)
     return caller
 

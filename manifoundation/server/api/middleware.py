@@ -7,7 +7,7 @@ import logging
 import re
 import time
 import uuid
-from typing import Any
+from typing import TYPE_CHECKING
 
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
@@ -15,7 +15,9 @@ from manifoundation.server.api.errors import Unavailable
 from manifoundation.server.api.logs import request_id_var
 from manifoundation.server.api.metrics import Metrics
 from manifoundation.server.api.negotiation import respond
-from manifoundation.server.api.versions import reported
+
+if TYPE_CHECKING:
+    from manifoundation.server.api.services import AppServices
 
 REQUEST_ID_HEADER = "x-request-id"
 _VALID_ID = re.compile(r"^[A-Za-z0-9._:\-]{1,128}$")
@@ -36,10 +38,10 @@ def request_id_from(headers: list[tuple[bytes, bytes]]) -> str:
 class RequestContext:
     """Request id in/out, refuse `/v1` work while shutting down, time and count every request."""
 
-    def __init__(self, app: ASGIApp, metrics: Metrics, state: Any) -> None:
+    def __init__(self, app: ASGIApp, metrics: Metrics, services: AppServices) -> None:
         self.app = app
         self.metrics = metrics
-        self.state = state
+        self.services = services
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -80,14 +82,14 @@ class RequestContext:
                 status = message["status"]
                 headers = list(message.get("headers", []))
                 headers.append((b"x-request-id", request_id.encode()))
-                headers.extend(reported(self.state).raw_headers())
+                headers.extend(self.services.versions.raw_headers())
                 message = {**message, "headers": headers}
                 observe()
             await send(message)
 
         self.metrics.in_flight.inc()
         try:
-            if getattr(self.state, "shutting_down", False) and scope["path"].startswith("/v1"):
+            if self.services.shutting_down and scope["path"].startswith("/v1"):
                 from starlette.requests import Request
 
                 err = Unavailable("the service is shutting down", retry_after=5)

@@ -18,7 +18,7 @@ from starlette.requests import Request
 from manifoundation.contract import FieldError
 from manifoundation.contract.codec import JSON, MSGPACK, media_type
 from manifoundation.contract.validation import summary
-from manifoundation.server.api.bodies import BodyPool, decode
+from manifoundation.server.api.bodies import decode
 from manifoundation.server.api.encoding import accepted, respond
 from manifoundation.server.api.errors import (
     BadRequest,
@@ -27,6 +27,7 @@ from manifoundation.server.api.errors import (
     RequestTimeout,
     UnsupportedMediaType,
 )
+from manifoundation.server.api.services import services_of
 
 __all__ = ["accepted", "body_chunks", "body_openapi", "declared_length", "read_bytes", "read_model", "respond"]
 
@@ -93,8 +94,8 @@ async def read_model(request: Request, cls: type[ModelT], limit: int) -> ModelT:
     base = (content_type or JSON).split(";", 1)[0].strip().lower()
     if base not in (JSON, "text/json") and media_type(base) != MSGPACK and not base.endswith("+json"):
         raise UnsupportedMediaType(f"Content-Type {base!r} is not supported; use {JSON} or {MSGPACK}")
-    settings = request.app.state.settings
-    bodies: BodyPool | None = getattr(request.app.state, "bodies", None)
+    services = services_of(request)
+    settings, bodies = services.settings, services.bodies
     timeouts = settings.body_timeout, settings.body_idle_timeout
     if bodies is None or not bodies.large(declared_length(request, limit)):
         return _answer(decode(cls, await read_bytes(request, limit, *timeouts), content_type))

@@ -34,6 +34,7 @@ from manifoundation.server.api.negotiation import read_model
 from manifoundation.server.api.robots import RobotCatalog
 from manifoundation.server.api.scenes import SceneStore
 from manifoundation.server.api.security import Caller
+from manifoundation.server.api.services import AppServices, services_of
 from manifoundation.server.api.settings import Settings
 from manifoundation.server.queue import JobQueue
 
@@ -41,11 +42,11 @@ log = logging.getLogger("manifoundation.server.api.submission")
 RequestT = TypeVar("RequestT", SynthesisRequest, PlanRequest)
 
 
-def running_queue(state: object) -> JobQueue:
+def running_queue(services: AppServices) -> JobQueue:
     """The app's queue while it takes work; `Unavailable` before the lifespan started it or while shutting down.
     (The front ends outside FastAPI's dependencies, gRPC and MCP, ask for it here.)"""
-    queue = getattr(state, "queue", None)
-    if queue is None or getattr(state, "shutting_down", False):
+    queue = services.queue
+    if queue is None or services.shutting_down:
         raise Unavailable("the service is not accepting work (starting or shutting down)")
     return queue
 
@@ -152,7 +153,7 @@ async def get_submitter(
     request: Request, queue: QueueDep, robots: RobotsDep, metrics: MetricsDep, settings: SettingsDep,
     request_id: RequestIdDep, caller: CallerDep,
 ) -> Submitter:  # fmt: skip
-    return Submitter(queue, robots, metrics, settings, request.app.state.scenes, request_id, caller)
+    return Submitter(queue, robots, metrics, settings, services_of(request).scenes, request_id, caller)
 
 
 SubmitterDep = Annotated[Submitter, Depends(get_submitter)]

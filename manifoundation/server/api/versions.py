@@ -2,15 +2,14 @@
 
 Every HTTP answer carries them as headers and every gRPC call as metadata (``x-mani-contract-version``,
 ``x-mani-service-version``); ``GET /healthz`` has them in its body. Clients compare the contract version with
-their own on their first answer. They are read from ``app.state.versions`` on each answer, so a test can make an
-app report another version (``app.state.versions = Versions(contract="2.0")``).
+their own on their first answer. They are read from the app's `AppServices.versions` on each answer, so a test can
+make an app report another version (``services_of(app).versions = Versions(contract="2.0")``).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from importlib.metadata import version as package_version
-from typing import Any
 
 from manifoundation.contract.versions import CONTRACT_HEADER, CONTRACT_VERSION, SERVICE_HEADER
 
@@ -34,7 +33,4 @@ class Versions:
         return [(name.encode(), value.encode("latin-1")) for name, value in self.metadata()]
 
 
-def reported(state: Any) -> Versions:
-    """The versions an app reports (``state``: its ``app.state``)."""
-    versions = getattr(state, "versions", None)
-    return versions if isinstance(versions, Versions) else Versions()
+

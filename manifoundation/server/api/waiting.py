@@ -7,18 +7,24 @@ from __future__ import annotations
 
 import asyncio
 import time
-from typing import Any
+from typing import TYPE_CHECKING
 
 from manifoundation.contract import JobPublic
 from manifoundation.server.api.errors import Unavailable
+from manifoundation.server.queue import JobQueue
+
+if TYPE_CHECKING:
+    from manifoundation.server.api.services import AppServices
 
 WAIT_SLICE_S = 1.0
 """The longest single `queue.wait`: a shutdown is noticed within this."""
 
 
-async def wait_for_job(state: Any, queue: Any, job_id: str, seconds: float, *, fetch_with: str) -> JobPublic:
+async def wait_for_job(
+    services: AppServices, queue: JobQueue, job_id: str, seconds: float, *, fetch_with: str
+) -> JobPublic:
     """The job once it ended, or as it is after ``seconds``. `Unavailable` (503 / UNAVAILABLE) when the service
-    starts shutting down meanwhile (``state.shutting_down``): the message tells the caller to fetch the job
+    starts shutting down meanwhile (``services.shutting_down``): the message tells the caller to fetch the job
     ``fetch_with`` (e.g. "with GetJob")."""
     end = time.monotonic() + max(0.0, seconds)
     while True:
@@ -26,6 +32,6 @@ async def wait_for_job(state: Any, queue: Any, job_id: str, seconds: float, *, f
         job: JobPublic = await queue.wait(job_id, max(0.0, min(left, WAIT_SLICE_S)))
         if job.state.terminal or left <= WAIT_SLICE_S:
             return job
-        if getattr(state, "shutting_down", False):
+        if services.shutting_down:
             raise Unavailable(f"the service is shutting down; job {job_id} may be fetched {fetch_with}")
         await asyncio.sleep(0)

@@ -83,13 +83,13 @@ def test_keys_and_tenancy(service: Service) -> None:
 
 
 def test_rate_limit_is_the_http_one(service: Service) -> None:
-    before = service.app.state.limiter
-    service.app.state.limiter = RateLimiter(0.01, 1)
+    before = service.app.state.services.limiter
+    service.app.state.services.limiter = RateLimiter(0.01, 1)
     try:
         service.stub.ListRobots(pb.ListRobotsRequest(), metadata=service.auth())
         error, status, body = failure(lambda: service.stub.ListRobots(pb.ListRobotsRequest(), metadata=service.auth()))
     finally:
-        service.app.state.limiter = before
+        service.app.state.services.limiter = before
     assert error.code() is grpc.StatusCode.RESOURCE_EXHAUSTED and body.type == "RateLimited"
     assert unpack(status, error_details_pb2.RetryInfo)[0].retry_delay.seconds >= 1
 

@@ -12,7 +12,7 @@ from .conftest import HAND, Service, request, wait_terminal
 
 def test_synthesize_watch_and_cancel_over_redis(redis_service: Service) -> None:
     svc = redis_service
-    assert svc.app.state.queue.backend == "redis"
+    assert svc.app.state.services.queue.backend == "redis"
     assert svc.stub.Synthesize(request(), metadata=svc.auth(), timeout=30).hand == HAND
     created = svc.stub.SubmitJob(request(max_iterations=2), metadata=svc.auth())
     updates = list(svc.stub.WatchJob(pb.WatchJobRequest(id=created.id), metadata=svc.auth(), timeout=30))

@@ -52,11 +52,11 @@ def client(service: Service) -> Iterator[GrpcClient]:
 @contextlib.contextmanager
 def reporting(service: Service, versions: Versions) -> Iterator[None]:
     """The service reports ``versions`` meanwhile."""
-    service.app.state.versions = versions
+    service.app.state.services.versions = versions
     try:
         yield
     finally:
-        service.app.state.versions = Versions()
+        service.app.state.services.versions = Versions()
 
 
 def synthesis(hand: str = HAND, **options: Any) -> SynthesisRequest:

@@ -34,7 +34,7 @@ def test_every_answer_and_healthz_name_the_versions(make_client: MakeClient, ser
 
 
 def test_another_major_version_is_an_error_on_every_call(make_client: MakeClient, service: InProcessService) -> None:
-    service.start().state.versions = Versions(service="9.0.0", contract=f"{MAJOR + 1}.0")
+    service.start().state.services.versions = Versions(service="9.0.0", contract=f"{MAJOR + 1}.0")
     client = make_client()
     for _ in range(2):
         with pytest.raises(IncompatibleService) as caught:
@@ -46,7 +46,7 @@ def test_another_major_version_is_an_error_on_every_call(make_client: MakeClient
 
 def test_a_newer_minor_version_warns_once(make_client: MakeClient, service: InProcessService) -> None:
     newer = f"{MAJOR}.{MINOR + 1}"
-    service.start().state.versions = Versions(contract=newer)
+    service.start().state.services.versions = Versions(contract=newer)
     client = make_client()
     with pytest.warns(ContractWarning, match=newer):
         assert client.robots()
@@ -66,7 +66,7 @@ def test_a_service_older_than_the_handshake_is_not_checked(make_client: MakeClie
 
 
 def test_the_async_client_checks_too(service: InProcessService) -> None:
-    service.start().state.versions = Versions(contract=f"{MAJOR + 1}.{MINOR}")
+    service.start().state.services.versions = Versions(contract=f"{MAJOR + 1}.{MINOR}")
 
     async def call() -> None:
         async with AsyncClient("http://testserver", transport=service.async_transport()) as client:

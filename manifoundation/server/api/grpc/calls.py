@@ -17,7 +17,7 @@ import contextvars
 import functools
 import time
 from collections.abc import AsyncIterator, Awaitable, Callable
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import grpc
 from prometheus_client import Counter, Histogram
@@ -27,7 +27,9 @@ from manifoundation.server.api.grpc.errors import abort, code_of, translate
 from manifoundation.server.api.metrics import LATENCY_BUCKETS, Metrics
 from manifoundation.server.api.security import Caller, RateLimiter, check_key, tenant_of
 from manifoundation.server.api.settings import Settings
-from manifoundation.server.api.versions import reported
+
+if TYPE_CHECKING:
+    from manifoundation.server.api.services import AppServices
 
 Reply = TypeVar("Reply")
 _initial_sent: contextvars.ContextVar[bool] = contextvars.ContextVar("grpc_initial_metadata_sent", default=False)
@@ -65,18 +67,18 @@ def peer_address(context: grpc.aio.ServicerContext) -> str:
     return host.strip("[]") or peer
 
 
-def authorize(state: Any, context: grpc.aio.ServicerContext) -> Caller:
+def authorize(services: AppServices, context: grpc.aio.ServicerContext) -> Caller:
     """The caller of this RPC, after its key (when keys are set) and its token bucket.
 
     Raises:
         Unauthorized: missing or unknown key.
         RateLimited: too many wrong keys from this address, or the caller's rate is over its limit.
     """
-    settings: Settings = state.settings
+    settings: Settings = services.settings
     identity = peer_address(context)
     caller = Caller()
     if settings.auth_enabled:
-        failures: RateLimiter = state.auth_failures
+        failures: RateLimiter = services.auth_failures
         if wait := failures.blocked(identity):
             raise RateLimited("too many requests with a wrong API key from this address", wait)
         metadata = {k.lower(): v for k, v in context.invocation_metadata() or ()}
@@ -88,22 +90,24 @@ def authorize(state: Any, context: grpc.aio.ServicerContext) -> Caller:
             raise
         identity = "key:" + key
         caller = Caller(tenant=tenant_of(key), admin=key in settings.admin_keys)
-    limiter: RateLimiter = state.limiter
+    limiter: RateLimiter = services.limiter
     limiter.take(identity)
     return caller
 
 
-async def send_initial_metadata(state: Any, context: grpc.aio.ServicerContext, *pairs: tuple[str, str]) -> None:
+async def send_initial_metadata(
+    services: AppServices, context: grpc.aio.ServicerContext, *pairs: tuple[str, str]
+) -> None:
     """Send the call's initial metadata now: the reported versions and ``pairs`` (once per call: an RPC that
     sends its own, e.g. a job id, calls this instead of ``context.send_initial_metadata``)."""
-    await context.send_initial_metadata((*reported(state).metadata(), *pairs))
+    await context.send_initial_metadata((*services.versions.metadata(), *pairs))
     _initial_sent.set(True)
 
 
-async def _announce(state: Any, context: grpc.aio.ServicerContext) -> None:
+async def _announce(services: AppServices, context: grpc.aio.ServicerContext) -> None:
     """The versions in the initial metadata, unless the RPC already sent its own."""
     if not _initial_sent.get():
-        await send_initial_metadata(state, context)
+        await send_initial_metadata(services, context)
 
 
 Unary = Callable[[Any, Any, grpc.aio.ServicerContext, Caller], Awaitable[Reply]]
@@ -118,15 +122,15 @@ def unary(handler: Unary[Reply]) -> Callable[[Any, Any, grpc.aio.ServicerContext
         started, code = time.perf_counter(), grpc.StatusCode.OK
         _initial_sent.set(False)
         try:
-            reply = await handler(self, request, context, authorize(self.state, context))
-            await _announce(self.state, context)
+            reply = await handler(self, request, context, authorize(self.services, context))
+            await _announce(self.services, context)
             return reply
         except asyncio.CancelledError:  # the client cancelled, went away or its deadline passed
             code = grpc.StatusCode.CANCELLED
             raise
         except Exception as exc:
             code = code_of(translate(exc)[0])
-            await abort(context, exc, reported(self.state).metadata())
+            await abort(context, exc, self.services.versions.metadata())
         finally:
             self.metrics.observe(handler.__name__, code, started)
 
@@ -141,16 +145,16 @@ def streaming(handler: Streaming[Reply]) -> Callable[[Any, Any, grpc.aio.Service
         started, code = time.perf_counter(), grpc.StatusCode.OK
         _initial_sent.set(False)
         try:
-            async for reply in handler(self, request, context, authorize(self.state, context)):
-                await _announce(self.state, context)
+            async for reply in handler(self, request, context, authorize(self.services, context)):
+                await _announce(self.services, context)
                 yield reply
-            await _announce(self.state, context)  # a stream that sent nothing
+            await _announce(self.services, context)  # a stream that sent nothing
         except asyncio.CancelledError:  # the client cancelled, went away or its deadline passed
             code = grpc.StatusCode.CANCELLED
             raise
         except Exception as exc:
             code = code_of(translate(exc)[0])
-            await abort(context, exc, reported(self.state).metadata())
+            await abort(context, exc, self.services.versions.metadata())
         finally:
             self.metrics.observe(handler.__name__, code, started)
 

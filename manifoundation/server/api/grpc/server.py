@@ -15,7 +15,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import grpc
 from grpc_health.v1 import health_pb2, health_pb2_grpc
@@ -26,6 +26,9 @@ from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
 from manifoundation.contract.protos.v1 import manifoundation_pb2_grpc as pb_grpc
 from manifoundation.server.api.grpc.servicer import ManiFoundationService
 from manifoundation.server.api.settings import Settings
+
+if TYPE_CHECKING:
+    from manifoundation.server.api.services import AppServices
 
 log = logging.getLogger("manifoundation.server.api.grpc")
 SERVICE_NAME = pb.DESCRIPTOR.services_by_name["ManiFoundation"].full_name
@@ -41,9 +44,9 @@ async def ready(queue: Any) -> bool:
 
 
 class GrpcServer:
-    """A started grpc.aio server over the app's ``state``; ``port`` is the one it bound."""
+    """A started grpc.aio server over the app's services; ``port`` is the one it bound."""
 
-    def __init__(self, state: Any, settings: Settings) -> None:
+    def __init__(self, services: AppServices, settings: Settings) -> None:
         limit = settings.grpc_max_message_bytes
         self.settings = settings
         self.server = grpc.aio.server(
@@ -53,9 +56,9 @@ class GrpcServer:
                 ("grpc.so_reuseport", 0),  # a port in use is an error, not a second server sharing it
             ],
         )
-        self.state = state
+        self.services = services
         self.health = HealthServicer()
-        pb_grpc.add_ManiFoundationServicer_to_server(ManiFoundationService(state), self.server)
+        pb_grpc.add_ManiFoundationServicer_to_server(ManiFoundationService(services), self.server)
         health_pb2_grpc.add_HealthServicer_to_server(self.health, self.server)
         names = (SERVICE_NAME, health_pb2.DESCRIPTOR.services_by_name["Health"].full_name, reflection.SERVICE_NAME)
         reflection.enable_server_reflection(names, self.server)
@@ -81,7 +84,7 @@ class GrpcServer:
         log.info("gRPC serving", extra={"address": self.address, "max_message_bytes": limit})
 
     async def _check(self) -> None:
-        await self.health.set(SERVICE_NAME, SERVING if await ready(self.state.queue) else NOT_SERVING)
+        await self.health.set(SERVICE_NAME, SERVING if await ready(self.services.queue) else NOT_SERVING)
 
     async def _watch_readiness(self) -> None:
         while True:
@@ -99,8 +102,8 @@ class GrpcServer:
         log.info("gRPC stopped")
 
 
-async def start_grpc(state: Any, settings: Settings) -> GrpcServer:
+async def start_grpc(services: AppServices, settings: Settings) -> GrpcServer:
     """Build and start the gRPC server of an app (its lifespan calls this after the queue started)."""
-    server = GrpcServer(state, settings)
+    server = GrpcServer(services, settings)
     await server.start()
     return server

@@ -15,7 +15,7 @@ import asyncio
 import logging
 import time
 from collections.abc import AsyncIterator
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import grpc
 
@@ -41,6 +41,9 @@ from manifoundation.server.api.grpc.submit import Submission
 from manifoundation.server.api.security import Caller
 from manifoundation.server.api.waiting import wait_for_job
 
+if TYPE_CHECKING:
+    from manifoundation.server.api.services import AppServices
+
 log = logging.getLogger("manifoundation.server.api.grpc")
 EXPIRY_NOTICE_S = 10.0  # a job past its deadline is expired by the queue within this
 DEADLINE_SLACK_S = 0.05  # a call that ends this close to its job's deadline let the deadline expire the job
@@ -58,12 +61,12 @@ def _call_deadline(context: grpc.aio.ServicerContext) -> float | None:
 
 
 class ManiFoundationService(pb_grpc.ManiFoundationServicer):
-    """The RPCs; ``state`` is the FastAPI app's state (queue, robots, settings, limiters, metrics)."""
+    """The RPCs; ``services``: the app's shared objects (queue, robots, settings, limiters, metrics)."""
 
-    def __init__(self, state: Any) -> None:
-        self.state = state
-        self.submission = Submission(state)
-        self.metrics = GrpcMetrics(state.metrics)
+    def __init__(self, services: AppServices) -> None:
+        self.services = services
+        self.submission = Submission(services)
+        self.metrics = GrpcMetrics(services.metrics)
 
     @unary
     async def Synthesize(self, request: pb.SynthesisRequest, context: Any, caller: Caller) -> pb.SynthesisResult:
@@ -72,14 +75,14 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
         call_deadline = _call_deadline(context)
         deadline = min(time.time() + max(0.0, timeout), call_deadline or float("inf"))
         _, job_id = await self.submission.one(request, caller, context, kind="sync", deadline=deadline)
-        await send_initial_metadata(self.state, context, ("x-job-id", job_id))
+        await send_initial_metadata(self.services, context, ("x-job-id", job_id))
         try:
             job = await self._wait(job_id, deadline)
         except asyncio.CancelledError:
             if call_deadline is None or time.time() < call_deadline - DEADLINE_SLACK_S:
-                await self.state.queue.cancel(job_id)  # the client cancelled or went away: stop the work
+                await self.submission.queue.cancel(job_id)  # the client cancelled or went away: stop the work
             raise
-        self.state.metrics.observe_job(job)
+        self.services.metrics.observe_job(job)
         if job.result is None:
             kind = _WITHOUT_ERROR.get(job.state, "DeadlineExceeded")
             raise JobFailed(job.error or ErrorBody(error=f"job ended {job.state.value}", type=kind), job_id)
@@ -89,7 +92,7 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
     async def _wait(self, job_id: str, deadline: float) -> JobPublic:
         """The job once terminal; its deadline bounds the wait (plus the queue's time to notice it)."""
         seconds = deadline + EXPIRY_NOTICE_S - time.time()
-        return await wait_for_job(self.state, self.state.queue, job_id, seconds, fetch_with="with GetJob")
+        return await wait_for_job(self.services, self.submission.queue, job_id, seconds, fetch_with="with GetJob")
 
     @unary
     async def SubmitJob(self, request: pb.SynthesisRequest, context: Any, caller: Caller) -> pb.JobCreated:
@@ -99,7 +102,7 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
     @unary
     async def GetJob(self, request: pb.GetJobRequest, context: Any, caller: Caller) -> pb.JobPublic:
         job = await self.submission.queue.get(request.id, with_result=not request.without_result, owner=caller.scope)
-        self.state.metrics.observe_job(job)
+        self.services.metrics.observe_job(job)
         return to_proto(job, pb.JobPublic)
 
     @unary
@@ -112,7 +115,7 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
         await queue.get(request.id, with_result=False, owner=caller.scope)  # NOT_FOUND before the stream
         ended = False
         try:
-            async for job in queue.events(request.id, interval=self.state.settings.sse_interval):
+            async for job in queue.events(request.id, interval=self.services.settings.sse_interval):
                 if job.state.terminal:
                     break
                 yield to_proto(job, pb.JobPublic)
@@ -131,7 +134,7 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
 
     @unary
     async def GetBatch(self, request: pb.GetBatchRequest, context: Any, caller: Caller) -> pb.BatchPublic:
-        queue, settings = self.submission.queue, self.state.settings
+        queue, settings = self.submission.queue, self.services.settings
         offset, limit = request.offset, request.limit if request.HasField("limit") else 100
         if offset < 0 or not 1 <= limit <= MAX_BATCH_SIZE:
             field = "offset" if offset < 0 else "limit"
@@ -155,7 +158,7 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
                     )
                     yield to_proto(item, pb.BatchItem)
             if waiting:
-                await asyncio.sleep(self.state.settings.sse_interval)
+                await asyncio.sleep(self.services.settings.sse_interval)
 
     @unary
     async def SubmitPlan(self, request: pb.PlanRequest, context: Any, caller: Caller) -> pb.JobCreated:
@@ -165,20 +168,20 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
 
     @unary
     async def ListRobots(self, request: pb.ListRobotsRequest, context: Any, caller: Caller) -> pb.RobotList:
-        robots = await self.state.robots.all(caller.tenant, fresh=True)
+        robots = await self.services.catalog().all(caller.tenant, fresh=True)
         return pb.RobotList(robots=[to_proto(r, pb.RobotPublic) for r in robots])
 
     @unary
     async def RegisterRobot(self, request: pb.RobotRegister, context: Any, caller: Caller) -> pb.RobotPublic:
         """The HTTP route's path (`RobotCatalog.register`): no built-in name, the key's count and bytes reserved
         atomically, validated by a worker."""
-        settings = self.state.settings
+        settings = self.services.settings
         if request.ByteSize() > settings.max_robot_bytes:
             raise PayloadTooLarge(
                 f"{request.ByteSize()} bytes, more than MANI_MAX_ROBOT_BYTES={settings.max_robot_bytes}"
             )
         body = await self.submission.validate(request, RobotRegister)
-        robot = await self.state.robots.register(
+        robot = await self.services.catalog().register(
             body, caller.tenant, limits=settings.robot_limits(), timeout=settings.robot_register_timeout
         )
         return to_proto(robot, pb.RobotPublic)

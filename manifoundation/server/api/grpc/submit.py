@@ -11,7 +11,7 @@ submitted over HTTP.
 from __future__ import annotations
 
 import asyncio
-from typing import Any, TypeVar
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import grpc
 from google.protobuf.message import Message
@@ -21,6 +21,9 @@ from manifoundation.contract.protos.convert import from_proto
 from manifoundation.server.api.middleware import request_id_from
 from manifoundation.server.api.security import Caller
 from manifoundation.server.api.submission import RequestT, Submitter, running_queue
+
+if TYPE_CHECKING:
+    from manifoundation.server.api.services import AppServices
 
 ModelT = TypeVar("ModelT", bound=WireModel)
 
@@ -32,26 +35,26 @@ def request_id(context: grpc.aio.ServicerContext) -> str:
 
 
 class Submission:
-    """The caller's way into the queue, over the app's own objects (``state``: the FastAPI app's state)."""
+    """The caller's way into the queue, over the app's own objects (``services``: the app's shared objects)."""
 
-    def __init__(self, state: Any) -> None:
-        self.state = state
+    def __init__(self, services: AppServices) -> None:
+        self.services = services
 
     @property
     def queue(self) -> Any:
         """The running queue (UNAVAILABLE before the lifespan started it or while shutting down)."""
-        return running_queue(self.state)
+        return running_queue(self.services)
 
     async def validate(self, message: Message, model: type[ModelT]) -> ModelT:
         """The contract's validation of ``message``; a message larger than ``parse_offload_bytes`` off the loop."""
-        if message.ByteSize() > self.state.settings.parse_offload_bytes:
+        if message.ByteSize() > self.services.settings.parse_offload_bytes:
             return await asyncio.to_thread(from_proto, message, model)
         return from_proto(message, model)
 
     def submitter(self, caller: Caller, context: grpc.aio.ServicerContext) -> Submitter:
         """The HTTP routes' `Submitter`, over this call's caller and request id."""
-        state = self.state
-        return Submitter(self.queue, state.robots, state.metrics, state.settings, state.scenes,
+        s = self.services
+        return Submitter(self.queue, s.catalog(), s.metrics, s.settings, s.scenes,
                          request_id(context), caller, transport="grpc")  # fmt: skip
 
     async def one(

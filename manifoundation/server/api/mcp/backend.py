@@ -12,7 +12,7 @@ and validation has one (the contract's, then the service's own checks):
 
 from __future__ import annotations
 
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
 from manifoundation.contract import BatchPublic, ErrorBody, JobPublic, PlanRequest, RobotPublic, SynthesisRequest
 from manifoundation.sdk import AsyncBatch, AsyncClient, ManiError, RequestError
@@ -22,6 +22,9 @@ from manifoundation.server.api.errors import from_exception
 from manifoundation.server.api.security import Caller
 from manifoundation.server.api.submission import Submitter, running_queue
 from manifoundation.server.api.waiting import wait_for_job
+
+if TYPE_CHECKING:
+    from manifoundation.server.api.services import AppServices
 
 
 class Backend(Protocol):
@@ -66,22 +69,22 @@ def error_body(exc: Exception) -> ErrorBody:
 
 
 class ServiceBackend:
-    """In the API process: the routes' objects on ``state`` (the FastAPI app's), for ``caller``."""
+    """In the API process: the routes' objects (the app's `AppServices`), for ``caller``."""
 
-    def __init__(self, state: Any, caller: Caller, request_id: str, base_url: str | None = None) -> None:
-        self.state, self.caller, self.request_id, self.base_url = state, caller, request_id, base_url
+    def __init__(self, services: AppServices, caller: Caller, request_id: str, base_url: str | None = None) -> None:
+        self.services, self.caller, self.request_id, self.base_url = services, caller, request_id, base_url
 
     @property
     def queue(self) -> Any:
-        return running_queue(self.state)
+        return running_queue(self.services)
 
     def _submitter(self) -> Submitter:
-        s = self.state
-        return Submitter(self.queue, s.robots, s.metrics, s.settings, s.scenes, self.request_id, self.caller,
+        s = self.services
+        return Submitter(self.queue, s.catalog(), s.metrics, s.settings, s.scenes, self.request_id, self.caller,
                          transport="mcp")  # fmt: skip
 
     async def robots(self) -> list[RobotPublic]:
-        robots: list[RobotPublic] = await self.state.robots.all(self.caller.tenant, fresh=True)
+        robots: list[RobotPublic] = await self.services.catalog().all(self.caller.tenant, fresh=True)
         return robots
 
     async def submit(self, request: SynthesisRequest) -> str:
@@ -105,8 +108,8 @@ class ServiceBackend:
         queue, owner = self.queue, self.caller.scope
         job: JobPublic = await queue.get(job_id, owner=owner)  # NotFound for another tenant's job
         if not job.state.terminal and wait > 0:
-            job = await wait_for_job(self.state, queue, job_id, wait, fetch_with="with get_job")
-        self.state.metrics.observe_job(job)
+            job = await wait_for_job(self.services, queue, job_id, wait, fetch_with="with get_job")
+        self.services.metrics.observe_job(job)
         return job
 
     async def batch(self, batch_id: str, offset: int, limit: int) -> BatchPublic:

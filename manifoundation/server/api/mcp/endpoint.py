@@ -1,8 +1,5 @@
-"""``/mcp`` on the service: authorize each request as ``/v1`` does, then hand it to the MCP SDK's app, which is
-started on first use (importing the SDK costs about a second: `mani serve` does not pay it until an agent calls).
-
-The SDK's app and its session manager live in one task (`McpHost._serve`: an anyio task group must be left by the
-task that entered it) from the first ``/mcp`` request to the app's shutdown (`McpHost.close`, from the lifespan).
+"""``/mcp`` on the service: authorize each request as ``/v1`` does, then hand it to the MCP SDK's app (started on
+first use: `manifoundation.server.api.mcp.host`).
 
 A ``GET /mcp`` is a session's event stream, which the SDK keeps open for as long as the client stays: each key may
 hold ``MANI_MCP_MAX_STREAMS`` at once (429 beyond), and each is ended after ``MANI_MCP_STREAM_MAX_S`` by telling
@@ -18,74 +15,27 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import importlib
 import time
 from collections import Counter
-from typing import Any
 
 from starlette.requests import Request
-from starlette.types import ASGIApp, Message, Receive, Scope, Send
+from starlette.types import Message, Receive, Scope, Send
 
 from manifoundation.server.api.deps import authorize
 from manifoundation.server.api.encoding import respond
 from manifoundation.server.api.errors import PayloadTooLarge, RateLimited, Unavailable, from_exception
+from manifoundation.server.api.services import AppServices
 
 PATH = "/mcp"
 CALLER_KEY = "mani_caller"
 """Where `McpEndpoint` leaves the request's `Caller` in the ASGI scope's state for the tools."""
 
 
-class McpHost:
-    """The MCP SDK's ASGI app, started on first use and stopped with the service."""
-
-    def __init__(self, state: Any) -> None:
-        self.state = state
-        self._task: asyncio.Task[None] | None = None
-        self._ready = asyncio.Event()
-        self._stop = asyncio.Event()
-        self._app: ASGIApp | None = None
-        self._failure: BaseException | None = None
-
-    async def app(self) -> ASGIApp:
-        """The running app (started now if it is not yet)."""
-        if getattr(self.state, "shutting_down", False) or self._stop.is_set():
-            raise Unavailable("the service is shutting down")
-        if self._task is None:
-            self._task = asyncio.create_task(self._serve(), name="mcp-streamable-http")
-        await self._ready.wait()
-        if self._app is None:
-            raise Unavailable(f"the MCP server did not start: {self._failure}")
-        return self._app
-
-    async def _serve(self) -> None:
-        try:
-            http = await asyncio.to_thread(
-                importlib.import_module, "manifoundation.server.api.mcp.http"
-            )  # off the event loop
-            server, app = http.build_app(self.state)
-            async with server.session_manager.run():
-                self._app = app
-                self._ready.set()
-                await self._stop.wait()
-        except Exception as exc:  # answered as 503 to every caller, never a crash of the service
-            self._failure = exc
-        finally:
-            self._app = None
-            self._ready.set()
-
-    async def close(self) -> None:
-        """Stop the app (the lifespan calls this at shutdown)."""
-        self._stop.set()
-        if self._task is not None:
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
-
-
 class McpEndpoint:
     """The ASGI app behind the ``/mcp`` route: the same keys and limits as ``/v1``, then the SDK's app."""
 
-    def __init__(self, state: Any) -> None:
-        self.state = state
+    def __init__(self, services: AppServices) -> None:
+        self.services = services
         self.streams: Counter[str | None] = Counter()
         """Open event streams per tenant (None: the service runs without keys)."""
 
@@ -94,11 +44,13 @@ class McpEndpoint:
         stream = scope.get("method") == "GET"
         async with contextlib.AsyncExitStack() as held:
             try:
-                caller = await authorize(request, self.state.settings)
+                caller = await authorize(request, self.services.settings)
                 self._check(caller.tenant, stream, _declared_length(request))
-                if not stream and self.state.bodies.large(_declared_length(request)):
-                    await held.enter_async_context(self.state.bodies.slot())  # 503 after MANI_BODY_TIMEOUT
-                app = await self.state.mcp.app()
+                if not stream and self.services.bodies.large(_declared_length(request)):
+                    await held.enter_async_context(self.services.bodies.slot())  # 503 after MANI_BODY_TIMEOUT
+                if self.services.mcp is None:
+                    raise Unavailable("the service is not started")
+                app = await self.services.mcp.app()
             except Exception as exc:
                 error = from_exception(exc)
                 await respond(request, error.body(), status=error.status, headers=error.headers)(scope, receive, send)
@@ -109,7 +61,7 @@ class McpEndpoint:
                 return
             self.streams[caller.tenant] += 1
             try:
-                ending = _EndingStream(receive, send, self.state.settings.mcp_stream_max_s)
+                ending = _EndingStream(receive, send, self.services.settings.mcp_stream_max_s)
                 await app(scope, ending.receive, ending.send)
             finally:
                 self.streams[caller.tenant] -= 1
@@ -118,7 +70,7 @@ class McpEndpoint:
 
     def _check(self, tenant: str | None, stream: bool, declared: int | None) -> None:
         """Refuse a body declared over the MCP limit (413) and an event stream over the key's count (429)."""
-        settings = self.state.settings
+        settings = self.services.settings
         if declared is not None and declared > settings.mcp_max_body_bytes:
             raise PayloadTooLarge(
                 f"MCP bodies are limited to {settings.mcp_max_body_bytes} bytes (MANI_MCP_MAX_BODY_BYTES); send "

@@ -10,15 +10,15 @@ from manifoundation.contract import HealthPublic, ReadyPublic
 from manifoundation.server.api.deps import Authorized, MetricsDep, QueueDep
 from manifoundation.server.api.negotiation import respond
 from manifoundation.server.api.responses import errors
-from manifoundation.server.api.versions import reported
+from manifoundation.server.api.services import services_of
 
 router = APIRouter(tags=["health"], dependencies=[Authorized])
 
 
 @router.get("/healthz", summary="Liveness", responses={200: {"model": HealthPublic}})
 async def healthz(request: Request) -> Response:
-    queue = getattr(request.app.state, "queue", None)
-    versions = reported(request.app.state)
+    services = services_of(request)
+    queue, versions = services.queue, services.versions
     backend = getattr(queue, "backend", "none")
     body = HealthPublic(backend=backend, version=versions.service, contract_version=versions.contract)
     return respond(request, body)

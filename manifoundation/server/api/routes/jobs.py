@@ -13,6 +13,7 @@ from manifoundation.contract import JobList, JobPublic
 from manifoundation.server.api.deps import Authorized, CallerDep, MetricsDep, QueueDep, SettingsDep
 from manifoundation.server.api.negotiation import respond
 from manifoundation.server.api.responses import READ_ERRORS
+from manifoundation.server.api.services import services_of
 
 router = APIRouter(prefix="/v1/jobs", tags=["jobs"], dependencies=[Authorized])
 
@@ -77,7 +78,7 @@ async def _stream(request: Request, queue: QueueDep, job_id: str, interval: floa
     pending: asyncio.Task[JobPublic] | None = None
     quiet_since = time.monotonic()
     try:
-        while not getattr(request.app.state, "shutting_down", False):
+        while not services_of(request).shutting_down:
             pending = pending or asyncio.ensure_future(events.__anext__())
             done, _ = await asyncio.wait({pending}, timeout=1.0)  # wake up each second to notice a shutdown
             if not done:

@@ -21,6 +21,7 @@ from manifoundation.server.api.deps import Authorized, CallerDep, HistoryDep, Qu
 from manifoundation.server.api.errors import NotFound
 from manifoundation.server.api.negotiation import respond
 from manifoundation.server.api.responses import READ_ERRORS
+from manifoundation.server.api.services import services_of
 
 STATIC = Path(__file__).resolve().parent.parent / "static"
 SWAGGER_FILES = frozenset({"swagger-ui-bundle.js", "swagger-ui.css", "favicon-32x32.png"})
@@ -107,4 +108,4 @@ async def dashboard_data(request: Request, history: HistoryDep, caller: CallerDe
 )
 async def scene(request: Request, job_id: str, queue: QueueDep, caller: CallerDep) -> Response:
     job = await queue.get(job_id, owner=caller.scope)
-    return respond(request, request.app.state.scenes.view(job))
+    return respond(request, services_of(request).scenes.view(job))

@@ -11,6 +11,7 @@ from manifoundation.contract import ErrorBody, ErrorType, JobCreated, JobPublic,
 from manifoundation.server.api.deps import Authorized
 from manifoundation.server.api.negotiation import body_openapi, respond
 from manifoundation.server.api.responses import ERRORS
+from manifoundation.server.api.services import services_of
 from manifoundation.server.api.submission import Admitted, SubmitterDep, read_and_submit
 from manifoundation.server.api.waiting import wait_for_job
 
@@ -48,7 +49,7 @@ async def synthesize(request: Request, submitter: SubmitterDep) -> Response:
     body, job_id = await read_and_submit(request, submitter, "sync", deadline_from_timeout=True)
     queue, metrics = submitter.queue, submitter.metrics
     wait = min(body.options.timeout, submitter.settings.sync_wait_max)
-    job = await wait_for_job(request.app.state, queue, job_id, wait, fetch_with="from another replica")
+    job = await wait_for_job(services_of(request), queue, job_id, wait, fetch_with="from another replica")
     if not job.state.terminal:
         return job_created(request, job_id, job)
     metrics.observe_job(job)
