@@ -20,6 +20,7 @@ import json
 import os
 import time
 from collections import Counter
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -231,8 +232,18 @@ def read_manifest(out_dir: str | Path) -> dict[str, Any]:
     return {"config": None, "shards": {}}
 
 
-def generate(cfg: DataConfig, out_dir: str | Path, workers: int = 1, progress: bool = True) -> dict[str, Any]:
-    """Generate (or resume) a data set in ``out_dir``; returns the manifest.
+ShardJob = tuple[DataConfig, int, str]
+"""(configuration, shard index, output directory): one shard to generate."""
+ShardRunner = Callable[[list[ShardJob]], Iterator[ShardResult]]
+"""Runs shard jobs and yields each finished shard's result once its files are in the output directory (any order;
+a shard it could not finish is left out). The default runs them here or in a local pool (`runs.run_jobs`);
+``mani-lab data generate --ray`` passes one that runs them on a Ray cluster (`research.offline.shards`)."""
+
+
+def generate(cfg: DataConfig, out_dir: str | Path, workers: int = 1, progress: bool = True,
+             runner: ShardRunner | None = None) -> dict[str, Any]:  # fmt: skip
+    """Generate (or resume) a data set in ``out_dir``; returns the manifest. Shards that ``runner`` left out are
+    listed in the manifest's ``lost_shards`` (a rerun generates them).
 
     Raises:
         ValueError: ``out_dir`` holds a data set made with a different configuration.
@@ -269,10 +280,12 @@ def generate(cfg: DataConfig, out_dir: str | Path, workers: int = 1, progress: b
         bar.update(1)
         bar.set_postfix(examples=manifest["totals"]["examples"], ex_per_s=f"{rate:.2f}")
 
-    for r in run_jobs(_run_shard_star, jobs, workers):
+    for r in (runner or (lambda js: run_jobs(_run_shard_star, js, workers)))(jobs):
         record(r)
     bar.close()
     manifest["totals"] = _totals(manifest)
+    manifest["lost_shards"] = [k for k in todo if str(k) not in manifest["shards"]]
+    write_manifest(out / MANIFEST, manifest)
     return manifest
 
 
