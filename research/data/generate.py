@@ -219,7 +219,11 @@ def _pad(a: np.ndarray, n: int) -> np.ndarray:
     return out
 
 
-def _run_shard_star(args: tuple[DataConfig, int, str]) -> ShardResult:
+ShardJob = tuple[DataConfig, int, str]  # (configuration, shard index, output directory)
+ShardRunner = Callable[[list[ShardJob]], Iterator[ShardResult]]  # shards made, files in place; default: run_jobs
+
+
+def _run_shard_star(args: ShardJob) -> ShardResult:
     return run_shard(*args)
 
 
@@ -232,18 +236,9 @@ def read_manifest(out_dir: str | Path) -> dict[str, Any]:
     return {"config": None, "shards": {}}
 
 
-ShardJob = tuple[DataConfig, int, str]
-"""(configuration, shard index, output directory): one shard to generate."""
-ShardRunner = Callable[[list[ShardJob]], Iterator[ShardResult]]
-"""Runs shard jobs and yields each finished shard's result once its files are in the output directory (any order;
-a shard it could not finish is left out). The default runs them here or in a local pool (`runs.run_jobs`);
-``mani-lab data generate --ray`` passes one that runs them on a Ray cluster (`research.offline.shards`)."""
-
-
 def generate(cfg: DataConfig, out_dir: str | Path, workers: int = 1, progress: bool = True,
              runner: ShardRunner | None = None) -> dict[str, Any]:  # fmt: skip
-    """Generate (or resume) a data set in ``out_dir``; returns the manifest. Shards that ``runner`` left out are
-    listed in the manifest's ``lost_shards`` (a rerun generates them).
+    """Generate (or resume) a data set in ``out_dir`` by ``runner``; returns the manifest (+ ``lost_shards``).
 
     Raises:
         ValueError: ``out_dir`` holds a data set made with a different configuration.
@@ -267,7 +262,7 @@ def generate(cfg: DataConfig, out_dir: str | Path, workers: int = 1, progress: b
     t0 = time.perf_counter()
     done_examples = 0
     bar = tqdm(total=n_shards, initial=n_shards - len(todo), unit="shard", disable=not progress, smoothing=0.1)
-    jobs = [(cfg, k, str(out)) for k in todo]
+    jobs: list[ShardJob] = [(cfg, k, str(out)) for k in todo]
 
     def record(r: ShardResult) -> None:
         nonlocal done_examples
