@@ -5,15 +5,22 @@ travel through a local pool and through Ray Data (`manifoundation.server.offline
 `WorkerFactory` is a picklable zero-argument callable that loads the heavy state (a pipeline, a model, hands)
 once and returns the `BatchFn` applied to every batch of rows that process gets.
 
-Crashes: a worker process that dies (a segfault, the OOM killer) breaks a local pool; the pool is started again
-and the rows that were in flight are retried one by one, up to ``max_attempts`` times each. Rows still without an
-answer after that are *not* yielded: the caller records each missing row (see `manifoundation.server.offline.batch`).
+Crashes: a worker process that dies (a segfault, the OOM killer) breaks a local pool. The rows no worker had begun
+go back to a new pool; the rows that were running are retried one at a time in a pool of one process, so a crash
+names its row, up to ``max_attempts`` crashes each. A row given up is *not* yielded: the caller records each
+missing row (see `manifoundation.server.offline.batch`).
 """
 
 from __future__ import annotations
 
+import multiprocessing as mp
+import os
+import tempfile
 from collections import Counter
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator, Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
 from typing import Protocol
 
 Value = str | bytes | int | float
@@ -31,6 +38,7 @@ WorkerFactory = Callable[[], BatchFn]
 """Loads a worker once per process (or Ray actor); must be picklable (a module-level class instance)."""
 
 _WORKER: BatchFn | None = None
+_MARK: Path | None = None  # where this pool process marks the rows it is running
 
 
 def chunks(rows: list[Row], size: int) -> list[list[Row]]:
@@ -53,32 +61,61 @@ def run_local(rows: list[Row], factory: WorkerFactory, *, workers: int = 1, batc
 
 def _pooled(rows: list[Row], factory: WorkerFactory, workers: int, batch_size: int,
             max_attempts: int) -> Iterator[list[Row]]:  # fmt: skip
-    import multiprocessing as mp
-    from concurrent.futures import Future, ProcessPoolExecutor, as_completed
-    from concurrent.futures.process import BrokenProcessPool
+    pending = rows
+    while pending:
+        lost, started = yield from _until_broken(pending, factory, workers, batch_size)
+        pending = [row for row in lost if str(row["id"]) not in started]  # never began: back to the pool
+        yield from _isolated([row for row in lost if str(row["id"]) in started], factory, max_attempts)
 
-    attempts: Counter[str] = Counter()
-    todo = chunks(rows, batch_size)
-    while todo:
-        lost: list[Row] = []
-        pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"), initializer=_load, initargs=(factory,))
+
+def _until_broken(rows: list[Row], factory: WorkerFactory, workers: int,
+                  batch_size: int) -> Generator[list[Row], None, tuple[list[Row], set[str]]]:  # fmt: skip
+    """Answer ``rows`` in a pool until it breaks; returns the rows left without an answer and the ids of the rows
+    a worker had begun (each worker marks its batch in a file of its own before running it)."""
+    with tempfile.TemporaryDirectory(prefix="mani-pool-") as marks:
+        pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("spawn"), initializer=_load,
+                                   initargs=(factory, marks))  # fmt: skip
         with pool:
-            futures: dict[Future[list[Row]], list[Row]] = {pool.submit(_answer, batch): batch for batch in todo}
+            futures = {pool.submit(_answer, batch): batch for batch in chunks(rows, batch_size)}
             try:
                 for future in as_completed(futures):
                     yield future.result()
                     del futures[future]
             except BrokenProcessPool:
-                lost = [row for batch in futures.values() for row in batch]
-        attempts.update(str(row["id"]) for row in lost)
-        todo = [[row] for row in lost if attempts[str(row["id"])] < max_attempts]  # one by one: find the culprit
+                for future in [f for f in futures if f.done() and f.exception() is None]:
+                    yield future.result()  # answered before the break
+                    del futures[future]
+        started = {line for mark in Path(marks).iterdir() for line in mark.read_text().splitlines()}
+    return [row for batch in futures.values() for row in batch], started
 
 
-def _load(factory: WorkerFactory) -> None:
-    global _WORKER
+def _isolated(suspects: list[Row], factory: WorkerFactory, max_attempts: int) -> Iterator[list[Row]]:
+    """Rows that were running when a worker died, one at a time in a pool of one: a crash names its row exactly.
+    A row given up (its ``max_attempts``-th crash, the first counted) is left out."""
+    crashes: Counter[str] = Counter({str(row["id"]): 1 for row in suspects})
+    queue = list(suspects)
+    while queue:
+        with ProcessPoolExecutor(1, mp_context=mp.get_context("spawn"), initializer=_load,
+                                 initargs=(factory, None)) as pool:  # fmt: skip
+            try:
+                while queue:
+                    answer = pool.submit(_answer, queue[:1]).result()
+                    queue.pop(0)
+                    yield answer
+            except BrokenProcessPool:
+                crashes[str(queue[0]["id"])] += 1
+                if crashes[str(queue[0]["id"])] >= max_attempts:
+                    queue.pop(0)
+
+
+def _load(factory: WorkerFactory, marks: str | None) -> None:
+    global _WORKER, _MARK
     _WORKER = factory()
+    _MARK = Path(marks) / str(os.getpid()) if marks else None
 
 
 def _answer(rows: list[Row]) -> list[Row]:
     assert _WORKER is not None, "the pool's initializer did not run"
+    if _MARK is not None:
+        _MARK.write_text("\n".join(str(row["id"]) for row in rows))
     return _WORKER(rows)
