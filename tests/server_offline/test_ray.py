@@ -94,3 +94,13 @@ def test_real_requests_give_the_local_answers_on_ray(cluster: Cluster, tmp_path:
                        progress=False)  # fmt: skip
     assert local.counts == on_ray.counts == {"succeeded": 4}
     assert results(tmp_path / "ray") == results(tmp_path / "local")
+
+
+def test_a_request_that_kills_its_actor_every_time_fails_alone(cluster: Cluster, tmp_path: Path) -> None:
+    requests = tmp_path / "requests"
+    write_requests(requests, 12)
+    crashing = SynthesisWorker(STAGED, {"crash_seed": 5})
+    summary = run_batch(requests, tmp_path / "out", crashing, ray_address=cluster.address, workers=2, batch_size=4,
+                        progress=False)  # fmt: skip
+    assert summary.counts == {"succeeded": 11, "WorkerLost": 1}
+    assert results(tmp_path / "out")["r0005"]["type"] == "WorkerLost"

@@ -1,9 +1,10 @@
 """The same rows through a Ray Data actor pool: one actor per worker, each loading its `WorkerFactory` once.
 
-``ray.data.from_items(rows)`` → ``map_batches(_Actor, concurrency=workers)`` → streamed back to the caller with
-``iter_batches`` (backpressure: the driver writes answers as they come, the object store holds only what is in
-flight). Ray Data restarts a dead actor and retries its batch (``max_task_retries`` times, then the block is given
-up); a block given up is left out of the answers like a local pool's lost rows, so the caller records what is
+``ray.data.from_items(rows)`` (a block a batch) → ``map_batches(_Actor, compute=ActorPoolStrategy(size=workers))``
+→ streamed back to the caller with ``iter_batches`` (backpressure: the driver writes answers as they come, the
+object store holds only what is in flight). Ray Data restarts a dead actor and retries its batch
+(`MAX_TASK_RETRIES` times, then the block is given up); the rows of a block given up run again one per block, and
+a row given up again is left out of the answers like a local pool's lost rows, so the caller records what is
 missing. Ray is imported here only inside the functions: it is an optional extra.
 """
 
@@ -65,7 +66,8 @@ def connect(address: str) -> bool:
 def run_ray(rows: list[Row], factory: WorkerFactory, *, address: str, workers: int = 1, batch_size: int = 8,
             cpus_per_worker: float = 1.0) -> Iterator[list[Row]]:  # fmt: skip
     """Answer ``rows`` on the Ray cluster at ``address`` (see `connect`) with ``workers`` actors, batch by batch as
-    they finish (any order); rows of a batch given up after `MAX_TASK_RETRIES` are left out."""
+    they finish (any order). The rows of a batch given up after `MAX_TASK_RETRIES` run again one per batch, so
+    only a row that kills its actor every time is left out."""
     import ray
 
     if not rows:
@@ -75,16 +77,30 @@ def run_ray(rows: list[Row], factory: WorkerFactory, *, address: str, workers: i
         context = ray.data.DataContext.get_current()
         context.enable_progress_bars = False  # the caller shows one bar of items
         context.max_errored_blocks = -1  # a batch given up must not stop the others; its rows count as missing
-        dataset = ray.data.from_items(rows, override_num_blocks=math.ceil(len(rows) / max(1, batch_size)))
-        with warnings.catch_warnings():  # Ray 2.60 names no parameter for max_task_retries but these remote args
-            warnings.filterwarnings("ignore", message=".*ray_remote_args.* is deprecated")
-            answered = dataset.map_batches(
-                _Actor, fn_constructor_args=(factory,), batch_size=batch_size, batch_format="numpy",
-                compute=ray.data.ActorPoolStrategy(size=max(1, workers)), num_cpus=cpus_per_worker,
-                max_restarts=-1, max_task_retries=MAX_TASK_RETRIES,
-            )  # fmt: skip
-        for batch in answered.iter_batches(batch_size=None, batch_format="numpy"):
-            yield rows_of(batch)
+        answered: set[str] = set()
+        for batch in _pass(rows, factory, workers, batch_size, cpus_per_worker):
+            answered.update(str(row["id"]) for row in batch)
+            yield batch
+        lost = [row for row in rows if str(row["id"]) not in answered]
+        if lost and batch_size > 1:
+            yield from _pass(lost, factory, workers, 1, cpus_per_worker)
     finally:
         if started:
             ray.shutdown()
+
+
+def _pass(rows: list[Row], factory: WorkerFactory, workers: int, batch_size: int,
+          cpus_per_worker: float) -> Iterator[list[Row]]:  # fmt: skip
+    """One Ray Data pipeline over ``rows``: a block a batch, an actor pool of ``workers``, streamed back."""
+    import ray
+
+    dataset = ray.data.from_items(rows, override_num_blocks=math.ceil(len(rows) / max(1, batch_size)))
+    with warnings.catch_warnings():  # Ray 2.60 names no parameter for max_task_retries but these remote args
+        warnings.filterwarnings("ignore", message=".*ray_remote_args.* is deprecated")
+        answered = dataset.map_batches(
+            _Actor, fn_constructor_args=(factory,), batch_size=batch_size, batch_format="numpy",
+            compute=ray.data.ActorPoolStrategy(size=max(1, min(workers, len(rows)))), num_cpus=cpus_per_worker,
+            max_restarts=-1, max_task_retries=MAX_TASK_RETRIES,
+        )  # fmt: skip
+    for batch in answered.iter_batches(batch_size=None, batch_format="numpy"):
+        yield rows_of(batch)
