@@ -26,9 +26,12 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from manifoundation.server.offline.synthesis import SynthesisWorker
 
 STAGED = "research.staged_pipeline:StagedPipeline"
 MODELS = "manifoundation.server.worker.models_pipeline:ModelsPipeline"
@@ -89,7 +92,8 @@ def main(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run(name: str, requests: Path, worker: Any, workers: int, address: str | None, batch_size: int) -> Row:
+def _run(name: str, requests: Path, worker: SynthesisWorker, workers: int, address: str | None,
+         batch_size: int) -> Row:  # fmt: skip
     from manifoundation.server.offline.batch import run_batch
 
     with tempfile.TemporaryDirectory(prefix="mani-bench-out-") as out:

@@ -12,6 +12,7 @@ import pytest
 from research.data.generate import DataConfig, generate
 from research.offline.shards import ray_runner
 from tests.ray_cluster import two_nodes
+from tests.research import tiny_data
 
 pytestmark = pytest.mark.slow
 pytest.importorskip("ray")
@@ -48,5 +49,12 @@ def test_shards_made_on_ray_equal_the_local_ones_and_a_rerun_makes_only_the_miss
         runner = ray_runner(cluster.address, 2)
         rerun = generate(CFG, tmp_path / "ray", progress=False,
                          runner=lambda jobs: (seen.extend(k for _, k, _ in jobs), runner(jobs))[1])  # fmt: skip
+        cli = tiny_data.cli().parse_args([
+            "data", "generate", "--out", str(tmp_path / "cli"), "--objects", "2", "--hands", "panda_gripper",
+            "--held-out-hands", "", "--palms", "4", "--grasps-per-job", "1", "--examples-per-grasp", "1",
+            "--ray", cluster.address, "--workers", "2", "--no-progress",
+        ])  # fmt: skip
+        assert cli.func(cli) == 0
     assert sorted(seen) == [3, 7] and rerun["totals"]["shards"] == 10
     assert _arrays(tmp_path / "ray").keys() == a.keys()
+    assert list(json.loads((tmp_path / "cli" / "manifest.json").read_text())["shards"]) == ["0"]
