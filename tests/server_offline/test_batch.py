@@ -30,7 +30,7 @@ def test_every_request_is_answered_or_its_error_recorded_and_a_rerun_skips_them(
     (requests / "invalid.json").write_text(invalid)
     with (requests / "many.jsonl").open("a") as f:
         f.write("[1, 2\n")
-    argv = [str(requests), "--out", str(out), "--pipeline", STAGED, "--no-progress"]
+    argv = [str(requests), "--out", str(out), "--pipeline", STAGED, "--window", "4", "--no-progress"]
     assert main(argv) == 1  # some requests failed
     got = results(out)
     assert set(got) == {*ids, "broken", "invalid", "many-000004"}

@@ -34,6 +34,8 @@ def register(subparsers: Any) -> None:
                    help="run on Ray Data at ADDRESS (auto, HOST:6379, ray://HOST:10001; local: a cluster of its own)")
     p.add_argument("--workers", type=int, default=1, help="worker processes, or Ray actors with --ray (default 1)")
     p.add_argument("--batch-size", type=int, default=8, help="requests per micro-batch of a worker (default 8)")
+    p.add_argument("--window", type=int, default=10_000,
+                   help="requests read into memory at a time (default 10000; each window restarts the workers)")
     p.add_argument("--pipeline", default=MODELS, help="the worker's pipeline, module:attr (default: the models)")
     p.add_argument("--pipeline-options", default="{}", help="the pipeline's keyword options, as JSON")
     p.add_argument("--weights-dir", default=None, help="network weights directory (default: the pipeline's)")
@@ -56,7 +58,7 @@ def run(args: argparse.Namespace) -> int:
             raise ValueError("not a JSON object")
         worker = SynthesisWorker(args.pipeline, options, args.weights_dir)
         summary = run_batch(args.requests, args.out, worker, ray_address=args.ray, workers=args.workers,
-                            batch_size=args.batch_size, retry_failed=args.retry_failed,
+                            batch_size=args.batch_size, retry_failed=args.retry_failed, window=args.window,
                             progress=not args.no_progress)  # fmt: skip
     except ValueError as exc:
         print(f"error: {exc}")

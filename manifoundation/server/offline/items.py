@@ -27,38 +27,58 @@ class Item:
     error: ErrorBody | None = None
 
 
-def read_items(directory: Path) -> list[Item]:
-    """Every request under ``directory`` (not recursive), in file-name order.
+@dataclass(frozen=True)
+class ItemRef:
+    """Where an item's request lies: a whole file, or ``length`` bytes at ``offset`` (a JSONL line). A batch holds
+    these for all its requests and the requests themselves for one window at a time."""
+
+    id: str
+    path: Path
+    offset: int = 0
+    length: int = -1  # -1: the whole file
+    where: str = ""  # how messages name it (``many.jsonl line 7``)
+
+
+def list_items(directory: Path) -> list[ItemRef]:
+    """Every request under ``directory`` (not recursive), in file-name order, unread.
 
     Raises:
         ValueError: two files give the same item id (``a.json`` and ``a.msgpack``).
     """
-    items: list[Item] = []
+    refs: list[ItemRef] = []
     for path in sorted(p for p in directory.iterdir() if p.is_file() and p.suffix in SUFFIXES):
-        items.extend(_jsonl(path) if path.suffix == ".jsonl" else [_one(path)])
+        refs.extend(_lines(path) if path.suffix == ".jsonl" else [ItemRef(path.stem, path, where=path.name)])
     seen: set[str] = set()
-    for item in items:
-        if item.id in seen:
-            raise ValueError(f"{directory}: two requests are named {item.id!r}; rename one of their files")
-        seen.add(item.id)
-    return items
+    for ref in refs:
+        if ref.id in seen:
+            raise ValueError(f"{directory}: two requests are named {ref.id!r}; rename one of their files")
+        seen.add(ref.id)
+    return refs
 
 
-def _one(path: Path) -> Item:
-    data = path.read_bytes()
-    if path.suffix == ".msgpack":
-        return Item(path.stem, request=data)
-    return _decoded(path.stem, data, path.name)
-
-
-def _jsonl(path: Path) -> list[Item]:
-    lines = path.read_bytes().splitlines()
-    return [_decoded(f"{path.stem}-{n:06d}", line, f"{path.name} line {n}")
-            for n, line in enumerate(lines, start=1) if line.strip()]  # fmt: skip
-
-
-def _decoded(item_id: str, data: bytes, where: str) -> Item:
+def load(ref: ItemRef) -> Item:
+    """The item ``ref`` points at, its request as msgpack bytes (or its ``BadRequest`` error)."""
+    with ref.path.open("rb") as f:
+        f.seek(ref.offset)
+        data = f.read(ref.length)
+    if ref.path.suffix == ".msgpack":
+        return Item(ref.id, request=data)
     try:
-        return Item(item_id, request=pack(decode_body(data, "application/json")))
+        return Item(ref.id, request=pack(decode_body(data, "application/json")))
     except (DecodeError, TypeError, ValueError) as exc:
-        return Item(item_id, error=ErrorBody.of(ErrorType.BAD_REQUEST, f"{where}: {exc}"[:2000]))
+        return Item(ref.id, error=ErrorBody.of(ErrorType.BAD_REQUEST, f"{ref.where}: {exc}"[:2000]))
+
+
+def read_items(directory: Path) -> list[Item]:
+    """Every request under ``directory``, read (`list_items` + `load`)."""
+    return [load(ref) for ref in list_items(directory)]
+
+
+def _lines(path: Path) -> list[ItemRef]:
+    refs, offset = [], 0
+    with path.open("rb") as f:
+        for n, line in enumerate(f, start=1):
+            if line.strip():
+                refs.append(ItemRef(f"{path.stem}-{n:06d}", path, offset, len(line), f"{path.name} line {n}"))
+            offset += len(line)
+    return refs

@@ -63,6 +63,13 @@ def connect(address: str) -> bool:
     return True
 
 
+def disconnect() -> None:
+    """Leave the cluster (`connect` returned True)."""
+    import ray
+
+    ray.shutdown()
+
+
 def run_ray(rows: list[Row], factory: WorkerFactory, *, address: str, workers: int = 1, batch_size: int = 8,
             cpus_per_worker: float = 1.0) -> Iterator[list[Row]]:  # fmt: skip
     """Answer ``rows`` on the Ray cluster at ``address`` (see `connect`) with ``workers`` actors, batch by batch as
