@@ -25,7 +25,7 @@ from manifoundation.server.offline.store import ResultStore
 
 WINDOW = 10_000
 """Requests read into memory (and handed to the pool) at a time: ~130 MB of 256-point requests, ~1 GB of 2048-point
-ones (points and normals as float64). Each window starts the pool's workers again (on Ray ~6 s)."""
+ones (points and normals as float64). Each window starts the pool's workers again (seconds)."""
 
 if TYPE_CHECKING:
     from tqdm import tqdm
