@@ -25,7 +25,8 @@ FORBIDDEN: dict[str, set[str]] = {
     "manifoundation/sdk": {"manifoundation.core", "manifoundation.cli", "torch", "numba", "fastapi",
                            "uvicorn"} | SERVER,
     "manifoundation/cli": {"manifoundation.core", "torch", "numba", "fastapi", "uvicorn"} | SERVER,
-    "manifoundation/server/api": SCIENCE_LIBS | {"manifoundation.core"},
+    "manifoundation/server/api": SCIENCE_LIBS | {"manifoundation.core", "ray"},
+    "manifoundation/server/offline": {"manifoundation.server.api"},
     "manifoundation/server/queue": {"manifoundation.server.api", "manifoundation.core", "torch"},
     "manifoundation/server/worker": {"manifoundation.server.api"},
     "manifoundation/server/commands": {"manifoundation.server.api"},
@@ -92,6 +93,24 @@ def test_torch_free_at_run_time(module: str) -> None:
     banned = {"torch", "pytorch_kinematics", "cvxpy", "manifoundation.core", "research"}
     heavy = {m for m in loaded if _banned(m, banned)}
     assert not heavy, f"importing {module} loaded {sorted(heavy)}"
+
+
+def test_ray_is_imported_inside_functions_only() -> None:
+    """Ray is an optional extra (`manifoundation[ray]`): no module of the product imports it at its top level."""
+    offenders = []
+    for path in sorted((ROOT / "manifoundation").rglob("*.py")):
+        for node in ast.parse(path.read_text(), filename=str(path)).body:
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else []
+            names += [node.module or ""] if isinstance(node, ast.ImportFrom) else []
+            if any(_banned(name, {"ray"}) for name in names):
+                offenders.append(f"{path.relative_to(ROOT)}:{node.lineno}")
+    assert not offenders, offenders
+
+
+@pytest.mark.parametrize("module", ["manifoundation.server.api.app", "manifoundation.server.commands.offline",
+                                    "manifoundation.server.offline.batch", "manifoundation.server.offline.ray_pool"])
+def test_ray_free_at_run_time(module: str) -> None:
+    assert not {m for m in _modules_after_import(module) if _banned(m, {"ray"})}
 
 
 def test_cli_help_does_not_import_science() -> None:

@@ -15,7 +15,10 @@ def register(subparsers: Any) -> None:
     g.add_argument("--out", default="data/v4", help="output directory (shards + manifest.json)")
     g.add_argument("--objects", type=int, default=400, help="number of objects")
     g.add_argument("--seed", type=int, default=0)
-    g.add_argument("--workers", type=int, default=2, help="worker processes")
+    g.add_argument("--workers", type=int, default=2, help="worker processes (Ray actors with --ray)")
+    g.add_argument("--ray", metavar="ADDRESS", default=None,
+                   help="rigid and articulated shards on Ray Data at ADDRESS (auto, HOST:6379, ray://HOST:10001; "
+                        "local: a cluster of its own); docs/offline.md")
     g.add_argument("--objects-per-shard", type=int, default=2)
     g.add_argument(
         "--hands", default=None, help="comma-separated training hands (default: allegro,leap,panda_gripper,kinova3f)"
@@ -134,8 +137,16 @@ def _generate(args: argparse.Namespace) -> int:
     if unknown_hands:
         raise SystemExit(f"--hands / --held-out-hands: unknown {', '.join(unknown_hands)} "
                          f"(built-in: {', '.join(list_hands(aliases=True))})")  # fmt: skip
-    manifest = generate(cfg, args.out, workers=args.workers, progress=not args.no_progress)
+    runner = None
+    if args.ray:
+        from research.offline.shards import ray_runner
+
+        runner = ray_runner(args.ray, args.workers)
+    manifest = generate(cfg, args.out, workers=args.workers, progress=not args.no_progress, runner=runner)
     print(json.dumps(manifest["totals"], indent=1))
+    if manifest["lost_shards"]:
+        print(f"lost shards (their workers died on every try; rerun to generate them): {manifest['lost_shards']}")
+        return 1
     return 0
 
 

@@ -20,6 +20,7 @@ import json
 import os
 import time
 from collections import Counter
+from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -218,7 +219,11 @@ def _pad(a: np.ndarray, n: int) -> np.ndarray:
     return out
 
 
-def _run_shard_star(args: tuple[DataConfig, int, str]) -> ShardResult:
+ShardJob = tuple[DataConfig, int, str]  # (configuration, shard index, output directory)
+ShardRunner = Callable[[list[ShardJob]], Iterator[ShardResult]]  # shards made, files in place; default: run_jobs
+
+
+def _run_shard_star(args: ShardJob) -> ShardResult:
     return run_shard(*args)
 
 
@@ -231,8 +236,9 @@ def read_manifest(out_dir: str | Path) -> dict[str, Any]:
     return {"config": None, "shards": {}}
 
 
-def generate(cfg: DataConfig, out_dir: str | Path, workers: int = 1, progress: bool = True) -> dict[str, Any]:
-    """Generate (or resume) a data set in ``out_dir``; returns the manifest.
+def generate(cfg: DataConfig, out_dir: str | Path, workers: int = 1, progress: bool = True,
+             runner: ShardRunner | None = None) -> dict[str, Any]:  # fmt: skip
+    """Generate (or resume) a data set in ``out_dir`` by ``runner``; returns the manifest (+ ``lost_shards``).
 
     Raises:
         ValueError: ``out_dir`` holds a data set made with a different configuration.
@@ -256,7 +262,7 @@ def generate(cfg: DataConfig, out_dir: str | Path, workers: int = 1, progress: b
     t0 = time.perf_counter()
     done_examples = 0
     bar = tqdm(total=n_shards, initial=n_shards - len(todo), unit="shard", disable=not progress, smoothing=0.1)
-    jobs = [(cfg, k, str(out)) for k in todo]
+    jobs: list[ShardJob] = [(cfg, k, str(out)) for k in todo]
 
     def record(r: ShardResult) -> None:
         nonlocal done_examples
@@ -269,10 +275,12 @@ def generate(cfg: DataConfig, out_dir: str | Path, workers: int = 1, progress: b
         bar.update(1)
         bar.set_postfix(examples=manifest["totals"]["examples"], ex_per_s=f"{rate:.2f}")
 
-    for r in run_jobs(_run_shard_star, jobs, workers):
+    for r in (runner or (lambda js: run_jobs(_run_shard_star, js, workers)))(jobs):
         record(r)
     bar.close()
     manifest["totals"] = _totals(manifest)
+    manifest["lost_shards"] = [k for k in todo if str(k) not in manifest["shards"]]
+    write_manifest(out / MANIFEST, manifest)
     return manifest
 
 
