@@ -15,7 +15,6 @@ from tests.ray_cluster import two_nodes
 from tests.research import tiny_data
 
 pytestmark = pytest.mark.slow
-pytest.importorskip("ray")
 
 CFG = DataConfig(objects=20, objects_per_shard=2, hands=("panda_gripper",), held_out_hands=(), palms=6,
                  grasps_per_job=2, examples_per_grasp=2, num_points=256, test_fraction=0.5,

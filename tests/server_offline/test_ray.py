@@ -24,7 +24,6 @@ if TYPE_CHECKING:
     from ray.cluster_utils import Cluster
 
 pytestmark = pytest.mark.slow
-pytest.importorskip("ray")
 ROOT = Path(__file__).resolve().parents[2]
 
 
