@@ -2,8 +2,7 @@
 
 Conventions: metres, seconds, newtons; right-handed frames; quaternions (w, x, y, z); outward unit normals;
 arrays as nested lists in JSON and typed binary in msgpack (`manifoundation.contract.arrays`). Schemas are named by
-role:
-``...In`` (part of a request), ``...Create`` / ``...Register`` (a POST body), ``...Public`` (what we answer).
+role: ``...In`` (part of a request), ``...Create`` / ``...Register`` (a POST body), ``...Public`` (what we answer).
 """
 
 from manifoundation.contract.common import MAX_POINTS, MIN_POINTS, SCHEMA_VERSION, WireModel

@@ -1,8 +1,7 @@
 """Body encodings shared by the service, the queue and the SDK: JSON and msgpack.
 
 msgpack bodies carry arrays as typed-binary maps (see `manifoundation.contract.arrays`); unpacking is bounded (buffer
-size,
-string, binary, array and map lengths) and never creates anything but plain types.
+size, string, binary, array and map lengths) and never creates anything but plain types.
 """
 
 from __future__ import annotations

@@ -2,8 +2,7 @@
 
 One enum, read by every side: the service maps `ErrorType.status` to the HTTP answer (and each type to a gRPC
 code: ``GRPC_CODE`` in `manifoundation/server/api/grpc/errors.py`), the workers put an `ErrorType` in a failed job's
-`ErrorBody`,
-the SDK maps it back to its exception classes. A job whose error is `CANCELLED` ends *cancelled*,
+`ErrorBody`, the SDK maps it back to its exception classes. A job whose error is `CANCELLED` ends *cancelled*,
 `DEADLINE_EXCEEDED` / `RESULT_EXPIRED` end *expired*, every other error ends *failed* (`ErrorType.job_state`).
 
 Compatibility: a newer service may add members. A client that reads a type it does not know keeps the string

@@ -9,8 +9,7 @@ name              description file                                             p
 ``shadow``        gymnasium-robotics ``envs/assets/hand/reach.xml`` (MJCF)     ``robot0:palm``     collision*
 ``panda_gripper`` example-robot-data ``panda_description/urdf/panda.urdf``     ``panda_hand``      collision
 ``barrett``       ``manifoundation/core/robots/descriptions/barrett_bh8.urdf``              ``bh_palm``
-collision
-``kinova3f``      ``manifoundation/core/robots/descriptions/kinova_3f.urdf``                ``k3f_palm``
+collision ``kinova3f``      ``manifoundation/core/robots/descriptions/kinova_3f.urdf``                ``k3f_palm``
 collision
 ================  ===========================================================  ==================  ============
 

@@ -3,8 +3,7 @@
 C clients send `POST /v1/synthesize` back to back (the benchmark's request) until N have been answered; every
 N / rows requests the API process's RSS and that of each embedded worker process (its children running
 `manifoundation.server.worker.child`) are read from /proc. The answer to "does it grow?" is the table: the last rows
-against the
-first rows after warm-up, not one figure at the end.
+against the first rows after warm-up, not one figure at the end.
 
 Each worker's anonymous memory (its heap, Python objects, tensors, compiled code: what a leak grows) is shown
 beside its RSS. RSS also counts the pages of the shared libraries it maps, and how many of those are resident

@@ -1,8 +1,7 @@
 """`mani-lab bench NAME`: the benchmarks of every component, found through the ``mani_lab.bench`` entry points.
 
 Each benchmark module (``research.commands.bench_refine``, ``research.bench.service``, ...) has ``register(subparsers)``
-and adds
-its own sub-parser to the ``bench`` sub-parsers, exactly like the top-level commands.
+and adds its own sub-parser to the ``bench`` sub-parsers, exactly like the top-level commands.
 """
 
 from __future__ import annotations

@@ -5,8 +5,7 @@ for the exact procedure: ground-truth poses from the data generator's verified g
 sampled``, default; force-closure grasps for ``closure``) or from our own verified force-closure refinements
 (``--ground-truth refined``, the original protocol), targets those grasps can produce, starts retreated + rotated ≤
 60° + shifted ≤ 5 cm, fingers at rest) on the procedural test objects of `manifoundation.core.objects` (sizes 5-25 cm,
-kinds
-cycled, seeded), against the direct-grasp baseline.
+kinds cycled, seeded), against the direct-grasp baseline.
 
 Examples:
     mani-lab eval refine --hand leap --mode task --objects 20 --grasps 2 --seed 0

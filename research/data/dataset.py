@@ -1,8 +1,7 @@
 """Reading generated shards for training: in-memory examples → normalised network tensors.
 
 Every example is normalised exactly as `manifoundation.core.network.inference` normalises a request (bounding-box
-centre,
-longest side s): positions (x − c)/s, motions and force maps / s, hand cloud / ``hand_scale_m``. Optional
+centre, longest side s): positions (x − c)/s, motions and force maps / s, hand cloud / ``hand_scale_m``. Optional
 augmentation rotates an example (points, normals, motion, force map) by a random rotation before normalising;
 physics is rotation-invariant and the hand cloud stays in its palm frame.
 

@@ -2,8 +2,7 @@
 
 Each body's cloud is resampled to ``num_points`` exactly as the network resamples a request
 (`manifoundation.core.network.resample`: farthest-point sampling down, even repetition up), and every per-point array of
-its
-examples (target motion, heatmap, motion map as the force map, mask) is read at the same indices. Properties go
+its examples (target motion, heatmap, motion map as the force map, mask) is read at the same indices. Properties go
 in ``extra["properties"]`` (E, 6) in the network's channel order, NaN where a material has none (the trainer's
 batches then condition on all of them, not only friction); the hand is ``hand`` for every example (the network
 takes one; a deformable's answer does not depend on it beyond H).

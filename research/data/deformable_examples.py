@@ -18,8 +18,7 @@ target is the press after spring-back, which the target's displacement does not 
 Slides (cloth and rope, `manifoundation.core.deformable.slides`): the target is the body translated by one displacement;
 the
 six named contact sets of `manifoundation.core.deformable.slides.slide_candidates` are simulated, and those that reach
-the
-target by the paper's metric are the labels (their union); an example none of them reaches is dropped. What
+the target by the paper's metric are the labels (their union); an example none of them reaches is dropped. What
 reaches a slide depends on the properties (a handkerchief must be pulled from its front, a card can be pushed):
 what the property figure asks the network to have learnt. With a margin (``slide_margin``), the labels keep only
 the sets that also reach the same heading's slide at the margin's length: at a sixth of its size a handkerchief

@@ -2,8 +2,7 @@
 
 Rigid: forces f_i = a_i (−n_i) + t_i with a_i ~ U(0.1, 1), |t_i| ≤ μ a_i; the scaled wrench w = Σ G_i f_i
 (manifoundation.core.refine.grasp) is normalised to unit length by dividing the forces by ‖w‖ (rejected when a normal
-force
-then exceeds 1, the refinement's bound), so the label grasp solves the refinement's force problem exactly.
+force then exceeds 1, the refinement's bound), so the label grasp solves the refinement's force problem exactly.
 The target motion is the inverse of Eq. 4 of the unscaled wrench, scaled to a random size.
 
 Articulated: the object is a link on a revolute (hinge on a bounding-box edge) or prismatic joint; the

@@ -65,8 +65,7 @@ def tip_points(hand: Hand) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
 
     The pad of a fingertip is the sphere that best fits its real surface near the tip point (`fit_pad`, on the
     samples of `manifoundation.core.robots.pads`, the contact model refinement and verification use): driving its centre
-    to
-    ``target + radius · n`` puts the real fingertip surface on the target whatever the finger's orientation. Flat
+    to ``target + radius · n`` puts the real fingertip surface on the target whatever the finger's orientation. Flat
     pads use the sphere tangent to them at the tip (`fit_pad`).
     """
     bodies, tips, pads, radii = [], [], [], []

@@ -318,8 +318,7 @@ def exact_checks(
     radii: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, float, float] | None:
     """The verification's own tests (`manifoundation.core.geometry`, fcl on the collision meshes; exact mesh distance of
-    the
-    pad spheres): contacts (m, 3) = pad points nearest the surface, normals, penetration, self-collision; None
+    the pad spheres): contacts (m, 3) = pad points nearest the surface, normals, penetration, self-collision; None
     when a test fails."""
     dist = obj.exact_signed_distance(pads) - radii
     if np.max(np.abs(dist)) > TIP_TOL:

@@ -3,8 +3,7 @@
 Cases, per material and split, are drawn exactly as `research.data.deformable_generate` draws its bodies (same seed,
 same ids, same train/test split by id): ``test_so`` takes training bodies, ``test_uo`` test bodies, and each case
 is one of the material's procedures (`manifoundation.core.deformable.procedures`) redrawn until its motion is an unseen
-one
-(`research.data.deformable_examples.is_unseen_motion`), simulated from rest to give the target cloud. Every
+one (`research.data.deformable_examples.is_unseen_motion`), simulated from rest to give the target cloud. Every
 method's contacts and motions are then simulated from the same rest state with the same `simulate` and scored by
 `metrics.shape_score`.
 

@@ -3,8 +3,7 @@
 Why: the shipped rigid weights lose rigid success when all of them are trained on deformables as well (model
 card, rounds 8 and 11). Parameters a rigid or articulated request never reaches can be trained without touching
 a single rigid answer: the deformable head (``deformable_head.``, manifoundation/core/network/deformable_head.py — what
-the
-shipped weights train) or the property MLPs ψ of the deformable properties (:data:`DEFORMABLE_PROPERTY_MLPS`;
+the shipped weights train) or the property MLPs ψ of the deformable properties (:data:`DEFORMABLE_PROPERTY_MLPS`;
 masked mean pooling drops absent properties, and a rigid request carries only friction and density — tried in
 round 12, did not learn).
 

@@ -1,6 +1,5 @@
 """End to end with the real science in the workers (`manifoundation.server.worker.models_pipeline`): a direct-grasp
-request on a
-built-in hand (runs without trained weights), its result drawn by the viewer in headless Chromium.
+request on a built-in hand (runs without trained weights), its result drawn by the viewer in headless Chromium.
 
 The embedded run is in the default suite; the Redis run of the same request is `slow`.
 """

@@ -7,8 +7,7 @@ instead of listing fields:
 
 - an ``Array`` message becomes the msgpack typed-binary map ``{dtype, shape, data}``, which the contract's array
   fields decode with the same dtype whitelist and byte-length rule (`manifoundation.contract.arrays.decode_typed`); the
-  other way
-  an ndarray is encoded with `manifoundation.contract.arrays.encode_typed`;
+  other way an ndarray is encoded with `manifoundation.contract.arrays.encode_typed`;
 - a message with a ``kind`` oneof (``TaskIn``) is the contract's discriminated union: the chosen field's name is
   ``kind`` and its message's fields sit beside it;
 - an unset message, an unset ``optional`` scalar and an empty repeated field are left out, so the contract's

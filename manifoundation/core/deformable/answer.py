@@ -1,8 +1,7 @@
 """The service's answer for a deformable object: contacts from the network's heatmap, a post-contact motion each.
 
 For each latent sample k: NMS on the heatmap (`manifoundation.core.network.selection.select_contacts`, the region mask
-hard)
-picks H ≤ ``max_contacts`` contacts; the motion of each is the task's own displacement at that point (a grasped
+hard) picks H ≤ ``max_contacts`` contacts; the motion of each is the task's own displacement at that point (a grasped
 point goes where the gripper takes it, so the target says exactly where it must end). The network's motion map
 (its φ_f map, motion map / heat) estimates the same vector; measured on unseen cloth bodies at the same contacts,
 the target's displacement reached the target more often (85.6 against 79.4 % per sample) and never less, rope

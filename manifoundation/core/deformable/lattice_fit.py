@@ -1,13 +1,11 @@
 """A plasticine cloud that is a lattice body's boundary, rebuilt as exactly that body.
 
 The plasticine generator (`manifoundation.core.deformable.plasticine`) cuts a body from an axis-aligned cubic lattice
-and shows
-its boundary vertices as the cloud. When a caller's cloud is such a boundary — every point on one axis-aligned
+and shows its boundary vertices as the cloud. When a caller's cloud is such a boundary — every point on one axis-aligned
 lattice of spacing h, to 1 % of a cell — the body is determined: the cubes whose centre the oriented cloud encloses
 (generalised winding number ≥ ½; a cube centre lies half a cell from the nearest boundary face, where the points'
 winding number is unambiguous), split by `manifoundation.core.deformable.lattice.cube_tetrahedra` with the parity
-counted from
-the body's own lowest cube, as the generator counts it. The fit is accepted only when the rebuilt body's
+counted from the body's own lowest cube, as the generator counts it. The fit is accepted only when the rebuilt body's
 boundary vertices are exactly the caller's points (same set, one each); otherwise the cloud is not a lattice
 boundary and `manifoundation.core.deformable.reconstruct` fills it with a lattice of its own instead.
 

@@ -22,8 +22,7 @@ density · t. MuJoCo's yield is a strain, so plasticine's yield stress becomes �
 the contract: ``ROPE_DENSITY`` and ``ROPE_RADIUS`` are fixed.
 
 The rope's range is for its 1 cm rod (`manifoundation.core.deformable.rope`): dragged by its middle, a 60 cm rope at 10³
-Pa
-leaves both ends in place, at 10⁵ Pa both ends follow by 8-10 cm, at 10⁷ Pa and above it moves like a stick.
+Pa leaves both ends in place, at 10⁵ Pa both ends follow by 8-10 cm, at 10⁷ Pa and above it moves like a stick.
 Plasticine's ranges were chosen by simulation (docs/deformables.md): below E ≈ 3·10⁵ Pa with yield ≈ 2·10³ Pa an
 8 cm body keeps flowing after a press is released; above yield ≈ 10⁵ Pa it springs back (elastic).
 """

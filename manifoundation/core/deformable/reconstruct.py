@@ -11,11 +11,9 @@ simulation mesh. Per material:
   generator makes (`manifoundation.core.deformable.rope.rod`), its thickness the cloud's.
 - **Plasticine**: a cloud that is the boundary of a body cut from an axis-aligned cubic lattice (the generator's
   bodies) is rebuilt as exactly that body (`manifoundation.core.deformable.lattice_fit`); any other cloud's volume
-  (generalised
-  winding number ≥ ½) is filled with lattice tetrahedra of its own
+  (generalised winding number ≥ ½) is filled with lattice tetrahedra of its own
   (`manifoundation.core.deformable.plasticine.tetrahedralise`, the cubes whose centre is inside, so that the body's
-  volume is
-  about the cloud's), refined until it holds enough cubes.
+  volume is about the cloud's), refined until it holds enough cubes.
 
 For rope and plasticine the caller's points are not the mesh's vertices: each point is embedded in its nearest
 tetrahedron by barycentric (affine) weights, and its rollout position is the same weights over the moved

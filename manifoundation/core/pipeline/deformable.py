@@ -8,8 +8,7 @@ proposal names the fingertip at each contact from the rigid fit of the hand's fi
 (`manifoundation.core.refine.initialise`, the pose is that fit's, not refined); ``quality.success`` is False with reason
 ``deformable_open_loop`` unless the request asks for ``simulate_rollout``: then each answer is applied in the
 simulator and judged by the shape metric (`manifoundation.core.pipeline.deformable_rollout`), and when every proposal
-has the
-network's own contacts, the most-moved points (`manifoundation.core.deformable.answer.moving_indices`,
+has the network's own contacts, the most-moved points (`manifoundation.core.deformable.answer.moving_indices`,
 ``motion_fallback``)
 are simulated beside them as one more candidate; the best ``num_proposals`` by the rollout are returned.
 Unordered targets (``target_points`` with ``correspondence="unknown"``) get their per-point motion by coherent

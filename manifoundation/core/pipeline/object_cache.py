@@ -2,8 +2,7 @@
 
 A worker meets the same object many times: a batch asks one object with several motions, hands or seeds, and a
 planner asks again about the object it is holding. What `manifoundation.core.pipeline.prepare` derives from the object
-alone
-— the processed mesh with its collision BVH, sharp edges and closest-point structures
+alone — the processed mesh with its collision BVH, sharp edges and closest-point structures
 (`manifoundation.core.geometry.per_mesh`),
 the point field with its k-d trees, grown hull, winding-number cells and sample areas, the normals and the mass
 properties — depends on nothing else in the request, so it is kept here, keyed by a digest of the bytes it was

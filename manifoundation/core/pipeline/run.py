@@ -9,8 +9,7 @@ methods "network" and "random_contacts" a refinement that stalls is restarted fr
 abandoned.
 Deformable materials (cloth, rope, plasticine) with a per-point task (``point_motion``, ``target_points``) get
 contacts with a post-contact motion each and no refinement (`manifoundation.core.pipeline.deformable`); with other tasks
-they
-are handled as rigid bodies for the hand (the motion fitted rigidly, Kabsch).
+they are handled as rigid bodies for the hand (the motion fitted rigidly, Kabsch).
 
 Why one module: the stages of one request (network, contact sets, initialisation, refinement, verification)
 run in order on one `Prepared` and share its timings and cancellation checks.

@@ -1,6 +1,5 @@
 """Contacts along a plan: one synthesis (`manifoundation.core.pipeline.run_pipeline`) per step, keeping the grasp while
-it
-still works.
+it still works.
 
 Step k moves the object from ``poses[k]`` to ``poses[k + 1]``; its task is that motion (the moved points as
 ``target_points``: the pipeline fits the rigid motion exactly and turns it into the wrench, Eq. 4-5), asked

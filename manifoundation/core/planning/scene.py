@@ -4,8 +4,7 @@ the hand that carries it — as python-fcl collision objects.
 The object collides by its mesh when the request has one, else by its points' convex hull (a conservative cover:
 a path the hull can take, the object can take). The hand collides by its links' collision meshes
 (`manifoundation.core.robots.Hand.collision_meshes`) posed by its forward kinematics. Every query answers either fast (a
-bool,
-for the planner's many calls: one fcl broad phase over the whole scene) or with the names of what was hit.
+bool, for the planner's many calls: one fcl broad phase over the whole scene) or with the names of what was hit.
 """
 
 from __future__ import annotations

@@ -2,8 +2,7 @@
 
 The cones are linearised (an ``edges``-sided pyramid) for the metric only; the optimisation uses exact cones.
 Wrenches are the scaled ones of `manifoundation.core.refine.wrench` (torque over ρ), so ε is dimensionless and
-comparable
-across object sizes. ε > 0 ⇔ the origin is strictly inside the convex hull of the primitive wrenches ⇔ force
+comparable across object sizes. ε > 0 ⇔ the origin is strictly inside the convex hull of the primitive wrenches ⇔ force
 closure. Point contacts with friction: two contacts can never reach ε > 0 (no torque about the line through
 them); ``torsional`` adds soft-finger primitives ``±γ f_n`` about the normal (torque γ in metres), the model we
 use for the pads of parallel-jaw grippers.

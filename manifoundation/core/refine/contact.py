@@ -76,8 +76,7 @@ class SurfaceContacts:
             direction a finger point moves to increase each, and that point's Jacobian: the fingertip bodies'
             samples nearest the object (Φ, ∇Φ), and object points near a fingertip measured against the convex
             parts of its body (`manifoundation.core.refine.object_guards`) — a sharp object edge poking into a flat
-            finger face
-            between samples (1.8 mm deep where the samples read 0.45 mm, LEAP on the example box).
+            finger face between samples (1.8 mm deep where the samples read 0.45 mm, LEAP on the example box).
         projected: (m, 3) the contacts projected onto the object, from the samples' own distances.
         body_poses: (1, nb, 4, 4) the hand's body poses at this pose (the linearisation's spheres reuse them).
         jacobian_request: the points (P, 3) and their bodies (P,) whose Jacobians make ``jac``, ``gap_jac``,

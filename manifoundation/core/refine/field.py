@@ -51,8 +51,7 @@ class PointCloudField:
 
     The distances (Φ, its side, the winding number, the hull) are measured on the caller's points or, when
     ``surface`` is given (samples of the object's exact surface, `manifoundation.core.refine.surface_samples`), on those
-    and the
-    caller's points together; normals (the friction cones'), nearest points, the region and the object-point
+    and the caller's points together; normals (the friction cones'), nearest points, the region and the object-point
     guards always use the caller's points.
 
     Args:

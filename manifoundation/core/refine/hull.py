@@ -1,8 +1,7 @@
 """The convex hull of an object's points, grown by a margin: a point outside it is outside the object.
 
 `manifoundation.core.refine.field.PointCloudField` asks it about the off-surface points whose side the discs leave
-unclear
-before it pays for their winding number. A 2 048-point cloud's hull has 1 000-4 000 facets; a point outside any
+unclear before it pays for their winding number. A 2 048-point cloud's hull has 1 000-4 000 facets; a point outside any
 facet's plane (by more than the margin) is outside, so a few facets with spread normals settle most points — 95 %
 of those the refinement asks about lie outside one of 32 — and only the rest are tested on every facet. The
 answer is the full test's.

@@ -61,8 +61,7 @@ class Linearisation:
     Attributes:
         tips, tip_jac: (m, 3), (m, 3, n) each fingertip's contact: its contact sample on the real finger surface
             (`manifoundation.core.refine.contact`) projected onto the object (where the force acts, as verification has
-            it), and
-            the sample's Jacobian (n = 6 + D).
+            it), and the sample's Jacobian (n = 6 + D).
         tip_phi, tip_grad, gap_jac: (m,), (m, 3), (m, 3, n) distance the objective drives to zero (Φ, or Φ^R with a
             mask) at each pad's sample nearest the object, its gradient and that sample's Jacobian.
         normals: (m, 3) the object's given outward normal at each contact (grasp maps, friction cones).
@@ -74,8 +73,7 @@ class Linearisation:
         sph, sph_jac, sph_radius: every collision sphere (S) and its Jacobian (self-collision pairs).
         pair_idx, pair_dist, pair_dir: self-collision pairs (P, 2), their centre distances and unit directions: the
             hand's pairs within `manifoundation.core.refine.self_pairs.PAIR_REACH` of touching (the others cannot
-            overlap nor
-            enter the step's rows).
+            overlap nor enter the step's rows).
         q, lower, upper: joint values and limits (D,).
         region_point: with a region mask, each contact point's distance to the nearest allowed sample (m,) — the
             verification's region test, which the convergence test also applies (Φ^R is to the samples' discs).

@@ -1,8 +1,7 @@
 """Samples of an object's exact surface for the refinement's distances, when the caller's points are sparse.
 
 The refinement measures the fingertips against the point field (`manifoundation.core.refine.field`), which keeps its
-pads a
-disc radius h (0.75 × the mean point spacing) clear of the points, since the true surface may lie that far beyond
+pads a disc radius h (0.75 × the mean point spacing) clear of the points, since the true surface may lie that far beyond
 them. On a sparse cloud that standoff is larger than the verification's contact tolerance (4 mm on the exact
 mesh): 2 048 points on a 36 cm sphere give h = 5.4 mm, and every grasp the refinement called converged there
 stood 5-7 mm off the mesh and failed verification. Measured on 24 held-out cases of 20-40 cm objects (allegro,

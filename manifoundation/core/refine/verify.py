@@ -9,8 +9,7 @@ the
   points' surface (`PointCloudField`, which keeps concavities; never a convex hull);
 - tip distance: the exact distance from each contact point to the posed fingertip body's collision mesh
   (`manifoundation.core.geometry.closest`): the contact lies on the object by construction and must lie on the finger
-  within
-  5 mm; with a region mask it must also lie within 5 mm of an allowed point;
+  within 5 mm; with a region mask it must also lie within 5 mm of an allowed point;
 - friction cones and the wrench use the object's normals as given: the caller's normal of the point nearest the
   contact (as the refinement has them; an outside check uses the same) — never a re-estimated or smoothed one;
   forces solve Eq. (6-8) (normal components ≥ 0 by the cones),

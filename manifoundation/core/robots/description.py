@@ -1,8 +1,7 @@
 """A parsed robot description: links with collision meshes and the joints between them.
 
 Both the URDF and the MJCF readers produce a :class:`RobotDescription`; :mod:`manifoundation.core.robots.kinematics`
-turns it
-into a tree of moving bodies (fixed joints collapsed) for batched forward kinematics.
+turns it into a tree of moving bodies (fixed joints collapsed) for batched forward kinematics.
 """
 
 from __future__ import annotations

@@ -9,8 +9,7 @@ before MuJoCo sees it:
    ``MAX_ELEMENTS`` elements over all documents), so an include bomb is refused before it is inlined;
 3. ``<compiler meshdir/assetdir/texturedir>`` applied to each ``<mesh file>`` (relative to the main document's
    folder, as MuJoCo does), the member checked with the mesh caps (:mod:`manifoundation.core.robots.archive_meshes`) and
-   the
-   attribute replaced by a flat name ``asset<i>.<ext>`` that MuJoCo finds in the in-memory asset map;
+   the attribute replaced by a flat name ``asset<i>.<ext>`` that MuJoCo finds in the in-memory asset map;
 4. textures, skins and height fields dropped (they draw, they do not collide) with materials' texture references,
    and the compiler's folder attributes removed;
 5. anything else that names a file or loads code (``<plugin>``, ``<extension>``, ``<model>``, a remaining

@@ -4,8 +4,7 @@ Decoding a 50 MB JSON body (millions of floats into Python lists, then into arra
 a thread would still stall every other request; a process does not. Bodies up to ``offload_bytes`` are decoded
 inline (the common case, ~2 ms); larger ones take one of ``slots`` slots before they are even read and are
 streamed, chunk by chunk as they arrive, to one of ``slots`` child processes (`manifoundation.server.api.body_child`):
-the API
-process never holds a large body, only the decoded request (its arrays: a third to a fifth of the JSON). A
+the API process never holds a large body, only the decoded request (its arrays: a third to a fifth of the JSON). A
 request that waits longer than ``wait_s`` for a slot gets 503 with Retry-After. The children import `clients`
 only (no torch, no server code).
 """
@@ -48,8 +47,7 @@ class BodyPool:
     """The slots and the decoding processes for large bodies (one per app; closed in the lifespan).
 
     The processes are plain ``python -m manifoundation.server.api.body_child`` children on pipes (no `multiprocessing`:
-    no
-    re-import of the parent's main module, no feeder threads holding copies of the body); one body at a time
+    no re-import of the parent's main module, no feeder threads holding copies of the body); one body at a time
     each, at most ``slots`` of them, started on first use. A child that fails or whose request is abandoned
     half-way is killed and replaced.
     """

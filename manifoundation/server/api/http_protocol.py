@@ -3,8 +3,7 @@ within ``head_timeout`` seconds, else it gets 408 and is closed.
 
 uvicorn bounds the idle time between requests (``timeout_keep_alive``) and our routes bound the body
 (`manifoundation.server.api.negotiation.body_chunks`), but nothing bounds the head: a client sending one header byte
-every few
-seconds, or connecting and sending nothing, held its connection for ever. The clock starts when the connection
+every few seconds, or connecting and sending nothing, held its connection for ever. The clock starts when the connection
 is made or when a request's first byte arrives (uvicorn's keep-alive timer covers the wait before that byte),
 and stops when the headers are complete. Built on the httptools protocol that ``uvicorn[standard]`` installs.
 """

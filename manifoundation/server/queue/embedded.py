@@ -5,8 +5,7 @@ Jobs, results and dead letters live in this process's memory: they are lost when
 evicted first: memory stays bounded whatever the results' size); an evicted job still answers state "expired"
 (a bounded list of tombstones), never "unknown". One pump thread talks to the workers over one duplex pipe each
 (`manifoundation.server.worker.child`): it dispatches up to ``batch_size`` queued jobs to an idle worker, takes progress
-and outcomes
-back, and notices a dead worker (EOF): its jobs go back to the queue until they have been delivered
+and outcomes back, and notices a dead worker (EOF): its jobs go back to the queue until they have been delivered
 ``max_deliveries`` times, then to the dead letters with the error; a replacement is spawned. A job given back
 that way runs alone (a micro-batch of one), so a job that kills its worker fails no batch-mate.
 

@@ -4,10 +4,8 @@ enqueues; `mani worker` processes anywhere consume.
 
 One stream with one consumer group; a job's record is a hash, its result a separate msgpack key with a TTL (a
 finished job whose result key is gone reports "expired"); see `manifoundation.server.queue.redis_lua` for the key layout
-and
-the atomic scripts, `manifoundation.server.worker.worker` for the consumer side (XREADGROUP, XAUTOCLAIM, heartbeats,
-dead letters).
-Waiting uses a pub/sub channel with polling as a fallback, so a lost message only delays, never hangs.
+and the atomic scripts, `manifoundation.server.worker.worker` for the consumer side (XREADGROUP, XAUTOCLAIM, heartbeats,
+dead letters). Waiting uses a pub/sub channel with polling as a fallback, so a lost message only delays, never hangs.
 Every call is bounded in time: connect and command timeouts of ``redis_timeout`` seconds, one retry after a
 reconnect, and a deadline of ``OP_ROUNDS × redis_timeout`` on each guarded step, so a hung Redis (SIGSTOP, a
 black-holed network) answers `QueueUnavailable` (503) in seconds instead of hanging requests.

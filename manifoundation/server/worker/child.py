@@ -1,6 +1,5 @@
 """The embedded backend's worker process: a thin shell around `manifoundation.server.worker.core.WorkerCore` that speaks
-to its
-parent (`mani serve`) over a duplex pipe.
+to its parent (`mani serve`) over a duplex pipe.
 
 Messages are msgpack maps (`manifoundation.contract.codec`); payloads travel as their own frames after the map that
 announces them,

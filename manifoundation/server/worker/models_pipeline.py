@@ -3,14 +3,12 @@
 initialisation → refinement → verification).
 
 Loaded once per worker process: the network from ``weights_dir`` (default ``manifoundation/core/weights``) when a
-checkpoint
-is there (``model_loaded``), and the built-in hands (published as the robot catalogue). Without weights, jobs
+checkpoint is there (``model_loaded``), and the built-in hands (published as the robot catalogue). Without weights, jobs
 whose method needs the network ("network", or "auto" without contacts) fail with a `ModelUnavailable` error;
 "contacts", "direct_grasp" and "random_contacts" run end to end. Jobs run one at a time (per-job progress and
 cancellation); with ``batch_network=True`` the network-method jobs of a micro-batch share one network call. A plan
 job runs `manifoundation.core.planning.plan_manipulation` (every step through the same synthesis pipeline and
-verification as
-a single request), its progress by stage: repair, planning (segments), contacts (steps).
+verification as a single request), its progress by stage: repair, planning (segments), contacts (steps).
 """
 
 from __future__ import annotations

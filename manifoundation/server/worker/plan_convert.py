@@ -2,8 +2,7 @@
 
 Field for field (the science's names are the wire's, `docs/planning.md`); each step's proposal goes through the
 single request's conversion (`manifoundation.server.worker.convert.to_proposal`), with the hand's collision spheres at
-its pose for
-the viewer. Imported in the worker process only (it imports `models`, hence torch).
+its pose for the viewer. Imported in the worker process only (it imports `models`, hence torch).
 """
 
 from __future__ import annotations

@@ -1,6 +1,5 @@
 """Wire ↔ science for registered hands: `RobotRegister` → `manifoundation.core.robots.user_hand.HandSource`, a built
-hand →
-`RobotPublic` (with its report and rest preview).
+hand → `RobotPublic` (with its report and rest preview).
 
 Imported in the worker process only (it imports `models`, hence torch).
 """

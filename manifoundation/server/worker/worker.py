@@ -12,8 +12,7 @@ current batch, then exit. Redis going away: retry with back-off, recreate the gr
 could not be written while Redis was down is retried until it is (`_end_durably`), so no job stays "running".
 
 Run as ``python -m manifoundation.server.worker.worker`` (settings as JSON in ``MANI_WORKER_SETTINGS``, else
-``MANI_*``); `mani worker`
-supervises several of these.
+``MANI_*``); `mani worker` supervises several of these.
 
 Why one module: one consumer's loop: claiming, delivery, heartbeats and durable outcomes share its in-flight
 bookkeeping and lock.

@@ -1,8 +1,7 @@
 """The real service app in the test process, behind httpx transports that can also script answers.
 
 `InProcessService` builds ``manifoundation.server.api.app.create_app(Settings(...), queue=ScriptedQueue())`` on first
-use and runs
-it as a server would (its lifespan started once, on one event loop of its own) but in a thread of the test
+use and runs it as a server would (its lifespan started once, on one event loop of its own) but in a thread of the test
 process and without a socket: requests reach it through ``httpx.ASGITransport``. `transport` (for `Client`) and
 `async_transport` (for `AsyncClient`, whose event loop is another one) record every request in ``seen`` and, while
 ``script`` has steps, answer the next one instead of the app: an ``httpx.Response`` to return, or an exception to
