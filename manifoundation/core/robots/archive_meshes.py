@@ -45,6 +45,7 @@ class ArchiveMeshes:
         suffix = member.rsplit(".", 1)[-1].lower()
         if f".{suffix}" not in MESH_SUFFIXES:
             raise HandLoadError(f"mesh {member!r}: unsupported format .{suffix} (use {', '.join(MESH_SUFFIXES)})")
+        _check_declared_size(member, suffix, self.archive.files[member])
         quiet = logging.getLogger("trimesh")
         level = quiet.level
         quiet.setLevel(logging.ERROR)
@@ -79,3 +80,21 @@ class ArchiveMeshes:
             return mesh
 
         return load
+
+
+def _check_declared_size(member: str, suffix: str, data: bytes) -> None:
+    """Refuse a text mesh whose face or vertex count is over the caps before a parser builds it: an OBJ's ``f`` and
+    ``v`` lines, an ASCII STL's facets, counted on the bytes (a 1.2 M-face OBJ took seconds to parse before its size
+    was known). Binary STLs are checked from their header when the archive is read; COLLADA is parsed as XML."""
+    if suffix == "obj":
+        faces = data.count(b"\nf ") + data.startswith(b"f ")
+        verts = data.count(b"\nv ") + data.startswith(b"v ")
+    elif suffix == "stl" and data[:5].lower() == b"solid":
+        faces = data.count(b"facet normal")
+        verts = 3 * faces
+    else:
+        return
+    if faces > MAX_MESH_FACES or verts > MAX_MESH_VERTICES:
+        raise HandLoadError(
+            f"mesh {member!r}: {faces} faces / {verts} vertices, over the {MAX_MESH_FACES} / {MAX_MESH_VERTICES} limit"
+        )
