@@ -19,10 +19,10 @@ Public names:
   ``client.submit_plan``): `make_plan`, `box_obstacle`, `as_pose`.
 - outputs: `result_to_dict`, `result_to_json`, `load_result`, `result_figure`.
 - errors: `ManiError` › `RequestError` › (`ValidationError`, `Unauthorized`, `NotFound`, `RateLimited`,
-  `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed`; `IncompatibleService` (another major version of the
-  contract); `MissingExtra` (an optional part not installed); `NeedsHttp` (a call only HTTP serves, made on a
-  gRPC client); the warning `ContractWarning` (a newer minor version:
-  docs/compatibility.md).
+  `ServerError`); `Unreachable`; `TimeoutError`; `JobFailed` (`JobExpired`: also a `TimeoutError`);
+  `IncompatibleService` (another major version of the contract); `MissingExtra` (an optional part not installed);
+  `NeedsHttp` (a call only HTTP serves, made on a gRPC client); the warning `ContractWarning` (a newer minor
+  version: docs/compatibility.md).
 - gRPC: `GrpcClient` and its `GrpcJob` in ``manifoundation.sdk.grpc_client``, `AsyncGrpcClient` and its `AsyncGrpcJob`
   (the same calls, awaited) in ``manifoundation.sdk.grpc_async_client``: the same surface, results and errors over
   the service's gRPC port (one base, `manifoundation.sdk._api` / ``_async_api``, over each transport); the calls
@@ -39,6 +39,7 @@ from manifoundation.sdk.client import Batch, Client, Job
 from manifoundation.sdk.errors import (
     ContractWarning,
     IncompatibleService,
+    JobExpired,
     JobFailed,
     ManiError,
     MissingExtra,
@@ -69,6 +70,7 @@ __all__ = [
     "ContractWarning",
     "IncompatibleService",
     "Job",
+    "JobExpired",
     "JobFailed",
     "ManiError",
     "MissingExtra",

@@ -247,7 +247,7 @@ class BaseClient:
         except (DecodeError, pydantic.ValidationError):
             body = ErrorBody(error=_text(response)[:500] or f"HTTP {response.status_code}", type="JobFailed")
         state = _ERROR_STATES.get(body.type, JobState.FAILED)
-        return JobFailed(job_id, state, body)
+        return JobFailed.of(job_id, state, body)
 
     def transport_error(self, request: httpx.Request, exc: Exception) -> Exception:
         """The SDK error for a transport failure that is not retried any more."""

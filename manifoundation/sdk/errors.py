@@ -12,6 +12,7 @@
     ├── Unreachable               no answer at all: connection refused, DNS, connection reset
     ├── TimeoutError              waited longer than the caller allowed (also a builtin ``TimeoutError``)
     ├── JobFailed                 a job ended failed, cancelled or expired; ``job`` and ``error`` say why
+    │   └── JobExpired            its deadline passed (also a TimeoutError)
     ├── IncompatibleService       the service speaks another major version of the contract
     ├── MissingExtra              an optional part ([grpc], [view], [mesh]) is not installed (an ImportError)
     └── NeedsHttp                 the call has no gRPC counterpart: use `Client`/`AsyncClient` (a NotImplementedError)
@@ -133,9 +134,30 @@ class JobFailed(ManiError):
         super().__init__(f"job {job_id} {state.value}{why}")
 
     @classmethod
+    def of(
+        cls, job_id: str, state: JobState, error: ErrorBody | None = None, job: JobPublic | None = None
+    ) -> JobFailed:
+        """The error for a job that ended without a result: a `JobExpired` when its deadline passed."""
+        if state is JobState.EXPIRED and error is not None and error.type == "DeadlineExceeded":
+            return JobExpired(job_id, state, error, job)
+        return cls(job_id, state, error, job)
+
+    @classmethod
     def from_job(cls, job: JobPublic) -> JobFailed:
         """The error for a job that ended without a result."""
-        return cls(job.id, job.state, job.error, job)
+        return cls.of(job.id, job.state, job.error, job)
+
+
+class JobExpired(JobFailed, TimeoutError):  # type: ignore[misc]  # job_id: str here, str | None in TimeoutError
+    """A job whose deadline (the request's ``timeout``) passed before it ended: both a `JobFailed` and a
+    `TimeoutError`, so ``except TimeoutError`` catches it whichever side noticed the deadline first, the caller's
+    wait or the service."""
+
+    def __init__(
+        self, job_id: str, state: JobState, error: ErrorBody | None = None, job: JobPublic | None = None
+    ) -> None:
+        JobFailed.__init__(self, job_id, state, error, job)
+        self.job_id = job_id  # TimeoutError's __init__ (next in the MRO) left it None
 
 
 class IncompatibleService(ManiError):

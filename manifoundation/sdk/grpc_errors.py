@@ -92,7 +92,7 @@ def error_from(error: grpc.RpcError, where: str, job_id: str | None = None) -> M
         if code is C.CANCELLED:
             return ManiError(f"{where}: the call was cancelled ({details})")
     if isinstance(ended, str) and body is not None:
-        return JobFailed(ended, _JOB_STATES.get(body.type, JobState.FAILED), body)
+        return JobFailed.of(ended, _JOB_STATES.get(body.type, JobState.FAILED), body)
     status = _STATUS_OF_CODE.get(code, 500)
     exc = error_for(status, body, text=f"{code.name}: {details}", retry_after=retry_after(trailers))
     exc.status_code = None

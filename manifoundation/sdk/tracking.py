@@ -102,7 +102,7 @@ def item_result(item: BatchItem) -> SynthesisResult:
     """The result of a finished batch item, or `JobFailed` when it has none."""
     if item.state is JobState.SUCCEEDED and item.result is not None:
         return item.result
-    raise JobFailed(item.job_id, item.state, item.error)
+    raise JobFailed.of(item.job_id, item.state, item.error)
 
 
 def parse_event(data: str) -> JobPublic:

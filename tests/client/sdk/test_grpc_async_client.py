@@ -134,8 +134,10 @@ def test_errors_are_the_sync_clients(service: Service) -> None:
 
 def test_timeouts_name_the_job(service: Service) -> None:
     async def body(client: AsyncGrpcClient) -> tuple[TimeoutError, TimeoutError, str]:
+        # about 1.2 s of work: the call's deadline, or on a loaded machine the job's own deadline noticed first by
+        # the service (`JobExpired`, also a TimeoutError) — either names the job
         with pytest.raises(TimeoutError) as call:
-            await client.synthesize(synthesis(max_iterations=20, timeout=0.4))  # about 1.2 s of work
+            await client.synthesize(synthesis(max_iterations=20, timeout=0.4))
         job = await client.submit(synthesis(max_iterations=20))
         with pytest.raises(TimeoutError) as stream:
             await job.wait(timeout=0.2)

@@ -23,7 +23,7 @@ DOCUMENTED = {
     "result_to_dict", "result_to_json", "load_result", "result_figure",
     # errors
     "ManiError", "RequestError", "ValidationError", "Unauthorized", "NotFound", "RateLimited", "ServerError",
-    "Unreachable", "TimeoutError", "JobFailed", "IncompatibleService", "MissingExtra", "NeedsHttp",
+    "Unreachable", "TimeoutError", "JobFailed", "JobExpired", "IncompatibleService", "MissingExtra", "NeedsHttp",
     "ContractWarning",
 }  # fmt: skip
 
@@ -39,6 +39,7 @@ def test_all_is_exactly_the_documented_names() -> None:
 def test_error_tree() -> None:
     for cls in (sdk.ValidationError, sdk.Unauthorized, sdk.NotFound, sdk.RateLimited, sdk.ServerError):
         assert issubclass(cls, sdk.RequestError)
+    assert issubclass(sdk.JobExpired, sdk.JobFailed) and issubclass(sdk.JobExpired, sdk.TimeoutError)
     for cls in (sdk.RequestError, sdk.Unreachable, sdk.TimeoutError, sdk.JobFailed):
         assert issubclass(cls, sdk.ManiError)
     assert issubclass(sdk.TimeoutError, TimeoutError)  # the builtin: `except TimeoutError` catches it too
