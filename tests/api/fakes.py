@@ -18,6 +18,8 @@ from manifoundation.contract import (
     JobProgress,
     JobPublic,
     JobState,
+    PhysicsQuality,
+    PhysicsTrial,
     Proposal,
     Quality,
     QueueStats,
@@ -43,6 +45,15 @@ HAND = RobotPublic(
 )
 
 
+def _fake_physics() -> PhysicsQuality:
+    """A simulated grasp test that held in five pushes and not in +z (what the viewer draws; no simulation here)."""
+    pushes = ("-x", "+x", "-y", "+y", "-z")
+    trials = [PhysicsTrial(direction=d, translation=0.002, rotation=1.5, held=True) for d in pushes]
+    trials.append(PhysicsTrial(direction="+z", translation=0.08, rotation=30.0, held=False))
+    return PhysicsQuality(held=False, reason="moved", trials=trials, penetration=0.0, tip_gaps=[0.0012, 0.0004],
+                          touching_after_squeeze=2, seconds=0.1, object_pieces="hull")  # fmt: skip
+
+
 def fake_result(request: SynthesisRequest) -> SynthesisResult:
     points = request.object.points
     contacts = points[[0, len(points) // 2]]
@@ -66,6 +77,7 @@ def fake_result(request: SynthesisRequest) -> SynthesisResult:
             penetration_depth=0.0,
             self_collision_depth=0.0,
             epsilon=0.1,
+            physics=_fake_physics() if request.options.simulate else None,
         ),
     )
     heatmap = np.linspace(0, 1, len(points)) if request.options.return_heatmap else None

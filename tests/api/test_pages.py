@@ -69,6 +69,15 @@ def test_viewer_draws_the_result(service: str) -> None:
     assert "could not load" not in dom
     assert "Ferrari–Canny ε" in dom and "converged" in dom and "fake_hand" in dom
     assert "proposal 0" in dom and "proposal 1" not in dom  # numbered as the CLI and `result.proposals[i]`
+    assert "not asked: options.simulate" in dom  # no physics test was asked for
+
+
+def test_viewer_shows_the_physics_trials(service: str) -> None:
+    auth = {"Authorization": f"Bearer {KEY}"}
+    response = httpx.post(f"{service}/v1/synthesize", json=request_body(simulate=True), headers=auth)
+    url = f"{service}/view/{response.headers['x-job-id']}#key={KEY}"
+    dom = dump_dom(url, budget_ms=4000)
+    assert "failed (moved)" in dom and "push +z" in dom and "80.0 mm" in dom and "1.2, 0.4" in dom
     assert "gl-container" in dom and "3D view unavailable" not in dom  # plotly's WebGL scene was drawn
     png = screenshot(url, "viewer.png", budget_ms=4000)
     assert png.stat().st_size > 10_000

@@ -141,6 +141,16 @@ function sphereMesh(spheres) {
     color: "#c49c94", opacity: 0.35, flatshading: true, hoverinfo: "skip" };
 }
 
+// The simulated grasp test (options.simulate): its verdict, then each push direction's displacement and turn.
+function physicsRows(physics) {
+  if (!physics) return [["physics test", "- (not asked: options.simulate)"]];
+  const trials = (physics.trials || []).map((t) => ["push " + t.direction,
+    (t.held ? "held" : "moved") + ", " + (1000 * t.translation).toFixed(1) + " mm, " + t.rotation.toFixed(1) + "°"]);
+  const gaps = (physics.tip_gaps || []).map((g) => (1000 * g).toFixed(1)).join(", ");
+  return [["physics test", physics.held ? "held" : "failed (" + physics.reason + ")"],
+    ["fingertip gaps (mm)", gaps || "-"], ["touching after squeeze", physics.touching_after_squeeze], ...trials];
+}
+
 function draw(scene, index) {
   const job = scene.job, result = job.result;
   const proposal = result && result.proposals.length ? result.proposals[index] : null;
@@ -151,7 +161,8 @@ function draw(scene, index) {
       ["max tip distance (m)", fmt(q.max_tip_distance)], ["penetration (m)", fmt(q.penetration_depth)],
       ["self-collision (m)", fmt(q.self_collision_depth)], ["Ferrari–Canny ε", q.epsilon == null ? "- (not computed)" : fmt(q.epsilon)],
       ["verified on", q.geometry || "-"], ["failed criteria", (q.failures || []).join(", ") || "-"],
-      ...(proposal.shape_error == null ? [] : [["shape error (2 m cube)", fmt(proposal.shape_error)]])]);
+      ...(proposal.shape_error == null ? [] : [["shape error (2 m cube)", fmt(proposal.shape_error)]]),
+      ...physicsRows(q.physics)]);
     rows("hand", proposal.palm_position ? [["hand", result.hand],
       ["palm position", proposal.palm_position.map(fmt).join(", ")],
       ["palm quaternion", proposal.palm_quaternion.map(fmt).join(", ")],
