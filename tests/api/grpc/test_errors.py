@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import grpc
 import pytest
 from google.rpc import error_details_pb2, status_pb2
@@ -154,3 +156,43 @@ def test_a_bad_page_names_its_parameter(service: Service) -> None:
     bad = pb.GetBatchRequest(id=batch.id, limit=0)
     error, _, body = failure(lambda: service.stub.GetBatch(bad, metadata=service.auth()))
     assert error.code() is grpc.StatusCode.INVALID_ARGUMENT and body.detail[0].field == "limit"
+
+
+def test_a_wait_cut_off_by_a_shutdown_names_its_job_in_a_header(service: Service) -> None:
+    """A synchronous caller cut off by a restart (503 / UNAVAILABLE) finds its job's id in ``X-Job-ID`` (HTTP) and
+    the ``x-job-id`` trailing metadata (gRPC), not only in the message text (issue 62, item 10)."""
+    import concurrent.futures
+
+    import httpx
+
+    from ..helpers import request_body
+    from .conftest import HAND, KEY
+
+    services = service.app.state.services
+    http = httpx.Client(base_url=service.base, headers={"Authorization": f"Bearer {KEY}"}, timeout=30)
+    slow = request_body(HAND, 128, max_iterations=200)  # ≈ 10 s: still running when the shutdown begins
+    with concurrent.futures.ThreadPoolExecutor(2) as pool:
+        answer = pool.submit(http.post, "/v1/synthesize", json=slow)
+        call = service.stub.Synthesize.future(request(max_iterations=200), metadata=service.auth(), timeout=30)
+        running = 0
+        for _ in range(200):
+            jobs = http.get("/v1/jobs?limit=5").json()["jobs"]
+            running = sum(job["state"] in ("running", "queued") for job in jobs)
+            if running >= 2:
+                break
+            time.sleep(0.02)
+        services.shutting_down = True
+        try:
+            cut = answer.result(timeout=10)
+            error = call.exception(timeout=10)
+        finally:
+            services.shutting_down = False
+    assert cut.status_code == 503, cut.text
+    http_job = cut.headers["x-job-id"]
+    assert http_job in cut.json()["error"]
+    assert error is not None and error.code() is grpc.StatusCode.UNAVAILABLE
+    grpc_job = dict(error.trailing_metadata())["x-job-id"]  # type: ignore[attr-defined]
+    assert grpc_job in error.details() and grpc_job != http_job
+    for job_id in (http_job, grpc_job):
+        assert http.delete(f"/v1/jobs/{job_id}").status_code in (200, 202, 409)
+    http.close()
