@@ -40,7 +40,7 @@ from research.bench.rss import rss_mb
 from research.bench.service import _free_port, request_body
 
 STAGED = "research.staged_pipeline:StagedPipeline"
-SCENARIOS = ("soak", "poison", "large_bodies", "full_queue", "slow_headers")
+SCENARIOS = ("soak", "poison", "large_bodies", "full_queue", "slow_headers", "grpc_batches")
 EXAMPLE = """examples (the README's figures):
   mani-lab bench faults --jobs 120 --kills 4 --restarts 2 --poison-batches 4 --bodies 100 --body-mb 8
   mani-lab bench faults --only large_bodies,full_queue --bodies 100 --body-mb 50
@@ -71,6 +71,9 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
                         help="full queue: one service per checkout (comma-separated), side by side, bursts alternating")
     parser.add_argument("--fsync", choices=("always", "everysec"), default="always",
                         help="soak: the private Redis's appendfsync (always: no acknowledged write lost on kill -9)")
+    parser.add_argument("--grpc-calls", type=int, default=3, help="gRPC: concurrent SubmitBatch calls (3)")
+    parser.add_argument("--grpc-requests", type=int, default=6, help="gRPC: requests per batch (6)")
+    parser.add_argument("--grpc-points", type=int, default=200_000, help="gRPC: points per request (200000)")
     parser.add_argument("--only", default=",".join(SCENARIOS), help=f"scenarios to run ({','.join(SCENARIOS)})")
     parser.add_argument("--budget", type=float, default=240.0, help="seconds per scenario at most (240)")
     parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
@@ -243,10 +246,10 @@ async def poison(args: argparse.Namespace, directory: str) -> dict[str, Any]:
 
 
 def _serve(
-    max_queue: int, stage_seconds: float, checkout: str | None = None, **env: str
+    max_queue: int, stage_seconds: float, checkout: str | None = None, grpc_port: int = 0, **env: str
 ) -> tuple[subprocess.Popen[bytes], str]:
     """`mani serve` on the staged pipeline; ``checkout``: run that directory's code (PYTHONPATH and working
-    directory: ``python -m`` puts the latter first on sys.path)."""
+    directory: ``python -m`` puts the latter first on sys.path); ``grpc_port``: gRPC on it (0: HTTP only)."""
     import httpx
 
     port = _free_port()
@@ -256,7 +259,8 @@ def _serve(
     environ.pop("MANI_REDIS_URL", None)
     if checkout:
         environ["PYTHONPATH"] = checkout
-    cmd = [sys.executable, "-m", "manifoundation.cli.main", "serve", "--port", str(port), "--no-grpc"]
+    cmd = [sys.executable, "-m", "manifoundation.cli.main", "serve", "--port", str(port)]
+    cmd += ["--grpc-port", str(grpc_port)] if grpc_port else ["--no-grpc"]
     proc = subprocess.Popen(cmd, env=environ, cwd=checkout, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     base = f"http://127.0.0.1:{port}"
     end = time.monotonic() + 120
@@ -353,6 +357,80 @@ async def large_bodies(args: argparse.Namespace) -> dict[str, Any]:
     }  # fmt: skip
 
 
+def _grpc_batch(requests: int, points: int) -> bytes:
+    """A serialized `BatchCreate` of ``requests`` requests of ``points`` points, points and normals as float64
+    (200 000 points: 9.6 MB a request)."""
+    import numpy as np
+
+    from manifoundation.contract import BatchCreate
+    from manifoundation.contract.protos.convert import to_proto
+    from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
+
+    body = request_body(64, "test_gripper", "direct_grasp")
+    p = np.random.default_rng(0).normal(size=(points, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    body["object"] = {"points": 0.04 * p, "normals": p}
+    body["options"]["max_iterations"] = 2
+    batch = BatchCreate.model_validate({"requests": [body] * requests})
+    return bytes(to_proto(batch, pb.BatchCreate).SerializeToString())
+
+
+async def grpc_batches(args: argparse.Namespace) -> dict[str, Any]:
+    """``--grpc-calls`` concurrent `SubmitBatch` of ``--grpc-requests`` requests of ``--grpc-points`` points
+    (issue 62, item 3: 3 × 6 × 200 000 points, 57.6 MB a call); /healthz polled every 20 ms by a process of its
+    own, API RSS sampled every 20 ms, and read again once the queue drained."""
+    import grpc
+    import httpx
+
+    from research.bench.probes import health_probe
+
+    data = _grpc_batch(args.grpc_requests, args.grpc_points)
+    port = _free_port()
+    proc, base = _serve(max_queue=10 * args.grpc_calls * args.grpc_requests, stage_seconds=0.0, grpc_port=port)
+    options = [("grpc.max_send_message_length", -1), ("grpc.max_receive_message_length", -1)]
+    method = "/manifoundation.v1.ManiFoundation/SubmitBatch"
+    try:
+        before = rss_mb(proc.pid).get("VmRSS", 0.0)
+        async with grpc.aio.insecure_channel(f"127.0.0.1:{port}", options=options) as channel:
+            call = channel.unary_unary(method, request_serializer=None, response_deserializer=None)
+
+            async def one() -> tuple[str, float]:
+                t0 = time.perf_counter()
+                try:
+                    await call(data, timeout=args.budget)
+                    return "OK", time.perf_counter() - t0
+                except grpc.aio.AioRpcError as exc:
+                    return exc.code().name, time.perf_counter() - t0
+
+            with health_probe(f"{base}/healthz") as health:
+                calls = [asyncio.ensure_future(one()) for _ in range(args.grpc_calls)]
+                posting = asyncio.gather(*calls)
+                peak = 0.0
+                while not posting.done():
+                    peak = max(peak, rss_mb(proc.pid).get("VmRSS", 0.0))
+                    await asyncio.sleep(0.02)
+                answers = posting.result()
+        after = rss_mb(proc.pid)
+        async with httpx.AsyncClient(base_url=base, timeout=60) as http:
+            end = time.monotonic() + args.budget
+            while (await http.get("/dashboard/data")).json()["stats"]["depth"] and time.monotonic() < end:
+                await asyncio.sleep(0.5)
+            await asyncio.sleep(1.0)
+            drained = rss_mb(proc.pid)
+    finally:
+        _stop(proc)
+    return {
+        "calls": args.grpc_calls, "requests": args.grpc_requests, "points": args.grpc_points,
+        "call_mb": round(len(data) / 1e6, 1), "answers": dict(Counter(s for s, _ in answers)),
+        "healthz_p50_ms": _pct(health, 0.5), "healthz_p99_ms": _pct(health, 0.99),
+        "healthz_max_ms": _pct(health, 1.0), "api_rss_before_mb": round(before, 0),
+        "api_rss_peak_mb": round(max(peak, after.get("VmHWM", 0.0)), 0),
+        "api_rss_after_mb": round(after.get("VmRSS", 0.0), 0),
+        "api_rss_drained_mb": round(drained.get("VmRSS", 0.0), 0),
+        "seconds": round(max((t for _, t in answers), default=0.0), 1),
+    }  # fmt: skip
+
+
 async def full_queue(args: argparse.Namespace) -> dict[str, Any]:
     """The queue full (10 slow jobs), then ``--bodies`` posts at once of a small body, of a large one pushed at
     once, and of a large one sent with ``Expect: 100-continue``: 429 latency to the status line, the median over
@@ -438,6 +516,7 @@ def run(args: argparse.Namespace) -> int:
             "large_bodies": lambda: large_bodies(args),
             "full_queue": lambda: full_queue(args),
             "slow_headers": lambda: slow_headers(args),
+            "grpc_batches": lambda: grpc_batches(args),
         }
         for name in chosen:
             figures[name] = asyncio.run(scenarios[name]())
