@@ -428,9 +428,12 @@ async def grpc_batches(args: argparse.Namespace) -> dict[str, Any]:
         after = rss_mb(proc.pid)
         async with httpx.AsyncClient(base_url=base, timeout=60) as http:
             end = time.monotonic() + args.budget
-            while (await http.get("/dashboard/data")).json()["stats"]["depth"] and time.monotonic() < end:
+            while time.monotonic() < end:
+                stats = (await http.get("/dashboard/data")).json()["stats"]
+                if not stats["depth"] and not stats["running"]:
+                    break
                 await asyncio.sleep(0.5)
-            await asyncio.sleep(1.0)
+            await asyncio.sleep(3.0)  # the queue trims the heap at most every 2 s
             drained = rss_mb(proc.pid)
     finally:
         _stop(proc)

@@ -57,9 +57,10 @@ _STOP_GRACE_S = 10.0
 
 
 TRIM_AFTER_FREED_BYTES = 32 * 1024 * 1024
-"""Once the payloads of ended jobs add up to this, the C heap's free pages go back to the OS (`HeapTrimmer`, at
-most every 2 s): glibc keeps freed multi-MB payloads in its arenas, so an API that took a few large batches would
-otherwise stay at their peak (issue 62, item 3: 368 MB after 3 × 57.6 MB gRPC batches drained, 90 MB before)."""
+"""Once the payloads of ended jobs add up to this (or the queue is idle), the C heap's free pages go back to the
+OS (`HeapTrimmer`, at most every 2 s): glibc keeps freed multi-MB payloads in its arenas, so an API that took a
+few large batches would otherwise stay at their peak (issue 62, item 3: 368 MB after 3 × 57.6 MB gRPC batches
+drained, 90 MB before)."""
 
 
 class EmbeddedPump:
@@ -136,8 +137,9 @@ class EmbeddedPump:
                 self._sweep()
                 if self._running:
                     self._replace_silent()
-            if self._freed_bytes >= TRIM_AFTER_FREED_BYTES and self._heap.maybe_trim():
-                self._freed_bytes = 0
+            idle = not self._pending and not any(w.inflight for w in list(self._workers.values()))
+            if self._freed_bytes >= (1 if idle else TRIM_AFTER_FREED_BYTES) and self._heap.maybe_trim():
+                self._freed_bytes = 0  # trimmed: after every 32 MB freed, and once the queue is idle
             if self._running:
                 self._dispatch()
             elif not any(w.process.is_alive() for w in list(self._workers.values())):
