@@ -122,6 +122,24 @@ def test_robots(service: Service) -> None:
     assert "grpc_hand" in names and "grpc_hand" not in others  # per-key namespaces, as over HTTP
 
 
+def test_a_large_robot_and_a_large_synthesis_go_through_the_body_pool(service: Service) -> None:
+    """`RegisterRobot` and `Synthesize` messages over MANI_PARSE_OFFLOAD_BYTES are decoded in the large-body
+    processes too (`LargeMessage`): the same answers as small ones; a synthesis's timeout read from the decoded
+    request."""
+    padding = "<!--" + "x" * 1_200_000 + "-->"  # 1.2 MB: over the 1 MiB offload threshold
+    urdf = f'<robot name="r">{padding}<link name="base"/><link name="tip"/></robot>'
+    mine = service.stub.RegisterRobot(pb.RobotRegister(name="grpc_large_hand", urdf=urdf, fingertips=["tip"]),
+                                      metadata=service.auth(), timeout=60)  # fmt: skip
+    assert mine.name == "grpc_large_hand" and mine.stored_bytes >= len(urdf)
+    message = request(n=100_000, timeout=30)
+    assert message.ByteSize() > 1024 * 1024
+    result, call = service.stub.Synthesize.with_call(message, metadata=service.auth(), timeout=60)
+    assert result.hand == HAND
+    job_id = dict(call.trailing_metadata())["x-job-id"]
+    job = service.stub.GetJob(pb.GetJobRequest(id=job_id), metadata=service.auth())
+    assert job.state == "succeeded" and job.deadline - job.created_at == pytest.approx(30, abs=1)
+
+
 def test_tips_offsets_travel_as_typed_arrays(service: Service) -> None:
     message = request()
     message.robot.tip_offsets.CopyFrom(pb.Array(dtype="float32", shape=[1, 3], data=np.zeros(3, "<f4").tobytes()))
