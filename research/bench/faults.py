@@ -1,7 +1,7 @@
 """`mani-lab bench faults`: what holds under faults and hostile load, measured (bounded in count and time, loopback
 only).
 
-Five scenarios, each on its own private processes (a `redis-server` on a free port with AOF in a temporary
+Ten scenarios, each on its own private processes (a `redis-server` on a free port with AOF in a temporary
 directory, `mani worker` / `mani serve` children), all killed at the end:
 
 - soak: N jobs through Redis with 2 workers (batch 4) while workers are killed (kill -9) and Redis is killed and
@@ -14,8 +14,15 @@ directory, `mani worker` / `mani serve` children), all killed at the end:
   sockets to the status line (`research.bench.probes`); large bodies both pushed at once and sent with
   ``Expect: 100-continue`` (as curl does), which a refusal answers before any of the body is sent.
 - slow headers: connections sending their request head a byte at a time: how many the server closed, how soon.
+- gRPC batches (issue 62, item 3): concurrent `SubmitBatch` of large messages: /healthz latency, API RSS peak,
+  after and once the queue drained.
+- include bomb (item 1): an MJCF include bomb registered twice beside a normal registration, on the real loader.
+- MCP bodies (item 2): large `upload_object` posts to ``/mcp`` at once, and one over ``MANI_MCP_MAX_BODY_BYTES``.
+- embedded SIGSTOP (item 6): the embedded worker running a job stopped: seconds until the job is delivered again.
+- MCP streams (item 7): `GET /mcp` streams from one key: how many were answered, how many outlive
+  ``MANI_MCP_STREAM_MAX_S``.
 
-Why one module: five scenarios of one benchmark share their process and Redis helpers and one report table.
+Why one module: the scenarios of one benchmark share their process and Redis helpers and one report table.
 """
 
 from __future__ import annotations
@@ -40,12 +47,14 @@ from research.bench.rss import rss_mb
 from research.bench.service import _free_port, request_body
 
 STAGED = "research.staged_pipeline:StagedPipeline"
-SCENARIOS = ("soak", "poison", "large_bodies", "full_queue", "slow_headers")
+SCENARIOS = ("soak", "poison", "large_bodies", "full_queue", "slow_headers", "grpc_batches", "include_bomb",
+             "mcp_bodies", "embedded_sigstop", "mcp_streams")
 EXAMPLE = """examples (the README's figures):
   mani-lab bench faults --jobs 120 --kills 4 --restarts 2 --poison-batches 4 --bodies 100 --body-mb 8
   mani-lab bench faults --only large_bodies,full_queue --bodies 100 --body-mb 50
   mani-lab bench faults --only slow_headers --slow 300 --slow-interval 15 --slow-seconds 50
-  mani-lab bench faults --only full_queue --rounds 10 --checkouts ../base,.   # two versions side by side"""
+  mani-lab bench faults --only full_queue --rounds 10 --checkouts ../base,.   # two versions side by side
+  mani-lab bench faults --only grpc_batches,include_bomb,mcp_bodies,embedded_sigstop,mcp_streams   # issue 62"""
 
 
 def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -71,6 +80,14 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
                         help="full queue: one service per checkout (comma-separated), side by side, bursts alternating")
     parser.add_argument("--fsync", choices=("always", "everysec"), default="always",
                         help="soak: the private Redis's appendfsync (always: no acknowledged write lost on kill -9)")
+    parser.add_argument("--grpc-calls", type=int, default=3, help="gRPC: concurrent SubmitBatch calls (3)")
+    parser.add_argument("--grpc-requests", type=int, default=6, help="gRPC: requests per batch (6)")
+    parser.add_argument("--grpc-points", type=int, default=200_000, help="gRPC: points per request (200000)")
+    parser.add_argument("--bomb-depth", type=int, default=4, help="include bomb: levels of 60 includes (4)")
+    parser.add_argument("--mcp-posts", type=int, default=4, help="MCP: large upload_object posts at once (4)")
+    parser.add_argument("--mcp-points", type=int, default=50_000, help="MCP: points per upload (50000: 6.6 MB)")
+    parser.add_argument("--streams", type=int, default=40, help="MCP streams: GET /mcp streams opened (40)")
+    parser.add_argument("--stream-max-s", type=float, default=3.0, help="MCP streams: MANI_MCP_STREAM_MAX_S (3)")
     parser.add_argument("--only", default=",".join(SCENARIOS), help=f"scenarios to run ({','.join(SCENARIOS)})")
     parser.add_argument("--budget", type=float, default=240.0, help="seconds per scenario at most (240)")
     parser.add_argument("--json", type=Path, help="also write the figures to this JSON file")
@@ -243,20 +260,22 @@ async def poison(args: argparse.Namespace, directory: str) -> dict[str, Any]:
 
 
 def _serve(
-    max_queue: int, stage_seconds: float, checkout: str | None = None, **env: str
+    max_queue: int, stage_seconds: float, checkout: str | None = None, grpc_port: int = 0, **env: str
 ) -> tuple[subprocess.Popen[bytes], str]:
     """`mani serve` on the staged pipeline; ``checkout``: run that directory's code (PYTHONPATH and working
-    directory: ``python -m`` puts the latter first on sys.path)."""
+    directory: ``python -m`` puts the latter first on sys.path); ``grpc_port``: gRPC on it (0: HTTP only)."""
     import httpx
 
     port = _free_port()
     environ = dict(os.environ, MANI_PIPELINE=STAGED, MANI_PIPELINE_OPTIONS=json.dumps({"stage_seconds": stage_seconds}),
                    MANI_MAX_QUEUE=str(max_queue), MANI_RATE_LIMIT_PER_S="0", MANI_LOG_LEVEL="WARNING",
-                   MANI_CONCURRENCY="1", MANI_BODY_TIMEOUT="120", **env)  # fmt: skip
+                   MANI_CONCURRENCY="1", MANI_BODY_TIMEOUT="120")  # fmt: skip
+    environ.update(env)
     environ.pop("MANI_REDIS_URL", None)
     if checkout:
         environ["PYTHONPATH"] = checkout
-    cmd = [sys.executable, "-m", "manifoundation.cli.main", "serve", "--port", str(port), "--no-grpc"]
+    cmd = [sys.executable, "-m", "manifoundation.cli.main", "serve", "--port", str(port)]
+    cmd += ["--grpc-port", str(grpc_port)] if grpc_port else ["--no-grpc"]
     proc = subprocess.Popen(cmd, env=environ, cwd=checkout, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     base = f"http://127.0.0.1:{port}"
     end = time.monotonic() + 120
@@ -353,6 +372,300 @@ async def large_bodies(args: argparse.Namespace) -> dict[str, Any]:
     }  # fmt: skip
 
 
+def _grpc_batch(requests: int, points: int) -> bytes:
+    """A serialized `BatchCreate` of ``requests`` requests of ``points`` points, points and normals as float64
+    (200 000 points: 9.6 MB a request)."""
+    import numpy as np
+
+    from manifoundation.contract import BatchCreate
+    from manifoundation.contract.protos.convert import to_proto
+    from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
+
+    body = request_body(64, "test_gripper", "direct_grasp")
+    p = np.random.default_rng(0).normal(size=(points, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    body["object"] = {"points": 0.04 * p, "normals": p}
+    body["options"]["max_iterations"] = 2
+    batch = BatchCreate.model_validate({"requests": [body] * requests})
+    return bytes(to_proto(batch, pb.BatchCreate).SerializeToString())
+
+
+async def grpc_batches(args: argparse.Namespace) -> dict[str, Any]:
+    """``--grpc-calls`` concurrent `SubmitBatch` of ``--grpc-requests`` requests of ``--grpc-points`` points
+    (issue 62, item 3: 3 × 6 × 200 000 points, 57.6 MB a call); /healthz polled every 20 ms by a process of its
+    own, API RSS sampled every 20 ms, and read again once the queue drained."""
+    import grpc
+    import httpx
+
+    from research.bench.probes import health_probe
+
+    data = _grpc_batch(args.grpc_requests, args.grpc_points)
+    port = _free_port()
+    proc, base = _serve(max_queue=10 * args.grpc_calls * args.grpc_requests, stage_seconds=0.0, grpc_port=port)
+    options = [("grpc.max_send_message_length", -1), ("grpc.max_receive_message_length", -1)]
+    method = "/manifoundation.v1.ManiFoundation/SubmitBatch"
+    try:
+        before = rss_mb(proc.pid).get("VmRSS", 0.0)
+        async with grpc.aio.insecure_channel(f"127.0.0.1:{port}", options=options) as channel:
+            call = channel.unary_unary(method, request_serializer=None, response_deserializer=None)
+
+            async def one() -> tuple[str, float]:
+                t0 = time.perf_counter()
+                try:
+                    await call(data, timeout=args.budget)
+                    return "OK", time.perf_counter() - t0
+                except grpc.aio.AioRpcError as exc:
+                    return exc.code().name, time.perf_counter() - t0
+
+            with health_probe(f"{base}/healthz") as health:
+                calls = [asyncio.ensure_future(one()) for _ in range(args.grpc_calls)]
+                posting = asyncio.gather(*calls)
+                peak = 0.0
+                while not posting.done():
+                    peak = max(peak, rss_mb(proc.pid).get("VmRSS", 0.0))
+                    await asyncio.sleep(0.02)
+                answers = posting.result()
+        after = rss_mb(proc.pid)
+        async with httpx.AsyncClient(base_url=base, timeout=60) as http:
+            end = time.monotonic() + args.budget
+            while time.monotonic() < end:
+                stats = (await http.get("/dashboard/data")).json()["stats"]
+                if not stats["depth"] and not stats["running"]:
+                    break
+                await asyncio.sleep(0.5)
+            await asyncio.sleep(3.0)  # the queue trims the heap at most every 2 s
+            drained = rss_mb(proc.pid)
+    finally:
+        _stop(proc)
+    return {
+        "calls": args.grpc_calls, "requests": args.grpc_requests, "points": args.grpc_points,
+        "call_mb": round(len(data) / 1e6, 1), "answers": dict(Counter(s for s, _ in answers)),
+        "healthz_p50_ms": _pct(health, 0.5), "healthz_p99_ms": _pct(health, 0.99),
+        "healthz_max_ms": _pct(health, 1.0), "api_rss_before_mb": round(before, 0),
+        "api_rss_peak_mb": round(max(peak, after.get("VmHWM", 0.0)), 0),
+        "api_rss_after_mb": round(after.get("VmRSS", 0.0), 0),
+        "api_rss_drained_mb": round(drained.get("VmRSS", 0.0), 0),
+        "seconds": round(max((t for _, t in answers), default=0.0), 1),
+    }  # fmt: skip
+
+
+_BOMB_HAND = (
+    '<mujoco model="h"><worldbody><body name="palm"><geom type="box" size=".02 .02 .02"/>'
+    '<body name="tip" pos="0 0 .05"><joint name="j" type="hinge" axis="1 0 0" range="0 1"/>'
+    '<geom type="sphere" size=".01"/></body></body></worldbody></mujoco>'
+)
+
+
+def _include_bomb(depth: int, fan_out: int = 60) -> bytes:
+    """An MJCF archive: ``hand.xml`` includes ``l0.xml``, each ``lN.xml`` includes ``l(N+1).xml`` ``fan_out``
+    times (issue 62, item 1: 815 bytes zipped at depth 3; 60^depth includes once inlined)."""
+    import io
+    import zipfile
+
+    files = {"hand.xml": _BOMB_HAND.replace("<worldbody>", '<include file="l0.xml"/><worldbody>')}
+    for level in range(depth):
+        files[f"l{level}.xml"] = "<mujoco>" + f'<include file="l{level + 1}.xml"/>' * fan_out + "</mujoco>"
+    files[f"l{depth}.xml"] = '<mujoco><default><geom rgba="1 0 0 1"/></default></mujoco>'
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
+        for name, text in files.items():
+            z.writestr(name, text)
+    return buf.getvalue()
+
+
+async def include_bomb(args: argparse.Namespace) -> dict[str, Any]:
+    """Issue 62, item 1: an include bomb of ``--bomb-depth`` levels registered twice at once beside a normal
+    registration (the same archive without includes), on the real loader (`ModelsPipeline`, one worker, hand
+    barrett): each bomb's status and seconds, the worker's peak RSS meanwhile, the normal one's status and
+    seconds."""
+    import base64
+
+    import httpx
+
+    from research.bench.rss import worker_pids
+
+    archive = base64.b64encode(_include_bomb(args.bomb_depth)).decode()
+    plain = base64.b64encode(_include_bomb(0)).decode()
+    proc, base = _serve(max_queue=20, stage_seconds=0.0, MANI_ROBOT_REGISTER_TIMEOUT="120",
+                        MANI_PIPELINE="manifoundation.server.worker.models_pipeline:ModelsPipeline",
+                        MANI_PIPELINE_OPTIONS=json.dumps({"hands": ["barrett"]}))  # fmt: skip
+    try:
+        workers = worker_pids(proc.pid)
+        async with httpx.AsyncClient(base_url=base, timeout=args.budget) as http:
+
+            async def register(name: str) -> tuple[int, str, float]:
+                t0 = time.perf_counter()
+                answer = await http.post("/v1/robots", json={"name": name, "archive": archive})
+                return answer.status_code, str(answer.json().get("error", ""))[:80], time.perf_counter() - t0
+
+            async def normal() -> tuple[int, float]:
+                t0 = time.perf_counter()
+                answer = await http.post("/v1/robots", json={"name": "plain", "archive": plain, "fingertips": ["tip"]})
+                return answer.status_code, time.perf_counter() - t0
+
+            before = sum(rss_mb(pid).get("VmRSS", 0.0) for pid in workers)
+            work = asyncio.ensure_future(asyncio.gather(register("bomb1"), register("bomb2"), normal()))
+            peak = 0.0
+            while not work.done():
+                peak = max(peak, sum(rss_mb(pid).get("VmRSS", 0.0) for pid in workers))
+                await asyncio.sleep(0.02)
+            first, second, (normal_status, normal_s) = work.result()
+    finally:
+        _stop(proc)
+    return {
+        "depth": args.bomb_depth, "archive_bytes": len(base64.b64decode(archive)),
+        "statuses": [first[0], second[0]], "error": first[1], "seconds": [round(first[2], 2), round(second[2], 2)],
+        "worker_rss_before_mb": round(before, 0), "worker_rss_peak_mb": round(peak, 0),
+        "normal": normal_status, "normal_s": round(normal_s, 2),
+    }  # fmt: skip
+
+
+async def mcp_bodies(args: argparse.Namespace) -> dict[str, Any]:
+    """Issue 62, item 2: ``--mcp-posts`` `upload_object` calls of ``--mcp-points`` points posted to ``/mcp`` at once
+    (JSON, parsed by the MCP SDK) and one of 36.5 MB (refused by ``MANI_MCP_MAX_BODY_BYTES`` before it is read):
+    /healthz latency meanwhile, API RSS peak and after."""
+    import httpx
+    import numpy as np
+
+    from research.bench.probes import health_probe
+
+    p = np.random.default_rng(0).normal(size=(args.mcp_points, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    call = {"jsonrpc": "2.0", "id": 1, "method": "tools/call",
+            "params": {"name": "upload_object", "arguments": {"points": (0.04 * p).tolist(), "normals": p.tolist()}}}
+    data = json.dumps(call).encode()
+    huge = data + b" " * max(0, 36_500_000 - len(data))  # the issue's 36.5 MB, whitespace-padded
+    headers = {"Content-Type": "application/json", "Accept": "application/json, text/event-stream"}
+    proc, base = _serve(max_queue=10, stage_seconds=0.0)
+    try:
+        before = rss_mb(proc.pid).get("VmRSS", 0.0)
+        async with httpx.AsyncClient(base_url=base, timeout=args.budget, headers=headers) as http:
+
+            async def post(body: bytes) -> int:
+                try:
+                    return (await http.post("/mcp", content=body)).status_code
+                except httpx.HTTPError:
+                    return 0
+
+            with health_probe(f"{base}/healthz") as health:
+                t0 = time.perf_counter()
+                posting = asyncio.gather(*[asyncio.ensure_future(post(data)) for _ in range(args.mcp_posts)])
+                peak = 0.0
+                while not posting.done():
+                    peak = max(peak, rss_mb(proc.pid).get("VmRSS", 0.0))
+                    await asyncio.sleep(0.02)
+                seconds = time.perf_counter() - t0
+                statuses = posting.result()
+            refused = await post(huge)
+        await asyncio.sleep(1.0)
+        after = rss_mb(proc.pid)
+    finally:
+        _stop(proc)
+    return {
+        "posts": args.mcp_posts, "post_mb": round(len(data) / 1e6, 1), "answers": dict(Counter(statuses)),
+        "huge_mb": round(len(huge) / 1e6, 1), "huge_answer": refused,
+        "healthz_p50_ms": _pct(health, 0.5), "healthz_p99_ms": _pct(health, 0.99), "healthz_max_ms": _pct(health, 1.0),
+        "api_rss_before_mb": round(before, 0), "api_rss_peak_mb": round(max(peak, after.get("VmHWM", 0.0)), 0),
+        "api_rss_after_mb": round(after.get("VmRSS", 0.0), 0), "seconds": round(seconds, 1),
+    }  # fmt: skip
+
+
+async def embedded_sigstop(args: argparse.Namespace) -> dict[str, Any]:
+    """Issue 62, item 6: the embedded worker running a job is stopped (SIGSTOP): seconds until its job is
+    delivered again (to a replacement; heartbeat every 0.5 s, timeout 1.5 s), the job's end, and the stopped
+    process's fate (killed by the queue, or left, then killed here)."""
+    import httpx
+
+    from research.bench.rss import worker_pids
+
+    proc, base = _serve(max_queue=10, stage_seconds=0.1, MANI_HEARTBEAT_INTERVAL="0.5")
+    stopped = None
+    try:
+        async with httpx.AsyncClient(base_url=base, timeout=30) as http:
+            body = request_body(256, "test_gripper", "direct_grasp")
+            body["options"].update(max_iterations=10, timeout=60)
+            job_id = (await http.post("/v1/jobs", json=body)).json()["id"]
+            end = time.monotonic() + args.budget
+            while (await http.get(f"/v1/jobs/{job_id}")).json()["state"] != "running" and time.monotonic() < end:
+                await asyncio.sleep(0.05)
+            stopped = worker_pids(proc.pid)[0]
+            os.kill(stopped, signal.SIGSTOP)
+            t0 = time.monotonic()
+            redelivered = None
+            job: dict[str, Any] = {}
+            while time.monotonic() - t0 < min(args.budget, 60):
+                job = (await http.get(f"/v1/jobs/{job_id}")).json()
+                if redelivered is None and job.get("deliveries", 1) >= 2:
+                    redelivered = time.monotonic() - t0
+                if job["state"] in ("succeeded", "failed", "cancelled", "expired"):
+                    break
+                await asyncio.sleep(0.05)
+            ended = time.monotonic() - t0
+            killed = _gone(stopped)
+    finally:
+        if stopped is not None:
+            with contextlib.suppress(ProcessLookupError, FileNotFoundError):
+                os.kill(stopped, signal.SIGKILL)
+        _stop(proc)
+    return {
+        "redelivered_after_s": None if redelivered is None else round(redelivered, 1), "state": job.get("state"),
+        "deliveries": job.get("deliveries"), "ended_after_s": round(ended, 1), "stopped_worker_killed": killed,
+    }  # fmt: skip
+
+
+def _gone(pid: int) -> bool:
+    """Whether process ``pid`` has exited (gone, or a zombie until its parent reaps it)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except (OSError, IndexError):
+        return True
+
+
+async def mcp_streams(args: argparse.Namespace) -> dict[str, Any]:
+    """Issue 62, item 7: ``--streams`` `GET /mcp` event streams from one key (``MANI_MCP_MAX_STREAMS`` 8): how many
+    were answered 200 and 429, and how many are still open ``--stream-max-s`` + 2 s later."""
+    import httpx
+
+    key = "bench-faults-key-1"
+    proc, base = _serve(max_queue=10, stage_seconds=0.0, MANI_API_KEYS=key,
+                        MANI_MCP_STREAM_MAX_S=str(args.stream_max_s))  # fmt: skip
+    headers = {"Accept": "text/event-stream", "Authorization": f"Bearer {key}"}
+    codes: list[int] = []
+    open_streams = 0
+    try:
+        limits = httpx.Limits(max_connections=None)
+        async with httpx.AsyncClient(base_url=base, timeout=args.budget, limits=limits) as http:
+
+            async def hold() -> None:
+                nonlocal open_streams
+                try:
+                    async with http.stream("GET", "/mcp", headers=headers) as answer:
+                        codes.append(answer.status_code)
+                        open_streams += 1
+                        try:
+                            async for _ in answer.aiter_bytes():
+                                pass
+                        finally:
+                            open_streams -= 1
+                except httpx.HTTPError:
+                    codes.append(0)
+
+            tasks = [asyncio.ensure_future(hold()) for _ in range(args.streams)]
+            await asyncio.sleep(1.0)
+            open_at_1s = open_streams
+            await asyncio.sleep(args.stream_max_s + 1.0)
+            still_open = open_streams
+            for task in tasks:
+                task.cancel()
+            await asyncio.gather(*tasks, return_exceptions=True)
+    finally:
+        _stop(proc)
+    return {
+        "streams": args.streams, "answers": dict(Counter(codes)), "open_after_1s": open_at_1s,
+        "stream_max_s": args.stream_max_s, f"open_after_{args.stream_max_s + 2:g}s": still_open,
+    }  # fmt: skip
+
+
 async def full_queue(args: argparse.Namespace) -> dict[str, Any]:
     """The queue full (10 slow jobs), then ``--bodies`` posts at once of a small body, of a large one pushed at
     once, and of a large one sent with ``Expect: 100-continue``: 429 latency to the status line, the median over
@@ -438,6 +751,11 @@ def run(args: argparse.Namespace) -> int:
             "large_bodies": lambda: large_bodies(args),
             "full_queue": lambda: full_queue(args),
             "slow_headers": lambda: slow_headers(args),
+            "grpc_batches": lambda: grpc_batches(args),
+            "include_bomb": lambda: include_bomb(args),
+            "mcp_bodies": lambda: mcp_bodies(args),
+            "embedded_sigstop": lambda: embedded_sigstop(args),
+            "mcp_streams": lambda: mcp_streams(args),
         }
         for name in chosen:
             figures[name] = asyncio.run(scenarios[name]())

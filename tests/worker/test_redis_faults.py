@@ -5,6 +5,7 @@ Redis."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
 import re
 import signal
@@ -172,3 +173,73 @@ def test_redis_at_maxmemory_is_said_plainly_without_its_internals(tmp_path: Path
     message = asyncio.run(main())
     assert "out of memory" in message and "maxmemory" in message, message
     assert not re.search(r"[0-9a-f]{40}", message) and "script" not in message, message
+
+
+def _fill(url: str) -> int:
+    """Fill a noeviction Redis with filler keys until it refuses a write; how many were written."""
+    import redis
+
+    raw = redis.Redis.from_url(url)
+    n = 0
+    try:
+        for size in (16_384, 1024, 64):  # down to the last few bytes: even a small outcome is refused
+            with contextlib.suppress(redis.exceptions.OutOfMemoryError):
+                while n < 100_000:
+                    raw.set(f"filler:{n}", b"x" * size)
+                    n += 1
+    finally:
+        raw.close()
+    return n
+
+
+def _free(url: str, n: int) -> None:
+    import redis
+
+    raw = redis.Redis.from_url(url)
+    raw.delete(*[f"filler:{i}" for i in range(n)])
+    raw.close()
+
+
+@pytest.mark.parametrize("when", ["delivery", "outcome"])
+def test_writes_refused_at_maxmemory_are_retried_not_left_for_the_visibility_timeout(tmp_path: Path, when: str) -> None:
+    """Redis reaches maxmemory (noeviction) when a worker takes a batch (its BEGIN writes are refused) or while the
+    batch runs (its outcome writes are refused). The worker retries them with a short back-off, so once memory is
+    freed the jobs end within seconds, not after the visibility timeout (issue 62, item 9: a job and its 4
+    batch-mates sat ~52 s)."""
+
+    async def main() -> tuple[float, list[JobState]]:
+        extra = ("--maxmemory", "4mb", "--maxmemory-policy", "noeviction")
+        with redis_server(tmp_path, extra=extra) as server:
+            queue = client(server.url)
+            await queue.start()
+            iterations = 8 if when == "outcome" else 2  # ≈ 3 s: still running once Redis is full
+            ids = await queue.submit([small_request(i) for i in range(4)])
+            filled = await asyncio.to_thread(_fill, server.url) if when == "delivery" else 0
+            options = {"stage_seconds": 0.1, "iterations": iterations}
+            log = open(tmp_path / "worker.log", "wb")  # noqa: SIM115
+            try:
+                with redis_workers(
+                    server.url, "mani:", pipeline_options=options, batch_size=4,
+                    heartbeat_interval=0.2, visibility_timeout=20, stderr=log, log_level="INFO",
+                ):  # fmt: skip
+                    if when == "outcome":
+                        await asyncio.gather(*(until(queue, i, running) for i in ids))
+                        filled = await asyncio.to_thread(_fill, server.url)
+                        jobs = await asyncio.gather(*(queue.get(i, with_result=False) for i in ids))
+                        assert all(job.state is JobState.RUNNING for job in jobs), (
+                            "the batch ended before Redis was full"
+                        )
+                    await asyncio.sleep(5.0)  # the worker meets the refusals meanwhile
+                    await asyncio.to_thread(_free, server.url, filled)
+                    freed = time.monotonic()
+                    jobs = await asyncio.gather(*(queue.wait(i, 30) for i in ids))
+                    return time.monotonic() - freed, [job.state for job in jobs]
+            finally:
+                log.close()
+                await queue.close()
+
+    after_free, states = run(main())
+    refusals = (tmp_path / "worker.log").read_text().count("maxmemory")
+    assert states == [JobState.SUCCEEDED] * 4, states
+    assert after_free < 5.0, f"the jobs ended {after_free:.1f} s after memory was freed (visibility timeout: 20 s)"
+    assert refusals, "the worker met no refusal: Redis was not full when it wrote"

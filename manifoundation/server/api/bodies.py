@@ -26,6 +26,9 @@ from manifoundation.contract.validation import field_errors
 
 ModelT = TypeVar("ModelT", bound=BaseModel)
 
+PROTOBUF = "application/x-protobuf"
+"""The "content type" of a gRPC request message: the contract's protobuf message of the model's name."""
+
 
 def decode(cls: type[ModelT], data: bytes, content_type: str | None) -> tuple[str, Any]:
     """Decode and validate (inline or in a child process); answers ``(kind, value)`` with plain, picklable values:
@@ -34,6 +37,8 @@ def decode(cls: type[ModelT], data: bytes, content_type: str | None) -> tuple[st
     if not data:
         return "empty", ""
     try:
+        if content_type == PROTOBUF:
+            return _from_protobuf(cls, data)
         return "ok", load_model(cls, data, content_type)
     except DecodeError as exc:
         return "decode", str(exc)
@@ -41,6 +46,20 @@ def decode(cls: type[ModelT], data: bytes, content_type: str | None) -> tuple[st
         return "invalid", field_errors(exc)
     except (ValueError, TypeError, RecursionError) as exc:
         return "bad", f"body could not be read: {exc}"
+
+
+def _from_protobuf(cls: type[ModelT], data: bytes) -> tuple[str, Any]:
+    """A gRPC request message (``manifoundation.v1.<cls name>``) validated as the contract's ``cls``."""
+    from google.protobuf.message import DecodeError as ProtobufDecodeError
+
+    from manifoundation.contract.protos.convert import from_proto
+    from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
+
+    try:
+        message = getattr(pb, cls.__name__).FromString(data)
+    except ProtobufDecodeError as exc:
+        return "decode", f"the message could not be parsed as {cls.__name__}: {exc}"
+    return "ok", from_proto(message, cls)  # type: ignore[type-var]
 
 
 class BodyPool:

@@ -98,12 +98,13 @@ async def read_model(request: Request, cls: type[ModelT], limit: int) -> ModelT:
     settings, bodies = services.settings, services.bodies
     timeouts = settings.body_timeout, settings.body_idle_timeout
     if bodies is None or not bodies.large(declared_length(request, limit)):
-        return _answer(decode(cls, await read_bytes(request, limit, *timeouts), content_type))
+        return decoded(decode(cls, await read_bytes(request, limit, *timeouts), content_type))
     async with bodies.slot():
-        return _answer(await bodies.decode(cls, body_chunks(request, limit, *timeouts), content_type))
+        return decoded(await bodies.decode(cls, body_chunks(request, limit, *timeouts), content_type))
 
 
-def _answer(outcome: tuple[str, Any]) -> Any:
+def decoded(outcome: tuple[str, Any]) -> Any:
+    """The model of a `manifoundation.server.api.bodies.decode` outcome, or the error it names (400, 422)."""
     kind, value = outcome
     if kind == "ok":
         return value

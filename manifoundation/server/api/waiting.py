@@ -16,6 +16,9 @@ from manifoundation.server.queue import JobQueue
 if TYPE_CHECKING:
     from manifoundation.server.api.services import AppServices
 
+JOB_ID_HEADER = "X-Job-ID"
+"""The header naming the job an answer is about (gRPC: its lower-case form, ``x-job-id``)."""
+
 WAIT_SLICE_S = 1.0
 """The longest single `queue.wait`: a shutdown is noticed within this."""
 
@@ -25,7 +28,8 @@ async def wait_for_job(
 ) -> JobPublic:
     """The job once it ended, or as it is after ``seconds``. `Unavailable` (503 / UNAVAILABLE) when the service
     starts shutting down meanwhile (``services.shutting_down``): the message tells the caller to fetch the job
-    ``fetch_with`` (e.g. "with GetJob")."""
+    ``fetch_with`` (e.g. "with GetJob"); it carries the job's id as ``X-Job-ID`` (the HTTP header; gRPC's
+    ``x-job-id`` trailing metadata), so a caller cut off by a restart fetches its job without parsing the text."""
     end = time.monotonic() + max(0.0, seconds)
     while True:
         left = end - time.monotonic()
@@ -33,5 +37,7 @@ async def wait_for_job(
         if job.state.terminal or left <= WAIT_SLICE_S:
             return job
         if services.shutting_down:
-            raise Unavailable(f"the service is shutting down; job {job_id} may be fetched {fetch_with}")
+            cut_off = Unavailable(f"the service is shutting down; job {job_id} may be fetched {fetch_with}")
+            cut_off.headers[JOB_ID_HEADER] = job_id
+            raise cut_off
         await asyncio.sleep(0)

@@ -10,6 +10,10 @@ writes the result
 publishes the worker's state and XCLAIMs its own in-flight entries so a long job is not stolen. SIGTERM: finish the
 current batch, then exit. Redis going away: retry with back-off, recreate the group, go on; an outcome that
 could not be written while Redis was down is retried until it is (`_end_durably`), so no job stays "running".
+Redis at its maxmemory (noeviction) refuses writes: an outcome is retried every second or so and, after
+`OOM_RESULT_RETRY_S`, written as a failure without its result (``Unavailable``, said plainly); entries taken
+whose BEGIN was refused are begun again by this worker after a short back-off. Neither waits for the visibility
+timeout.
 
 Run as ``python -m manifoundation.server.worker.worker`` (settings as JSON in ``MANI_WORKER_SETTINGS``, else
 ``MANI_*``); `mani worker` supervises several of these.
@@ -32,7 +36,7 @@ from typing import Any
 
 import redis
 from redis.exceptions import ConnectionError as RedisConnectionError
-from redis.exceptions import RedisError, ResponseError
+from redis.exceptions import OutOfMemoryError, RedisError, ResponseError
 from redis.exceptions import TimeoutError as RedisTimeoutError
 
 from manifoundation.contract import (
@@ -46,6 +50,7 @@ from manifoundation.contract import (
 )
 from manifoundation.contract.codec import pack
 from manifoundation.server.queue.records import cancelled_error, deadline_error, new_id, scoped_robot
+from manifoundation.server.queue.redis import public_reason
 from manifoundation.server.queue.redis_lua import BEGIN, FINISH, GROUP, TOUCH, Keys
 from manifoundation.server.worker.core import PROGRESS_INTERVAL_S, RawJob, WorkerCore, runs_of
 from manifoundation.server.worker.logs import job_context, setup_logging
@@ -58,6 +63,17 @@ PROGRESS_S = PROGRESS_INTERVAL_S
 """Seconds between a job's cancel-flag reads (as between its progress writes: short jobs stay at ~4 round trips)."""
 END_RETRY_S = 30.0
 """How long a stopping worker keeps retrying to write an outcome while Redis is unreachable."""
+OOM_RESULT_RETRY_S = 10.0
+"""How long an outcome refused by a Redis at its maxmemory is retried with its result; after that the job is
+failed without it (a much smaller write), so its caller learns why instead of waiting."""
+REFUSED_BACKOFF_MAX_S = 1.0
+"""The longest pause between retries of a write Redis refused for lack of memory (memory may free at any time)."""
+
+
+def out_of_memory(exc: BaseException) -> bool:
+    """Whether Redis refused a write because its maxmemory is reached (noeviction)."""
+    text = str(exc)
+    return isinstance(exc, OutOfMemoryError) or text.startswith("OOM") or "maxmemory" in text
 
 
 class RedisWorker:
@@ -87,6 +103,7 @@ class RedisWorker:
         self._last_orphans = 0.0
         self._last_tidy = time.monotonic()
         self._healthy_since = -math.inf  # since this worker's last Redis error: other workers had time to beat
+        self._retake: list[tuple[bytes, dict[bytes, bytes]]] = []  # taken, not begun (a write refused): begin again
 
     # ---- lifecycle -------------------------------------------------------------------------------------------
     def run(self) -> None:
@@ -108,10 +125,11 @@ class RedisWorker:
                     self._handle(entries)
                 backoff = 0.1
             except RedisError as exc:
-                log.warning("redis error, retrying in %.1f s: %s", backoff, exc)
+                refused = out_of_memory(exc)
+                log.warning("redis error, retrying in %.1f s: %s", backoff, public_reason(exc) if refused else exc)
                 self._healthy_since = time.monotonic()
                 time.sleep(backoff)
-                backoff = min(backoff * 2, 5.0)
+                backoff = min(backoff * 2, REFUSED_BACKOFF_MAX_S if refused else 5.0)
                 self._connect(quiet=True)
         self._leave()
         log.info("worker stopped")
@@ -178,18 +196,21 @@ class RedisWorker:
             time.sleep(self.settings.heartbeat_interval)
             try:
                 self._beat(client)
+            except RedisError as exc:  # e.g. refused at maxmemory: the entries are touched all the same
+                log.debug("heartbeat failed: %s", exc)
+            try:  # XCLAIM is allowed at maxmemory: a worker waiting for memory keeps its jobs
                 with self.lock:
                     entries = list(self.inflight)
                 if entries:
                     touch(keys=[self.keys.stream], args=[GROUP, self.id, *entries], client=client)
             except RedisError as exc:
-                log.debug("heartbeat failed: %s", exc)
+                log.debug("touch failed: %s", exc)
 
     def _beat(self, client: Any = None) -> None:
         assert self.info is not None
         now = time.time()
         with self.lock:
-            current = next(iter(self.inflight.values()), None)
+            current = next((job for job in self.inflight.values() if job), None)
         info = self.info.model_copy(update={"last_heartbeat": now, "current_job": current, "jobs_done": self.jobs_done})
         ttl = int(self.settings.heartbeat_timeout * 1000)
         pipe = (client or self.r).pipeline(transaction=False)
@@ -233,6 +254,12 @@ class RedisWorker:
         return float(self.r.info("server").get("uptime_in_seconds", 0))
 
     def _take(self) -> list[tuple[bytes, dict[bytes, bytes]]]:
+        if self._retake:  # still this worker's in the stream's pending list (the heartbeat kept them)
+            entries, self._retake = self._retake, []
+            with self.lock:
+                for entry, _ in entries:
+                    self.inflight.pop(entry.decode(), None)
+            return entries
         size = self.settings.batch_size
         now = time.monotonic()
         if now - self._last_tidy > 30.0:
@@ -276,19 +303,30 @@ class RedisWorker:
     def _handle(self, entries: list[tuple[bytes, dict[bytes, bytes]]]) -> None:
         raw_jobs: list[RawJob] = []
         entry_of: dict[str, str] = {}
-        for entry_raw, fields in entries:
+        refused: RedisError | None = None
+        for index, (entry_raw, fields) in enumerate(entries):
             entry = entry_raw.decode()
-            if fields.get(b"k") == b"robot":
-                self._robot(entry, fields)
-                continue
-            job_id = fields[b"id"].decode()
-            request_id = fields[b"r"].decode() if fields.get(b"r") else None  # entries of older services lack it
-            with job_context(job_id, request_id):
-                raw = self._start_job(entry, job_id, fields, request_id)
+            try:
+                if fields.get(b"k") == b"robot":
+                    self._robot(entry, fields)
+                    continue
+                job_id = fields[b"id"].decode()
+                request_id = fields[b"r"].decode() if fields.get(b"r") else None  # entries of older services lack it
+                with job_context(job_id, request_id):
+                    raw = self._start_job(entry, job_id, fields, request_id)
+            except RedisError as exc:
+                # Taken but not begun: without this the entries would wait for the visibility timeout. They stay
+                # this worker's (the heartbeat touches them) and are begun again after the run loop's back-off.
+                refused, self._retake = exc, list(entries[index:])
+                with self.lock:
+                    self.inflight.update({e.decode(): "" for e, _ in self._retake})
+                break
             if raw is not None:
                 raw_jobs.append(raw)
                 entry_of[job_id] = entry
         if not raw_jobs:
+            if refused is not None:
+                raise refused
             return
         request_of = {j.id: j.request_id for j in raw_jobs}
         with self.lock:
@@ -307,6 +345,8 @@ class RedisWorker:
             with self.lock:
                 for raw in raw_jobs:
                     self.inflight.pop(entry_of[raw.id], None)
+        if refused is not None:
+            raise refused
 
     def _end_durably(self, entry: str, job_id: str, state: str, **outcome: Any) -> None:
         """`_end`, retried with back-off while Redis is unreachable (a restart, a failover): the outcome is
@@ -314,10 +354,29 @@ class RedisWorker:
         (the entry is then re-delivered) only when stopping and Redis stays away for `END_RETRY_S` seconds, or
         when the job's stream is gone (Redis came back without its data)."""
         backoff, give_up = 0.1, float("inf")
+        refused_since: float | None = None
         while True:
             try:
                 self._end(entry, job_id, state, **outcome)
                 return
+            except ResponseError as exc:
+                if not out_of_memory(exc):  # NOGROUP: Redis restarted without persistence, the job is gone
+                    log.error("outcome discarded: the job's stream entry is gone (%s)", exc)
+                    return
+                now = time.monotonic()
+                refused_since = now if refused_since is None else refused_since
+                if self.stopping and give_up == float("inf"):
+                    give_up = now + END_RETRY_S
+                if now > give_up:
+                    log.error("outcome not written, %s; the job will be re-delivered", public_reason(exc))
+                    raise
+                if outcome.get("result") and now - refused_since > OOM_RESULT_RETRY_S:
+                    state, outcome = "failed", {"error": _unstorable(exc), "timings": outcome.get("timings")}
+                    log.error("result not stored, %s: the job fails without it", public_reason(exc))
+                    continue
+                log.warning("outcome refused, %s; retrying in %.1f s", public_reason(exc), backoff)
+                time.sleep(backoff)
+                backoff = min(backoff * 2, REFUSED_BACKOFF_MAX_S)
             except (RedisConnectionError, RedisTimeoutError) as exc:
                 if self.stopping and give_up == float("inf"):
                     give_up = time.monotonic() + END_RETRY_S
@@ -327,9 +386,6 @@ class RedisWorker:
                 log.warning("outcome not written yet (%s); retrying in %.1f s", exc, backoff)
                 time.sleep(backoff)
                 backoff = min(backoff * 2, 2.0)
-            except ResponseError as exc:  # NOGROUP: Redis restarted without persistence, the job is gone
-                log.error("outcome discarded: the job's stream entry is gone (%s)", exc)
-                return
 
     def _start_job(self, entry: str, job_id: str, fields: dict[bytes, bytes], request_id: str | None) -> RawJob | None:
         """BEGIN the delivery; the job as the core takes it when it is to run, else end it here (dead, expired,
@@ -428,6 +484,14 @@ class RedisWorker:
         pipe.xdel(self.keys.stream, entry)
         pipe.publish(self.keys.done, f"robot:{rid}")
         pipe.execute()
+
+
+def _unstorable(exc: BaseException) -> ErrorBody:
+    """The error of a job whose result Redis refused to store."""
+    return ErrorBody(
+        error=f"the job ran but its result could not be stored: {public_reason(exc)}; submit it again later",
+        type=ErrorType.UNAVAILABLE.value,
+    )
 
 
 def main() -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import time
+
 import grpc
 import pytest
 from google.rpc import error_details_pb2, status_pb2
@@ -14,7 +16,7 @@ from manifoundation.server.api.grpc.errors import DETAILS_KEY, ERROR_KEY, GRPC_C
 from manifoundation.server.api.grpc.server import SERVICE_NAME
 from manifoundation.server.api.security import RateLimiter
 
-from .conftest import FAIL_SEED, OTHER, Service, request
+from .conftest import FAIL_SEED, OTHER, Service, request, wait_terminal
 
 
 def failure(call: object) -> tuple[grpc.RpcError, status_pb2.Status, pb.ErrorBody]:
@@ -154,3 +156,56 @@ def test_a_bad_page_names_its_parameter(service: Service) -> None:
     bad = pb.GetBatchRequest(id=batch.id, limit=0)
     error, _, body = failure(lambda: service.stub.GetBatch(bad, metadata=service.auth()))
     assert error.code() is grpc.StatusCode.INVALID_ARGUMENT and body.detail[0].field == "limit"
+
+
+def test_a_wait_cut_off_by_a_shutdown_names_its_job_in_a_header(service: Service) -> None:
+    """A synchronous caller cut off by a restart (503 / UNAVAILABLE) finds its job's id in ``X-Job-ID`` (HTTP) and
+    the ``x-job-id`` trailing metadata (gRPC), not only in the message text (issue 62, item 10). The embedded
+    worker is stopped (SIGSTOP) meanwhile, so neither job can end before the shutdown begins."""
+    import concurrent.futures
+    import contextlib
+    import os
+    import signal
+
+    import httpx
+
+    from ..helpers import request_body
+    from .conftest import HAND, KEY
+
+    services = service.app.state.services
+    http = httpx.Client(base_url=service.base, headers={"Authorization": f"Bearer {KEY}"}, timeout=30)
+    before = {job["id"] for job in http.get("/v1/jobs?limit=50").json()["jobs"]}
+    workers = [worker.process.pid for worker in services.queue._workers.values()]
+    assert workers, "no embedded worker process"
+    for pid in workers:
+        os.kill(pid, signal.SIGSTOP)
+    try:
+        with concurrent.futures.ThreadPoolExecutor(2) as pool:
+            answer = pool.submit(http.post, "/v1/synthesize", json=request_body(HAND, 128))
+            call = service.stub.Synthesize.future(request(), metadata=service.auth(), timeout=30)
+            for _ in range(50):  # until the HTTP request's job is submitted too (≤ 1 s: the worker is replaced
+                # after its heartbeat timeout, 6 s)
+                new = {job["id"] for job in http.get("/v1/jobs?limit=50").json()["jobs"]} - before
+                if len(new) >= 2:
+                    break
+                time.sleep(0.02)
+            assert len(new) == 2, new
+            services.shutting_down = True
+            try:
+                cut = answer.result(timeout=10)
+                error = call.exception(timeout=10)
+            finally:
+                services.shutting_down = False
+    finally:
+        for pid in workers:
+            with contextlib.suppress(ProcessLookupError):  # replaced, if it was stopped too long
+                os.kill(pid, signal.SIGCONT)
+    assert cut.status_code == 503, cut.text
+    http_job = cut.headers["x-job-id"]
+    assert http_job in cut.json()["error"]
+    assert error is not None and error.code() is grpc.StatusCode.UNAVAILABLE
+    grpc_job = dict(error.trailing_metadata())["x-job-id"]  # type: ignore[attr-defined]
+    assert grpc_job in error.details() and grpc_job != http_job
+    for job_id in (http_job, grpc_job):
+        assert wait_terminal(service, job_id).state == "succeeded"  # the jobs themselves go on
+    http.close()

@@ -117,7 +117,17 @@ async def abort(
     more trailing metadata (the reported versions)."""
     error, retry_after = translate(exc)
     metadata = trailers(error, retry_after) + extra
-    if isinstance(exc, JobFailed):
-        metadata += ((keys.JOB_ID, exc.job_id),)
+    job_id = exc.job_id if isinstance(exc, JobFailed) else _job_id_of(exc)
+    if job_id:
+        metadata += ((keys.JOB_ID, job_id),)
     await context.abort(code_of(error), error.error, trailing_metadata=metadata)
     raise AssertionError("unreachable: abort raises")  # pragma: no cover
+
+
+def _job_id_of(exc: BaseException) -> str | None:
+    """The job an `ApiError` names in its ``X-Job-ID`` header (e.g. a synchronous wait cut off by a shutdown)."""
+    if isinstance(exc, http_errors.ApiError):
+        for name, value in exc.headers.items():
+            if name.lower() == keys.JOB_ID:
+                return value
+    return None

@@ -25,6 +25,7 @@ from grpc_reflection.v1alpha import reflection
 from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
 from manifoundation.contract.protos.v1 import manifoundation_pb2_grpc as pb_grpc
 from manifoundation.server.api.grpc.servicer import ManiFoundationService
+from manifoundation.server.api.grpc.submit import deferred
 from manifoundation.server.api.settings import Settings
 
 if TYPE_CHECKING:
@@ -43,6 +44,43 @@ async def ready(queue: Any) -> bool:
         return False
 
 
+LARGE_REQUESTS: dict[str, type[Any]] = {
+    "Synthesize": pb.SynthesisRequest,
+    "SubmitJob": pb.SynthesisRequest,
+    "SubmitBatch": pb.BatchCreate,
+    "SubmitPlan": pb.PlanRequest,
+    "RegisterRobot": pb.RobotRegister,
+}
+"""The RPCs whose message may be large: parsed off the event loop when it is (`grpc.submit.LargeMessage`)."""
+
+
+class _Handlers:
+    """Stands in for a server to receive the generated code's method handlers."""
+
+    def __init__(self) -> None:
+        self.service, self.handlers = "", dict[str, Any]()
+
+    def add_generic_rpc_handlers(self, _: Any) -> None:
+        pass
+
+    def add_registered_method_handlers(self, service: str, handlers: dict[str, Any]) -> None:
+        self.service, self.handlers = service, handlers
+
+
+def add_servicer(servicer: Any, server: grpc.aio.Server, offload_bytes: int) -> None:
+    """The generated ``add_ManiFoundationServicer_to_server``, except that the messages of `LARGE_REQUESTS` larger
+    than ``offload_bytes`` reach the servicer unparsed (`deferred`)."""
+    generated = _Handlers()
+    pb_grpc.add_ManiFoundationServicer_to_server(servicer, generated)
+    handlers = {
+        name: handler._replace(request_deserializer=deferred(LARGE_REQUESTS[name], offload_bytes))
+        if name in LARGE_REQUESTS else handler
+        for name, handler in generated.handlers.items()
+    }  # fmt: skip
+    server.add_generic_rpc_handlers((grpc.method_handlers_generic_handler(generated.service, handlers),))
+    server.add_registered_method_handlers(generated.service, handlers)
+
+
 class GrpcServer:
     """A started grpc.aio server over the app's services; ``port`` is the one it bound."""
 
@@ -58,7 +96,7 @@ class GrpcServer:
         )
         self.services = services
         self.health = HealthServicer()
-        pb_grpc.add_ManiFoundationServicer_to_server(ManiFoundationService(services), self.server)
+        add_servicer(ManiFoundationService(services), self.server, settings.parse_offload_bytes)
         health_pb2_grpc.add_HealthServicer_to_server(self.health, self.server)
         names = (SERVICE_NAME, health_pb2.DESCRIPTOR.services_by_name["Health"].full_name, reflection.SERVICE_NAME)
         reflection.enable_server_reflection(names, self.server)

@@ -29,6 +29,7 @@ from manifoundation.contract import (
     JobState,
     PlanRequest,
     RobotRegister,
+    SynthesisRequest,
 )
 from manifoundation.contract.protos.convert import to_proto
 from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
@@ -37,7 +38,7 @@ from manifoundation.server.api.batch_pages import batch_page
 from manifoundation.server.api.errors import InvalidInput, PayloadTooLarge
 from manifoundation.server.api.grpc.calls import GrpcMetrics, send_initial_metadata, streaming, unary
 from manifoundation.server.api.grpc.errors import JobFailed
-from manifoundation.server.api.grpc.submit import Submission
+from manifoundation.server.api.grpc.submit import LargeMessage, Submission
 from manifoundation.server.api.security import Caller
 from manifoundation.server.api.waiting import wait_for_job
 
@@ -71,10 +72,15 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
     @unary
     async def Synthesize(self, request: pb.SynthesisRequest, context: Any, caller: Caller) -> pb.SynthesisResult:
         """Submit, wait for the end, answer the result (or the job's error as the call's status)."""
-        timeout = request.options.timeout if request.options.HasField("timeout") else DEFAULT_TIMEOUT_S
+        message: pb.SynthesisRequest | SynthesisRequest = request
+        if isinstance(request, LargeMessage):  # its timeout is read from the request decoded off the loop
+            message = await self.submission.validate(request, SynthesisRequest)
+            timeout = message.options.timeout
+        else:
+            timeout = request.options.timeout if request.options.HasField("timeout") else DEFAULT_TIMEOUT_S
         call_deadline = _call_deadline(context)
         deadline = min(time.time() + max(0.0, timeout), call_deadline or float("inf"))
-        _, job_id = await self.submission.one(request, caller, context, kind="sync", deadline=deadline)
+        _, job_id = await self.submission.one(message, caller, context, kind="sync", deadline=deadline)
         await send_initial_metadata(self.services, context, ("x-job-id", job_id))
         try:
             job = await self._wait(job_id, deadline)

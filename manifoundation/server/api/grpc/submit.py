@@ -2,15 +2,23 @@
 steps.
 
 Admission before validation (RESOURCE_EXHAUSTED when the queue has no room), validation once by the contract
-(`convert.from_proto`; a large message off the event loop, like a large HTTP body), the hand check, submission on
+(`convert.from_proto`), the hand check, submission on
 the caller's behalf with the call's request id, the scene kept for the viewer and the submission counted: the
 same order, objects and limits as the HTTP routes, so a job submitted over gRPC is indistinguishable from one
 submitted over HTTP.
+
+A large message (over ``MANI_PARSE_OFFLOAD_BYTES``) is decoded as a large HTTP body is: its bytes arrive as a
+`LargeMessage` (the server's deserializer does not parse it, `deferred`), wait for one of the same large-body slots
+(``AppServices.bodies``, 503 / UNAVAILABLE after ``MANI_BODY_TIMEOUT``) and go to a body process, which parses and
+validates them (`manifoundation.server.api.bodies`); this process lets go of the bytes as soon as the body process
+has them and never builds the protobuf message, so neither the event loop nor a thread of this process spends the
+GIL on it.
 """
 
 from __future__ import annotations
 
 import asyncio
+from collections.abc import AsyncIterator, Callable
 from typing import TYPE_CHECKING, Any, TypeVar
 
 import grpc
@@ -18,7 +26,9 @@ from google.protobuf.message import Message
 
 from manifoundation.contract import BatchCreate, SynthesisRequest, WireModel
 from manifoundation.contract.protos.convert import from_proto
+from manifoundation.server.api.bodies import PROTOBUF
 from manifoundation.server.api.middleware import request_id_from
+from manifoundation.server.api.negotiation import decoded
 from manifoundation.server.api.security import Caller
 from manifoundation.server.api.submission import RequestT, Submitter, running_queue
 
@@ -26,6 +36,41 @@ if TYPE_CHECKING:
     from manifoundation.server.api.services import AppServices
 
 ModelT = TypeVar("ModelT", bound=WireModel)
+CHUNK_BYTES = 1 << 20
+"""A large message goes to its body process in pieces of this size."""
+
+
+class LargeMessage:
+    """A request message larger than ``MANI_PARSE_OFFLOAD_BYTES`` as it arrived: its bytes, not yet parsed."""
+
+    __slots__ = ("data", "kind")
+
+    def __init__(self, data: bytes, kind: type[Message]) -> None:
+        self.data, self.kind = data, kind
+
+    def ByteSize(self) -> int:
+        return len(self.data)
+
+    def take(self) -> bytes:
+        """The bytes, dropped from here (so they are freed once the body process has them)."""
+        data, self.data = self.data, b""
+        return data
+
+
+def deferred(kind: type[Message], offload_bytes: int) -> Callable[[bytes], Message | LargeMessage]:
+    """The request deserializer of an RPC whose message may be large: small ones parsed at once as usual, larger
+    ones handed over unparsed (`LargeMessage`)."""
+
+    def deserialize(data: bytes) -> Message | LargeMessage:
+        return LargeMessage(data, kind) if len(data) > offload_bytes else kind.FromString(data)
+
+    return deserialize
+
+
+async def _pieces(data: bytes) -> AsyncIterator[bytes]:
+    view = memoryview(data)
+    for start in range(0, len(view), CHUNK_BYTES):
+        yield view[start : start + CHUNK_BYTES]  # type: ignore[misc]
 
 
 def request_id(context: grpc.aio.ServicerContext) -> str:
@@ -45,8 +90,18 @@ class Submission:
         """The running queue (UNAVAILABLE before the lifespan started it or while shutting down)."""
         return running_queue(self.services)
 
-    async def validate(self, message: Message, model: type[ModelT]) -> ModelT:
-        """The contract's validation of ``message``; a message larger than ``parse_offload_bytes`` off the loop."""
+    async def validate(self, message: Message | LargeMessage | ModelT, model: type[ModelT]) -> ModelT:
+        """The contract's validation of ``message``: a `LargeMessage` in a body process while holding a large-body
+        slot; a parsed message larger than ``parse_offload_bytes`` (the limit was raised since) in a thread; a
+        model already validated as it is."""
+        if isinstance(message, model):
+            return message
+        if isinstance(message, LargeMessage):
+            bodies = self.services.bodies
+            async with bodies.slot():
+                value: ModelT = decoded(await bodies.decode(model, _pieces(message.take()), PROTOBUF))
+                return value
+        assert isinstance(message, Message)
         if message.ByteSize() > self.services.settings.parse_offload_bytes:
             return await asyncio.to_thread(from_proto, message, model)
         return from_proto(message, model)
@@ -59,7 +114,7 @@ class Submission:
 
     async def one(
         self,
-        message: Message,
+        message: Message | LargeMessage | RequestT,
         caller: Caller,
         context: grpc.aio.ServicerContext,
         *,
@@ -74,7 +129,7 @@ class Submission:
         body = await self.validate(message, model)
         return body, await submitter.submit(body, kind, deadline)
 
-    async def batch(self, message: Message, caller: Caller, context: grpc.aio.ServicerContext) -> str:
+    async def batch(self, message: Message | LargeMessage, caller: Caller, context: grpc.aio.ServicerContext) -> str:
         """Validate and submit a batch, all or none (the HTTP route's limits). Returns the batch id."""
         submitter = self.submitter(caller, context)
         await submitter.admit()
