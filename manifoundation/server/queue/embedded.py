@@ -44,6 +44,7 @@ from manifoundation.server.queue.base import (
     RobotLimits,
 )
 from manifoundation.server.queue.embedded_parts import JobRecord, WorkerHandle
+from manifoundation.server.queue.embedded_payloads import packed
 from manifoundation.server.queue.embedded_pump import EmbeddedPump
 from manifoundation.server.queue.records import (
     cancelled_error,
@@ -56,26 +57,6 @@ from manifoundation.server.queue.records import (
 
 log = logging.getLogger("manifoundation.server.queue.embedded")
 
-
-PACK_INLINE_BYTES = 1 << 20
-"""Requests whose arrays add up to more than this are packed in a thread, not on the event loop."""
-
-
-def _cloud_bytes(request: JobRequest) -> int:
-    """The size of a request's point cloud (its points; 0 for a request without one)."""
-    points = getattr(getattr(request, "object", None), "points", None)
-    return int(getattr(points, "nbytes", 0))
-
-
-async def _packed(requests: Sequence[JobRequest]) -> list[bytes]:
-    """The queue's payloads of ``requests``; large ones (200 000 points pack in ≈ 6 ms) in a thread."""
-
-    def pack_all() -> list[bytes]:
-        return [pack(r.model_dump(mode="python", exclude_none=True)) for r in requests]
-
-    if sum(_cloud_bytes(r) for r in requests) > PACK_INLINE_BYTES:
-        return await asyncio.to_thread(pack_all)
-    return pack_all()
 
 class EmbeddedQueue(EmbeddedPump, JobQueue):
     """In-process queue + ``concurrency`` spawned worker processes (see module doc)."""
@@ -122,7 +103,7 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
     ) -> list[str]:  # fmt: skip
         if not self._running:
             raise QueueUnavailable("the embedded queue is not running")
-        payloads = await _packed(requests)
+        payloads = await packed(requests)
         with self._lock:
             if len(self._pending) + len(requests) > self.settings.max_queue:
                 raise QueueFull(f"queue holds {len(self._pending)} jobs (max {self.settings.max_queue})", 1.0)

@@ -2,11 +2,9 @@
 dispatch, outcomes, worker loss and retention.
 
 `manifoundation.server.queue.embedded.EmbeddedQueue` is the queue's API on top of this (the asyncio side). The pump
-thread is
-the only reader of the workers' pipes (the `manifoundation.server.worker.child` protocol: a map, then the payload frames
-it announces);
-everything shared between it and the event loop is guarded by ``_lock``, held only for bookkeeping (no decoding,
-no validation, no I/O that can block).
+thread is the only reader of the workers' pipes (the `manifoundation.server.worker.child` protocol: a map, then the
+payload frames it announces); everything shared between it and the event loop is guarded by ``_lock``, held only
+for bookkeeping (no decoding, no validation, no I/O that can block).
 """
 
 from __future__ import annotations
@@ -36,6 +34,7 @@ from manifoundation.contract import (
 from manifoundation.contract.codec import unpack
 from manifoundation.server.queue.base import RobotLimits
 from manifoundation.server.queue.embedded_parts import ChildProcess, JobRecord, WorkerHandle, settle
+from manifoundation.server.queue.embedded_payloads import FreedPayloads
 from manifoundation.server.queue.records import (
     cancelled_error,
     deadline_error,
@@ -46,7 +45,6 @@ from manifoundation.server.queue.records import (
     worker_lost_error,
 )
 from manifoundation.server.queue.robot_quota import check_in_memory
-from manifoundation.server.worker.heap import HeapTrimmer
 from manifoundation.server.worker.settings import QueueSettings
 from manifoundation.server.worker.supervisor import spawn, stop_all
 
@@ -54,13 +52,6 @@ log = logging.getLogger("manifoundation.server.queue.embedded")
 _TOMBSTONES_PER_RESULT = 10
 _STOP_GRACE_S = 10.0
 """Seconds a stopping worker has to finish its batch before it is killed."""
-
-
-TRIM_AFTER_FREED_BYTES = 32 * 1024 * 1024
-"""Once the payloads of ended jobs add up to this (or the queue is idle), the C heap's free pages go back to the
-OS (`HeapTrimmer`, at most every 2 s): glibc keeps freed multi-MB payloads in its arenas, so an API that took a
-few large batches would otherwise stay at their peak (issue 62, item 3: 368 MB after 3 × 57.6 MB gRPC batches
-drained, 90 MB before)."""
 
 
 class EmbeddedPump:
@@ -74,8 +65,7 @@ class EmbeddedPump:
         self._pending: deque[str] = deque()
         self._finished: OrderedDict[str, None] = OrderedDict()
         self._result_bytes = 0  # of the finished jobs' results held in `_jobs`
-        self._freed_bytes = 0  # of payloads let go since the C heap was last trimmed
-        self._heap = HeapTrimmer()
+        self._freed = FreedPayloads()
         self._tombstones: OrderedDict[str, tuple[float, str | None, str | None]] = OrderedDict()
         self._batches: OrderedDict[str, tuple[str | None, list[str]]] = OrderedDict()
         self._waiters: dict[str, list[tuple[asyncio.AbstractEventLoop, asyncio.Future[None]]]] = {}
@@ -138,8 +128,7 @@ class EmbeddedPump:
                 if self._running:
                     self._replace_silent()
             idle = not self._pending and not any(w.inflight for w in list(self._workers.values()))
-            if self._freed_bytes >= (1 if idle else TRIM_AFTER_FREED_BYTES) and self._heap.maybe_trim():
-                self._freed_bytes = 0  # trimmed: after every 32 MB freed, and once the queue is idle
+            self._freed.maybe_trim(idle)
             if self._running:
                 self._dispatch()
             elif not any(w.process.is_alive() for w in list(self._workers.values())):
@@ -298,7 +287,7 @@ class EmbeddedPump:
                 self._pending.remove(job.id)
         job.finished_at = time.time()
         self._result_bytes += len(result or b"") - len(job.result or b"")
-        self._freed_bytes += len(job.payload)
+        self._freed.add(len(job.payload))
         job.result, job.error, job.payload = result, error, b""
         job.state = JobState.SUCCEEDED if error is None else state_for_error(error)
         if job.state is JobState.SUCCEEDED:
