@@ -110,7 +110,7 @@ def run_physics(args: argparse.Namespace) -> int:
             )  # fmt: skip
             records.append({
                 "hand": hand_name, "object": obj.name, "proposal": k, "verified": bool(p.quality.success),
-                "source": p.contact_source, "holds": r.success, "reason": r.reason, "tip_gaps": r.tip_gaps,
+                "source": p.contact_source, "epsilon": p.quality.epsilon, "holds": r.success, "reason": r.reason, "tip_gaps": r.tip_gaps,
                 "touching_after_squeeze": r.contacts_after_squeeze, "penetration": r.penetration,
                 "trials": [[t.direction, t.translation, t.rotation, t.held] for t in r.trials],
                 "pipeline_s": seconds, "physics_s": r.seconds, "object_pieces": shapes[obj.name].source,
