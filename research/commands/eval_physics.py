@@ -48,6 +48,8 @@ def add_physics_parser(sub: Any) -> None:
                    "(default: Protocol's 3, MuJoCo Menagerie's LEAP Hand; its Allegro has 10)")
     a.add_argument("--damping-revolute", type=float, default=None, help="revolute joint damping, N·m·s/rad "
                    "(default: Protocol's 0.1; Menagerie's Allegro has 1)")
+    a.add_argument("--no-close", action="store_true",
+                   help="leave the fingertips where the refinement put them (no closing stage)")
     a.add_argument("--json", default=None, help="also write every proposal's record to this file")
     a.set_defaults(func=run_physics)
 
@@ -95,7 +97,7 @@ def run_physics(args: argparse.Namespace) -> int:
         send = args.geometry == "mesh"
         inp = SynthesisInput(
             points=points, normals=normals, hand=hand, task=TaskInput("force_closure"), method=args.method,
-            num_proposals=args.proposals, seed=args.seed, hand_key=hand.name,
+            num_proposals=args.proposals, seed=args.seed, hand_key=hand.name, close_gaps=not args.no_close,
             mesh_vertices=np.asarray(obj.mesh.vertices) if send else None,
             mesh_faces=np.asarray(obj.mesh.faces) if send else None,
         )  # fmt: skip
@@ -110,7 +112,8 @@ def run_physics(args: argparse.Namespace) -> int:
             )  # fmt: skip
             records.append({
                 "hand": hand_name, "object": obj.name, "proposal": k, "verified": bool(p.quality.success),
-                "source": p.contact_source, "epsilon": p.quality.epsilon, "holds": r.success, "reason": r.reason, "tip_gaps": r.tip_gaps,
+                "source": p.contact_source, "epsilon": p.quality.epsilon, "holds": r.success, "reason": r.reason,
+                "tip_gaps": r.tip_gaps,
                 "touching_after_squeeze": r.contacts_after_squeeze, "penetration": r.penetration,
                 "trials": [[t.direction, t.translation, t.rotation, t.held] for t in r.trials],
                 "pipeline_s": seconds, "physics_s": r.seconds, "object_pieces": shapes[obj.name].source,
@@ -118,6 +121,7 @@ def run_physics(args: argparse.Namespace) -> int:
     table = Table(
         title=f"simulated grasp test of the service's answers: {len(objects)} third-party objects, "
         f"force closure, method {args.method}, {args.geometry} sent, {args.proposals} proposal(s), "
+        f"{'no closing' if args.no_close else 'closed'}, "
         f"kp {protocol.kp_revolute:g} N·m/rad, damping {protocol.damping_revolute:g}, judged on the {args.judge}"
     )
     for col in ("hand", "requests", "first holds", "best holds", "proposals", "verified", "verified & hold", "hold",
