@@ -9,7 +9,10 @@ grasp → squeeze; holds when the object moves < 5 cm and turns < 15° in all si
 
 Columns: proposals, how many the service called verified, how many of those hold, how many of all hold, the median
 fingertip gap at the grasp pose (signed distance from each fingertip body's real mesh to the object), the share of
-fingertips within 0.5 mm, and how often no finger touches the object after the squeeze.
+fingertips within 0.5 mm, and how often no finger touches the object after the squeeze; per request, whether its first
+proposal holds (the pipeline's order) and whether its best holds once the proposals are ordered by the test
+(`manifoundation.core.physics.physics_order`, what ``options.simulate`` returns first): with ``--proposals K`` > 1
+the best of K.
 
 Example:
     mani-lab eval physics --hand leap,allegro,panda_gripper --objects 10 --json physics.json
@@ -45,6 +48,8 @@ def add_physics_parser(sub: Any) -> None:
                    "(default: Protocol's 3, MuJoCo Menagerie's LEAP Hand; its Allegro has 10)")
     a.add_argument("--damping-revolute", type=float, default=None, help="revolute joint damping, N·m·s/rad "
                    "(default: Protocol's 0.1; Menagerie's Allegro has 1)")
+    a.add_argument("--no-close", action="store_true",
+                   help="leave the fingertips where the refinement put them (no closing stage)")
     a.add_argument("--json", default=None, help="also write every proposal's record to this file")
     a.set_defaults(func=run_physics)
 
@@ -59,7 +64,7 @@ def run_physics(args: argparse.Namespace) -> int:
     from rich.table import Table
     from tqdm import tqdm
 
-    from manifoundation.core.physics import Protocol, from_mesh, from_points, simulate_grasp
+    from manifoundation.core.physics import Protocol, from_mesh, from_points, physics_order, simulate_grasp
     from manifoundation.core.pipeline import SynthesisInput, TaskInput, run_pipeline
     from manifoundation.core.robots import get_hand
     from research.audit import third_party_objects
@@ -92,7 +97,7 @@ def run_physics(args: argparse.Namespace) -> int:
         send = args.geometry == "mesh"
         inp = SynthesisInput(
             points=points, normals=normals, hand=hand, task=TaskInput("force_closure"), method=args.method,
-            num_proposals=args.proposals, seed=args.seed, hand_key=hand.name,
+            num_proposals=args.proposals, seed=args.seed, hand_key=hand.name, close_gaps=not args.no_close,
             mesh_vertices=np.asarray(obj.mesh.vertices) if send else None,
             mesh_faces=np.asarray(obj.mesh.faces) if send else None,
         )  # fmt: skip
@@ -107,7 +112,8 @@ def run_physics(args: argparse.Namespace) -> int:
             )  # fmt: skip
             records.append({
                 "hand": hand_name, "object": obj.name, "proposal": k, "verified": bool(p.quality.success),
-                "source": p.contact_source, "holds": r.success, "reason": r.reason, "tip_gaps": r.tip_gaps,
+                "source": p.contact_source, "epsilon": p.quality.epsilon, "holds": r.success, "reason": r.reason,
+                "tip_gaps": r.tip_gaps,
                 "touching_after_squeeze": r.contacts_after_squeeze, "penetration": r.penetration,
                 "trials": [[t.direction, t.translation, t.rotation, t.held] for t in r.trials],
                 "pipeline_s": seconds, "physics_s": r.seconds, "object_pieces": shapes[obj.name].source,
@@ -115,10 +121,11 @@ def run_physics(args: argparse.Namespace) -> int:
     table = Table(
         title=f"simulated grasp test of the service's answers: {len(objects)} third-party objects, "
         f"force closure, method {args.method}, {args.geometry} sent, {args.proposals} proposal(s), "
+        f"{'no closing' if args.no_close else 'closed'}, "
         f"kp {protocol.kp_revolute:g} N·m/rad, damping {protocol.damping_revolute:g}, judged on the {args.judge}"
     )
-    for col in ("hand", "proposals", "verified", "verified & hold", "hold", "median tip gap mm",
-                "tips ≤ 0.5 mm", "none touching", "physics s"):  # fmt: skip
+    for col in ("hand", "requests", "first holds", "best holds", "proposals", "verified", "verified & hold", "hold",
+                "median tip gap mm", "tips ≤ 0.5 mm", "none touching", "physics s"):  # fmt: skip
         table.add_column(col, justify="right" if col != "hand" else "left")
     false_claims = 0
     for hand_name in hands:
@@ -126,14 +133,21 @@ def run_physics(args: argparse.Namespace) -> int:
         gaps = np.array([g for r in rows for g in r["tip_gaps"]])
         ver = [r for r in rows if r["verified"]]
         false_claims += sum(not r["holds"] for r in ver)
+        requests: dict[str, list[dict[str, Any]]] = {}
+        for rec in rows:
+            requests.setdefault(rec["object"], []).append(rec)
+        first = sum(rs[0]["holds"] for rs in requests.values())
+        best = sum(rs[physics_order([x["verified"] for x in rs], [x["holds"] for x in rs])[0]]["holds"]
+                   for rs in requests.values())  # fmt: skip
         table.add_row(
-            hand_name, str(len(rows)), str(len(ver)), f"{sum(r['holds'] for r in ver)}/{len(ver)}",
+            hand_name, str(len(requests)), f"{first}/{len(requests)}", f"{best}/{len(requests)}", str(len(rows)),
+            str(len(ver)), f"{sum(r['holds'] for r in ver)}/{len(ver)}",
             f"{sum(r['holds'] for r in rows)}/{len(rows)}", f"{1000 * np.median(gaps):.1f}" if len(gaps) else "-",
             f"{100 * np.mean(np.abs(gaps) <= 5e-4):.0f} %" if len(gaps) else "-",
             f"{sum(r['touching_after_squeeze'] == 0 for r in rows)}/{len(rows)}",
             f"{np.median([r['physics_s'] for r in rows]):.2f}" if rows else "-",
         )  # fmt: skip
-    Console(width=160).print(table)
+    Console(width=200).print(table)
     print("objects:", ", ".join(o.name for o in objects))
     if args.json:
         Path(args.json).write_text(json.dumps(records, indent=1))

@@ -26,4 +26,4 @@ def test_eval_physics_prints_the_table_and_writes_every_proposal(
     false_claims = sum(r["verified"] and not r["holds"] for r in records)
     assert code == (1 if false_claims else 0)
     text = capsys.readouterr().out
-    assert "verified & hold" in text and "panda_gripper" in text
+    assert "verified & hold" in text and "best holds" in text and "panda_gripper" in text

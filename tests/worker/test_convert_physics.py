@@ -63,3 +63,22 @@ def test_simulate_turns_a_verified_grasp_that_drops_into_a_failure() -> None:
 def test_without_simulate_nothing_changes() -> None:
     result = to_result(_output(HALF + 0.02), _request(False, True), "test", get_hand("panda_gripper"))
     assert _physics(result) == (True, [], None)
+
+
+def test_simulate_puts_the_proposals_that_held_first() -> None:
+    drops, holds = _output(HALF + 0.02), _output(HALF)
+    both = SynthesisOutput(hand="panda_gripper", proposals=[drops.proposals[0], holds.proposals[0]])
+    result = to_result(both, _request(True, True), "test", get_hand("panda_gripper"))
+    first, second = result.proposals
+    assert first.quality.physics is not None and first.quality.physics.held and first.quality.success
+    assert np.allclose(first.joint_values, [HALF])
+    assert second.quality.physics is not None and not second.quality.physics.held and not second.quality.success
+    plain = to_result(both, _request(False, True), "test", get_hand("panda_gripper"))
+    assert np.allclose(plain.proposals[0].joint_values, [HALF + 0.02])  # without simulate: the pipeline's order
+
+
+def test_physics_order_is_held_and_verified_then_held_then_verified() -> None:
+    from manifoundation.core.physics import physics_order
+
+    assert physics_order([True, False, True, True], [False, True, True, None]) == [2, 1, 0, 3]
+    assert physics_order([], []) == []

@@ -5,7 +5,21 @@ model (`hand_model`, `object_model`, `scene`) and runs the six-direction test (`
 """
 
 from manifoundation.core.physics.object_model import ObjectShape, from_mesh, from_points
-from manifoundation.core.physics.protocol import PhysicsResult, Protocol, Trial
+from manifoundation.core.physics.protocol import (
+    PhysicsResult,
+    Protocol,
+    Trial,
+    physics_order,
+)
 from manifoundation.core.physics.trial import simulate_grasp
 
-__all__ = ["ObjectShape", "PhysicsResult", "Protocol", "Trial", "from_mesh", "from_points", "simulate_grasp"]
+__all__ = [
+    "ObjectShape",
+    "PhysicsResult",
+    "Protocol",
+    "Trial",
+    "from_mesh",
+    "from_points",
+    "physics_order",
+    "simulate_grasp",
+]

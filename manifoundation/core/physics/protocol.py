@@ -98,3 +98,12 @@ class PhysicsResult:
     @property
     def max_rotation(self) -> float:
         return max((t.rotation for t in self.trials), default=float("inf"))
+
+
+def physics_order(verified: list[bool], held: list[bool | None]) -> list[int]:
+    """Indices of proposals, best first, once each has been judged: verified and held, then held, then verified
+    (not simulated counts as not held), each group in its given order (stable).
+
+    Without it a verified proposal that drops the object could stay first while a later one holds (best of 4 on
+    10 third-party objects: LEAP 1 → 4 of 10 hold first; research/results/physics.md)."""
+    return sorted(range(len(verified)), key=lambda i: (not (verified[i] and held[i]), not held[i], not verified[i]))

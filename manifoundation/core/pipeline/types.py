@@ -99,6 +99,9 @@ class SynthesisInput:
             nor returned (None: all ``num_proposals``).
         rollout_corrections: deformables with ``simulate_rollout``: rollouts a proposal that misses its target
             may spend correcting its motions (`manifoundation.core.pipeline.deformable_rollout`; 0: none).
+        close_gaps: after a verified refinement, close the fingertips onto the object
+            (`manifoundation.core.refine.close`; the closed pose is kept only where verification still accepts it;
+            not for an ``initial_pose``, which stays as carried).
     """
 
     points: np.ndarray
@@ -126,6 +129,7 @@ class SynthesisInput:
     initial_pose: HandPose | None = None
     stop_after_verified: int | None = None
     rollout_corrections: int = 0
+    close_gaps: bool = True
 
 
 @dataclass

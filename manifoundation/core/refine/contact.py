@@ -112,6 +112,16 @@ class SurfaceContacts:
         return np.asarray(self.points - phi[:, None] * grad)
 
 
+def field_standoff(field: ObjectField) -> float:
+    """The guards' standoff and the pads' target distance (m) for ``field``: `GUARD_STANDOFF` or the field's
+    ``resolution``, whichever is larger, unless the field sets its own ``standoff`` (the closing stage,
+    `manifoundation.core.refine.close`)."""
+    own = getattr(field, "standoff", None)
+    if own is not None:
+        return float(own)
+    return max(GUARD_STANDOFF, float(getattr(field, "resolution", 0.0)))
+
+
 def contact_jacobians(
     hand: Any, body_poses: torch.Tensor, palm_pos: torch.Tensor, request: tuple[np.ndarray, np.ndarray], m: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:  # fmt: skip
@@ -161,7 +171,7 @@ def surface_contacts(
             sample.
     """
     surf = hand.contact_surface  # type: ignore[attr-defined]
-    standoff = max(GUARD_STANDOFF, float(getattr(field, "resolution", 0.0)))
+    standoff = field_standoff(field)
     with torch.no_grad():  # the body poses once: the samples, the parts' poses and the Jacobians all use them
         T_all = hand.tree.body_poses(*pose)  # type: ignore[attr-defined]
         world_t, _, _ = hand.surface_samples(*pose, jacobian=False, body_poses=T_all)  # type: ignore[attr-defined]

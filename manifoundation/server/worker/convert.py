@@ -192,7 +192,9 @@ def to_result(
     """The wire result of ``output`` (maps and history only when the request asked for them).
 
     With ``hand``, each proposal carries the hand's collision spheres at its pose; with ``options.simulate`` (a
-    rigid object and a robot) each proposal's ``quality.physics`` is the simulated grasp test (`simulate`).
+    rigid object and a robot) each proposal's ``quality.physics`` is the simulated grasp test (`simulate`), and the
+    proposals are ordered by it: verified and held first, then held, then the rest (`physics_order`; the ``heatmap``
+    stays the one of the pipeline's first proposal — ``network_sample`` says which sample each came from).
     """
     options = request.options
     rigid = request.object.material.value == "rigid"
@@ -203,6 +205,12 @@ def to_result(
         to_proposal(p, hand, history=options.return_history, mesh=options.return_hand_mesh, physics=ph)
         for p, ph in zip(output.proposals, physics, strict=True)
     ]
+    if any(ph is not None for ph in physics):  # those that held first (`physics_order`)
+        from manifoundation.core.physics import physics_order
+
+        order = physics_order([bool(p.quality.success) for p in output.proposals],
+                              [ph is not None and ph.held for ph in physics])  # fmt: skip
+        proposals = [proposals[i] for i in order]
     return SynthesisResult(
         hand=output.hand,
         model_version=model_version,
