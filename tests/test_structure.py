@@ -18,7 +18,8 @@ CORE_ORDER = (
 )  # fmt: skip
 """Bottom to top: a subpackage of `manifoundation.core` imports only from those before it (and itself)."""
 RESEARCH_ORDER = (
-    "audit", "staged_pipeline", "data", "offline", "training", "evaluation", "commands", "bench", "benchmarks", "cli",
+    "audit", "hostile_archives", "staged_pipeline", "data", "offline", "training", "evaluation", "commands", "bench",
+    "benchmarks", "cli",
 )  # fmt: skip
 """The same for `research`. ``audit`` imports nothing of the science: it is the outside check and shares no code
 with what it checks."""

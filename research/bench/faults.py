@@ -45,6 +45,7 @@ from typing import Any
 
 from research.bench.rss import rss_mb
 from research.bench.service import _free_port, request_body
+from research.hostile_archives import include_bomb as bomb_archive
 
 STAGED = "research.staged_pipeline:StagedPipeline"
 SCENARIOS = ("soak", "poison", "large_bodies", "full_queue", "slow_headers", "grpc_batches", "include_bomb",
@@ -449,30 +450,6 @@ async def grpc_batches(args: argparse.Namespace) -> dict[str, Any]:
     }  # fmt: skip
 
 
-_BOMB_HAND = (
-    '<mujoco model="h"><worldbody><body name="palm"><geom type="box" size=".02 .02 .02"/>'
-    '<body name="tip" pos="0 0 .05"><joint name="j" type="hinge" axis="1 0 0" range="0 1"/>'
-    '<geom type="sphere" size=".01"/></body></body></worldbody></mujoco>'
-)
-
-
-def _include_bomb(depth: int, fan_out: int = 60) -> bytes:
-    """An MJCF archive: ``hand.xml`` includes ``l0.xml``, each ``lN.xml`` includes ``l(N+1).xml`` ``fan_out``
-    times (issue 62, item 1: 815 bytes zipped at depth 3; 60^depth includes once inlined)."""
-    import io
-    import zipfile
-
-    files = {"hand.xml": _BOMB_HAND.replace("<worldbody>", '<include file="l0.xml"/><worldbody>')}
-    for level in range(depth):
-        files[f"l{level}.xml"] = "<mujoco>" + f'<include file="l{level + 1}.xml"/>' * fan_out + "</mujoco>"
-    files[f"l{depth}.xml"] = '<mujoco><default><geom rgba="1 0 0 1"/></default></mujoco>'
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
-        for name, text in files.items():
-            z.writestr(name, text)
-    return buf.getvalue()
-
-
 async def include_bomb(args: argparse.Namespace) -> dict[str, Any]:
     """Issue 62, item 1: an include bomb of ``--bomb-depth`` levels registered twice at once beside a normal
     registration (the same archive without includes), on the real loader (`ModelsPipeline`, one worker, hand
@@ -484,8 +461,8 @@ async def include_bomb(args: argparse.Namespace) -> dict[str, Any]:
 
     from research.bench.rss import worker_pids
 
-    archive = base64.b64encode(_include_bomb(args.bomb_depth)).decode()
-    plain = base64.b64encode(_include_bomb(0)).decode()
+    archive = base64.b64encode(bomb_archive(args.bomb_depth)).decode()
+    plain = base64.b64encode(bomb_archive(0)).decode()
     proc, base = _serve(max_queue=20, stage_seconds=0.0, MANI_ROBOT_REGISTER_TIMEOUT="120",
                         MANI_PIPELINE="manifoundation.server.worker.models_pipeline:ModelsPipeline",
                         MANI_PIPELINE_OPTIONS=json.dumps({"hands": ["barrett"]}))  # fmt: skip

@@ -29,7 +29,7 @@ from manifoundation.server.api.settings import Settings
 from research.audit import AuditedGrasp, audit_grasp
 from research.audit.objects import sample_surface
 from research.evaluation.custom_hands import audit_hand
-from tests.hostile_archives import include_bomb
+from research.hostile_archives import include_bomb
 
 from .server import serving
 from .workers import start_queue_and_workers

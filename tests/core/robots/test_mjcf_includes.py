@@ -11,7 +11,7 @@ import pytest
 
 from manifoundation.core.robots.description import HandLoadError
 from manifoundation.core.robots.user_hand import HandSource, build_user_hand
-from tests.hostile_archives import include_bomb
+from research.hostile_archives import include_bomb
 
 
 @pytest.mark.parametrize("depth", [3, 4, 7])

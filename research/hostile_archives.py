@@ -1,4 +1,4 @@
-"""Hostile robot archives shared by the core and the API tests (issue 62)."""
+"""Hostile robot archives (issue 62): made by the tests of the core and the API and by `mani-lab bench faults`."""
 
 from __future__ import annotations
 
