@@ -1,9 +1,8 @@
 """Discovery of `mani` subcommands from entry points.
 
 Subcommands live next to the code they drive (`manifoundation.server.api.cli`, `research.commands.train`, ...). They are
-found through
-the `mani.commands` entry-point group so that the `clients` package never imports server or science code; a
-command's module must keep its top level light and import its heavy dependencies when the command runs.
+found through the `mani.commands` entry-point group so that the `clients` package never imports server or science code;
+a command's module must keep its top level light and import its heavy dependencies when the command runs.
 """
 
 from __future__ import annotations

@@ -94,11 +94,9 @@ def audit_grasp(
         grasp: the proposal.
         object_mesh: the object in the world frame (watertight for exact penetration); ``None``: distances to
             ``object_points`` only and no penetration check.
-        object_points: (N, 3) object surface points (optional; required without a mesh).
-        object_normals: (N, 3) their outward normals (with ``object_points``: used for the friction cones).
-        mu: friction coefficient.
-        target_wrench: (6,) ``[F (N), τ (N·m)]`` the forces should achieve (optional).
-        closure: also require force closure.
+        object_points: (N, 3) object surface points (optional; required without a mesh). object_normals: (N, 3) their
+        outward normals (with ``object_points``: used for the friction cones). mu: friction coefficient. target_wrench:
+        (6,) ``[F (N), τ (N·m)]`` the forces should achieve (optional). closure: also require force closure.
         soft_finger: torsional friction radius (m) of soft-finger contacts for the closure test (rubber pads of a
             parallel gripper resist a moment about the normal; two point contacts are never in closure); 0: point
             contacts.

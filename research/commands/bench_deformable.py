@@ -7,13 +7,11 @@ steps/s, seconds per rollout, the share of rollouts that stayed stable (no NaN, 
 grasp tracking error (largest distance between a grasped vertex and its path's end at release).
 
 With ``--registration N`` it also measures the unordered-target registration
-(`manifoundation.core.deformable.registration`)
-on N simulated pairs per material: the start cloud, the rollout shuffled, the optimal-transport motion against
-the simulated one. With ``--rebuilt N`` it measures the bodies the service rebuilds from clouds for
-``options.simulate_rollout`` (`manifoundation.core.deformable.reconstruct`): N generated bodies per material, the
-ground-truth
-manipulation simulated on the generator's mesh and on the body rebuilt from its cloud, the second rollout scored
-against the first by the shape metric.
+(`manifoundation.core.deformable.registration`) on N simulated pairs per material: the start cloud, the rollout
+shuffled, the optimal-transport motion against the simulated one. With ``--rebuilt N`` it measures the bodies the
+service rebuilds from clouds for ``options.simulate_rollout`` (`manifoundation.core.deformable.reconstruct`): N
+generated bodies per material, the ground-truth manipulation simulated on the generator's mesh and on the body rebuilt
+from its cloud, the second rollout scored against the first by the shape metric.
 
 Example:
     mani-lab bench deformable --materials cloth,rope,plasticine --bodies 2 --registration 10 --rebuilt 10

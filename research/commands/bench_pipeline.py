@@ -14,13 +14,12 @@ within 1e-9). Both workers run this file as a script, so the reference needs no 
 M`` does the same with this checkout and another method: ``--method network --compare-method random_contacts``
 is the network's starts against random ones on the same requests (``--weights`` picks the network).
 
-Objects: ``third_party`` (the audit's meshes that installed packages ship, `research.audit.third_party_objects`;
-there are 43, the first 18 the original set; ``--seeds`` repeats each with other samples and contacts; each spec
-names its file, so a reference checkout with fewer candidates loads the same objects), ``procedural``
+Objects: ``third_party`` (the audit's meshes that installed packages ship, `research.audit.third_party_objects`; there
+are 43, the first 18 the original set; ``--seeds`` repeats each with other samples and contacts; each spec names its
+file, so a reference checkout with fewer candidates loads the same objects), ``procedural``
 (`manifoundation.core.objects`), or ``box`` (``examples/data/box.npz``, no mesh: the README protocol). ``--order
-object`` asks
-each object of every hand in a row (the second hand's request finds the first's object in the worker's object
-cache, `manifoundation.core.pipeline.object_cache`), instead of each hand's requests in turn.
+object`` asks each object of every hand in a row (the second hand's request finds the first's object in the worker's
+object cache, `manifoundation.core.pipeline.object_cache`), instead of each hand's requests in turn.
 
 Example:
     mani-lab bench pipeline --hand leap,allegro --set third_party --seeds 3 --audit 6 --compare /tmp/ref-23

@@ -16,16 +16,15 @@ set, and the labels are the union of both sets (:func:`union_labels`). Plasticin
 target is the press after spring-back, which the target's displacement does not reach (docs/deformables.md).
 
 Slides (cloth and rope, `manifoundation.core.deformable.slides`): the target is the body translated by one displacement;
-the
-six named contact sets of `manifoundation.core.deformable.slides.slide_candidates` are simulated, and those that reach
-the target by the paper's metric are the labels (their union); an example none of them reaches is dropped. What
-reaches a slide depends on the properties (a handkerchief must be pulled from its front, a card can be pushed):
-what the property figure asks the network to have learnt. With a margin (``slide_margin``), the labels keep only
-the sets that also reach the same heading's slide at the margin's length: at a sixth of its size a handkerchief
-still follows a push from behind, at a quarter it bunches up, and an open-loop answer should not sit on that edge.
-Each slide also keeps every named set's `metrics.shortfall` at the slide and at the margin's length
-(``set_shortfall``, ``set_shortfall_margin``; stored as ``slide_shortfall``, NaN rows for other examples), so
-that other labels — the best set alone, a weight by margin — can be drawn from a data set without simulating again.
+the six named contact sets of `manifoundation.core.deformable.slides.slide_candidates` are simulated, and those that
+reach the target by the paper's metric are the labels (their union); an example none of them reaches is dropped. What
+reaches a slide depends on the properties (a handkerchief must be pulled from its front, a card can be pushed): what the
+property figure asks the network to have learnt. With a margin (``slide_margin``), the labels keep only the sets that
+also reach the same heading's slide at the margin's length: at a sixth of its size a handkerchief still follows a push
+from behind, at a quarter it bunches up, and an open-loop answer should not sit on that edge. Each slide also keeps
+every named set's `metrics.shortfall` at the slide and at the margin's length (``set_shortfall``,
+``set_shortfall_margin``; stored as ``slide_shortfall``, NaN rows for other examples), so that other labels — the best
+set alone, a weight by margin — can be drawn from a data set without simulating again.
 
 Motion split: a manipulation is an "unseen motion" when the heading of its mean contact motion lies within
 ``HELD_OUT_HALF_WIDTH`` of one of ``HELD_OUT_HEADINGS`` (four diagonals; ≈ 22 % of headings); those never enter

@@ -1,10 +1,9 @@
 """Third-party hands, built as a user's upload is and audited from their packages' original files.
 
 `audit_hand` gives the audit (`research.audit`, which shares no code with `manifoundation.core.robots`) its own model of
-a
-packaged hand: the package's description file read by the audit's kinematics (pytorch-kinematics, MuJoCo), its
-meshes found in the package. `grasp_and_audit` asks the pipeline for force-closure grasps of an object and audits
-every proposal.
+a packaged hand: the package's description file read by the audit's kinematics (pytorch-kinematics, MuJoCo), its meshes
+found in the package. `grasp_and_audit` asks the pipeline for force-closure grasps of an object and audits every
+proposal.
 """
 
 from __future__ import annotations

@@ -1,9 +1,8 @@
 """Fixtures of the SDK tests: the real service app in process (`inprocess.py`), sample results and objects.
 
 The SDK is exercised against ``manifoundation.server.api.app.create_app`` over the in-memory `ScriptedQueue`
-(``queues.py``), with
-no server and no socket; ``script`` answers what only a transport can (connection errors, garbage, scripted 429s).
-``test_service_e2e.py`` runs the same app under uvicorn, ``test_embedded_e2e.py`` the real workers.
+(``queues.py``), with no server and no socket; ``script`` answers what only a transport can (connection errors, garbage,
+scripted 429s). ``test_service_e2e.py`` runs the same app under uvicorn, ``test_embedded_e2e.py`` the real workers.
 """
 
 from __future__ import annotations

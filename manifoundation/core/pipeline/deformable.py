@@ -1,18 +1,17 @@
 """Deformable requests (cloth, rope, plasticine with a ``point_motion`` or ``target_points`` task) in the pipeline.
 
 No wrench and no refinement: the answer is contacts with a post-contact motion each
-(`manifoundation.core.deformable.answer`).
-Methods: "network" (the heatmap's NMS contacts with the task's motion at them), "random_contacts" (spread points with
-the task's motion at them), "contacts" (the given points, with the task's motion at them). With a hand, each
-proposal names the fingertip at each contact from the rigid fit of the hand's fingertips onto the contacts
-(`manifoundation.core.refine.initialise`, the pose is that fit's, not refined); ``quality.success`` is False with reason
-``deformable_open_loop`` unless the request asks for ``simulate_rollout``: then each answer is applied in the
-simulator and judged by the shape metric (`manifoundation.core.pipeline.deformable_rollout`), and when every proposal
-has the network's own contacts, the most-moved points (`manifoundation.core.deformable.answer.moving_indices`,
-``motion_fallback``)
-are simulated beside them as one more candidate; the best ``num_proposals`` by the rollout are returned.
-Unordered targets (``target_points`` with ``correspondence="unknown"``) get their per-point motion by coherent
-point drift and optimal transport (`manifoundation.core.deformable.registration`).
+(`manifoundation.core.deformable.answer`). Methods: "network" (the heatmap's NMS contacts with the task's motion at
+them), "random_contacts" (spread points with the task's motion at them), "contacts" (the given points, with the task's
+motion at them). With a hand, each proposal names the fingertip at each contact from the rigid fit of the hand's
+fingertips onto the contacts (`manifoundation.core.refine.initialise`, the pose is that fit's, not refined);
+``quality.success`` is False with reason ``deformable_open_loop`` unless the request asks for ``simulate_rollout``: then
+each answer is applied in the simulator and judged by the shape metric
+(`manifoundation.core.pipeline.deformable_rollout`), and when every proposal has the network's own contacts, the
+most-moved points (`manifoundation.core.deformable.answer.moving_indices`, ``motion_fallback``) are simulated beside
+them as one more candidate; the best ``num_proposals`` by the rollout are returned. Unordered targets (``target_points``
+with ``correspondence="unknown"``) get their per-point motion by coherent point drift and optimal transport
+(`manifoundation.core.deformable.registration`).
 """
 
 from __future__ import annotations

@@ -1,11 +1,10 @@
 """A deformable answer judged in the simulator: `options.simulate_rollout` (and `options.rollout_corrections`).
 
 The object is rebuilt as a simulation body from its points (`manifoundation.core.deformable.reconstruct`), each
-proposal's
-contacts are grasped and moved by their motions (`manifoundation.core.deformable.simulate`, the same physics as the data
-and the evaluation), and the rollout is scored against the target (the points plus the per-point target motion; for
-unordered targets, the registered motion) by the paper's shape metric (`manifoundation.core.deformable.metrics`). The
-body is rebuilt once per request and shared by the proposals.
+proposal's contacts are grasped and moved by their motions (`manifoundation.core.deformable.simulate`, the same physics
+as the data and the evaluation), and the rollout is scored against the target (the points plus the per-point target
+motion; for unordered targets, the registered motion) by the paper's shape metric
+(`manifoundation.core.deformable.metrics`). The body is rebuilt once per request and shared by the proposals.
 
 Corrections (closed loop through the simulator). The target's displacement at a contact is where that point
 ends after the release, not the motion that takes it there: a plasticine press springs back and drags its

@@ -1,15 +1,14 @@
 """`run_pipeline`: contacts → initial pose → SOCP refinement → verification, with progress, cancel, deadline.
 
-Stages reported to ``progress(stage, fraction)``: "network", "initialisation", "refinement" (k / max
-iterations over all proposals), "verification". ``should_cancel()`` is checked between stages and before every
-refinement iteration (raises `Cancelled`). A ``deadline`` (time.monotonic()) that passes during refinement stops
-it and returns the best iterate, not converged, reason "deadline"; later proposals are then not refined. For
-methods "network" and "random_contacts" a refinement that stalls is restarted from approach alignments
-(`manifoundation.core.refine.strategy`) within the same iteration budget; given contacts ("contacts") are never
-abandoned.
-Deformable materials (cloth, rope, plasticine) with a per-point task (``point_motion``, ``target_points``) get
-contacts with a post-contact motion each and no refinement (`manifoundation.core.pipeline.deformable`); with other tasks
-they are handled as rigid bodies for the hand (the motion fitted rigidly, Kabsch).
+Stages reported to ``progress(stage, fraction)``: "network", "initialisation", "refinement" (k / max iterations over all
+proposals), "verification". ``should_cancel()`` is checked between stages and before every refinement iteration (raises
+`Cancelled`). A ``deadline`` (time.monotonic()) that passes during refinement stops it and returns the best iterate, not
+converged, reason "deadline"; later proposals are then not refined. For methods "network" and "random_contacts" a
+refinement that stalls is restarted from approach alignments (`manifoundation.core.refine.strategy`) within the same
+iteration budget; given contacts ("contacts") are never abandoned. Deformable materials (cloth, rope, plasticine) with a
+per-point task (``point_motion``, ``target_points``) get contacts with a post-contact motion each and no refinement
+(`manifoundation.core.pipeline.deformable`); with other tasks they are handled as rigid bodies for the hand (the motion
+fitted rigidly, Kabsch).
 
 Why one module: the stages of one request (network, contact sets, initialisation, refinement, verification)
 run in order on one `Prepared` and share its timings and cancellation checks.

@@ -1,11 +1,10 @@
 """The contact model on the real fingertip surfaces, shared by refinement, the grasp sampler and verification.
 
 A fingertip's contact is the sample of its pad (`manifoundation.core.robots.pads`: evenly spaced samples of the
-fingertip body's
-collision mesh near its tip point) nearest to the object: the smallest Φ (or, with a region mask, the smallest
-Φ^R). Its gap to the object is that Φ (negative: the finger surface is inside), its Jacobian the sample's point
-Jacobian, and the contact on the object is the sample projected along the surface normal. All samples of a
-fingertip body guard it against penetration (Φ ≥ 0); the other bodies keep their collision spheres.
+fingertip body's collision mesh near its tip point) nearest to the object: the smallest Φ (or, with a region mask, the
+smallest Φ^R). Its gap to the object is that Φ (negative: the finger surface is inside), its Jacobian the sample's point
+Jacobian, and the contact on the object is the sample projected along the surface normal. All samples of a fingertip
+body guard it against penetration (Φ ≥ 0); the other bodies keep their collision spheres.
 
 The friction cones use the object's normals as given: the normal of the caller's point nearest the contact
 (`PointCloudField.given_normal`), never a re-estimated or smoothed one.

@@ -1,13 +1,11 @@
 """A cover of each fingertip body's surface samples by a few representatives, to bound the others' distances.
 
 The contact model (`manifoundation.core.refine.contact`) needs the object's signed distance Φ of a fingertip body's
-samples
-only where it decides something: the pad samples nearest the object (the contact and its ties) and the body's
-samples nearest the object (the guard rows). Φ changes by at most the distance moved (a distance is 1-Lipschitz;
-the point field's, to the nearest of the 8 nearest discs, by up to their radius h more), and a body is rigid, so
-a sample ``s`` within δ of its representative ``r`` has ``Φ(r) − δ − h ≤ Φ(s) ≤ Φ(r) + δ + h`` at every pose:
-measuring the representatives first bounds every sample, and only those whose lower bound can still be among the
-nearest are measured.
+samples only where it decides something: the pad samples nearest the object (the contact and its ties) and the body's
+samples nearest the object (the guard rows). Φ changes by at most the distance moved (a distance is 1-Lipschitz; the
+point field's, to the nearest of the 8 nearest discs, by up to their radius h more), and a body is rigid, so a sample
+``s`` within δ of its representative ``r`` has ``Φ(r) − δ − h ≤ Φ(s) ≤ Φ(r) + δ + h`` at every pose: measuring the
+representatives first bounds every sample, and only those whose lower bound can still be among the nearest are measured.
 """
 
 from __future__ import annotations

@@ -1,10 +1,9 @@
 """A body-decoding process (``python -m manifoundation.server.api.body_child``): reads framed bodies on stdin, answers
 on stdout.
 
-Frame in: 4-byte big-endian header length, the header (JSON: ``cls`` "module:Name", ``ct`` content type), then
-the body as chunks, each a 4-byte big-endian length and that many bytes, ended by a chunk of length 0. Frame
-out: 8-byte big-endian length, then the pickled ``(kind, value)`` of `manifoundation.server.api.bodies.decode`. Imports
-`clients`
+Frame in: 4-byte big-endian header length, the header (JSON: ``cls`` "module:Name", ``ct`` content type), then the body
+as chunks, each a 4-byte big-endian length and that many bytes, ended by a chunk of length 0. Frame out: 8-byte
+big-endian length, then the pickled ``(kind, value)`` of `manifoundation.server.api.bodies.decode`. Imports `clients`
 and pydantic only: no torch, no server code. Exits at EOF.
 """
 

@@ -1,9 +1,8 @@
 """What the result viewer draws besides the result: the object's points, kept by the API that took the request.
 
-The queue contract returns results, not requests, so the API keeps a bounded, subsampled copy of each object
-it enqueued (at most ``MAX_VIEW_POINTS`` points, float32; least recently submitted dropped first); for a plan also
-its scene as drawn (`manifoundation.server.api.plan_scenes`: obstacles, support plane, waypoints). A job submitted
-through another
+The queue contract returns results, not requests, so the API keeps a bounded, subsampled copy of each object it enqueued
+(at most ``MAX_VIEW_POINTS`` points, float32; least recently submitted dropped first); for a plan also its scene as
+drawn (`manifoundation.server.api.plan_scenes`: obstacles, support plane, waypoints). A job submitted through another
 API replica, or forgotten, is drawn from its result alone (contacts, forces, hand; a plan's path and steps).
 """
 

@@ -4,14 +4,13 @@ Factory::
 
     create_queue(settings=None, **options) -> JobQueue
 
-``settings`` is a `QueueSettings`, any object with matching attributes (e.g. the service's own settings: the
-fields it shares with `QueueSettings`, such as ``redis_url``, are taken), a Redis URL string, or None (read
-``MANI_*`` from the environment). ``options`` override single fields (``concurrency=2``, ``max_queue=100``,
+``settings`` is a `QueueSettings`, any object with matching attributes (e.g. the service's own settings: the fields it
+shares with `QueueSettings`, such as ``redis_url``, are taken), a Redis URL string, or None (read ``MANI_*`` from the
+environment). ``options`` override single fields (``concurrency=2``, ``max_queue=100``,
 ``pipeline="research.staged_pipeline:StagedPipeline"``, ...). With a ``redis_url`` the answer is a `RedisQueue` (durable
 with AOF, scale-out: run `mani worker` processes against the same URL and ``queue_prefix``); without one an
 `EmbeddedQueue` that spawns ``concurrency`` worker processes in `start()` (non-durable: jobs and results live in
-memory).
-Call ``await queue.start()`` before use and ``await queue.close()`` at the end.
+memory). Call ``await queue.start()`` before use and ``await queue.close()`` at the end.
 """
 
 from __future__ import annotations

@@ -2,12 +2,11 @@
 to its parent (`mani serve`) over a duplex pipe.
 
 Messages are msgpack maps (`manifoundation.contract.codec`); payloads travel as their own frames after the map that
-announces them,
-so a request or a result is never encoded inside another message. Parent → child: ``run`` (job metadata, then per
-job its request frame and, when it names a registered robot, the robot's frame), ``cancel`` (id), ``robot`` (then
-the registration's frame: validate it), ``stop`` (finish the current batch, then exit). Child → parent: ``hello``
-(worker info and built-in robots), ``heartbeat``, ``progress``, ``done`` (state, error, timings; then the result's
-frame when it succeeded), ``robot`` (validation answer).
+announces them, so a request or a result is never encoded inside another message. Parent → child: ``run`` (job metadata,
+then per job its request frame and, when it names a registered robot, the robot's frame), ``cancel`` (id), ``robot``
+(then the registration's frame: validate it), ``stop`` (finish the current batch, then exit). Child → parent: ``hello``
+(worker info and built-in robots), ``heartbeat``, ``progress``, ``done`` (state, error, timings; then the result's frame
+when it succeeded), ``robot`` (validation answer).
 """
 
 from __future__ import annotations

@@ -1,8 +1,7 @@
 """`mani worker`: run Redis Streams worker processes (scale-out; the embedded backend runs its own inside
 `mani serve`). A small supervisor starts ``--concurrency`` worker processes (`manifoundation.server.worker.worker`),
-restarts one that
-dies (a crashed job is re-delivered to a live worker), and on SIGTERM/SIGINT forwards SIGTERM so each finishes its
-current batch, then exits.
+restarts one that dies (a crashed job is re-delivered to a live worker), and on SIGTERM/SIGINT forwards SIGTERM so each
+finishes its current batch, then exits.
 
 Example::
 

@@ -1,14 +1,13 @@
 """The worker core, the same for every transport: decode → job input → run → encoded outcome + timings.
 
 Both worker programs are thin shells around it: the embedded backend's child process
-(`manifoundation.server.worker.child`, fed over a
-pipe by `mani serve`) and the Redis worker (`manifoundation.server.worker.worker`, fed by a stream). A shell hands the
-core `RawJob`s
-(the request still as the msgpack bytes the API encoded once) and gets `Finished` outcomes back (a result already
-encoded once, as the bytes the queue stores), so neither shell decodes, validates or encodes a request or a result
-itself. The one validation at the queue → worker boundary is `decode`'s; the result is built once by the pipeline
-and encoded once here. A job's ``kind`` says what its bytes are: a `SynthesisRequest` (run in micro-batches) or a
-`PlanRequest` (run alone, after the batch's syntheses, through `Pipeline.plan`).
+(`manifoundation.server.worker.child`, fed over a pipe by `mani serve`) and the Redis worker
+(`manifoundation.server.worker.worker`, fed by a stream). A shell hands the core `RawJob`s (the request still as the
+msgpack bytes the API encoded once) and gets `Finished` outcomes back (a result already encoded once, as the bytes the
+queue stores), so neither shell decodes, validates or encodes a request or a result itself. The one validation at the
+queue → worker boundary is `decode`'s; the result is built once by the pipeline and encoded once here. A job's ``kind``
+says what its bytes are: a `SynthesisRequest` (run in micro-batches) or a `PlanRequest` (run alone, after the batch's
+syntheses, through `Pipeline.plan`).
 
 Timings, one meaning on both backends (seconds): ``queue`` from submission to the start in a worker, ``run`` from
 that start to the outcome, ``total`` their sum; plus the pipeline's own per-stage figures (``network``,

@@ -106,10 +106,9 @@ def error_from_exception(exc: BaseException) -> ErrorBody:
     """The one translation of an exception into a job's error.
 
     A `manifoundation.core.errors.ScienceError` carries its contract type (``code``), and its ``field`` when it names
-    one (the
-    planner's errors: ``waypoints[2]`` → ``detail`` field ``waypoints.2``); pydantic's `ValidationError` (a queue
-    payload is input too) is a ``ValidationError`` naming each field; anything else is a fault of the service,
-    an ``InternalError`` that names the exception's class, never a 4xx that blames the caller.
+    one (the planner's errors: ``waypoints[2]`` → ``detail`` field ``waypoints.2``); pydantic's `ValidationError` (a
+    queue payload is input too) is a ``ValidationError`` naming each field; anything else is a fault of the service, an
+    ``InternalError`` that names the exception's class, never a 4xx that blames the caller.
     """
     import pydantic
 

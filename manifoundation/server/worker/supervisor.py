@@ -1,12 +1,10 @@
 """Worker processes, started, restarted and stopped the same way for both backends.
 
 `mani serve`'s embedded queue keeps its `manifoundation.server.worker.child` processes on socketpairs; `mani worker`
-keeps
-`manifoundation.server.worker.worker` processes on Redis. Both start a worker as ``python -m MODULE`` with the queue
-settings as JSON
-in ``MANI_WORKER_SETTINGS``, slow down a worker that keeps dying before it is ready (`CrashLoop`; a `mani worker`
-process says so on a pipe, `announce_ready`), and stop with SIGTERM (finish the current batch), then SIGKILL after
-a grace period (`stop_all`).
+keeps `manifoundation.server.worker.worker` processes on Redis. Both start a worker as ``python -m MODULE`` with the
+queue settings as JSON in ``MANI_WORKER_SETTINGS``, slow down a worker that keeps dying before it is ready (`CrashLoop`;
+a `mani worker` process says so on a pipe, `announce_ready`), and stop with SIGTERM (finish the current batch), then
+SIGKILL after a grace period (`stop_all`).
 """
 
 from __future__ import annotations

@@ -1,19 +1,17 @@
 """A Redis Streams worker process: load the pipeline (model) once, then consume micro-batches.
 
-Loop: XAUTOCLAIM entries idle longer than ``visibility_timeout`` (their worker died), one at a time (a
-re-delivered job runs alone, so a job that kills its worker takes no batch-mate down), else XREADGROUP COUNT =
-``batch_size`` (waiting up to ``max_wait_ms`` to fill a batch); for each job the BEGIN script counts the delivery
-(beyond ``max_deliveries`` → dead-letter stream, the job failed with its last error), drops expired or cancelled
-jobs, marks it running; the batch runs through the worker core (`manifoundation.server.worker.core`); the FINISH script
-writes the result
-(msgpack, TTL) and acks in one atomic step, only while this worker still owns the entry. A heartbeat thread
-publishes the worker's state and XCLAIMs its own in-flight entries so a long job is not stolen. SIGTERM: finish the
-current batch, then exit. Redis going away: retry with back-off, recreate the group, go on; an outcome that
-could not be written while Redis was down is retried until it is (`_end_durably`), so no job stays "running".
-Redis at its maxmemory (noeviction) refuses writes: an outcome is retried every second or so and, after
-`OOM_RESULT_RETRY_S`, written as a failure without its result (``Unavailable``, said plainly); entries taken
-whose BEGIN was refused are begun again by this worker after a short back-off. Neither waits for the visibility
-timeout.
+Loop: XAUTOCLAIM entries idle longer than ``visibility_timeout`` (their worker died), one at a time (a re-delivered job
+runs alone, so a job that kills its worker takes no batch-mate down), else XREADGROUP COUNT = ``batch_size`` (waiting up
+to ``max_wait_ms`` to fill a batch); for each job the BEGIN script counts the delivery (beyond ``max_deliveries`` →
+dead-letter stream, the job failed with its last error), drops expired or cancelled jobs, marks it running; the batch
+runs through the worker core (`manifoundation.server.worker.core`); the FINISH script writes the result (msgpack, TTL)
+and acks in one atomic step, only while this worker still owns the entry. A heartbeat thread publishes the worker's
+state and XCLAIMs its own in-flight entries so a long job is not stolen. SIGTERM: finish the current batch, then exit.
+Redis going away: retry with back-off, recreate the group, go on; an outcome that could not be written while Redis was
+down is retried until it is (`_end_durably`), so no job stays "running". Redis at its maxmemory (noeviction) refuses
+writes: an outcome is retried every second or so and, after `OOM_RESULT_RETRY_S`, written as a failure without its
+result (``Unavailable``, said plainly); entries taken whose BEGIN was refused are begun again by this worker after a
+short back-off. Neither waits for the visibility timeout.
 
 Run as ``python -m manifoundation.server.worker.worker`` (settings as JSON in ``MANI_WORKER_SETTINGS``, else
 ``MANI_*``); `mani worker` supervises several of these.

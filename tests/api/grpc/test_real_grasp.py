@@ -1,9 +1,8 @@
 """A client built from the proto alone gets a real grasp over gRPC, and the outside check accepts it.
 
 The service runs the real science (`manifoundation.server.worker.models_pipeline.ModelsPipeline`, the Allegro hand)
-behind gRPC; the
-client is a subprocess that knows only the `.proto` file (no SDK, no generated code of ours); the grasp it gets
-is judged by the independent audit (`research.audit`: its own kinematics, the hand's meshes, the object's exact
+behind gRPC; the client is a subprocess that knows only the `.proto` file (no SDK, no generated code of ours); the grasp
+it gets is judged by the independent audit (`research.audit`: its own kinematics, the hand's meshes, the object's exact
 mesh), which shares no code with the service's verification.
 """
 

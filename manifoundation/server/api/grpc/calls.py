@@ -3,10 +3,10 @@ reported versions (``x-mani-contract-version``, ``x-mani-service-version``) in t
 (and in the trailers of a failed one).
 
 The same rules as HTTP (`manifoundation.server.api.deps.authorize`), on the app's own objects: the keys of `Settings`,
-the tenant of
-each key (`manifoundation.server.api.security.tenant_of`), one token bucket per key shared by both transports (a key's
-HTTP and gRPC calls draw on the same bucket), and the same wrong-key limit per client address. The key travels in the
-``authorization`` metadata as ``Bearer <key>``. Health checks and reflection need no key (like /healthz).
+the tenant of each key (`manifoundation.server.api.security.tenant_of`), one token bucket per key shared by both
+transports (a key's HTTP and gRPC calls draw on the same bucket), and the same wrong-key limit per client address. The
+key travels in the ``authorization`` metadata as ``Bearer <key>``. Health checks and reflection need no key (like
+/healthz).
 """
 
 from __future__ import annotations

@@ -2,9 +2,8 @@
 
 Every `manifoundation.contract.ErrorType` has one code here (`GRPC_CODE`, tested complete). An exception becomes an
 `ErrorBody` through the HTTP side's own translation (`manifoundation.server.api.errors.from_exception`: queue errors,
-pydantic's
-`ValidationError` with each field and problem, ...), so both transports classify an error the same way; only the
-last step differs. A failed call carries, besides its code and message:
+pydantic's `ValidationError` with each field and problem, ...), so both transports classify an error the same way; only
+the last step differs. A failed call carries, besides its code and message:
 
 - ``grpc-status-details-bin``: a ``google.rpc.Status`` with an ``ErrorInfo`` (``reason``: the ErrorType name),
   a ``BadRequest`` (each field and problem) for a validation error, and a ``RetryInfo`` (the retry delay) for

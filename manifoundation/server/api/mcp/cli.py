@@ -1,11 +1,10 @@
 """`mani mcp`: the MCP tools over stdio, for an agent on this machine, in front of a running service.
 
 The tools are the same as at ``/mcp`` on the service (`manifoundation.server.api.mcp.tools`); here they call the service
-over HTTP
-with the SDK (`ClientBackend`) with the key given (``--api-key`` / ``MANI_API_KEY``), so the service validates,
-limits and scopes every call as it does any SDK call. Uploaded objects stay in this process (the
-``MANI_OBJECT_TTL_S`` / ``MANI_MAX_OBJECTS`` / ``MANI_MAX_OBJECT_STORE_BYTES`` limits) and may also be read from
-files on this machine (``upload_object(path=...)``). Stdout carries the protocol; logs go to stderr.
+over HTTP with the SDK (`ClientBackend`) with the key given (``--api-key`` / ``MANI_API_KEY``), so the service
+validates, limits and scopes every call as it does any SDK call. Uploaded objects stay in this process (the
+``MANI_OBJECT_TTL_S`` / ``MANI_MAX_OBJECTS`` / ``MANI_MAX_OBJECT_STORE_BYTES`` limits) and may also be read from files
+on this machine (``upload_object(path=...)``). Stdout carries the protocol; logs go to stderr.
 
 Kept light at import time: the MCP SDK is imported when the command runs.
 """
