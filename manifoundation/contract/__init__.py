@@ -61,6 +61,7 @@ from manifoundation.contract.requests import (
 from manifoundation.contract.results import (
     HandMesh,
     IterationRecord,
+    PhysicsMotion,
     PhysicsQuality,
     PhysicsTrial,
     Proposal,
@@ -141,6 +142,7 @@ __all__ = [
     "ObjectIn",
     "ObstacleIn",
     "PhysicalProperties",
+    "PhysicsMotion",
     "PhysicsQuality",
     "PhysicsTrial",
     "PlanMethod",

@@ -69,9 +69,10 @@ class SynthesisOptions(WireModel):
     simulate: bool = Field(
         False,
         description="Rigid objects with a robot: run the simulated grasp test (MuJoCo, DexGraspBench's protocol: "
-        "pregrasp → grasp → squeeze, then 1 N pushes along ±x, ±y, ±z for 2 s; docs/physics.md) on each "
-        "proposal; `quality.physics` carries it and `quality.success` requires that the object held. About "
-        "0.1-0.6 s a proposal.",
+        "pregrasp → grasp → squeeze, then 1 N pushes along ±x, ±y, ±z for 2 s; for a `delta_pose` task instead "
+        "gravity on and the palm carried along the task's motion over 1 s, success within 1 cm and 10° of the "
+        "target pose; docs/physics.md) on each proposal; `quality.physics` carries it (`test`: closure or motion) "
+        "and `quality.success` requires that it passed. About 0.1-0.6 s a proposal.",
     )
     rollout_corrections: int = Field(
         0, ge=0, le=8, description="Deformables with `simulate_rollout`: a proposal whose rollout misses the "

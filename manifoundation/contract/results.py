@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 import numpy as np
 from pydantic import Field, field_validator
@@ -20,13 +20,30 @@ class PhysicsTrial(WireModel):
     held: bool = Field(..., description="Moved < 5 cm and turned < 15°.")
 
 
+class PhysicsMotion(WireModel):
+    """The target-motion trial of the simulated test (``delta_pose`` tasks): where the object ended."""
+
+    translation_error: float = Field(..., ge=0, description="Distance of the object's centre of mass from the "
+                                     "target's at the end, m (success < 1 cm).")
+    rotation_error: float = Field(..., ge=0, description="Angle of the object's orientation from the target's at "
+                                  "the end, degrees (success < 10°).")
+    dropped: bool = Field(..., description="No hand body touched the object at the end.")
+    reached: bool = Field(..., description="Ended within 1 cm and 10° of the target pose, not dropped.")
+
+
 class PhysicsQuality(WireModel):
     """The simulated grasp test (``options.simulate``; MuJoCo, DexGraspBench's protocol, docs/physics.md)."""
 
-    held: bool = Field(..., description="The object held in all six directions.")
+    held: bool = Field(..., description="The test passed: the object held in all six directions (closure) or "
+                       "reached the target pose (motion).")
     reason: str = Field(..., description="held, moved (a push moved or turned it too far) or penetration (the "
-                        "pregrasp penetrates more than 1 cm).")
-    trials: list[PhysicsTrial] = Field(default_factory=list, description="The six pushes (none after penetration).")
+                        "pregrasp penetrates more than 1 cm); motion: reached, missed or dropped.")
+    test: Literal["closure", "motion"] = Field("closure", description="Which test ran: closure (six pushes, gravity "
+                                               "off; force_closure and wrench tasks) or motion (delta_pose: the "
+                                               "palm carried along the task's motion under gravity).")
+    trials: list[PhysicsTrial] = Field(default_factory=list, description="The six pushes (closure; none after "
+                                       "penetration).")
+    motion: PhysicsMotion | None = Field(None, description="The target-motion trial (test motion).")
     penetration: float = Field(..., ge=0, description="Deepest hand-object or hand-hand penetration at the "
                                "pregrasp, m.")
     tip_gaps: list[float] = Field(default_factory=list, description="Per fingertip, the signed distance from its "

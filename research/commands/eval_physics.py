@@ -14,8 +14,15 @@ proposal holds (the pipeline's order) and whether its best holds once the propos
 (`manifoundation.core.physics.physics_order`, what ``options.simulate`` returns first): with ``--proposals K`` > 1
 the best of K.
 
+``--task lift`` (``delta:0,0,0.05``; any ``delta:x,y,z[,qw,qx,qy,qz]``) asks for that object motion instead and
+judges each proposal by the executed target-motion test (`manifoundation.core.physics.simulate_motion`: the same
+squeeze, then gravity on and the palm carried along the motion over 1 s, held 0.5 s; reaches when the object ends
+within 1 cm and 10° of the target pose); "hold" then means "reached" and three columns add the median final
+position / rotation error and how many dropped.
+
 Example:
     mani-lab eval physics --hand leap,allegro,panda_gripper --objects 10 --json physics.json
+    mani-lab eval physics --hand leap,allegro,panda_gripper --objects 10 --task lift
 """
 
 from __future__ import annotations
@@ -50,8 +57,28 @@ def add_physics_parser(sub: Any) -> None:
                    "(default: Protocol's 0.1; Menagerie's Allegro has 1)")
     a.add_argument("--no-close", action="store_true",
                    help="leave the fingertips where the refinement put them (no closing stage)")
+    a.add_argument("--task", default="closure",
+                   help="closure (force closure, six pushes), lift (= delta:0,0,0.05) or delta:x,y,z[,qw,qx,qy,qz] "
+                   "(the target-motion test)")
     a.add_argument("--json", default=None, help="also write every proposal's record to this file")
     a.set_defaults(func=run_physics)
+
+
+def parse_task(text: str) -> tuple[list[float], list[float]] | None:
+    """``closure`` → None; ``lift`` / ``delta:x,y,z[,qw,qx,qy,qz]`` → (translation (3,), rotation (4,) wxyz).
+
+    Raises:
+        ValueError: anything else.
+    """
+    if text == "closure":
+        return None
+    text = "delta:0,0,0.05" if text == "lift" else text
+    if not text.startswith("delta:"):
+        raise ValueError(f"--task {text!r}: closure, lift or delta:x,y,z[,qw,qx,qy,qz]")
+    v = [float(x) for x in text.removeprefix("delta:").split(",")]
+    if len(v) not in (3, 7):
+        raise ValueError(f"--task {text!r}: 3 or 7 numbers")
+    return v[:3], v[3:] or [1.0, 0.0, 0.0, 0.0]
 
 
 def run_physics(args: argparse.Namespace) -> int:
@@ -64,13 +91,21 @@ def run_physics(args: argparse.Namespace) -> int:
     from rich.table import Table
     from tqdm import tqdm
 
-    from manifoundation.core.physics import Protocol, from_mesh, from_points, physics_order, simulate_grasp
+    from manifoundation.core import physics as sim
     from manifoundation.core.pipeline import SynthesisInput, TaskInput, run_pipeline
     from manifoundation.core.robots import get_hand
     from research.audit import third_party_objects
 
     torch.set_num_threads(1)
-    protocol = Protocol()
+    try:
+        motion = parse_task(args.task)
+    except ValueError as exc:
+        print(exc)
+        return EXIT_USAGE
+    task = TaskInput("force_closure")
+    if motion is not None:
+        task = TaskInput("delta_pose", np.array(motion[0]), np.array(motion[1]))
+    protocol = sim.Protocol()
     if args.kp_revolute is not None:
         protocol = replace(protocol, kp_revolute=args.kp_revolute)
     if args.damping_revolute is not None:
@@ -85,8 +120,8 @@ def run_physics(args: argparse.Namespace) -> int:
 
         predictor = ContactPredictor.from_checkpoint(args.weights)
     shapes = {
-        o.name: from_mesh(o.mesh.vertices, o.mesh.faces) if args.judge == "mesh"
-        else from_points(*o.sample(args.points, args.seed))
+        o.name: sim.from_mesh(o.mesh.vertices, o.mesh.faces) if args.judge == "mesh"
+        else sim.from_points(*o.sample(args.points, args.seed))
         for o in objects
     }  # fmt: skip
     records: list[dict[str, Any]] = []
@@ -96,7 +131,7 @@ def run_physics(args: argparse.Namespace) -> int:
         points, normals = obj.sample(args.points, args.seed)
         send = args.geometry == "mesh"
         inp = SynthesisInput(
-            points=points, normals=normals, hand=hand, task=TaskInput("force_closure"), method=args.method,
+            points=points, normals=normals, hand=hand, task=task, method=args.method,
             num_proposals=args.proposals, seed=args.seed, hand_key=hand.name, close_gaps=not args.no_close,
             mesh_vertices=np.asarray(obj.mesh.vertices) if send else None,
             mesh_faces=np.asarray(obj.mesh.faces) if send else None,
@@ -106,26 +141,30 @@ def run_physics(args: argparse.Namespace) -> int:
         seconds = time.perf_counter() - t0
         for k, p in enumerate(out.proposals):
             assert p.palm_position is not None and p.palm_quaternion is not None and p.joint_values is not None
-            r = simulate_grasp(
-                hand, p.palm_position, p.palm_quaternion, p.joint_values, p.contact_points, p.contact_normals,
-                p.fingertips, shapes[obj.name], protocol,
-            )  # fmt: skip
+            grasp = (hand, p.palm_position, p.palm_quaternion, p.joint_values, p.contact_points, p.contact_normals,
+                     p.fingertips, shapes[obj.name])  # fmt: skip
+            r = (sim.simulate_grasp(*grasp, protocol=protocol) if motion is None
+                 else sim.simulate_motion(*grasp, np.array(motion[0]), np.array(motion[1]), protocol))  # fmt: skip
+            m = r.motion
             records.append({
                 "hand": hand_name, "object": obj.name, "proposal": k, "verified": bool(p.quality.success),
                 "source": p.contact_source, "epsilon": p.quality.epsilon, "holds": r.success, "reason": r.reason,
                 "tip_gaps": r.tip_gaps,
                 "touching_after_squeeze": r.contacts_after_squeeze, "penetration": r.penetration,
                 "trials": [[t.direction, t.translation, t.rotation, t.held] for t in r.trials],
+                "motion": None if m is None else [m.translation_error, m.rotation_error, m.dropped],
                 "pipeline_s": seconds, "physics_s": r.seconds, "object_pieces": shapes[obj.name].source,
             })  # fmt: skip
     table = Table(
         title=f"simulated grasp test of the service's answers: {len(objects)} third-party objects, "
-        f"force closure, method {args.method}, {args.geometry} sent, {args.proposals} proposal(s), "
+        f"{'force closure' if motion is None else 'target motion ' + args.task}, method {args.method}, "
+        f"{args.geometry} sent, {args.proposals} proposal(s), "
         f"{'no closing' if args.no_close else 'closed'}, "
         f"kp {protocol.kp_revolute:g} N·m/rad, damping {protocol.damping_revolute:g}, judged on the {args.judge}"
     )
     for col in ("hand", "requests", "first holds", "best holds", "proposals", "verified", "verified & hold", "hold",
-                "median tip gap mm", "tips ≤ 0.5 mm", "none touching", "physics s"):  # fmt: skip
+                "median tip gap mm", "tips ≤ 0.5 mm", "none touching", "physics s",
+                *(() if motion is None else ("median error mm", "median error deg", "dropped"))):  # fmt: skip
         table.add_column(col, justify="right" if col != "hand" else "left")
     false_claims = 0
     for hand_name in hands:
@@ -137,7 +176,7 @@ def run_physics(args: argparse.Namespace) -> int:
         for rec in rows:
             requests.setdefault(rec["object"], []).append(rec)
         first = sum(rs[0]["holds"] for rs in requests.values())
-        best = sum(rs[physics_order([x["verified"] for x in rs], [x["holds"] for x in rs])[0]]["holds"]
+        best = sum(rs[sim.physics_order([x["verified"] for x in rs], [x["holds"] for x in rs])[0]]["holds"]
                    for rs in requests.values())  # fmt: skip
         table.add_row(
             hand_name, str(len(requests)), f"{first}/{len(requests)}", f"{best}/{len(requests)}", str(len(rows)),
@@ -145,10 +184,23 @@ def run_physics(args: argparse.Namespace) -> int:
             f"{sum(r['holds'] for r in rows)}/{len(rows)}", f"{1000 * np.median(gaps):.1f}" if len(gaps) else "-",
             f"{100 * np.mean(np.abs(gaps) <= 5e-4):.0f} %" if len(gaps) else "-",
             f"{sum(r['touching_after_squeeze'] == 0 for r in rows)}/{len(rows)}",
-            f"{np.median([r['physics_s'] for r in rows]):.2f}" if rows else "-",
+            f"{np.median([r['physics_s'] for r in rows]):.2f}" if rows else "-", *_motion_cells(rows, motion is None),
         )  # fmt: skip
     Console(width=200).print(table)
     print("objects:", ", ".join(o.name for o in objects))
     if args.json:
         Path(args.json).write_text(json.dumps(records, indent=1))
     return EXIT_FAILED if false_claims else EXIT_OK
+
+
+def _motion_cells(rows: list[dict[str, Any]], closure: bool) -> tuple[str, ...]:
+    """Median final position (mm) and rotation (deg) error and the drops, over the runs that started."""
+    import numpy as np
+
+    if closure:
+        return ()
+    ran = [r["motion"] for r in rows if r["motion"] is not None]
+    if not ran:
+        return ("-", "-", f"0/{len(rows)}")
+    pos = np.median([1000 * min(e[0], 1.0) for e in ran])  # a drop counts as 1 m
+    return (f"{pos:.0f}", f"{np.median([e[1] for e in ran]):.1f}", f"{sum(e[2] for e in ran)}/{len(rows)}")

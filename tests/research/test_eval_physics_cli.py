@@ -27,3 +27,30 @@ def test_eval_physics_prints_the_table_and_writes_every_proposal(
     assert code == (1 if false_claims else 0)
     text = capsys.readouterr().out
     assert "verified & hold" in text and "best holds" in text and "panda_gripper" in text
+
+
+def test_eval_physics_task_lift_runs_the_target_motion_test(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    p = argparse.ArgumentParser()
+    add_physics_parser(p.add_subparsers())
+    out = tmp_path / "lift.json"
+    args = p.parse_args(["physics", "--hand", "panda_gripper", "--objects", "2", "--method", "random_contacts",
+                         "--task", "lift", "--json", str(out)])  # fmt: skip
+    args.func(args)
+    records = json.loads(out.read_text())
+    assert len(records) == 2 and all(r["reason"] in ("reached", "missed", "dropped", "penetration") for r in records)
+    assert all(r["trials"] == [] for r in records)
+    assert all(r["motion"] is None or len(r["motion"]) == 3 for r in records)
+    text = capsys.readouterr().out
+    assert "target motion lift" in text and "dropped" in text
+
+
+def test_parse_task() -> None:
+    from research.commands.eval_physics import parse_task
+
+    assert parse_task("closure") is None
+    assert parse_task("lift") == ([0.0, 0.0, 0.05], [1.0, 0.0, 0.0, 0.0])
+    assert parse_task("delta:0,0,0.1,0,0,0,1") == ([0.0, 0.0, 0.1], [0.0, 0.0, 0.0, 1.0])
+    with pytest.raises(ValueError):
+        parse_task("push")

@@ -82,3 +82,43 @@ def test_physics_order_is_held_and_verified_then_held_then_verified() -> None:
 
     assert physics_order([True, False, True, True], [False, True, True, None]) == [2, 1, 0, 3]
     assert physics_order([], []) == []
+
+
+def _lift_request(task: dict[str, object]) -> SynthesisRequest:
+    box = trimesh.creation.box(extents=[0.03, 2 * HALF, 0.03])
+    box.apply_translation([0.0, 0.0, -PAD_Z])  # below the palm turned upside down: the fingers point down
+    pts = trimesh.sample.sample_surface_even(box, 200, seed=0)[0]
+    return SynthesisRequest.model_validate({
+        "object": {"points": np.asarray(pts).tolist(), "mesh": {"vertices": box.vertices.tolist(),
+                                                                "faces": box.faces.tolist()}},
+        "task": task, "robot": {"name": "panda_gripper"}, "options": {"method": "direct_grasp", "simulate": True},
+    })  # fmt: skip
+
+
+def _down(q: float) -> SynthesisOutput:
+    out = _output(q)
+    p = out.proposals[0]
+    p.palm_quaternion = np.array([0.0, 1.0, 0.0, 0.0])  # 180° about x
+    p.contact_points = np.array([[0.0, -HALF, -PAD_Z], [0.0, HALF, -PAD_Z]])
+    p.contact_normals = np.array([[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]])
+    return out
+
+
+def test_the_task_picks_the_test() -> None:
+    from manifoundation.server.worker.convert import physics_test
+
+    lift = {"kind": "delta_pose", "translation": [0.0, 0.0, 0.05]}
+    assert physics_test(_lift_request(lift)) == "motion"
+    assert physics_test(_lift_request({"kind": "force_closure"})) == "closure"
+    assert physics_test(_lift_request({"kind": "wrench", "wrench": [0, 0, 1, 0, 0, 0]})) == "closure"
+    hand = get_hand("panda_gripper")
+    held = to_result(_down(HALF), _lift_request(lift), "test", hand).proposals[0].quality
+    assert held.success and held.physics is not None and held.physics.test == "motion"
+    assert held.physics.trials == [] and held.physics.motion is not None and held.physics.motion.reached
+    assert held.physics.motion.translation_error < 0.01 and held.physics.reason == "reached"
+    dropped = to_result(_down(HALF + 0.02), _lift_request(lift), "test", hand).proposals[0].quality
+    assert not dropped.success and dropped.failures == ["physics"] and dropped.physics is not None
+    assert dropped.physics.motion is not None and dropped.physics.motion.dropped
+    closure = to_result(_down(HALF), _lift_request({"kind": "force_closure"}), "test", hand).proposals[0].quality
+    assert closure.physics is not None and closure.physics.test == "closure" and len(closure.physics.trials) == 6
+    assert closure.physics.motion is None

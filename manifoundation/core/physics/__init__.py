@@ -4,8 +4,10 @@ Independent of the optimiser: it reads the hand's description and real meshes (`
 model (`hand_model`, `object_model`, `scene`) and runs the six-direction test (`trial`, settings in `protocol`).
 """
 
+from manifoundation.core.physics.motion import simulate_motion
 from manifoundation.core.physics.object_model import ObjectShape, from_mesh, from_points
 from manifoundation.core.physics.protocol import (
+    MotionTrial,
     PhysicsResult,
     Protocol,
     Trial,
@@ -14,6 +16,7 @@ from manifoundation.core.physics.protocol import (
 from manifoundation.core.physics.trial import simulate_grasp
 
 __all__ = [
+    "MotionTrial",
     "ObjectShape",
     "PhysicsResult",
     "Protocol",
@@ -22,4 +25,5 @@ __all__ = [
     "from_points",
     "physics_order",
     "simulate_grasp",
+    "simulate_motion",
 ]

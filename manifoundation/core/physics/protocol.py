@@ -32,6 +32,10 @@ class Protocol:
         armature_revolute (kg·m²) / armature_prismatic (kg): reflected rotor inertia, which keeps the 4 ms step stable.
         damping_revolute (N·m·s/rad) / damping_prismatic (N·s/m): joint damping (ζ ≈ 0.3 and 0.9 with those gains).
         max_translation (m) / max_rotation (deg): what the object may move / turn; max_penetration (m) at the start.
+        Target motion (``simulate_motion``, issue 63): after the squeeze, gravity (m/s², along −z) on and the palm
+        driven along the task's motion over motion_seconds, then held motion_hold_seconds; success when the
+        object's centre ends within target_translation (m) and its orientation within target_rotation (deg) of the
+        target pose.
     """
 
     mass: float = 0.1
@@ -54,6 +58,11 @@ class Protocol:
     max_rotation: float = 15.0
     max_penetration: float = 0.01
     stop_at_first_failure: bool = False
+    gravity: float = 9.81
+    motion_seconds: float = 1.0
+    motion_hold_seconds: float = 0.5
+    target_translation: float = 0.01
+    target_rotation: float = 10.0
 
 
 @dataclass
@@ -64,6 +73,17 @@ class Trial:
     translation: float
     rotation: float
     held: bool
+
+
+@dataclass
+class MotionTrial:
+    """The target-motion trial: the object's final distance (m) and angle (deg) from the target pose, whether it
+    dropped (no hand body touches it at the end) and whether it reached the target within the tolerance."""
+
+    translation_error: float
+    rotation_error: float
+    dropped: bool
+    reached: bool
 
 
 @dataclass
@@ -79,6 +99,8 @@ class PhysicsResult:
         contacts_after_squeeze: hand bodies touching the object after the squeeze of the first trial.
         pregrasp, squeeze: (D,) the joint targets used.
         seconds: wall time of the test.
+        test: which test ran: "closure" (the six pushes, ``trials``) or "motion" (the target motion, ``motion``).
+        motion: the target-motion trial's figures (``test == "motion"`` and the start did not fail).
     """
 
     success: bool
@@ -90,6 +112,8 @@ class PhysicsResult:
     pregrasp: np.ndarray = field(repr=False)
     squeeze: np.ndarray = field(repr=False)
     seconds: float = 0.0
+    test: str = "closure"
+    motion: MotionTrial | None = None
 
     @property
     def max_translation(self) -> float:

@@ -18,6 +18,12 @@ if TYPE_CHECKING:
     from manifoundation.core.robots.hand import Hand
 
 
+PALM_TARGET = "palm_target"
+"""The mocap body the free palm is welded to in the target-motion trial."""
+PALM_MASS = 1.0
+"""The palm's mass in the target-motion trial, kg: a real hand's order, so the weld carries the object stiffly."""
+
+
 @dataclass
 class Scene:
     """The compiled model and the indices the test needs.
@@ -57,9 +63,13 @@ def _rest_overlaps(hand: Hand) -> frozenset[tuple[str, str]]:
 
 
 def build_scene(
-    hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, shape: ObjectShape, protocol: Protocol
+    hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, shape: ObjectShape, protocol: Protocol,
+    moving: bool = False,
 ) -> Scene:
-    """Compile the scene (palm pose wxyz in the world frame; the object's pieces in the world frame)."""
+    """Compile the scene (palm pose wxyz in the world frame; the object's pieces in the world frame).
+
+    ``moving`` (the target-motion trial): the palm gets a free joint welded to the mocap body ``palm_target``
+    (driven through ``data.mocap_pos`` / ``mocap_quat``) and the hand's bodies are gravity-compensated."""
     spec = mujoco.MjSpec()
     spec.compiler.degree = False  # joint ranges in radians (MJCF's default is degrees)
     opt = spec.option
@@ -74,6 +84,17 @@ def build_scene(
         spec, desc, list(hand.joint_names), np.asarray(palm_position, float), np.asarray(palm_quaternion, float),
         protocol, _rest_overlaps(hand),
     )  # fmt: skip
+    if moving:  # a free palm welded to a mocap body, as DexGraspBench's base (see `motion`)
+        palm = spec.body(hm.bodies[0])
+        palm.add_freejoint(name=PREFIX + "palm/free")
+        palm.mass = PALM_MASS
+        target = spec.worldbody.add_body(name=PALM_TARGET, pos=palm.pos, quat=palm.quat, mocap=True)
+        weld = spec.add_equality(type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY)
+        weld.name1, weld.name2 = target.name, palm.name
+        weld.solref = [2 * protocol.timestep, 1.0]
+        weld.data = [0, 0, 0, 0, 0, 0, 1, 0, 0, 0, 1, 0]  # anchor, relative pose (identity), torque scale
+        for b in hm.bodies:
+            spec.body(b).gravcomp = 1.0
     add_object(spec, shape, protocol)
     for g in spec.geoms:
         g.friction = [protocol.friction[0], protocol.friction[1], 0.0001]

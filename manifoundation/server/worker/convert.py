@@ -16,6 +16,7 @@ from manifoundation.contract import (
     HandMesh,
     IterationRecord,
     Method,
+    PhysicsMotion,
     PhysicsQuality,
     PhysicsTrial,
     Proposal,
@@ -90,15 +91,21 @@ def _finite(value: float) -> float:
     return float(value) if np.isfinite(value) else _BIG
 
 
+def physics_test(request: SynthesisRequest) -> str:
+    """Which simulated test judges the request's answers: "motion" (the palm carried along the task's motion under
+    gravity, `simulate_motion`) for a ``delta_pose`` task, else "closure" (the six pushes, `simulate_grasp`)."""
+    return "motion" if request.task.kind == "delta_pose" else "closure"
+
+
 def simulate(request: SynthesisRequest, hand: Hand, proposals: list[ProposalOutput]) -> list[PhysicsQuality | None]:
-    """The simulated grasp test (`manifoundation.core.physics`) of each proposal with a hand pose: on the sent mesh,
-    else on the points (and their normals, estimated when not sent)."""
+    """The simulated grasp test (`manifoundation.core.physics`) of each proposal with a hand pose, the one the task
+    asks for (`physics_test`): on the sent mesh, else on the points (and their normals, estimated when not sent)."""
     from scipy.spatial import cKDTree
 
     from manifoundation.core.geometry.object import estimate_normals
-    from manifoundation.core.physics import ObjectShape, from_mesh, from_points, simulate_grasp
+    from manifoundation.core.physics import ObjectShape, from_mesh, from_points, simulate_grasp, simulate_motion
 
-    obj = request.object
+    obj, task = request.object, request.task
     shape: ObjectShape | None = None
     out: list[PhysicsQuality | None] = []
     for p in proposals:
@@ -112,12 +119,21 @@ def simulate(request: SynthesisRequest, hand: Hand, proposals: list[ProposalOutp
                 pts = np.asarray(obj.points, np.float64)
                 nrm = estimate_normals(pts, cKDTree(pts)) if obj.normals is None else np.asarray(obj.normals, float)
                 shape = from_points(pts, nrm)
-        r = simulate_grasp(hand, p.palm_position, p.palm_quaternion, p.joint_values, p.contact_points,
-                           p.contact_normals, p.fingertips, shape)  # fmt: skip
+        grasp = (hand, p.palm_position, p.palm_quaternion, p.joint_values, p.contact_points, p.contact_normals,
+                 p.fingertips, shape)  # fmt: skip
+        if physics_test(request) == "motion" and task.kind == "delta_pose":
+            r = simulate_motion(*grasp, np.asarray(task.translation, float), np.asarray(task.rotation, float))
+        else:
+            r = simulate_grasp(*grasp)
+        m = r.motion
         out.append(PhysicsQuality(
-            held=r.success, reason=r.reason, penetration=_finite(r.penetration),
+            held=r.success, reason=r.reason, test="motion" if r.test == "motion" else "closure",
+            penetration=_finite(r.penetration),
             trials=[PhysicsTrial(direction=t.direction, translation=_finite(t.translation),
                                  rotation=_finite(t.rotation), held=t.held) for t in r.trials],
+            motion=None if m is None else PhysicsMotion(
+                translation_error=_finite(m.translation_error), rotation_error=_finite(m.rotation_error),
+                dropped=m.dropped, reached=m.reached),
             tip_gaps=[_finite(g) for g in r.tip_gaps], touching_after_squeeze=r.contacts_after_squeeze,
             pregrasp=[float(v) for v in r.pregrasp], squeeze=[float(v) for v in r.squeeze], seconds=r.seconds,
             object_pieces=shape.source,

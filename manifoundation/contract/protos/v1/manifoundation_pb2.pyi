@@ -235,7 +235,7 @@ class PhysicsTrial(_message.Message):
     def __init__(self, direction: _Optional[str] = ..., translation: _Optional[float] = ..., rotation: _Optional[float] = ..., held: _Optional[bool] = ...) -> None: ...
 
 class PhysicsQuality(_message.Message):
-    __slots__ = ("held", "reason", "trials", "penetration", "tip_gaps", "touching_after_squeeze", "pregrasp", "squeeze", "seconds", "object_pieces")
+    __slots__ = ("held", "reason", "trials", "penetration", "tip_gaps", "touching_after_squeeze", "pregrasp", "squeeze", "seconds", "object_pieces", "test", "motion")
     HELD_FIELD_NUMBER: _ClassVar[int]
     REASON_FIELD_NUMBER: _ClassVar[int]
     TRIALS_FIELD_NUMBER: _ClassVar[int]
@@ -246,6 +246,8 @@ class PhysicsQuality(_message.Message):
     SQUEEZE_FIELD_NUMBER: _ClassVar[int]
     SECONDS_FIELD_NUMBER: _ClassVar[int]
     OBJECT_PIECES_FIELD_NUMBER: _ClassVar[int]
+    TEST_FIELD_NUMBER: _ClassVar[int]
+    MOTION_FIELD_NUMBER: _ClassVar[int]
     held: bool
     reason: str
     trials: _containers.RepeatedCompositeFieldContainer[PhysicsTrial]
@@ -256,7 +258,21 @@ class PhysicsQuality(_message.Message):
     squeeze: _containers.RepeatedScalarFieldContainer[float]
     seconds: float
     object_pieces: str
-    def __init__(self, held: _Optional[bool] = ..., reason: _Optional[str] = ..., trials: _Optional[_Iterable[_Union[PhysicsTrial, _Mapping]]] = ..., penetration: _Optional[float] = ..., tip_gaps: _Optional[_Iterable[float]] = ..., touching_after_squeeze: _Optional[int] = ..., pregrasp: _Optional[_Iterable[float]] = ..., squeeze: _Optional[_Iterable[float]] = ..., seconds: _Optional[float] = ..., object_pieces: _Optional[str] = ...) -> None: ...
+    test: str
+    motion: PhysicsMotion
+    def __init__(self, held: _Optional[bool] = ..., reason: _Optional[str] = ..., trials: _Optional[_Iterable[_Union[PhysicsTrial, _Mapping]]] = ..., penetration: _Optional[float] = ..., tip_gaps: _Optional[_Iterable[float]] = ..., touching_after_squeeze: _Optional[int] = ..., pregrasp: _Optional[_Iterable[float]] = ..., squeeze: _Optional[_Iterable[float]] = ..., seconds: _Optional[float] = ..., object_pieces: _Optional[str] = ..., test: _Optional[str] = ..., motion: _Optional[_Union[PhysicsMotion, _Mapping]] = ...) -> None: ...
+
+class PhysicsMotion(_message.Message):
+    __slots__ = ("translation_error", "rotation_error", "dropped", "reached")
+    TRANSLATION_ERROR_FIELD_NUMBER: _ClassVar[int]
+    ROTATION_ERROR_FIELD_NUMBER: _ClassVar[int]
+    DROPPED_FIELD_NUMBER: _ClassVar[int]
+    REACHED_FIELD_NUMBER: _ClassVar[int]
+    translation_error: float
+    rotation_error: float
+    dropped: bool
+    reached: bool
+    def __init__(self, translation_error: _Optional[float] = ..., rotation_error: _Optional[float] = ..., dropped: _Optional[bool] = ..., reached: _Optional[bool] = ...) -> None: ...
 
 class IterationRecord(_message.Message):
     __slots__ = ("residual", "tip_distance", "step")

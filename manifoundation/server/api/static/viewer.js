@@ -147,8 +147,13 @@ function physicsRows(physics) {
   const trials = (physics.trials || []).map((t) => ["push " + t.direction,
     (t.held ? "held" : "moved") + ", " + (1000 * t.translation).toFixed(1) + " mm, " + t.rotation.toFixed(1) + "°"]);
   const gaps = (physics.tip_gaps || []).map((g) => (1000 * g).toFixed(1)).join(", ");
-  return [["physics test", physics.held ? "held" : "failed (" + physics.reason + ")"],
-    ["fingertip gaps (mm)", gaps || "-"], ["touching after squeeze", physics.touching_after_squeeze], ...trials];
+  const m = physics.motion;
+  const motion = m ? [["motion: final error", (1000 * m.translation_error).toFixed(1) + " mm, "
+    + m.rotation_error.toFixed(1) + "°" + (m.dropped ? " (dropped)" : "")]] : [];
+  const name = physics.test === "motion" ? "physics test (target motion)" : "physics test";
+  return [[name, physics.held ? (physics.test === "motion" ? "reached" : "held") : "failed (" + physics.reason + ")"],
+    ["fingertip gaps (mm)", gaps || "-"], ["touching after squeeze", physics.touching_after_squeeze], ...motion,
+    ...trials];
 }
 
 function draw(scene, index) {
