@@ -167,19 +167,19 @@ TABLE_WIDTH = 100
 
 def stderr_console() -> Any:
     """A rich console on stderr (progress and tables never mix with ``--json`` output on stdout)."""
-    from rich.console import Console
-
-    console = Console(stderr=True)
-    if not console.is_terminal:
-        console.width = TABLE_WIDTH
-    return console
+    return _console(stderr=True)
 
 
 def stdout_console() -> Any:
     """A rich console on stdout for human-readable output."""
+    return _console(stderr=False)
+
+
+def _console(stderr: bool) -> Any:
+    """A rich console, ``TABLE_WIDTH`` columns wide when its stream is not a terminal."""
     from rich.console import Console
 
-    console = Console()
+    console = Console(stderr=stderr)
     if not console.is_terminal:
         console.width = TABLE_WIDTH
     return console

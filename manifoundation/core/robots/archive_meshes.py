@@ -58,11 +58,7 @@ class ArchiveMeshes:
         if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
             raise HandLoadError(f"mesh {member!r}: no triangles")
         faces, verts = len(loaded.faces), len(loaded.vertices)
-        if faces > MAX_MESH_FACES or verts > MAX_MESH_VERTICES:
-            raise HandLoadError(
-                f"mesh {member!r}: {faces} faces / {verts} vertices, "
-                f"over the {MAX_MESH_FACES} / {MAX_MESH_VERTICES} limit"
-            )
+        _check_caps(member, faces, verts)
         if not np.all(np.isfinite(loaded.vertices)):
             raise HandLoadError(f"mesh {member!r}: non-finite vertex coordinates")
         self.loaded[member] = faces
@@ -94,6 +90,11 @@ def _check_declared_size(member: str, suffix: str, data: bytes) -> None:
         verts = 3 * faces
     else:
         return
+    _check_caps(member, faces, verts)
+
+
+def _check_caps(member: str, faces: int, verts: int) -> None:
+    """Refuse a mesh over the face or vertex cap, naming the member and the counts."""
     if faces > MAX_MESH_FACES or verts > MAX_MESH_VERTICES:
         raise HandLoadError(
             f"mesh {member!r}: {faces} faces / {verts} vertices, over the {MAX_MESH_FACES} / {MAX_MESH_VERTICES} limit"

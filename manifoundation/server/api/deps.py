@@ -32,10 +32,7 @@ async def get_metrics(request: Request) -> Metrics:
 
 
 async def get_robots(request: Request) -> RobotCatalog:
-    robots = services_of(request).robots
-    if robots is None:
-        raise Unavailable("the service is not started")
-    return robots
+    return services_of(request).catalog()
 
 
 async def get_history(request: Request) -> History:

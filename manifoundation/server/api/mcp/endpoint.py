@@ -24,6 +24,7 @@ from starlette.types import Message, Receive, Scope, Send
 from manifoundation.server.api.deps import authorize
 from manifoundation.server.api.encoding import respond
 from manifoundation.server.api.errors import PayloadTooLarge, RateLimited, Unavailable, from_exception
+from manifoundation.server.api.negotiation import declared_length
 from manifoundation.server.api.services import AppServices
 
 PATH = "/mcp"
@@ -45,8 +46,9 @@ class McpEndpoint:
         async with contextlib.AsyncExitStack() as held:
             try:
                 caller = await authorize(request, self.services.settings)
-                self._check(caller.tenant, stream, _declared_length(request))
-                if not stream and self.services.bodies.large(_declared_length(request)):
+                declared = declared_length(request, self.services.settings.max_body_bytes)
+                self._check(caller.tenant, stream, declared)
+                if not stream and self.services.bodies.large(declared):
                     await held.enter_async_context(self.services.bodies.slot())  # 503 after MANI_BODY_TIMEOUT
                 if self.services.mcp is None:
                     raise Unavailable("the service is not started")
@@ -79,12 +81,6 @@ class McpEndpoint:
         if stream and self.streams[tenant] >= settings.mcp_max_streams:
             raise RateLimited(f"at most {settings.mcp_max_streams} open MCP event streams per key "
                               "(MANI_MCP_MAX_STREAMS): close one first", retry_after=5.0)  # fmt: skip
-
-
-def _declared_length(request: Request) -> int | None:
-    """The body's declared length, or None (no or a malformed Content-Length: the SDK's own limit still holds)."""
-    value = request.headers.get("content-length")
-    return int(value) if value is not None and value.isdigit() else None
 
 
 class _EndingStream:
