@@ -52,8 +52,8 @@ class PhysicsQuality(WireModel):
                                         "(first push).")
     pregrasp: list[float] = Field(default_factory=list, description="Joint targets of the pregrasp (contacts 1 cm "
                                   "out), in `joint_names` order.")
-    squeeze: list[float] = Field(default_factory=list, description="Joint targets of the squeeze (2 × grasp − "
-                                 "pregrasp).")
+    squeeze: list[float] = Field(default_factory=list, description="Joint targets of the squeeze (contacts 1 cm "
+                                 "in, within the joint limits), in `joint_names` order.")
     seconds: float = Field(..., ge=0, description="Wall time of the test.")
     object_pieces: str = Field(..., description="How the object was built: hull (the sent mesh, convex), "
                                "mesh_patches (non-convex mesh) or point_patches (points only).")
@@ -124,7 +124,8 @@ class Proposal(WireModel):
         None,
         description="Where the contacts came from: network, given (the caller's contacts, each within 5 mm of "
         "its given point: see `contact_shift`), given_moved (the caller's contacts, at least one moved farther "
-        "than 5 mm by the refinement), random, direct_grasp, random_fallback "
+        "than 5 mm by the refinement), random, direct_grasp, opposed (a gripper asked to hold the object: its two "
+        "pads on opposite faces, network-weighted), random_fallback "
         "(the network's heatmap had no point above the selection threshold, so random contacts were refined) "
         "or motion_fallback (a deformable's flat heatmap: the points the task moves most, with its motion).",
     )

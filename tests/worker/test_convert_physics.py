@@ -1,4 +1,5 @@
-"""``options.simulate``: the worker's conversion runs the simulated grasp test and reports it in ``quality.physics``."""
+"""``options.simulate``: the worker asks the pipeline for the simulated grasp test, and its conversion reports the test
+in ``quality.physics`` (success requires that it held). The tests judge grasps with the real test (MuJoCo)."""
 
 from __future__ import annotations
 
@@ -6,9 +7,10 @@ import numpy as np
 import trimesh
 
 from manifoundation.contract import SynthesisRequest, SynthesisResult
+from manifoundation.core.physics import from_mesh, from_points, simulate_grasp, simulate_motion
 from manifoundation.core.pipeline import ProposalOutput, QualityOutput, SynthesisOutput
 from manifoundation.core.robots import get_hand
-from manifoundation.server.worker.convert import to_result
+from manifoundation.server.worker.convert import to_input, to_result
 
 PAD_Z, HALF = 0.1, 0.02  # the Panda's pads at joint value q sit at y = ±q, z 0.0585-0.112 in the palm frame
 
@@ -26,7 +28,9 @@ def _request(simulate: bool, mesh: bool) -> SynthesisRequest:
     })  # fmt: skip
 
 
-def _output(q: float) -> SynthesisOutput:
+def _output(q: float, request: SynthesisRequest | None = None) -> SynthesisOutput:
+    """A verified Panda proposal with the pads at ±q; judged by the simulated test as the pipeline judges it when
+    ``request`` asks for ``simulate``."""
     hand = get_hand("panda_gripper")
     proposal = ProposalOutput(
         contact_points=np.array([[0.0, HALF, PAD_Z], [0.0, -HALF, PAD_Z]]),
@@ -35,7 +39,25 @@ def _output(q: float) -> SynthesisOutput:
         joint_names=list(hand.joint_names), joint_values=np.array([q]),
         quality=QualityOutput(True, True, "converged", 3, 0.0, 0.0, 0.0, 0.0, 0.1),
     )  # fmt: skip
+    if request is not None and request.options.simulate:
+        _judge(proposal, request)
     return SynthesisOutput(hand="panda_gripper", proposals=[proposal])
+
+
+def _judge(p: ProposalOutput, request: SynthesisRequest) -> None:
+    obj, task = request.object, request.task
+    if obj.mesh is not None:
+        shape = from_mesh(np.asarray(obj.mesh.vertices, float), np.asarray(obj.mesh.faces, np.int64))
+    else:
+        assert obj.normals is not None
+        shape = from_points(np.asarray(obj.points, float), np.asarray(obj.normals, float))
+    assert p.palm_position is not None and p.palm_quaternion is not None and p.joint_values is not None
+    grasp = (get_hand("panda_gripper"), p.palm_position, p.palm_quaternion, p.joint_values, p.contact_points,
+             p.contact_normals, p.fingertips, shape)  # fmt: skip
+    if task.kind == "delta_pose":
+        p.physics = simulate_motion(*grasp, np.asarray(task.translation, float), np.asarray(task.rotation, float))
+    else:
+        p.physics = simulate_grasp(*grasp)
 
 
 def _physics(result: SynthesisResult) -> tuple[bool, list[str], object]:
@@ -45,7 +67,8 @@ def _physics(result: SynthesisResult) -> tuple[bool, list[str], object]:
 
 def test_simulate_reports_a_grasp_that_holds() -> None:
     for mesh in (True, False):
-        result = to_result(_output(HALF), _request(True, mesh), "test", get_hand("panda_gripper"))
+        request = _request(True, mesh)
+        result = to_result(_output(HALF, request), request, "test", get_hand("panda_gripper"))
         success, failures, physics = _physics(result)
         assert success and failures == [] and physics is not None
         assert result.proposals[0].quality.physics is not None
@@ -55,7 +78,8 @@ def test_simulate_reports_a_grasp_that_holds() -> None:
 
 
 def test_simulate_turns_a_verified_grasp_that_drops_into_a_failure() -> None:
-    result = to_result(_output(HALF + 0.02), _request(True, True), "test", get_hand("panda_gripper"))
+    request = _request(True, True)
+    result = to_result(_output(HALF + 0.02, request), request, "test", get_hand("panda_gripper"))
     success, failures, physics = _physics(result)
     assert not success and failures == ["physics"] and physics is not None
 
@@ -65,16 +89,9 @@ def test_without_simulate_nothing_changes() -> None:
     assert _physics(result) == (True, [], None)
 
 
-def test_simulate_puts_the_proposals_that_held_first() -> None:
-    drops, holds = _output(HALF + 0.02), _output(HALF)
-    both = SynthesisOutput(hand="panda_gripper", proposals=[drops.proposals[0], holds.proposals[0]])
-    result = to_result(both, _request(True, True), "test", get_hand("panda_gripper"))
-    first, second = result.proposals
-    assert first.quality.physics is not None and first.quality.physics.held and first.quality.success
-    assert np.allclose(first.joint_values, [HALF])
-    assert second.quality.physics is not None and not second.quality.physics.held and not second.quality.success
-    plain = to_result(both, _request(False, True), "test", get_hand("panda_gripper"))
-    assert np.allclose(plain.proposals[0].joint_values, [HALF + 0.02])  # without simulate: the pipeline's order
+def test_the_worker_asks_the_pipeline_for_the_test_for_rigid_objects_with_a_robot() -> None:
+    assert to_input(_request(True, True), get_hand("panda_gripper")).simulate
+    assert not to_input(_request(False, True), get_hand("panda_gripper")).simulate
 
 
 def test_physics_order_is_held_and_verified_then_held_then_verified() -> None:
@@ -104,21 +121,23 @@ def _down(q: float) -> SynthesisOutput:
     return out
 
 
-def test_the_task_picks_the_test() -> None:
-    from manifoundation.server.worker.convert import physics_test
-
+def test_a_lift_is_reported_as_the_motion_test() -> None:
     lift = {"kind": "delta_pose", "translation": [0.0, 0.0, 0.05]}
-    assert physics_test(_lift_request(lift)) == "motion"
-    assert physics_test(_lift_request({"kind": "force_closure"})) == "closure"
-    assert physics_test(_lift_request({"kind": "wrench", "wrench": [0, 0, 1, 0, 0, 0]})) == "closure"
-    hand = get_hand("panda_gripper")
-    held = to_result(_down(HALF), _lift_request(lift), "test", hand).proposals[0].quality
+    hand, request = get_hand("panda_gripper"), _lift_request(lift)
+    out = _down(HALF)
+    _judge(out.proposals[0], request)
+    held = to_result(out, request, "test", hand).proposals[0].quality
     assert held.success and held.physics is not None and held.physics.test == "motion"
     assert held.physics.trials == [] and held.physics.motion is not None and held.physics.motion.reached
     assert held.physics.motion.translation_error < 0.01 and held.physics.reason == "reached"
-    dropped = to_result(_down(HALF + 0.02), _lift_request(lift), "test", hand).proposals[0].quality
+    out = _down(HALF + 0.02)
+    _judge(out.proposals[0], request)
+    dropped = to_result(out, request, "test", hand).proposals[0].quality
     assert not dropped.success and dropped.failures == ["physics"] and dropped.physics is not None
     assert dropped.physics.motion is not None and dropped.physics.motion.dropped
-    closure = to_result(_down(HALF), _lift_request({"kind": "force_closure"}), "test", hand).proposals[0].quality
+    hold_it = _lift_request({"kind": "force_closure"})
+    out = _down(HALF)
+    _judge(out.proposals[0], hold_it)
+    closure = to_result(out, hold_it, "test", hand).proposals[0].quality
     assert closure.physics is not None and closure.physics.test == "closure" and len(closure.physics.trials) == 6
     assert closure.physics.motion is None

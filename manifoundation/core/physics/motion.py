@@ -24,7 +24,7 @@ import numpy as np
 from manifoundation.core.physics.object_model import ObjectShape
 from manifoundation.core.physics.protocol import MotionTrial, PhysicsResult, Protocol
 from manifoundation.core.physics.scene import Scene, build_scene
-from manifoundation.core.physics.trial import _angle, _drive, _penetration, _reset, _touching, pregrasp, tip_gaps
+from manifoundation.core.physics.trial import _angle, _drive, _penetration, _reset, _touching, moved_contacts, tip_gaps
 
 if TYPE_CHECKING:
     from manifoundation.core.robots.hand import Hand
@@ -49,20 +49,21 @@ def simulate_motion(
     t0 = time.perf_counter()
     sc = build_scene(hand, palm_position, palm_quaternion, shape, p, moving=True)
     q = np.asarray(joints, float)
-    pre = pregrasp(sc, q, np.asarray(contact_points, float), np.asarray(contact_normals, float), fingertips, p)
-    pre = np.clip(pre, hand.lower, hand.upper)
-    squeeze = 2 * q - pre
+    limits = (np.asarray(hand.lower, float), np.asarray(hand.upper, float))
+    cps, cns = np.asarray(contact_points, float), np.asarray(contact_normals, float)
+    pre = moved_contacts(sc, q, cps, cns, fingertips, p.pregrasp_distance, limits)
+    squeeze = moved_contacts(sc, q, cps, cns, fingertips, -p.pregrasp_distance, limits)
     _reset(sc, q)
     gaps = tip_gaps(sc, fingertips)
     _reset(sc, pre)
     pen = _penetration(sc)
     if pen > p.max_penetration:
         return PhysicsResult(False, [], "penetration", pen, gaps, 0, pre, squeeze, time.perf_counter() - t0,
-                             test="motion")  # fmt: skip
+                             test="motion", object_pieces=shape.source)  # fmt: skip
     trial, touching = _carry(sc, pre, q, squeeze, np.asarray(translation, float), rotation, p)
     reason = "reached" if trial.reached else "dropped" if trial.dropped else "missed"
     return PhysicsResult(trial.reached, [], reason, pen, gaps, touching, pre, squeeze, time.perf_counter() - t0,
-                         test="motion", motion=trial)  # fmt: skip
+                         test="motion", motion=trial, object_pieces=shape.source)  # fmt: skip
 
 
 def _axis_angle(rotation: np.ndarray | None) -> tuple[np.ndarray, float]:

@@ -27,7 +27,7 @@ class Protocol:
 
     Attributes:
         mass: object mass, kg. friction: sliding, torsional. force_factor: the force is ``force_factor × mass`` N.
-        pregrasp_distance: contacts moved this far outward (m) for the pregrasp; squeeze = 2 grasp − pregrasp.
+        pregrasp_distance: contacts moved this far outward (m) for the pregrasp and as far inward for the squeeze.
         kp_revolute: position gain of revolute joints, N·m/rad; kp_prismatic: of prismatic joints, N/m.
         armature_revolute (kg·m²) / armature_prismatic (kg): reflected rotor inertia, which keeps the 4 ms step stable.
         damping_revolute (N·m·s/rad) / damping_prismatic (N·s/m): joint damping (ζ ≈ 0.3 and 0.9 with those gains).
@@ -101,6 +101,7 @@ class PhysicsResult:
         seconds: wall time of the test.
         test: which test ran: "closure" (the six pushes, ``trials``) or "motion" (the target motion, ``motion``).
         motion: the target-motion trial's figures (``test == "motion"`` and the start did not fail).
+        object_pieces: how the object was built (`ObjectShape.source`): "hull", "mesh_patches", "point_patches".
     """
 
     success: bool
@@ -114,6 +115,7 @@ class PhysicsResult:
     seconds: float = 0.0
     test: str = "closure"
     motion: MotionTrial | None = None
+    object_pieces: str = ""
 
     @property
     def max_translation(self) -> float:

@@ -31,6 +31,7 @@ from manifoundation.core.pipeline.deformable import (
     prepare_deformable,
 )
 from manifoundation.core.pipeline.object_cache import ObjectCache
+from manifoundation.core.pipeline.physics_search import PhysicsJudge, best_by_physics, enough_held
 from manifoundation.core.pipeline.prepare import ContactSet, Prepared, contact_sets, network_inputs, prepare
 from manifoundation.core.pipeline.types import (
     Cancelled,
@@ -66,7 +67,7 @@ def _network(batch: Sequence[Prepared | PreparedDeformable], predictor: Any) -> 
     by_k: dict[int, list[int]] = {}
     for i, prep in enumerate(batch):
         if prep.inp.method == "network" and prep.inp.initial_pose is None:
-            by_k.setdefault(prep.inp.num_proposals, []).append(i)
+            by_k.setdefault(prep.inp.candidates, []).append(i)
     if by_k and predictor is None:
         raise ModelUnavailable("method 'network' needs a trained model; none is loaded (use 'contacts')")
     for k, idx in by_k.items():
@@ -175,7 +176,7 @@ def _finish(
         starts.append(inp.initial_pose)
         sources.append("initial_pose")
     elif inp.method == "direct_grasp":
-        for k in range(inp.num_proposals):
+        for k in range(inp.candidates):
             start = _start_pose(replace(prep, inp=replace(inp, seed=inp.seed + k)))
             starts.append(direct_grasp(hand, prep.cloud, start, prep.centre)[0])
             sources.append("direct_grasp")
@@ -201,10 +202,14 @@ def _finish(
     chosen += [None] * (len(starts) - len(chosen))
     proposals: list[ProposalOutput] = []
     seconds: dict[str, float] = {"refinement": 0.0}
+    judge = PhysicsJudge(prep) if inp.simulate else None
     for k, (start, source) in enumerate(zip(starts, sources, strict=True)):
         enough = inp.stop_after_verified
         if enough is not None and sum(p.quality.success for p in proposals) >= enough:
             break  # enough verified proposals: the rest are neither refined nor returned
+        if judge is not None and k >= inp.num_proposals and (enough_held(proposals, inp.num_proposals) or (
+                inp.deadline is not None and time.monotonic() >= inp.deadline)):
+            break  # simulate: enough held (or no time left): no more candidates
         t0 = time.perf_counter()
         verified = _Verifier(prep)
         res = _refined(prep, start, k, config, total, report, should_cancel, verified)
@@ -213,12 +218,19 @@ def _finish(
         proposal = _proposal(prep, res.pose if res is not None else start, res, seconds, source, verified)
         if (picked := chosen[k]) is not None:
             proposal.network_forces, proposal.network_sample = picked.forces, picked.sample
+        if judge is not None:
+            t0 = time.perf_counter()
+            proposal.physics = judge(proposal)
+            seconds["physics"] = seconds.get("physics", 0.0) + time.perf_counter() - t0
         proposals.append(proposal)
         report("verification", (k + 1) / len(starts))
         _check(should_cancel)
     timings["refinement"] = seconds["refinement"]
     timings["verification"] = seconds.get("verification", 0.0)
     proposals.sort(key=_rank)
+    if judge is not None:
+        timings["physics"] = seconds.get("physics", 0.0)
+        proposals = best_by_physics(proposals, inp.num_proposals)
     heat = force = None
     if net_out is not None:  # the maps of the sample the best proposal came from (the first when none did)
         best = next((p.network_sample for p in proposals if p.network_sample is not None), 0)

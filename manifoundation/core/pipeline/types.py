@@ -15,6 +15,7 @@ from manifoundation.core.errors import Cancelled, InvalidInput, ModelUnavailable
 from manifoundation.core.refine.state import HandPose
 
 if TYPE_CHECKING:
+    from manifoundation.core.physics import PhysicsResult
     from manifoundation.core.robots.hand import Hand
 
 METHODS = ("network", "contacts", "direct_grasp", "random_contacts")
@@ -130,6 +131,15 @@ class SynthesisInput:
     stop_after_verified: int | None = None
     rollout_corrections: int = 0
     close_gaps: bool = True
+    simulate: bool = False  # rigid, with a robot: judge each proposal in physics and search until enough hold
+
+    @property
+    def candidates(self) -> int:
+        """Starts drawn (network samples or contact sets): ``num_proposals``, or with ``simulate`` up to
+        `SIMULATE_CANDIDATES` per proposal asked (at most `SIMULATE_MAX_CANDIDATES`, never fewer than asked)."""
+        if not self.simulate:
+            return self.num_proposals
+        return max(self.num_proposals, min(SIMULATE_MAX_CANDIDATES, SIMULATE_CANDIDATES * self.num_proposals))
 
 
 @dataclass
@@ -164,6 +174,13 @@ class IterationOutput:
     step: float
 
 
+SIMULATE_CANDIDATES = 4
+"""With ``simulate``: starts drawn per proposal asked, until that many held (`physics_search`; best of 4 on 43
+third-party objects: LEAP 8 → 24 hold, Allegro 9 → 18, Panda 10 → 17; research/results/physics.md)."""
+SIMULATE_MAX_CANDIDATES = 8
+"""... and at most this many in all (each costs a refinement, 0.3-1 s, and a test, 0.05-0.3 s)."""
+
+
 @dataclass
 class ProposalOutput:
     """One hand proposal: contacts (one per fingertip), forces, pose and quality."""
@@ -185,6 +202,7 @@ class ProposalOutput:
     network_sample: int | None = None  # which of the network's K latent samples the contacts came from
     rollout_points: np.ndarray | None = None  # (N, 3) deformables: the points after the simulated manipulation
     shape_error: float | None = None  # deformables: rollout vs target, most-moving points, normalised 2 m cube
+    physics: PhysicsResult | None = None  # ``simulate``: the simulated grasp test's result
 
     def pose(self) -> HandPose:
         """The hand's pose at this proposal.

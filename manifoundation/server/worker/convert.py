@@ -27,6 +27,7 @@ from manifoundation.contract import (
 from manifoundation.core.pipeline import JointInput, ProposalOutput, SynthesisInput, SynthesisOutput, TaskInput
 
 if TYPE_CHECKING:
+    from manifoundation.core.physics import PhysicsResult
     from manifoundation.core.robots.hand import Hand
 
 _BIG = float(np.finfo(np.float64).max)
@@ -84,6 +85,7 @@ def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = Non
         hand_key=hand.name,
         stop_after_verified=options.stop_after_verified,
         rollout_corrections=options.rollout_corrections,
+        simulate=options.simulate and obj.material.value == "rigid" and request.robot is not None,
     )
 
 
@@ -91,54 +93,21 @@ def _finite(value: float) -> float:
     return float(value) if np.isfinite(value) else _BIG
 
 
-def physics_test(request: SynthesisRequest) -> str:
-    """Which simulated test judges the request's answers: "motion" (the palm carried along the task's motion under
-    gravity, `simulate_motion`) for a ``delta_pose`` task, else "closure" (the six pushes, `simulate_grasp`)."""
-    return "motion" if request.task.kind == "delta_pose" else "closure"
-
-
-def simulate(request: SynthesisRequest, hand: Hand, proposals: list[ProposalOutput]) -> list[PhysicsQuality | None]:
-    """The simulated grasp test (`manifoundation.core.physics`) of each proposal with a hand pose, the one the task
-    asks for (`physics_test`): on the sent mesh, else on the points (and their normals, estimated when not sent)."""
-    from scipy.spatial import cKDTree
-
-    from manifoundation.core.geometry.object import estimate_normals
-    from manifoundation.core.physics import ObjectShape, from_mesh, from_points, simulate_grasp, simulate_motion
-
-    obj, task = request.object, request.task
-    shape: ObjectShape | None = None
-    out: list[PhysicsQuality | None] = []
-    for p in proposals:
-        if p.palm_position is None or p.palm_quaternion is None or p.joint_values is None or not p.fingertips:
-            out.append(None)
-            continue
-        if shape is None:
-            if obj.mesh is not None:
-                shape = from_mesh(np.asarray(obj.mesh.vertices, float), np.asarray(obj.mesh.faces, np.int64))
-            else:
-                pts = np.asarray(obj.points, np.float64)
-                nrm = estimate_normals(pts, cKDTree(pts)) if obj.normals is None else np.asarray(obj.normals, float)
-                shape = from_points(pts, nrm)
-        grasp = (hand, p.palm_position, p.palm_quaternion, p.joint_values, p.contact_points, p.contact_normals,
-                 p.fingertips, shape)  # fmt: skip
-        if physics_test(request) == "motion" and task.kind == "delta_pose":
-            r = simulate_motion(*grasp, np.asarray(task.translation, float), np.asarray(task.rotation, float))
-        else:
-            r = simulate_grasp(*grasp)
-        m = r.motion
-        out.append(PhysicsQuality(
-            held=r.success, reason=r.reason, test="motion" if r.test == "motion" else "closure",
-            penetration=_finite(r.penetration),
-            trials=[PhysicsTrial(direction=t.direction, translation=_finite(t.translation),
-                                 rotation=_finite(t.rotation), held=t.held) for t in r.trials],
-            motion=None if m is None else PhysicsMotion(
-                translation_error=_finite(m.translation_error), rotation_error=_finite(m.rotation_error),
-                dropped=m.dropped, reached=m.reached),
-            tip_gaps=[_finite(g) for g in r.tip_gaps], touching_after_squeeze=r.contacts_after_squeeze,
-            pregrasp=[float(v) for v in r.pregrasp], squeeze=[float(v) for v in r.squeeze], seconds=r.seconds,
-            object_pieces=shape.source,
-        ))  # fmt: skip
-    return out
+def physics_quality(r: PhysicsResult) -> PhysicsQuality:
+    """The wire form of a proposal's simulated grasp test (the pipeline ran it: ``simulate``)."""
+    m = r.motion
+    return PhysicsQuality(
+        held=r.success, reason=r.reason, test="motion" if r.test == "motion" else "closure",
+        penetration=_finite(r.penetration),
+        trials=[PhysicsTrial(direction=t.direction, translation=_finite(t.translation),
+                             rotation=_finite(t.rotation), held=t.held) for t in r.trials],
+        motion=None if m is None else PhysicsMotion(
+            translation_error=_finite(m.translation_error), rotation_error=_finite(m.rotation_error),
+            dropped=m.dropped, reached=m.reached),
+        tip_gaps=[_finite(g) for g in r.tip_gaps], touching_after_squeeze=r.contacts_after_squeeze,
+        pregrasp=[float(v) for v in r.pregrasp], squeeze=[float(v) for v in r.squeeze], seconds=r.seconds,
+        object_pieces=r.object_pieces,
+    )  # fmt: skip
 
 
 def to_proposal(
@@ -151,7 +120,7 @@ def to_proposal(
         hand: when given, the hand's collision spheres at the proposal's pose (and with ``mesh``, its posed
             collision meshes) travel with it, for viewers.
         history: include the refinement's per-iteration record.
-        physics: the simulated grasp test's figures (`simulate`): success then also requires that it held.
+        physics: the simulated grasp test's figures (`physics_quality`): success then also requires that it held.
     """
     q = p.quality
     failures = list(q.failures)
@@ -208,25 +177,17 @@ def to_result(
     """The wire result of ``output`` (maps and history only when the request asked for them).
 
     With ``hand``, each proposal carries the hand's collision spheres at its pose; with ``options.simulate`` (a
-    rigid object and a robot) each proposal's ``quality.physics`` is the simulated grasp test (`simulate`), and the
-    proposals are ordered by it: verified and held first, then held, then the rest (`physics_order`; the ``heatmap``
-    stays the one of the pipeline's first proposal — ``network_sample`` says which sample each came from).
+    rigid object and a robot) the pipeline judged each proposal by the simulated grasp test, searched until enough
+    held and ordered them by it (`manifoundation.core.pipeline.physics_search`): ``quality.physics`` carries it and
+    ``quality.success`` requires that it held (the ``heatmap`` stays the one of the pipeline's first proposal —
+    ``network_sample`` says which sample each came from).
     """
     options = request.options
-    rigid = request.object.material.value == "rigid"
-    physics: list[PhysicsQuality | None] = [None] * len(output.proposals)
-    if options.simulate and hand is not None and rigid and request.robot is not None:
-        physics = simulate(request, hand, output.proposals)
     proposals = [
-        to_proposal(p, hand, history=options.return_history, mesh=options.return_hand_mesh, physics=ph)
-        for p, ph in zip(output.proposals, physics, strict=True)
-    ]
-    if any(ph is not None for ph in physics):  # those that held first (`physics_order`)
-        from manifoundation.core.physics import physics_order
-
-        order = physics_order([bool(p.quality.success) for p in output.proposals],
-                              [ph is not None and ph.held for ph in physics])  # fmt: skip
-        proposals = [proposals[i] for i in order]
+        to_proposal(p, hand, history=options.return_history, mesh=options.return_hand_mesh,
+                    physics=None if p.physics is None else physics_quality(p.physics))
+        for p in output.proposals
+    ]  # fmt: skip
     return SynthesisResult(
         hand=output.hand,
         model_version=model_version,

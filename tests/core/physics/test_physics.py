@@ -49,7 +49,7 @@ def test_gripper_squeezing_a_box_holds_in_all_six_directions() -> None:
     assert [t.direction for t in r.trials] == ["-x", "+x", "-y", "+y", "-z", "+z"]
     assert all(t.translation < 0.005 and t.rotation < 2.0 for t in r.trials)
     assert np.allclose(r.pregrasp, [HALF + 0.01], atol=1e-6)  # each pad 1 cm outward
-    assert np.allclose(r.squeeze, [HALF - 0.01], atol=1e-6)  # 2 x grasp - pregrasp
+    assert np.allclose(r.squeeze, [HALF - 0.01], atol=1e-6)  # each pad 1 cm inward
     assert max(abs(g) for g in r.tip_gaps) < 5e-4 and r.contacts_after_squeeze == 2
 
 
@@ -175,3 +175,35 @@ def test_a_four_finger_answer_that_holds_and_the_same_hand_pulled_back_that_does
     r = simulate_grasp(hand, LEMON_PALM - 0.02 * back, LEMON_QUAT, LEMON_Q, LEMON_CONTACTS - 0.02 * back, LEMON_NORMALS,
                        hand.fingertip_links, shape)  # fmt: skip
     assert not r.success and max(r.tip_gaps) > 0.005
+
+
+@pytest.mark.parametrize("distance", [0.01, -0.01])
+def test_pregrasp_and_squeeze_move_each_contact_one_cm_along_its_normal(distance: float) -> None:
+    # the lemon answer: one damped step at the grasp moved the thumb's contact 2.4 cm along and 2.5 cm across its
+    # normal on other answers; judged here by the hand's own forward kinematics (pytorch-kinematics), not MuJoCo
+    import torch
+
+    from manifoundation.core.physics.scene import build_scene
+    from manifoundation.core.physics.trial import moved_contacts
+
+    hand, shape = get_hand("leap"), _lemon()
+    sc = build_scene(hand, LEMON_PALM, LEMON_QUAT, shape, Protocol())
+    limits = (np.asarray(hand.lower, float), np.asarray(hand.upper, float))
+    q = moved_contacts(sc, LEMON_Q, LEMON_CONTACTS, LEMON_NORMALS, hand.fingertip_links, distance, limits)
+    assert np.all(q >= limits[0] - 1e-12) and np.all(q <= limits[1] + 1e-12)
+
+    def frames(joints: np.ndarray) -> list[np.ndarray]:
+        poses = hand.link_poses(torch.tensor(LEMON_PALM[None]), torch.tensor(LEMON_QUAT[None]),
+                                torch.tensor(joints[None]))  # fmt: skip
+        return [poses[link][0].numpy() for link in hand.fingertip_links]
+
+    unit = LEMON_NORMALS / np.linalg.norm(LEMON_NORMALS, axis=1, keepdims=True)
+    for x, n, a, b in zip(LEMON_CONTACTS, unit, frames(LEMON_Q), frames(q), strict=True):
+        local = np.linalg.solve(a, np.append(x, 1.0))
+        moved = (b @ local)[:3] - x
+        along, across = moved @ n, np.linalg.norm(moved - (moved @ n) * n)
+        if abs(along - distance) < 5e-4 and across < 5e-4:
+            continue
+        # a finger at the edge of its reach (the lemon's thumb, squeezing, stretched out: 6.1 mm, 2 mm across):
+        # as far as it goes, never farther, and mostly along the normal
+        assert 0.5 < along / distance <= 1.0 + 1e-3 and across < 0.5 * abs(along), (along, across)

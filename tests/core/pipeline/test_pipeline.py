@@ -114,9 +114,13 @@ class _FakePredictor:
         return outs
 
 
+# a lift: force closure with a two-pad gripper takes opposed pads, not the network's contacts (test_physics_search)
+LIFT = TaskInput("delta_pose", np.array([0.0, 0.0, 0.05]), np.array([1.0, 0.0, 0.0, 0.0]))
+
+
 def test_network_batch_calls_the_predictor_once(box, gripper):
     fake = _FakePredictor()
-    inp = _inp(box, gripper, method="network", refine=False)
+    inp = _inp(box, gripper, method="network", refine=False, task=LIFT)
     res = run_pipeline_batch([inp, inp], fake)
     assert fake.calls == 1
     assert all(isinstance(r, SynthesisOutput) and r.heatmap is not None for r in res)
@@ -131,7 +135,7 @@ def test_a_flat_heatmap_falls_back_to_random_contacts_and_says_so(box, gripper):
                 o.heatmaps = np.full_like(o.heatmaps, 0.2)  # nothing above the selection threshold
             return outs
 
-    out = run_pipeline(_inp(box, gripper, method="network", refine=False), Flat())
+    out = run_pipeline(_inp(box, gripper, method="network", refine=False, task=LIFT), Flat())
     assert [p.contact_source for p in out.proposals] == ["random_fallback"]
 
 
@@ -158,7 +162,7 @@ def test_network_proposals_keep_the_networks_forces_and_sample(box, gripper):
                 o.heatmaps = o.heatmaps * (1.0 - 0.1 * np.arange(num_samples)[:, None])  # K distinguishable maps
             return outs
 
-    out = run_pipeline(_inp(box, gripper, method="network", refine=False, num_proposals=3), Distinct())
+    out = run_pipeline(_inp(box, gripper, method="network", refine=False, num_proposals=3, task=LIFT), Distinct())
     samples = sorted(p.network_sample for p in out.proposals if p.contact_source == "network")
     assert samples == [0, 1, 2]
     for p in out.proposals:

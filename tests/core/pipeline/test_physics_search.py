@@ -1,0 +1,77 @@
+"""``simulate`` in the pipeline: each candidate judged by the real simulated grasp test (MuJoCo), more drawn until
+enough hold, the best returned in physics order."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from manifoundation.core.physics import PhysicsResult
+from manifoundation.core.pipeline import ProposalOutput, QualityOutput, SynthesisInput, TaskInput, run_pipeline
+from manifoundation.core.pipeline.physics_search import best_by_physics, enough_held
+from manifoundation.core.robots import get_hand
+
+WEIGHTS = Path(__file__).resolve().parents[3] / "manifoundation" / "core" / "weights" / "cpu1k"
+
+
+def _box() -> tuple[np.ndarray, np.ndarray, trimesh.Trimesh]:
+    box = trimesh.creation.box(extents=[0.04, 0.06, 0.06])
+    pts, faces = trimesh.sample.sample_surface_even(box, 800, seed=0)
+    return np.asarray(pts), np.asarray(box.face_normals[faces]), box
+
+
+def _inp(**kw: object) -> SynthesisInput:
+    pts, nrm, box = _box()
+    base: dict[str, object] = dict(
+        points=pts, normals=nrm, hand=get_hand("panda_gripper"), task=TaskInput("force_closure"),
+        mesh_vertices=np.asarray(box.vertices), mesh_faces=np.asarray(box.faces), simulate=True,
+    )  # fmt: skip
+    base.update(kw)
+    return SynthesisInput(**base)  # type: ignore[arg-type]
+
+
+def test_candidates_are_four_per_proposal_asked_at_most_eight_never_fewer_than_asked() -> None:
+    assert [_inp(num_proposals=k).candidates for k in (1, 2, 3, 12)] == [4, 8, 8, 12]
+    assert [_inp(num_proposals=k, simulate=False).candidates for k in (1, 3)] == [1, 3]
+
+
+def test_a_grasp_that_holds_ends_the_search_at_once() -> None:
+    fractions: list[float] = []
+    out = run_pipeline(_inp(method="contacts", contacts=np.array([[0.02, 0, 0], [-0.02, 0, 0]])),
+                       progress=lambda stage, f: fractions.append(f) if stage == "verification" else None)  # fmt: skip
+    (best,) = out.proposals
+    assert best.physics is not None and best.physics.success and len(best.physics.trials) == 6
+    assert best.physics.object_pieces == "hull"
+    assert fractions == [0.25]  # one candidate of four refined, judged, enough
+    assert out.timings["physics"] > 0
+
+
+def test_a_gripper_asked_to_hold_gets_opposed_pads_and_the_held_ones_first() -> None:
+    from manifoundation.core.network import ContactPredictor
+
+    predictor = ContactPredictor.from_checkpoint(str(WEIGHTS))
+    out = run_pipeline(_inp(method="network", num_proposals=2), predictor=predictor)
+    assert len(out.proposals) == 2
+    for p in out.proposals:
+        assert p.contact_source in ("opposed", "random_fallback") and p.physics is not None
+    held = [p.physics is not None and p.physics.success for p in out.proposals]
+    assert held == sorted(held, reverse=True)
+
+
+def _judged(verified: bool, held: bool | None) -> ProposalOutput:
+    p = ProposalOutput(np.zeros((2, 3)), np.zeros((2, 3)), np.zeros((2, 3)), ["a", "b"], np.zeros(3),
+                       np.array([1.0, 0, 0, 0]), ["j"], np.zeros(1),
+                       QualityOutput(verified, verified, "converged", 1, 0.0, 0.0, 0.0, 0.0, 0.1))  # fmt: skip
+    if held is not None:
+        p.physics = PhysicsResult(held, [], "held" if held else "moved", 0.0, [0.0, 0.0], 2, np.zeros(1), np.zeros(1))
+    return p
+
+
+@pytest.mark.parametrize(("wanted", "expected"), [(1, [2]), (2, [2, 1]), (4, [2, 1, 0, 3])])
+def test_best_by_physics_takes_held_and_verified_then_held_then_verified(wanted: int, expected: list[int]) -> None:
+    ps = [_judged(True, False), _judged(False, True), _judged(True, True), _judged(True, None)]
+    assert best_by_physics(ps, wanted) == [ps[i] for i in expected]
+    assert enough_held(ps, 2) and not enough_held(ps, 3)
