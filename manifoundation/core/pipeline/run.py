@@ -47,6 +47,7 @@ from manifoundation.core.refine.baseline import direct_grasp
 from manifoundation.core.refine.close import close_gaps
 from manifoundation.core.refine.initialise import initialise, rest_geometry
 from manifoundation.core.refine.refine import RefineConfig, refine
+from manifoundation.core.refine.squeeze import squeeze_imbalance
 from manifoundation.core.refine.state import HandPose
 from manifoundation.core.refine.strategy import refine_from_start
 from manifoundation.core.refine.verify import Verification, verify
@@ -141,6 +142,9 @@ def _proposal(
         failures=list(ver.failures),
         geometry=ver.geometry,
     )
+    imbalance = None
+    if prep.task.closure and verified.given is None and len(ver.contacts) == hand.num_fingertips:
+        imbalance = squeeze_imbalance(hand, pose, ver.contacts, ver.normals, prep.task.centre, prep.task.length)
     shift = None
     if verified.given is not None:  # the caller's contacts: say how far each moved, "given" only if none did
         shift = np.linalg.norm(ver.contacts - verified.given, axis=1)
@@ -158,6 +162,7 @@ def _proposal(
         contact_source=source,
         history=history,
         contact_shift=shift,
+        squeeze_imbalance=imbalance,
     )
 
 
@@ -240,12 +245,13 @@ def _finish(
                            timings=timings)  # fmt: skip
 
 
-def _rank(p: ProposalOutput) -> tuple[bool, float]:
-    """Verified first; among them (force closure) the larger Ferrari–Canny ε first, each group else in order. On 10
-    third-party objects with 4 proposals the first one held in the simulated grasp test for LEAP in 4 of 10 ordered
-    by ε, 1 of 10 in the network samples' order (research/results/physics.md)."""
+def _rank(p: ProposalOutput) -> tuple[bool, float, float]:
+    """Verified first; among them (force closure) the better-balanced squeeze first (`squeeze_imbalance`), then
+    the larger Ferrari–Canny ε; each group else in order. Of four proposals on 43 third-party objects, the first
+    held for LEAP in 10 ordered by the squeeze's balance, 6 by ε; Allegro 5 and 5 (research/results/physics.md)."""
     eps = p.quality.epsilon
-    return not p.quality.success, -eps if eps is not None and np.isfinite(eps) else np.inf
+    balance = p.squeeze_imbalance if p.squeeze_imbalance is not None else np.inf
+    return not p.quality.success, balance, -eps if eps is not None and np.isfinite(eps) else np.inf
 
 
 def _refined(

@@ -203,6 +203,7 @@ class ProposalOutput:
     rollout_points: np.ndarray | None = None  # (N, 3) deformables: the points after the simulated manipulation
     shape_error: float | None = None  # deformables: rollout vs target, most-moving points, normalised 2 m cube
     physics: PhysicsResult | None = None  # ``simulate``: the simulated grasp test's result
+    squeeze_imbalance: float | None = None  # force closure: `manifoundation.core.refine.squeeze` (0 balanced … 2)
 
     def pose(self) -> HandPose:
         """The hand's pose at this proposal.
