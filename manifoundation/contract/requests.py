@@ -71,8 +71,10 @@ class SynthesisOptions(WireModel):
         description="Rigid objects with a robot: run the simulated grasp test (MuJoCo, DexGraspBench's protocol: "
         "pregrasp → grasp → squeeze, then 1 N pushes along ±x, ±y, ±z for 2 s; for a `delta_pose` task instead "
         "gravity on and the palm carried along the task's motion over 1 s, success within 1 cm and 10° of the "
-        "target pose; docs/physics.md) on each proposal; `quality.physics` carries it (`test`: closure or motion) "
-        "and `quality.success` requires that it passed. About 0.1-0.6 s a proposal.",
+        "target pose; docs/physics.md) on each candidate, and search: up to 8 candidates (or `num_proposals`) are "
+        "refined and tested one after another until `num_proposals` held; the best come first (held and verified, "
+        "held, verified). `quality.physics` carries the test (`test`: closure or motion) and `quality.success` "
+        "requires that it passed. A request then takes about 0.5-2 s instead of 0.15-0.3 s on one core.",
     )
     rollout_corrections: int = Field(
         0, ge=0, le=8, description="Deformables with `simulate_rollout`: a proposal whose rollout misses the "

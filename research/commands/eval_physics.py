@@ -61,7 +61,7 @@ def add_physics_parser(sub: Any) -> None:
                    "(default: Protocol's 0.1; Menagerie's Allegro has 1)")
     a.add_argument("--simulate", action="store_true",
                    help="options.simulate: the pipeline judges its candidates by the test and searches until enough "
-                   "hold (up to 4 per proposal asked, at most 8); 'first holds' is then what the caller gets first")
+                   "hold (at least 8 candidates); 'first holds' is then what the caller gets first")
     a.add_argument("--no-close", action="store_true",
                    help="leave the fingertips where the refinement put them (no closing stage)")
     a.add_argument("--task", default="closure",

@@ -33,8 +33,8 @@ def _inp(**kw: object) -> SynthesisInput:
     return SynthesisInput(**base)  # type: ignore[arg-type]
 
 
-def test_candidates_are_four_per_proposal_asked_at_most_eight_never_fewer_than_asked() -> None:
-    assert [_inp(num_proposals=k).candidates for k in (1, 2, 3, 12)] == [4, 8, 8, 12]
+def test_candidates_are_eight_or_as_many_as_asked() -> None:
+    assert [_inp(num_proposals=k).candidates for k in (1, 2, 8, 12)] == [8, 8, 8, 12]
     assert [_inp(num_proposals=k, simulate=False).candidates for k in (1, 3)] == [1, 3]
 
 
@@ -45,7 +45,7 @@ def test_a_grasp_that_holds_ends_the_search_at_once() -> None:
     (best,) = out.proposals
     assert best.physics is not None and best.physics.success and len(best.physics.trials) == 6
     assert best.physics.object_pieces == "hull"
-    assert fractions == [0.25]  # one candidate of four refined, judged, enough
+    assert fractions == [0.125]  # one candidate of eight refined, judged, enough
     assert out.timings["physics"] > 0
 
 
