@@ -5,7 +5,7 @@ The geometric checks cannot tell which of several verified proposals holds in ph
 the pipeline's first of four held for LEAP in 9, the best of the four by the test in 24;
 research/results/physics.md). So with ``simulate`` the pipeline draws `SynthesisInput.candidates` starts (network
 samples and opposed contact sets; at least 8), refines and judges them one after another, stops as soon as
-``num_proposals`` of them held, and returns the ``num_proposals`` best in `physics_order` (verified and held, held,
+``num_proposals`` of them are verified and held, and returns the ``num_proposals`` best in `physics_order` (verified and held, held,
 verified). The
 test (`manifoundation.core.physics`) is the one `mani-lab eval physics` runs: force closure's six pushes, or for
 a ``delta_pose`` task the executed motion; on the sent mesh, else on the points and their normals.
@@ -65,8 +65,8 @@ class PhysicsJudge:
 
 
 def enough_held(proposals: list[ProposalOutput], wanted: int) -> bool:
-    """Whether ``wanted`` of the judged proposals held."""
-    return sum(p.physics is not None and p.physics.success for p in proposals) >= wanted
+    """Whether ``wanted`` of the judged proposals are verified and held (what the answer calls a success)."""
+    return sum(p.quality.success and p.physics is not None and p.physics.success for p in proposals) >= wanted
 
 
 def best_by_physics(proposals: list[ProposalOutput], wanted: int) -> list[ProposalOutput]:
