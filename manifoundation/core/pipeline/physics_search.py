@@ -20,6 +20,7 @@ import numpy as np
 from manifoundation.core.physics import (
     ObjectShape,
     PhysicsResult,
+    Protocol,
     from_mesh,
     from_points,
     physics_order,
@@ -49,8 +50,10 @@ class PhysicsJudge:
                 self._shape = from_points(self.prep.cloud.points, self.prep.cloud.normals)
         return self._shape
 
-    def __call__(self, p: ProposalOutput) -> PhysicsResult | None:
-        """The test's result for ``p`` (None: a proposal without a hand pose)."""
+    def __call__(self, p: ProposalOutput, complete: bool = False) -> PhysicsResult | None:
+        """The test's result for ``p`` (None: a proposal without a hand pose). Searching (``complete=False``) the
+        pushes stop at the first that moves the object (the verdict is the same; a failing candidate costs about
+        half); `complete_trials` re-runs the ones returned so their answer lists every push."""
         if p.palm_position is None or p.palm_quaternion is None or p.joint_values is None or not p.fingertips:
             return None
         inp = self.prep.inp
@@ -61,7 +64,13 @@ class PhysicsJudge:
             translation = np.zeros(3) if task.translation is None else np.asarray(task.translation, float)
             rotation = np.array([1.0, 0, 0, 0]) if task.rotation is None else np.asarray(task.rotation, float)
             return simulate_motion(*grasp, translation, rotation)
-        return simulate_grasp(*grasp)
+        return simulate_grasp(*grasp, protocol=Protocol(stop_at_first_failure=not complete))
+
+    def complete_trials(self, proposals: list[ProposalOutput]) -> None:
+        """Every push of each returned proposal whose search stopped at its first failing one."""
+        for p in proposals:
+            if p.physics is not None and p.physics.test == "closure" and p.physics.reason == "moved":
+                p.physics = self(p, complete=True)
 
 
 def enough_held(proposals: list[ProposalOutput], wanted: int) -> bool:

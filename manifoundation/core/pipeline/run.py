@@ -234,8 +234,10 @@ def _finish(
     timings["verification"] = seconds.get("verification", 0.0)
     proposals.sort(key=_rank)
     if judge is not None:
-        timings["physics"] = seconds.get("physics", 0.0)
         proposals = best_by_physics(proposals, inp.num_proposals)
+        t0 = time.perf_counter()
+        judge.complete_trials(proposals)
+        timings["physics"] = seconds.get("physics", 0.0) + time.perf_counter() - t0
     heat = force = None
     if net_out is not None:  # the maps of the sample the best proposal came from (the first when none did)
         best = next((p.network_sample for p in proposals if p.network_sample is not None), 0)

@@ -49,6 +49,19 @@ def test_a_grasp_that_holds_ends_the_search_at_once() -> None:
     assert out.timings["physics"] > 0
 
 
+def test_without_a_grasp_that_holds_every_candidate_is_tried_and_the_answer_lists_every_push() -> None:
+    # both pads asked onto the same face and left unrefined: nothing opposes them, nothing holds
+    fractions: list[float] = []
+    out = run_pipeline(_inp(method="contacts", contacts=np.array([[0.02, 0.01, 0], [0.02, -0.01, 0]]), refine=False),
+                       progress=lambda stage, f: fractions.append(f) if stage == "verification" else None)  # fmt: skip
+    (best,) = out.proposals
+    assert fractions[-1] == 1.0 and len(fractions) == 8
+    assert best.physics is not None and not best.physics.success
+    # searching stopped at the first push that moved it; the answer lists all six
+    assert best.physics.reason == "moved"
+    assert [t.direction for t in best.physics.trials] == ["-x", "+x", "-y", "+y", "-z", "+z"]
+
+
 def test_a_gripper_asked_to_hold_gets_opposed_pads_and_the_held_ones_first() -> None:
     from manifoundation.core.network import ContactPredictor
 
