@@ -74,7 +74,7 @@ class SynthesisOptions(WireModel):
         "target pose; docs/physics.md) on each candidate, and search: up to 8 candidates (or `num_proposals`) are "
         "refined and tested one after another until `num_proposals` held; the best come first (held and verified, "
         "held, verified). `quality.physics` carries the test (`test`: closure or motion) and `quality.success` "
-        "requires that it passed. A request then takes about 0.5-2 s instead of 0.15-0.3 s on one core.",
+        "requires that it passed. A request then takes about 0.4-1.9 s instead of 0.15-0.3 s on one core.",
     )
     rollout_corrections: int = Field(
         0, ge=0, le=8, description="Deformables with `simulate_rollout`: a proposal whose rollout misses the "
