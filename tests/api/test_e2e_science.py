@@ -164,3 +164,26 @@ def test_given_contacts_come_back_one_each_with_how_far_they_moved(base: str) ->
     far = httpx.post(f"{base}/v1/synthesize", json=body, timeout=60)
     assert far.status_code == 422, far.text[:500]
     assert far.json()["detail"][0]["field"] == "contacts.points" and "0.970 m" in far.json()["error"]
+
+
+def test_simulate_searches_in_the_worker_and_reports_every_push(base: str) -> None:
+    """Issue 63: with `options.simulate` the worker's pipeline tests its candidates in MuJoCo and returns the best;
+    the answer carries the whole test (six pushes), and "verified" only where the object held."""
+    from .science import box_object
+
+    body = {
+        "object": box_object(512, (0.05, 0.06, 0.07)), "task": {"kind": "force_closure"}, "robot": {"name": HAND},
+        "options": {"method": "random_contacts", "num_proposals": 1, "max_iterations": 30, "simulate": True,
+                    "timeout": 120},
+    }  # fmt: skip
+    response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=180)
+    assert response.status_code == 200, response.text[:2000]
+    result = SynthesisResult.model_validate(response.json())
+    (p,) = result.proposals
+    physics = p.quality.physics
+    assert physics is not None and physics.test == "closure" and physics.object_pieces in ("hull", "point_patches")
+    assert physics.reason in ("held", "moved")  # refined candidates: none starts inside the box
+    assert [t.direction for t in physics.trials] == ["-x", "+x", "-y", "+y", "-z", "+z"]
+    assert not p.quality.success or physics.held
+    assert ("physics" in p.quality.failures) == (not physics.held)
+    assert result.timings["physics"] > 0
