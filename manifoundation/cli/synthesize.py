@@ -51,6 +51,9 @@ def add_request_args(parser: argparse.ArgumentParser) -> None:
     req = parser.add_argument_group("request")
     req.add_argument("--hand", default="leap", help="built-in or registered hand name (default %(default)s); "
                      "'none' for a deformable's contacts and motions for any gripper")
+    req.add_argument("--simulate", action="store_true",
+                     help="rigid objects: test each candidate in MuJoCo (six pushes, or the executed motion for a "
+                     "delta task) and search until one holds; 'ok' then means it held (simulate)")
     req.add_argument("--rollout", action="store_true",
                      help="deformables: simulate the answer and judge it by the shape metric (simulate_rollout)")
     req.add_argument("--corrections", type=int, default=0, metavar="C",
@@ -148,6 +151,7 @@ def build_request(args: argparse.Namespace, path: Path | None = None) -> Any:
         return_hand_mesh=getattr(args, "view", None) is not None,  # --view draws the posed hand's meshes
         simulate_rollout=args.rollout,
         rollout_corrections=args.corrections,
+        simulate=args.simulate,
     )
 
 
@@ -189,14 +193,17 @@ def result_table(result: SynthesisResult) -> Any:
     table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False, padding=(0, 1, 0, 0))
     if any(p.contact_motions is not None for p in result.proposals):
         return _deformable_rows(table, result)
-    for column in ("#", "ok", "reason", "from", "iter", "residual", "tip mm", "pen mm", "ε", "palm x y z (m)"):
-        table.add_column(column, justify="left" if column in ("ok", "reason", "from") else "right", no_wrap=True)
+    # with simulate the simulated test's verdict (held, moved, reached, ...) stands where the refinement's reason is
+    tested = any(p.quality.physics is not None for p in result.proposals)
+    reason = "physics" if tested else "reason"
+    for column in ("#", "ok", reason, "from", "iter", "residual", "tip mm", "pen mm", "ε", "palm x y z (m)"):
+        table.add_column(column, justify="left" if column in ("ok", reason, "from") else "right", no_wrap=True)
     for i, p in enumerate(result.proposals):
         q = p.quality
         table.add_row(
             str(i),
             "[green]yes[/]" if q.success else "[red]no[/]",
-            q.reason,
+            q.reason if not tested else "-" if q.physics is None else q.physics.reason,
             p.contact_source or "-",
             str(q.iterations),
             f"{q.wrench_residual:.1e}",

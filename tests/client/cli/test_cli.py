@@ -210,3 +210,27 @@ def test_the_proposal_table_fits_100_columns_with_the_contact_source(object_poin
     assert max(len(line) for line in lines) <= 100
     palm = " ".join(f"{v:+.3f}" for v in best.palm_position)
     assert sum("random_fallback" in line and "0.100" in line and palm in line for line in lines) == 2
+
+
+def test_simulate_asks_for_the_test_and_the_table_shows_its_verdict(object_file: Path, object_points: np.ndarray
+                                                                    ) -> None:  # fmt: skip
+    import io
+
+    from rich.console import Console
+
+    from manifoundation.cli.synthesize import build_request, result_table
+    from tests.api.fakes import fake_result
+
+    assert build_request(build_parser().parse_args(["synthesize", str(object_file), "--simulate"])).options.simulate
+    assert not build_request(build_parser().parse_args(["synthesize", str(object_file)])).options.simulate
+    request = make_request(object_from_points(object_points), "force_closure", HAND, simulate=True)
+    result = fake_result(request)  # its proposal's test moved the object in +z
+    best = result.proposals[0].model_copy(update={"contact_source": "random_fallback"})
+    assert best.quality.physics is not None and best.quality.physics.reason == "moved"
+    out = io.StringIO()
+    Console(file=out, width=common.TABLE_WIDTH, color_system=None).print(result_table(
+        result.model_copy(update={"proposals": [best]})))
+    lines = out.getvalue().splitlines()
+    assert max(len(line) for line in lines) <= 100
+    assert any("physics" in line for line in lines) and any("moved" in line and "random_fallback" in line
+                                                            for line in lines)  # fmt: skip
