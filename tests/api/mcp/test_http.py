@@ -40,6 +40,10 @@ async def _session(science: Science) -> dict[str, Any]:
         seen["synth"] = (await mine.call_tool("synthesize", {
             "object_id": object_id, "hand": HAND, "method": "direct_grasp", "num_proposals": 1, "wait_s": 60,
         })).structured_content  # fmt: skip
+        seen["simulated"] = (await mine.call_tool("synthesize", {
+            "object_id": object_id, "hand": HAND, "method": "direct_grasp", "num_proposals": 1, "simulate": True,
+            "wait_s": 60,
+        })).structured_content  # fmt: skip
         seen["plan"] = (await mine.call_tool("plan_manipulation", {
             "object_id": object_id, "hand": HAND, "start": [0, 0, 0.1], "waypoints": [[0.1, 0, 0.1]],
             "support_plane": 0.0, "options": {"contacts": False}, "wait_s": 30,
@@ -66,6 +70,10 @@ def test_tools_act_for_the_key_through_the_service(science: Science) -> None:
     assert synth["result"]["proposals"] == 1 and synth["view_url"].endswith(f"/view/{synth['job_id']}")
     best = synth["result"]["best"]
     assert len(best["contact_points"]) == len(best["fingertips"]) == 4 and len(best["joint_values"]) == 16
+    assert best["physics"] is None  # not asked
+    tested = seen["simulated"]["result"]["best"]  # asked: the simulated grasp test's verdict, success only if held
+    assert tested["physics"]["test"] == "closure" and tested["physics"]["reason"] in ("held", "moved", "penetration")
+    assert not tested["success"] or tested["physics"]["held"]
     plan = seen["plan"]
     assert plan["state"] == "succeeded" and plan["plan"]["success"] and plan["plan"]["segments"] == 1, plan
     assert plan["plan"]["waypoints"][-1]["position"] == [0.1, 0.0, 0.1]

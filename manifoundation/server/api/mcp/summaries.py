@@ -49,6 +49,8 @@ def proposal_summary(p: Proposal) -> dict[str, Any]:
         "joint_values": dict(zip(p.joint_names, _r(p.joint_values), strict=True)),
         "wrench_residual": round(q.wrench_residual, 6), "max_tip_distance_m": round(q.max_tip_distance, 5),
         "penetration_m": round(q.penetration_depth, 5), "epsilon": q.epsilon,
+        "physics": None if q.physics is None else {"held": q.physics.held, "reason": q.physics.reason,
+                                                   "test": q.physics.test},
     }  # fmt: skip
 
 

@@ -117,7 +117,9 @@ def build_server(objects: ObjectStore, session_of: SessionFn, *, name: str = "ma
 
     @server.tool(description="Contacts, forces and a hand pose for an object and a task; waits up to wait_s. "
                              "task: {kind: delta_pose, translation: [x,y,z], rotation: [w,x,y,z]} | "
-                             "{kind: force_closure} | {kind: wrench, wrench: [6]}.")
+                             "{kind: force_closure} | {kind: wrench, wrench: [6]}. simulate: test candidates in "
+                             "MuJoCo (six pushes, or the executed motion for delta_pose) until one holds; success "
+                             "then means it held (about 1-3 s more).")
     async def synthesize(
         ctx: Context,
         object_id: str,
@@ -126,13 +128,15 @@ def build_server(objects: ObjectStore, session_of: SessionFn, *, name: str = "ma
         method: Literal["auto", "network", "random_contacts", "direct_grasp"] = "auto",
         num_proposals: Annotated[int, Field(ge=1, le=MAX_PROPOSALS)] = 4,
         seed: int = 0,
+        simulate: bool = False,
         wait_s: Wait = 30.0,
     ) -> dict[str, Any]:
         async def body() -> dict[str, Any]:
             session = await session_of(ctx)
+            options = {"method": method, "num_proposals": num_proposals, "seed": seed, "simulate": simulate}
             request = SynthesisRequest.model_validate({
                 "object": await _object(session, object_id), "task": task or {"kind": "force_closure"},
-                "robot": {"name": hand}, "options": {"method": method, "num_proposals": num_proposals, "seed": seed},
+                "robot": {"name": hand}, "options": options,
             })  # fmt: skip
             job_id = await session.backend.submit(request)
             return job_summary(await session.backend.job(job_id, wait_s), session.backend.view_url(job_id))
