@@ -24,7 +24,7 @@ import numpy as np
 from manifoundation.core.physics.object_model import ObjectShape
 from manifoundation.core.physics.protocol import MotionTrial, PhysicsResult, Protocol
 from manifoundation.core.physics.scene import Scene, build_scene
-from manifoundation.core.physics.trial import _angle, _drive, _penetration, _reset, _touching, moved_contacts, tip_gaps
+from manifoundation.core.physics.trial import _angle, _drive, _reset, _touching, start
 
 if TYPE_CHECKING:
     from manifoundation.core.robots.hand import Hand
@@ -49,14 +49,7 @@ def simulate_motion(
     t0 = time.perf_counter()
     sc = build_scene(hand, palm_position, palm_quaternion, shape, p, moving=True)
     q = np.asarray(joints, float)
-    limits = (np.asarray(hand.lower, float), np.asarray(hand.upper, float))
-    cps, cns = np.asarray(contact_points, float), np.asarray(contact_normals, float)
-    pre = moved_contacts(sc, q, cps, cns, fingertips, p.pregrasp_distance, limits)
-    squeeze = moved_contacts(sc, q, cps, cns, fingertips, -p.pregrasp_distance, limits)
-    _reset(sc, q)
-    gaps = tip_gaps(sc, fingertips)
-    _reset(sc, pre)
-    pen = _penetration(sc)
+    pre, squeeze, gaps, pen = start(sc, hand, q, contact_points, contact_normals, fingertips, p)
     if pen > p.max_penetration:
         return PhysicsResult(False, [], "penetration", pen, gaps, 0, pre, squeeze, time.perf_counter() - t0,
                              test="motion", object_pieces=shape.source)  # fmt: skip

@@ -38,14 +38,7 @@ def simulate_grasp(
     t0 = time.perf_counter()
     sc = build_scene(hand, palm_position, palm_quaternion, shape, p)
     q = np.asarray(joints, float)
-    limits = (np.asarray(hand.lower, float), np.asarray(hand.upper, float))
-    cps, cns = np.asarray(contact_points, float), np.asarray(contact_normals, float)
-    pre = moved_contacts(sc, q, cps, cns, fingertips, p.pregrasp_distance, limits)
-    squeeze = moved_contacts(sc, q, cps, cns, fingertips, -p.pregrasp_distance, limits)
-    _reset(sc, q)
-    gaps = tip_gaps(sc, fingertips)
-    _reset(sc, pre)
-    pen = _penetration(sc)
+    pre, squeeze, gaps, pen = start(sc, hand, q, contact_points, contact_normals, fingertips, p)
     trials: list[Trial] = []
     touching = 0
     if pen > p.max_penetration:
@@ -60,6 +53,22 @@ def simulate_grasp(
     ok = len(trials) == len(DIRECTIONS) and all(t.held for t in trials)
     return PhysicsResult(ok, trials, "held" if ok else "moved", pen, gaps, touching, pre, squeeze,
                          time.perf_counter() - t0, object_pieces=shape.source)  # fmt: skip
+
+
+def start(
+    sc: Scene, hand: Hand, q: np.ndarray, contact_points: np.ndarray, contact_normals: np.ndarray,
+    fingertips: list[str], p: Protocol,
+) -> tuple[np.ndarray, np.ndarray, list[float], float]:  # fmt: skip
+    """What every trial starts from: the pregrasp and squeeze targets (D,) (`moved_contacts`, ±``pregrasp_distance``
+    within the joint limits), the fingertip gaps at the grasp (m,) and the penetration at the pregrasp (m)."""
+    limits = (np.asarray(hand.lower, float), np.asarray(hand.upper, float))
+    cps, cns = np.asarray(contact_points, float), np.asarray(contact_normals, float)
+    pre = moved_contacts(sc, q, cps, cns, fingertips, p.pregrasp_distance, limits)
+    squeeze = moved_contacts(sc, q, cps, cns, fingertips, -p.pregrasp_distance, limits)
+    _reset(sc, q)
+    gaps = tip_gaps(sc, fingertips)
+    _reset(sc, pre)
+    return pre, squeeze, gaps, _penetration(sc)
 
 
 PREGRASP_DAMPING = 1e-4
