@@ -175,12 +175,12 @@ def test_redis_at_maxmemory_is_said_plainly_without_its_internals(tmp_path: Path
     assert not re.search(r"[0-9a-f]{40}", message) and "script" not in message, message
 
 
-def _fill(url: str) -> int:
-    """Fill a noeviction Redis with filler keys until it refuses a write; how many were written."""
+def _fill(url: str, n: int = 0) -> int:
+    """Fill a noeviction Redis with filler keys `filler:n`, `filler:n+1`, … until it refuses a write; the next free
+    index (call again with it to top Redis up when its memory use has dropped)."""
     import redis
 
     raw = redis.Redis.from_url(url)
-    n = 0
     try:
         for size in (16_384, 1024, 64):  # down to the last few bytes: even a small outcome is refused
             with contextlib.suppress(redis.exceptions.OutOfMemoryError):
@@ -229,7 +229,11 @@ def test_writes_refused_at_maxmemory_are_retried_not_left_for_the_visibility_tim
                         assert all(job.state is JobState.RUNNING for job in jobs), (
                             "the batch ended before Redis was full"
                         )
-                    await asyncio.sleep(5.0)  # the worker meets the refusals meanwhile
+                    for _ in range(150):  # until the worker meets a refusal (≤ 30 s, load or not)
+                        if "maxmemory" in (tmp_path / "worker.log").read_text(errors="replace"):
+                            break
+                        await asyncio.sleep(0.2)
+                        filled = await asyncio.to_thread(_fill, server.url, filled)  # memory use may have dropped
                     await asyncio.to_thread(_free, server.url, filled)
                     freed = time.monotonic()
                     jobs = await asyncio.gather(*(queue.wait(i, 30) for i in ids))
