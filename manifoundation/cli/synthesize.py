@@ -51,9 +51,10 @@ def add_request_args(parser: argparse.ArgumentParser) -> None:
     req = parser.add_argument_group("request")
     req.add_argument("--hand", default="leap", help="built-in or registered hand name (default %(default)s); "
                      "'none' for a deformable's contacts and motions for any gripper")
-    req.add_argument("--simulate", action="store_true",
-                     help="rigid objects: test each candidate in MuJoCo (six pushes, or the executed motion for a "
-                     "delta task) and search until one holds; 'ok' then means it held (simulate)")
+    req.add_argument("--simulate", action=argparse.BooleanOptionalAction, default=None,
+                     help="rigid objects: each answer is tested in MuJoCo (six pushes, or the executed motion for a "
+                     "delta task) and 'ok' means it held; --simulate searches candidates until one holds, "
+                     "--no-simulate skips the test (simulate: unset, true, false)")
     req.add_argument("--rollout", action="store_true",
                      help="deformables: simulate the answer and judge it by the shape metric (simulate_rollout)")
     req.add_argument("--corrections", type=int, default=0, metavar="C",
@@ -193,7 +194,7 @@ def result_table(result: SynthesisResult) -> Any:
     table = Table(title=title, box=box.SIMPLE_HEAD, pad_edge=False, padding=(0, 1, 0, 0))
     if any(p.contact_motions is not None for p in result.proposals):
         return _deformable_rows(table, result)
-    # with simulate the simulated test's verdict (held, moved, reached, ...) stands where the refinement's reason is
+    # where the simulated test ran, its verdict (held, moved, reached, ...) stands where the refinement's reason is
     tested = any(p.quality.physics is not None for p in result.proposals)
     reason = "physics" if tested else "reason"
     for column in ("#", "ok", reason, "from", "iter", "residual", "tip mm", "pen mm", "ε", "palm x y z (m)"):

@@ -66,15 +66,18 @@ class SynthesisOptions(WireModel):
         "rebuilt from the points, resting on a table under its lowest point) and judge success by the paper's "
         "shape metric against the target; returns `rollout_points`. About 0.5-2 s a proposal.",
     )
-    simulate: bool = Field(
-        False,
-        description="Rigid objects with a robot: run the simulated grasp test (MuJoCo, DexGraspBench's protocol: "
+    simulate: bool | None = Field(
+        None,
+        description="Rigid objects with a robot: the simulated grasp test (MuJoCo, DexGraspBench's protocol: "
         "pregrasp → grasp → squeeze, then 1 N pushes along ±x, ±y, ±z for 2 s; for a `delta_pose` task instead "
         "gravity on and the palm carried along the task's motion over 1 s, success within 1 cm and 10° of the "
-        "target pose; docs/physics.md) on each candidate, and search: up to 8 candidates (or `num_proposals`) are "
-        "refined and tested one after another until `num_proposals` held; the best come first (held and verified, "
-        "held, verified). `quality.physics` carries the test (`test`: closure or motion) and `quality.success` "
-        "requires that it passed. A request then takes about 0.4-1.9 s instead of 0.15-0.3 s on one core.",
+        "target pose; docs/physics.md). Unset (the default): each returned proposal is tested once, "
+        "`quality.success` requires that it passed and the ones that passed come first (about 0.05-0.35 s a "
+        "proposal on one core). true: search — up to 8 candidates (or `num_proposals`) are refined and tested one "
+        "after another until `num_proposals` passed, the best first (held and verified, held, verified); about "
+        "0.4-1.9 s a request instead of 0.15-0.3 s. false: no test (geometric verification only: faster, and a "
+        "proposal it calls a success may not hold). `quality.physics` carries the test (`test`: closure or "
+        "motion).",
     )
     rollout_corrections: int = Field(
         0, ge=0, le=8, description="Deformables with `simulate_rollout`: a proposal whose rollout misses the "

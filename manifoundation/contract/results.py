@@ -32,7 +32,8 @@ class PhysicsMotion(WireModel):
 
 
 class PhysicsQuality(WireModel):
-    """The simulated grasp test (``options.simulate``; MuJoCo, DexGraspBench's protocol, docs/physics.md)."""
+    """The simulated grasp test (``options.simulate``: unset, each returned proposal; true, a search; MuJoCo,
+    DexGraspBench's protocol, docs/physics.md)."""
 
     held: bool = Field(..., description="The test passed: the object held in all six directions (closure) or "
                        "reached the target pose (motion).")
@@ -84,8 +85,8 @@ class Quality(WireModel):
         "oriented points' surface, which keeps concavities).",
     )
     physics: PhysicsQuality | None = Field(
-        None, description="With `options.simulate`: the simulated grasp test; `success` then also requires that "
-        "the object held (a failed test adds 'physics' to `failures`).",
+        None, description="The simulated grasp test (rigid objects with a robot, unless `options.simulate` is "
+        "false); `success` then also requires that the object held (a failed test adds 'physics' to `failures`).",
     )
 
 

@@ -14,9 +14,12 @@ proposal holds (the pipeline's order) and whether its best holds once the propos
 (`manifoundation.core.physics.physics_order`, what ``options.simulate`` returns first): with ``--proposals K`` > 1
 the best of K.
 
-``--simulate`` asks the pipeline itself for the test (``options.simulate``): it judges its candidates as it makes
-them, draws more until enough hold (`manifoundation.core.pipeline.physics_search`) and returns them ordered by it, so
-"first holds" is what a caller with ``simulate`` gets first; "request s" is the median pipeline time per request.
+The pipeline runs as the service runs it (``options.simulate`` unset): it tests each returned proposal on what it
+was sent (the points' patches, or the mesh with ``--geometry mesh``), calls it verified only when it held there and
+puts those first. ``--simulate`` asks it to search (``options.simulate: true``): it judges its candidates as it makes
+them, draws more until enough hold (`manifoundation.core.pipeline.physics_search`) and returns them ordered by it;
+``--no-simulate``: geometric verification only. "first holds" is what the caller gets first; "request s" is the
+median pipeline time per request.
 
 ``--task lift`` (``delta:0,0,0.05``; any ``delta:x,y,z[,qw,qx,qy,qz]``) asks for that object motion instead and
 judges each proposal by the executed target-motion test (`manifoundation.core.physics.simulate_motion`: the same
@@ -38,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
+MODE_TITLE = {None: "checked by the test, ", True: "searched by the test, ", False: ""}
 WEIGHTS = Path(__file__).resolve().parents[2] / "manifoundation" / "core" / "weights" / "cpu1k"
 
 
@@ -59,9 +63,9 @@ def add_physics_parser(sub: Any) -> None:
                    "(default: Protocol's 3, MuJoCo Menagerie's LEAP Hand; its Allegro has 10)")
     a.add_argument("--damping-revolute", type=float, default=None, help="revolute joint damping, N·m·s/rad "
                    "(default: Protocol's 0.1; Menagerie's Allegro has 1)")
-    a.add_argument("--simulate", action="store_true",
-                   help="options.simulate: the pipeline judges its candidates by the test and searches until enough "
-                   "hold (at least 8 candidates); 'first holds' is then what the caller gets first")
+    a.add_argument("--simulate", action=argparse.BooleanOptionalAction, default=None,
+                   help="options.simulate: unset, the pipeline tests what it returns (the service's default); "
+                   "--simulate, it searches candidates until enough hold (at least 8); --no-simulate, no test")
     a.add_argument("--no-close", action="store_true",
                    help="leave the fingertips where the refinement put them (no closing stage)")
     a.add_argument("--task", default="closure",
@@ -99,7 +103,7 @@ def run_physics(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from manifoundation.core import physics as sim
-    from manifoundation.core.pipeline import SynthesisInput, TaskInput, run_pipeline
+    from manifoundation.core.pipeline import SynthesisInput, TaskInput, physics_mode, run_pipeline
     from manifoundation.core.robots import get_hand
     from research.audit import third_party_objects
 
@@ -140,7 +144,7 @@ def run_physics(args: argparse.Namespace) -> int:
         inp = SynthesisInput(
             points=points, normals=normals, hand=hand, task=task, method=args.method,
             num_proposals=args.proposals, seed=args.seed, hand_key=hand.name, close_gaps=not args.no_close,
-            simulate=args.simulate,
+            simulate=physics_mode(args.simulate),
             mesh_vertices=np.asarray(obj.mesh.vertices) if send else None,
             mesh_faces=np.asarray(obj.mesh.faces) if send else None,
         )  # fmt: skip
@@ -156,12 +160,15 @@ def run_physics(args: argparse.Namespace) -> int:
             m = r.motion
             records.append({
                 "hand": hand_name, "object": obj.name, "proposal": k,
-                # what the service calls verified: with --simulate, only what also held in its own test
+                # what the service calls verified: unless --no-simulate, only what also held in its own test
                 "verified": bool(p.quality.success) and (p.physics is None or bool(p.physics.success)),
                 "source": p.contact_source, "epsilon": p.quality.epsilon, "holds": r.success, "reason": r.reason,
                 "tip_gaps": r.tip_gaps,
                 "touching_after_squeeze": r.contacts_after_squeeze, "penetration": r.penetration,
                 "trials": [[t.direction, t.translation, t.rotation, t.held] for t in r.trials],
+                # unless --no-simulate, the service's own test (on what it was sent) of the same proposal
+                "service_trials": None if p.physics is None else [
+                    [t.direction, t.translation, t.rotation, t.held] for t in p.physics.trials],
                 "motion": None if m is None else [m.translation_error, m.rotation_error, m.dropped],
                 "pipeline_s": seconds, "physics_s": r.seconds, "object_pieces": shapes[obj.name].source,
             })  # fmt: skip
@@ -169,7 +176,7 @@ def run_physics(args: argparse.Namespace) -> int:
         title=f"simulated grasp test of the service's answers: {len(objects)} third-party objects, "
         f"{'force closure' if motion is None else 'target motion ' + args.task}, method {args.method}, "
         f"{args.geometry} sent, {args.proposals} proposal(s), "
-        f"{'no closing' if args.no_close else 'closed'}, {'searched by the test, ' if args.simulate else ''}"
+        f"{'no closing' if args.no_close else 'closed'}, {MODE_TITLE[args.simulate]}"
         f"kp {protocol.kp_revolute:g} N·m/rad, damping {protocol.damping_revolute:g}, judged on the {args.judge}"
     )
     for col in ("hand", "requests", "first holds", "best holds", "proposals", "verified", "verified & hold", "hold",

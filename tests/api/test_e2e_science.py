@@ -78,7 +78,9 @@ def test_the_quickstart_grasp_touches_the_box_with_the_real_fingertips(base: str
                    "properties": {"friction": 0.8}},
         "task": {"kind": "delta_pose", "translation": [0.0, 0.0, 0.05], "rotation": [1.0, 0.0, 0.0, 0.0]},
         "robot": {"name": HAND},
-        "options": {"method": "random_contacts", "num_proposals": 2, "timeout": 120, "return_hand_mesh": True},
+        # the geometry of a verified answer is what this checks: the simulated test's verdict is the next test's
+        "options": {"method": "random_contacts", "num_proposals": 2, "timeout": 120, "return_hand_mesh": True,
+                    "simulate": False},
     }  # fmt: skip
     response = httpx.post(f"{base}/v1/synthesize", json=body, timeout=180)
     assert response.status_code == 200, response.text[:2000]

@@ -1,5 +1,6 @@
-"""``options.simulate``: the worker asks the pipeline for the simulated grasp test, and its conversion reports the test
-in ``quality.physics`` (success requires that it held). The tests judge grasps with the real test (MuJoCo)."""
+"""``options.simulate``: the worker asks the pipeline for the simulated grasp test (by default a check of what it
+returns, true a search, false none), and its conversion reports the test in ``quality.physics`` (success requires
+that it held). The tests judge grasps with the real test (MuJoCo)."""
 
 from __future__ import annotations
 
@@ -15,7 +16,7 @@ from manifoundation.server.worker.convert import to_input, to_result
 PAD_Z, HALF = 0.1, 0.02  # the Panda's pads at joint value q sit at y = ±q, z 0.0585-0.112 in the palm frame
 
 
-def _request(simulate: bool, mesh: bool) -> SynthesisRequest:
+def _request(simulate: bool | None, mesh: bool) -> SynthesisRequest:
     box = trimesh.creation.box(extents=[0.03, 2 * HALF, 0.03])
     box.apply_translation([0.0, 0.0, PAD_Z])
     pts, face = trimesh.sample.sample_surface_even(box, 600, seed=0)
@@ -39,7 +40,7 @@ def _output(q: float, request: SynthesisRequest | None = None) -> SynthesisOutpu
         joint_names=list(hand.joint_names), joint_values=np.array([q]),
         quality=QualityOutput(True, True, "converged", 3, 0.0, 0.0, 0.0, 0.0, 0.1),
     )  # fmt: skip
-    if request is not None and request.options.simulate:
+    if request is not None and request.options.simulate is not False:
         _judge(proposal, request)
     return SynthesisOutput(hand="panda_gripper", proposals=[proposal])
 
@@ -90,8 +91,20 @@ def test_without_simulate_nothing_changes() -> None:
 
 
 def test_the_worker_asks_the_pipeline_for_the_test_for_rigid_objects_with_a_robot() -> None:
-    assert to_input(_request(True, True), get_hand("panda_gripper")).simulate
-    assert not to_input(_request(False, True), get_hand("panda_gripper")).simulate
+    hand = get_hand("panda_gripper")
+    assert [to_input(_request(v, True), hand).simulate for v in (None, True, False)] == ["check", "search", "off"]
+    unset = SynthesisRequest.model_validate({
+        "object": {"points": np.random.default_rng(0).normal(size=(64, 3)).tolist()},
+        "task": {"kind": "force_closure"}, "robot": {"name": "panda_gripper"},
+    })  # fmt: skip
+    assert unset.options.simulate is None and to_input(unset, hand).simulate == "check"  # the default tests
+
+
+def test_a_checked_answer_that_drops_is_no_success() -> None:
+    request = _request(None, False)
+    result = to_result(_output(HALF + 0.02, request), request, "test", get_hand("panda_gripper"))
+    success, failures, physics = _physics(result)
+    assert not success and failures == ["physics"] and physics is not None
 
 
 def test_physics_order_is_held_and_verified_then_held_then_verified() -> None:

@@ -136,4 +136,7 @@ def test_a_worker_prepares_an_object_it_has_seen_once_unless_told_not_to(keep: b
     first, again = (pipeline.run([JobInput(id=i, request=request)], lambda *a: None, lambda job_id: False)[0]
                     for i in ("a", "b"))  # fmt: skip
     assert pipeline.objects.objects.hits == (1 if keep else 0) and len(pipeline.objects.objects) == int(keep)
-    assert [p.model_dump_json() for p in first.proposals] == [p.model_dump_json() for p in again.proposals]
+    timing = {"quality": {"physics": {"seconds"}}}  # the simulated test's wall time differs from run to run
+    assert [p.model_dump_json(exclude=timing) for p in first.proposals] == [
+        p.model_dump_json(exclude=timing) for p in again.proposals
+    ]

@@ -11,11 +11,13 @@ from manifoundation.core.pipeline.types import (
     IterationOutput,
     JointInput,
     ModelUnavailable,
+    PhysicsMode,
     ProposalOutput,
     QualityOutput,
     SynthesisInput,
     SynthesisOutput,
     TaskInput,
+    physics_mode,
 )
 
 __all__ = [
@@ -24,11 +26,13 @@ __all__ = [
     "IterationOutput",
     "JointInput",
     "ModelUnavailable",
+    "PhysicsMode",
     "ProposalOutput",
     "QualityOutput",
     "SynthesisInput",
     "SynthesisOutput",
     "TaskInput",
+    "physics_mode",
     "run_pipeline",
     "run_pipeline_batch",
 ]

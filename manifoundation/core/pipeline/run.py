@@ -207,14 +207,15 @@ def _finish(
     chosen += [None] * (len(starts) - len(chosen))
     proposals: list[ProposalOutput] = []
     seconds: dict[str, float] = {"refinement": 0.0}
-    judge = PhysicsJudge(prep) if inp.simulate else None
+    judge = PhysicsJudge(prep) if inp.simulate != "off" else None
+    search = inp.simulate == "search"
     for k, (start, source) in enumerate(zip(starts, sources, strict=True)):
         enough = inp.stop_after_verified
         if enough is not None and sum(p.quality.success for p in proposals) >= enough:
             break  # enough verified proposals: the rest are neither refined nor returned
-        if judge is not None and k >= inp.num_proposals and (enough_held(proposals, inp.num_proposals) or (
+        if search and k >= inp.num_proposals and (enough_held(proposals, inp.num_proposals) or (
                 inp.deadline is not None and time.monotonic() >= inp.deadline)):
-            break  # simulate: enough held (or no time left): no more candidates
+            break  # searching: enough held (or no time left): no more candidates
         t0 = time.perf_counter()
         verified = _Verifier(prep)
         res = _refined(prep, start, k, config, total, report, should_cancel, verified)
@@ -223,7 +224,7 @@ def _finish(
         proposal = _proposal(prep, res.pose if res is not None else start, res, seconds, source, verified)
         if (picked := chosen[k]) is not None:
             proposal.network_forces, proposal.network_sample = picked.forces, picked.sample
-        if judge is not None:
+        if search and judge is not None:
             t0 = time.perf_counter()
             proposal.physics = judge(proposal)
             seconds["physics"] = seconds.get("physics", 0.0) + time.perf_counter() - t0
@@ -234,9 +235,14 @@ def _finish(
     timings["verification"] = seconds.get("verification", 0.0)
     proposals.sort(key=_rank)
     if judge is not None:
-        proposals = best_by_physics(proposals, inp.num_proposals)
         t0 = time.perf_counter()
-        judge.complete_trials(proposals)
+        if search:
+            proposals = best_by_physics(proposals, inp.num_proposals)
+            judge.complete_trials(proposals)
+        else:  # check: each returned proposal tested once, those that held first
+            for p in proposals:
+                p.physics = judge(p, complete=True)
+            proposals = best_by_physics(proposals, len(proposals))
         timings["physics"] = seconds.get("physics", 0.0) + time.perf_counter() - t0
     heat = force = None
     if net_out is not None:  # the maps of the sample the best proposal came from (the first when none did)

@@ -7,7 +7,7 @@ Mirrors ``manifoundation/contract`` (requests, tasks, results) field for field w
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
@@ -76,6 +76,18 @@ class JointInput:
     part_mask: np.ndarray
 
 
+PhysicsMode = Literal["off", "check", "search"]
+"""How a rigid request with a robot uses the simulated grasp test (`manifoundation.core.pipeline.physics_search`):
+"off" — geometric verification only; "check" — each returned proposal is tested, counts as a success only when it
+held, and the ones that held come first; "search" — every candidate is tested as it is made and more are drawn
+until ``num_proposals`` held."""
+
+
+def physics_mode(simulate: bool | None) -> PhysicsMode:
+    """A request's ``options.simulate`` as a `PhysicsMode`: unset -> "check", true -> "search", false -> "off"."""
+    return "check" if simulate is None else "search" if simulate else "off"
+
+
 @dataclass
 class SynthesisInput:
     """One synthesis request in core form.
@@ -131,13 +143,13 @@ class SynthesisInput:
     stop_after_verified: int | None = None
     rollout_corrections: int = 0
     close_gaps: bool = True
-    simulate: bool = False  # rigid, with a robot: judge each proposal in physics and search until enough hold
+    simulate: PhysicsMode = "off"  # rigid, with a robot: the simulated grasp test (`PhysicsMode`)
 
     @property
     def candidates(self) -> int:
-        """Starts drawn (network samples or contact sets): ``num_proposals``, or with ``simulate`` at least
-        `SIMULATE_CANDIDATES`."""
-        return max(self.num_proposals, SIMULATE_CANDIDATES) if self.simulate else self.num_proposals
+        """Starts drawn (network samples or contact sets): ``num_proposals``, or when searching (``simulate``
+        "search") at least `SIMULATE_CANDIDATES`."""
+        return max(self.num_proposals, SIMULATE_CANDIDATES) if self.simulate == "search" else self.num_proposals
 
 
 @dataclass
@@ -173,9 +185,9 @@ class IterationOutput:
 
 
 SIMULATE_CANDIDATES = 8
-"""With ``simulate``: the fewest starts drawn, one after another until ``num_proposals`` held (`physics_search`).
-On 43 third-party objects (K = 1) the first answer held for LEAP in 15 with 4, 20 with 8; Allegro 17 and 21; the
-median request 2.0 → 2.2 s and 1.0 → 1.8 s (research/results/physics.md)."""
+"""Searching (``simulate`` "search"): the fewest starts drawn, one after another until ``num_proposals`` held
+(`physics_search`). On 43 third-party objects (K = 1) the first answer held for LEAP in 15 with 4, 20 with 8;
+Allegro 17 and 21; the median request 2.0 → 2.2 s and 1.0 → 1.8 s (research/results/physics.md)."""
 
 
 @dataclass

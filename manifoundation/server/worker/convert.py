@@ -24,7 +24,14 @@ from manifoundation.contract import (
     SynthesisRequest,
     SynthesisResult,
 )
-from manifoundation.core.pipeline import JointInput, ProposalOutput, SynthesisInput, SynthesisOutput, TaskInput
+from manifoundation.core.pipeline import (
+    JointInput,
+    ProposalOutput,
+    SynthesisInput,
+    SynthesisOutput,
+    TaskInput,
+    physics_mode,
+)
 
 if TYPE_CHECKING:
     from manifoundation.core.physics import PhysicsResult
@@ -85,7 +92,8 @@ def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = Non
         hand_key=hand.name,
         stop_after_verified=options.stop_after_verified,
         rollout_corrections=options.rollout_corrections,
-        simulate=options.simulate and obj.material.value == "rigid" and request.robot is not None,
+        simulate=physics_mode(options.simulate) if obj.material.value == "rigid" and request.robot is not None
+        else "off",
     )
 
 
@@ -176,9 +184,10 @@ def to_result(
 ) -> SynthesisResult:
     """The wire result of ``output`` (maps and history only when the request asked for them).
 
-    With ``hand``, each proposal carries the hand's collision spheres at its pose; with ``options.simulate`` (a
-    rigid object and a robot) the pipeline judged each proposal by the simulated grasp test, searched until enough
-    held and ordered them by it (`manifoundation.core.pipeline.physics_search`): ``quality.physics`` carries it and
+    With ``hand``, each proposal carries the hand's collision spheres at its pose; for a rigid object and a robot
+    the pipeline judged the proposals by the simulated grasp test unless ``options.simulate`` is false (`physics_mode`;
+    with true it searched until enough held) and ordered them by it
+    (`manifoundation.core.pipeline.physics_search`): ``quality.physics`` carries it and
     ``quality.success`` requires that it held (the ``heatmap`` stays the one of the pipeline's first proposal —
     ``network_sample`` says which sample each came from).
     """

@@ -70,8 +70,9 @@ def test_tools_act_for_the_key_through_the_service(science: Science) -> None:
     assert synth["result"]["proposals"] == 1 and synth["view_url"].endswith(f"/view/{synth['job_id']}")
     best = synth["result"]["best"]
     assert len(best["contact_points"]) == len(best["fingertips"]) == 4 and len(best["joint_values"]) == 16
-    assert best["physics"] is None  # not asked
-    tested = seen["simulated"]["result"]["best"]  # asked: the simulated grasp test's verdict, success only if held
+    # tested by default (a check of the answer): success only where the object held
+    assert best["physics"]["test"] == "closure" and (not best["success"] or best["physics"]["held"])
+    tested = seen["simulated"]["result"]["best"]  # a search asked: the test's verdict, success only if held
     assert tested["physics"]["test"] == "closure" and tested["physics"]["reason"] in ("held", "moved", "penetration")
     assert not tested["success"] or tested["physics"]["held"]
     plan = seen["plan"]

@@ -1,5 +1,5 @@
-"""``simulate`` in the pipeline: each candidate judged by the real simulated grasp test (MuJoCo), more drawn until
-enough hold, the best returned in physics order."""
+"""The simulated grasp test in the pipeline (real MuJoCo): "search" judges each candidate and draws more until enough
+hold, the best returned in physics order; "check" (the service's default) tests each returned proposal once."""
 
 from __future__ import annotations
 
@@ -10,7 +10,15 @@ import pytest
 import trimesh
 
 from manifoundation.core.physics import PhysicsResult
-from manifoundation.core.pipeline import ProposalOutput, QualityOutput, SynthesisInput, TaskInput, run_pipeline
+from manifoundation.core.pipeline import (
+    PhysicsMode,
+    ProposalOutput,
+    QualityOutput,
+    SynthesisInput,
+    TaskInput,
+    physics_mode,
+    run_pipeline,
+)
 from manifoundation.core.pipeline.physics_search import best_by_physics, enough_held
 from manifoundation.core.robots import get_hand
 
@@ -27,15 +35,16 @@ def _inp(**kw: object) -> SynthesisInput:
     pts, nrm, box = _box()
     base: dict[str, object] = dict(
         points=pts, normals=nrm, hand=get_hand("panda_gripper"), task=TaskInput("force_closure"),
-        mesh_vertices=np.asarray(box.vertices), mesh_faces=np.asarray(box.faces), simulate=True,
+        mesh_vertices=np.asarray(box.vertices), mesh_faces=np.asarray(box.faces), simulate="search",
     )  # fmt: skip
     base.update(kw)
     return SynthesisInput(**base)  # type: ignore[arg-type]
 
 
-def test_candidates_are_eight_or_as_many_as_asked() -> None:
+@pytest.mark.parametrize("mode", ["off", "check"])
+def test_candidates_are_eight_or_as_many_as_asked(mode: PhysicsMode) -> None:
     assert [_inp(num_proposals=k).candidates for k in (1, 2, 8, 12)] == [8, 8, 8, 12]
-    assert [_inp(num_proposals=k, simulate=False).candidates for k in (1, 3)] == [1, 3]
+    assert [_inp(num_proposals=k, simulate=mode).candidates for k in (1, 3)] == [1, 3]
 
 
 def test_a_grasp_that_holds_ends_the_search_at_once() -> None:
@@ -88,3 +97,33 @@ def test_best_by_physics_takes_held_and_verified_then_held_then_verified(wanted:
     ps = [_judged(True, False), _judged(False, True), _judged(True, True), _judged(True, None)]
     assert best_by_physics(ps, wanted) == [ps[i] for i in expected]
     assert enough_held(ps, 1) and not enough_held(ps, 2)  # held but not verified is no success: search on
+
+
+def test_the_services_default_checks_what_it_returns_and_an_unheld_proposal_is_no_success() -> None:
+    # both pads on one face, unrefined: geometric verification is not asked (refine off) but the test runs
+    fractions: list[float] = []
+    contacts = np.array([[0.02, 0.01, 0], [0.02, -0.01, 0]])
+    out = run_pipeline(_inp(method="contacts", contacts=contacts, refine=False, simulate="check"),
+                       progress=lambda stage, f: fractions.append(f) if stage == "verification" else None)  # fmt: skip
+    (p,) = out.proposals
+    assert fractions == [1.0]  # one candidate: a check draws no more
+    assert p.physics is not None and not p.physics.success and len(p.physics.trials) == 6
+    held = run_pipeline(_inp(method="contacts", contacts=np.array([[0.02, 0, 0], [-0.02, 0, 0]]), simulate="check"))
+    (q,) = held.proposals
+    assert q.physics is not None and q.physics.success and q.quality.success
+    off = run_pipeline(_inp(method="contacts", contacts=np.array([[0.02, 0, 0], [-0.02, 0, 0]]), simulate="off"))
+    assert off.proposals[0].physics is None and "physics" not in off.timings
+
+
+def test_a_checked_answer_puts_the_held_proposals_first() -> None:
+    from manifoundation.core.network import ContactPredictor
+
+    predictor = ContactPredictor.from_checkpoint(str(WEIGHTS))
+    out = run_pipeline(_inp(method="network", num_proposals=3, simulate="check"), predictor=predictor)
+    assert len(out.proposals) == 3 and all(p.physics is not None for p in out.proposals)
+    held = [p.physics is not None and p.physics.success and p.quality.success for p in out.proposals]
+    assert held == sorted(held, reverse=True)
+
+
+def test_a_requests_simulate_maps_unset_true_false_to_check_search_off() -> None:
+    assert [physics_mode(v) for v in (None, True, False)] == ["check", "search", "off"]

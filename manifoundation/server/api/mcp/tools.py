@@ -117,9 +117,10 @@ def build_server(objects: ObjectStore, session_of: SessionFn, *, name: str = "ma
 
     @server.tool(description="Contacts, forces and a hand pose for an object and a task; waits up to wait_s. "
                              "task: {kind: delta_pose, translation: [x,y,z], rotation: [w,x,y,z]} | "
-                             "{kind: force_closure} | {kind: wrench, wrench: [6]}. simulate: test candidates in "
-                             "MuJoCo (six pushes, or the executed motion for delta_pose) until one holds; success "
-                             "then means it held (about 1-3 s more).")
+                             "{kind: force_closure} | {kind: wrench, wrench: [6]}. Each proposal is tested in MuJoCo "
+                             "(six pushes, or the executed motion for delta_pose) and success means it held; "
+                             "simulate: true searches candidates until one holds (about 1-3 s more), false skips "
+                             "the test.")
     async def synthesize(
         ctx: Context,
         object_id: str,
@@ -128,7 +129,7 @@ def build_server(objects: ObjectStore, session_of: SessionFn, *, name: str = "ma
         method: Literal["auto", "network", "random_contacts", "direct_grasp"] = "auto",
         num_proposals: Annotated[int, Field(ge=1, le=MAX_PROPOSALS)] = 4,
         seed: int = 0,
-        simulate: bool = False,
+        simulate: bool | None = None,
         wait_s: Wait = 30.0,
     ) -> dict[str, Any]:
         async def body() -> dict[str, Any]:
