@@ -57,7 +57,8 @@ class PhysicsQuality(WireModel):
                                  "in, within the joint limits), in `joint_names` order.")
     seconds: float = Field(..., ge=0, description="Wall time of the test.")
     object_pieces: str = Field(..., description="How the object was built: hull (the sent mesh, convex), "
-                               "mesh_patches (non-convex mesh) or point_patches (points only).")
+                               "mesh_patches (non-convex mesh), point_hull (points only, lying on their convex "
+                               "hull) or point_patches (other points).")
 
 
 class Quality(WireModel):

@@ -183,7 +183,7 @@ def test_simulate_searches_in_the_worker_and_reports_every_push(base: str) -> No
     result = SynthesisResult.model_validate(response.json())
     (p,) = result.proposals
     physics = p.quality.physics
-    assert physics is not None and physics.test == "closure" and physics.object_pieces in ("hull", "point_patches")
+    assert physics is not None and physics.test == "closure" and physics.object_pieces in ("hull", "point_hull")
     assert physics.reason in ("held", "moved")  # refined candidates: none starts inside the box
     assert [t.direction for t in physics.trials] == ["-x", "+x", "-y", "+y", "-z", "+z"]
     assert not p.quality.success or physics.held

@@ -74,7 +74,7 @@ def test_simulate_reports_a_grasp_that_holds() -> None:
         assert success and failures == [] and physics is not None
         assert result.proposals[0].quality.physics is not None
         p = result.proposals[0].quality.physics
-        assert p.held and len(p.trials) == 6 and p.object_pieces == ("hull" if mesh else "point_patches")
+        assert p.held and len(p.trials) == 6 and p.object_pieces == ("hull" if mesh else "point_hull")
         assert np.allclose(p.pregrasp, [HALF + 0.01]) and np.allclose(p.squeeze, [HALF - 0.01])
 
 

@@ -101,7 +101,8 @@ class PhysicsResult:
         seconds: wall time of the test.
         test: which test ran: "closure" (the six pushes, ``trials``) or "motion" (the target motion, ``motion``).
         motion: the target-motion trial's figures (``test == "motion"`` and the start did not fail).
-        object_pieces: how the object was built (`ObjectShape.source`): "hull", "mesh_patches", "point_patches".
+        object_pieces: how the object was built (`ObjectShape.source`): "hull", "mesh_patches", "point_hull",
+            "point_patches".
     """
 
     success: bool

@@ -24,13 +24,16 @@ def _box(centre_y: float = 0.0) -> trimesh.Trimesh:
     return box
 
 
-def _grasp(q: float, box: trimesh.Trimesh, centre_y: float = 0.0, points: bool = False) -> PhysicsResult:
+def _grasp(q: float, box: trimesh.Trimesh, centre_y: float = 0.0, points: bool = False,
+           noise: float = 0.0) -> PhysicsResult:  # fmt: skip
     hand = get_hand("panda_gripper")
     contacts = np.array([[0.0, centre_y + HALF, PAD_Z], [0.0, centre_y - HALF, PAD_Z]])
     normals = np.array([[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]])
     if points:
         pts, face = trimesh.sample.sample_surface_even(box, 1500, seed=0)
-        shape = from_points(np.asarray(pts), box.face_normals[face])
+        nrm = box.face_normals[face]
+        pts = np.asarray(pts) + nrm * np.random.default_rng(0).uniform(-noise, noise, (len(pts), 1))
+        shape = from_points(pts, nrm)
     else:
         shape = from_mesh(box.vertices, box.faces)
     return simulate_grasp(hand, PALM_POS, PALM_QUAT, np.array([q]), contacts, normals, hand.fingertip_links, shape)
@@ -53,9 +56,24 @@ def test_gripper_squeezing_a_box_holds_in_all_six_directions() -> None:
     assert max(abs(g) for g in r.tip_gaps) < 5e-4 and r.contacts_after_squeeze == 2
 
 
-def test_gripper_squeezing_a_box_rebuilt_from_points_holds() -> None:
-    r = _grasp(HALF, _box(), points=True)
+@pytest.mark.parametrize(("noise", "pieces"), [(0.0, "point_hull"), (0.002, "point_patches")])
+def test_gripper_squeezing_a_box_rebuilt_from_points_holds(noise: float, pieces: str) -> None:
+    # points on the box: its hull, as the mesh would be; points 2 mm off it (beyond HULL_TOLERANCE): patches
+    r = _grasp(HALF, _box(), points=True, noise=noise)
     assert r.success, r.trials
+    assert r.object_pieces == pieces
+
+
+def test_a_cloud_on_its_hull_is_built_as_that_hull_and_a_concave_one_as_patches() -> None:
+    box = _box()
+    pts, face = trimesh.sample.sample_surface_even(box, 1500, seed=0)
+    shape = from_points(np.asarray(pts), box.face_normals[face])
+    ((piece,),) = [shape.pieces]
+    assert shape.source == "point_hull"
+    assert np.abs(trimesh.convex.convex_hull(piece).extents - box.extents).max() < 2e-3  # the box itself
+    ring = trimesh.creation.annulus(0.02, 0.04, 0.02)  # a hole through it: not convex
+    pts, face = trimesh.sample.sample_surface_even(ring, 1500, seed=0)
+    assert from_points(np.asarray(pts), ring.face_normals[face]).source == "point_patches"
 
 
 def test_open_gripper_two_cm_from_the_box_fails() -> None:
