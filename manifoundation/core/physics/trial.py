@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import mujoco
@@ -44,9 +45,10 @@ def simulate_grasp(
     if pen > p.max_penetration:
         return PhysicsResult(False, [], "penetration", pen, gaps, 0, pre, squeeze, time.perf_counter() - t0,
                              object_pieces=shape.source)
-    for i, (d, name) in enumerate(zip(DIRECTIONS, DIRECTION_NAMES, strict=True)):
-        trial, n = _push(sc, pre, q, squeeze, d, name, p)
-        touching = n if i == 0 else touching
+    squeezed = _squeezed(sc, pre, q, squeeze, p)
+    touching = _touching(sc)
+    for d, name in zip(DIRECTIONS, DIRECTION_NAMES, strict=True):
+        trial = _push(sc, squeezed, d, name, p)
         trials.append(trial)
         if not trial.held and p.stop_at_first_failure:
             break
@@ -169,16 +171,36 @@ def _drive(sc: Scene, a: np.ndarray, b: np.ndarray, p: Protocol) -> None:
         mujoco.mj_step(sc.model, sc.data, nstep=p.interp_inner)
 
 
-def _push(
-    sc: Scene, pre: np.ndarray, q: np.ndarray, squeeze: np.ndarray, direction: np.ndarray, name: str, p: Protocol
-) -> tuple[Trial, int]:
+@dataclass
+class Squeezed:
+    """The state every push starts from: the object's pose at the pregrasp (where displacement is measured from) and
+    MuJoCo's whole integration state after pregrasp → grasp → squeeze. The approach is deterministic, so it is
+    simulated once and restored for each push (bit-identical to simulating it six times, at a sixth of the cost)."""
+
+    start_pos: np.ndarray  # (3,) the object's centre of mass at the pregrasp
+    start_quat: np.ndarray  # (4,) wxyz
+    state: np.ndarray  # mj_getState(mjSTATE_INTEGRATION)
+
+
+def _squeezed(sc: Scene, pre: np.ndarray, q: np.ndarray, squeeze: np.ndarray, p: Protocol) -> Squeezed:
     _reset(sc, pre)
     a = sc.object_qpos
     start_pos = sc.data.xipos[sc.object_body].copy()
     start_quat = sc.data.qpos[a + 3 : a + 7].copy()
     _drive(sc, pre, q, p)
     _drive(sc, q, squeeze, p)
-    touching = _touching(sc)
+    state = np.empty(mujoco.mj_stateSize(sc.model, INTEGRATION))
+    mujoco.mj_getState(sc.model, sc.data, state, INTEGRATION)
+    return Squeezed(start_pos, start_quat, state)
+
+
+INTEGRATION = mujoco.mjtState.mjSTATE_INTEGRATION
+
+
+def _push(sc: Scene, squeezed: Squeezed, direction: np.ndarray, name: str, p: Protocol) -> Trial:
+    mujoco.mj_setState(sc.model, sc.data, squeezed.state, INTEGRATION)  # xfrc_applied back to zero too
+    a = sc.object_qpos
+    start_pos, start_quat = squeezed.start_pos, squeezed.start_quat
     sc.data.xfrc_applied[sc.object_body, :3] = p.force_factor * p.mass * direction
     steps = round(p.hold_seconds / p.timestep)
     moved, turned = 0.0, 0.0
@@ -189,7 +211,7 @@ def _push(
         if moved >= p.max_translation or turned >= p.max_rotation or not np.isfinite(moved):
             break
     held = bool(np.isfinite(moved) and moved < p.max_translation and turned < p.max_rotation)
-    return Trial(name, moved, turned, held), touching
+    return Trial(name, moved, turned, held)
 
 
 def _angle(q1: np.ndarray, q2: np.ndarray) -> float:
