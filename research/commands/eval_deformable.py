@@ -8,6 +8,9 @@ Examples:
         --seed 0 --data-seed 5
     mani-lab eval deformable --materials cloth,rope --splits test_uo --cases 20 --methods \
         network_samples,network_checked,random_checked --proposals 8 --data-seed 5
+    mani-lab eval deformable --materials plasticine --cases 15 --methods \
+        ground_truth,random_motion,random_target_motion,network,network_checked,moving_corrected --proposals 1 \
+        --corrections 4 --separation --seed 0 --data-seed 0     # issue 59's separation table, 3 min
 """
 
 from __future__ import annotations
@@ -52,6 +55,10 @@ def add_deformable(sub: Any) -> None:
     d.add_argument("--figure-samples", type=int, default=0,
                    help="also answer the figure's shapes with this many latent samples (the service at seeds SEED, "
                    "SEED + 1, ...) and count every answer's side and success; needs --figure")
+    d.add_argument("--separation", action="store_true",
+                   help="also print, per material, whether the metric separates (issue 59: ground_truth ≥ 95 %%, "
+                   "random_motion ≤ 5 %%, random_target_motion ≤ 20 %%), by the rule and by the paper's all-points "
+                   "rule, every split together")
     d.add_argument("--json", default=None, help="also write the summary to this JSON file")
     d.add_argument("--no-progress", action="store_true")
     d.set_defaults(func=run_deformable)
@@ -161,15 +168,17 @@ def deformable_figures(args: argparse.Namespace) -> dict[str, Any] | None:
                                                     service))
                 bar.update(1)
     bar.close()
-    table = Table(title=f"deformables: simulated rollout vs target (paper metric), {args.cases} cases per row "
-                        f"group, seed {args.seed}")
-    for col in ("material", "split", "method", "cases", "success %", "median mean err", "median top err",
+    table = Table(title=f"deformables: simulated rollout vs target (shape metric; plasticine: issue 59's rule), "
+                        f"{args.cases} cases per row group, seed {args.seed}")
+    for col in ("material", "split", "method", "cases", "success %", "paper's 3D rule %", "median closure",
+                "median mean err", "median top err",
                 "network's own contacts (successes)", "head's motion / target's"):
         table.add_column(col, justify="left" if col in ("material", "split", "method") else "right")
     rows = report.summary()
     for r in rows:
         table.add_row(str(r["material"]), str(r["split"]), str(r["method"]), str(r["cases"]),
-                      f"{r['success']:.1f}", f"{r['mean_error']:.3f}", f"{r['top_mean_error']:.3f}",
+                      f"{r['success']:.1f}", f"{r['paper_success']:.1f}" if r["material"] == "plasticine" else "-",
+                      f"{r['closure']:.2f}", f"{r['mean_error']:.3f}", f"{r['top_mean_error']:.3f}",
                       f"{r['network_contacts']} ({r['network_successes']})" if str(r["method"]).startswith("network")
                       else "-",
                       _readback(r))
@@ -179,6 +188,10 @@ def deformable_figures(args: argparse.Namespace) -> dict[str, Any] | None:
         for line in _goal_lines(material, report.success_rates(material, "test_uo")):
             console.print(line)
     figures: dict[str, Any] = {"table": rows}
+    if args.separation:
+        from research.evaluation.separation import print_separation
+
+        figures["separation"] = print_separation(console, report, materials, methods)
     if args.sensitivity:
         from research.evaluation.property_pairs import SENSITIVITY_PAIRS, property_sensitivity
 

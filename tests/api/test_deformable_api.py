@@ -150,13 +150,13 @@ def test_a_rigid_request_without_a_robot_is_a_422_naming_the_robot(base: str) ->
 
 
 def test_plasticine_press_corrected_by_rollouts_reaches_the_target(base: str) -> None:
-    """The pressed cluster given as contacts, the target as per-point motion: the answer's motions, corrected
+    """The pressed points given as contacts, the target as per-point motion: the answer's motions, corrected
     through the service's simulator, press the generator's own mesh onto the target (the 3D metric)."""
     from manifoundation.core.deformable.plasticine import make_plasticine
     from manifoundation.core.deformable.procedures import plasticine_push
 
-    blob = make_plasticine("box", 0)
-    press = plasticine_push(blob, np.random.default_rng(0))
+    blob = make_plasticine("composite", 3)
+    press = plasticine_push(blob, np.random.default_rng(3))
     target = simulate(blob, press.contacts, press.motions).cloud
     body = _given_contacts_request(blob, press.contacts, target, num_contacts=len(press.contacts),
                                    rollout_corrections=6)  # fmt: skip

@@ -10,6 +10,15 @@ Grasp: a mocap body ``grip<k>`` starts at the grasped vertex and a ``connect`` e
 mocap is then driven along the contact's path. The equality's time constant is two steps (MuJoCo's safe floor)
 and its impedance near 1 (solimp 0.99-0.999), which holds a vertex against the stiffest plasticine in our ranges
 (measured: 1.5 cm press tracked to < 1 mm).
+
+Board: plasticine adheres to the board it stands on. Its base (the vertices of its two lowest lattice levels, the
+bottom layer of cells, where the second lies in the lower quarter of the body's height: `held_vertices`) is tied to
+the world where it rests by ``connect`` equalities of the same stiffness that stay on after the grasps are released,
+so a press dents the body instead of sliding or rolling it across the table. The lowest level alone was measured
+too: on a blob or composite that touches the board with one cube's face (4 vertices) the body then topples under its
+own weight (1.7-24 mm mean drift with nothing pressed); with the bottom layer of cells held, every one of 14 such
+bodies stays within 0.2 mm (docs/deformables.md). A grasped base vertex is the grasp's, not the board's. Cloth and
+rope lie free.
 """
 
 from __future__ import annotations
@@ -22,6 +31,10 @@ from manifoundation.core.deformable.materials import flex_parameters
 FLEX_NAME = "obj"
 RADIUS = {"cloth": 0.004, "rope": 0.001, "plasticine": 0.001}
 DAMPING = {"cloth": 1e-3, "rope": 1e-3, "plasticine": 1e-3}
+HELD_MATERIALS = ("plasticine",)
+BASE_LEVELS = 2  # distinct vertex heights from the bottom that the board holds (a lattice's bottom layer of cells)
+BASE_SHARE = 0.25  # … those of them in this lower share of the body's height (a flat box: its bottom level only)
+LEVEL = 1e-6  # × the body's size: heights closer than this are one level
 
 
 def oriented_elements(body: DeformableBody) -> np.ndarray:
@@ -40,8 +53,24 @@ def _numbers(a: np.ndarray) -> str:
     return " ".join(f"{x:.6g}" for x in np.asarray(a).reshape(-1))
 
 
+def held_vertices(body: DeformableBody, grasped: np.ndarray) -> np.ndarray:
+    """Vertex indices (B,) the board holds: a plasticine body's lowest vertex height and the next ones up to
+    `BASE_LEVELS` in all, those within `BASE_SHARE` of its height, less the ``grasped`` (H,) vertices; none for
+    cloth and rope."""
+    if body.material not in HELD_MATERIALS:
+        return np.zeros(0, dtype=np.int64)
+    z = np.asarray(body.vertices, dtype=np.float64)[:, 2]
+    tol = LEVEL * max(body.size, 1e-9)
+    levels = np.unique(np.round((z - z.min()) / tol)) * tol  # heights above the lowest vertex
+    base = levels[:BASE_LEVELS]
+    cut = z.min() + float(base[(base <= BASE_SHARE * levels[-1]) | (base == 0.0)].max()) + 0.5 * tol
+    held: np.ndarray = np.setdiff1d(np.flatnonzero(z <= cut), np.asarray(grasped, dtype=np.int64))
+    return held
+
+
 def scene_xml(body: DeformableBody, grasped: np.ndarray, timestep: float) -> str:
-    """MJCF text of the table, the body and one mocap grasp per vertex in ``grasped`` (H,)."""
+    """MJCF text of the table, the body, one mocap grasp per vertex in ``grasped`` (H,) and the board's hold on a
+    plasticine base (`held_vertices`); the grasps' equalities come first, one per grasped vertex."""
     p = flex_parameters(body.material, body.properties, body.measure())
     v = np.asarray(body.vertices, dtype=np.float64)
     dim = 2 if body.material == "cloth" else 3
@@ -56,6 +85,10 @@ def scene_xml(body: DeformableBody, grasped: np.ndarray, timestep: float) -> str
         f'<connect body1="grip{k}" body2="{FLEX_NAME}_{int(i)}" anchor="0 0 0" solref="{ref}" '
         'solimp="0.99 0.999 0.001"/>'
         for k, i in enumerate(grasped)
+    )
+    welds += "".join(
+        f'<connect body1="{FLEX_NAME}_{int(i)}" anchor="0 0 0" solref="{ref}" solimp="0.99 0.999 0.001"/>'
+        for i in held_vertices(body, grasped)
     )
     return f"""<mujoco model="deformable">
   <option timestep="{timestep:.6g}" integrator="discrete" solver="CG" tolerance="1e-6" iterations="200"/>

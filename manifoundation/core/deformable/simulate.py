@@ -1,11 +1,12 @@
 """`simulate(body, contacts, motions) -> Rollout`: grasp points of a deformable body and move them, on MuJoCo.
 
-Schedule: the grasped vertices follow their paths for ``move_seconds``, are released (the grasp equalities
-switch off) and the body settles for ``settle_seconds``; the rollout is the cloud (surface vertices) then. A
-contact's path from its start p₀ with motion d is p(s) = p₀ + σ(s) d + ẑ · lift · |d| · sin(π σ(s)), σ the
-minimum-jerk profile 10s³ − 15s⁴ + 6s⁵ of s = t / move_seconds: a straight drag that rises by ``lift``·|d| in
-the middle (cloth folds lift the edge over the cloth; a plasticine press does not lift). Data generation and the
-evaluation both call this function, so a label and its check see the same physics.
+Schedule: the grasped vertices follow their paths for ``move_seconds``, are released (the grasp equalities switch
+off; a plasticine base stays held by the board, `mjcf.held_vertices`) and the body settles for ``settle_seconds``;
+the rollout is the cloud (surface vertices) then. A contact's path from its start p₀ with motion d is p(s) = p₀ +
+σ(s) d + ẑ · lift · |d| · sin(π σ(s)), σ the minimum-jerk profile 10s³ − 15s⁴ + 6s⁵ of s = t / move_seconds: a
+straight drag that rises by ``lift``·|d| in the middle (cloth folds lift the edge over the cloth; a plasticine press
+does not lift). Data generation and the evaluation both call this function, so a label and its check see the same
+physics.
 """
 
 from __future__ import annotations
@@ -144,7 +145,7 @@ def simulate(body: DeformableBody, contacts: np.ndarray, motions: np.ndarray,
             if k < move and len(verts):
                 data.mocap_pos[:] = path_points(start, mot, (k + 1) / move, lift)
             if k == move:
-                data.eq_active[:] = 0
+                data.eq_active[: len(verts)] = 0  # the grasps let go; the board keeps its hold (mjcf)
             mujoco.mj_step(model, data)
             if k == move - 1:
                 reached = data.flexvert_xpos[verts].copy()

@@ -39,7 +39,7 @@ def test_rebuilt_plasticine_embeds_the_cloud_exactly_and_presses_like_the_native
     native = simulate(body, press.contacts, press.motions, QUICK).cloud
     rollout = rebuilt.cloud(simulate(rebuilt.body, rebuilt.to_simulator(body.points[press.contacts]),
                                      press.motions, QUICK).vertices)  # fmt: skip
-    assert shape_score("plasticine", body.points, native, rollout).success  # the 3D metric: 0.5 cm in a 2 m cube
+    assert shape_score("plasticine", body.points, native, rollout).success  # the 3D rule (closure, top points)
     assert np.abs(rollout - native).max() < 1e-4
 
 

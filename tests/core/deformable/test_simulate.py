@@ -42,6 +42,20 @@ def test_plasticine_keeps_a_press_and_an_elastic_body_does_not() -> None:
     assert dent["elastic"] > -0.006  # springs back
 
 
+def test_the_board_holds_a_plasticine_base_so_a_body_on_one_cube_face_stands() -> None:
+    from manifoundation.core.deformable.mjcf import held_vertices
+
+    body = make_plasticine("composite", seed=7)  # held by its lowest level alone it tips over: 4 mm mean drift
+    z = body.vertices[:, 2]
+    assert np.sum(z <= z.min() + 1e-9) == 4  # it touches the board with one cube's face
+    held = held_vertices(body, np.zeros(0, dtype=np.int64))
+    assert len(held) > 4 and np.unique(np.round(z[held], 9)).size == 2  # the bottom layer of cells
+    still = simulate(body, np.zeros(0, dtype=np.int64), np.zeros((0, 3)))
+    assert still.stable and np.linalg.norm(still.cloud - body.points, axis=1).mean() < 5e-4
+    assert held[0] not in held_vertices(body, held[:1])  # a grasped base vertex is the grasp's
+    assert len(held_vertices(make_rope(seed=0), np.zeros(0, dtype=np.int64))) == 0
+
+
 def test_contacts_snap_to_the_nearest_cloud_point() -> None:
     rope = make_rope(seed=2)
     np.testing.assert_array_equal(contact_vertices(rope, rope.points[[5, 9]] + 1e-4), [5, 9])

@@ -28,9 +28,9 @@ def _press(kind: str, seed: int, corrections: int) -> tuple[object, np.ndarray, 
 
 
 def test_a_press_by_the_targets_displacement_misses_and_corrected_reaches_it() -> None:
-    body, target, open_loop = _press("box", 0, corrections=0)
+    body, target, open_loop = _press("composite", 3, corrections=0)
     assert not open_loop.quality.success and open_loop.quality.iterations == 0
-    body, target, closed = _press("box", 0, corrections=6)
+    body, target, closed = _press("composite", 3, corrections=6)
     assert closed.quality.success and closed.quality.reason == "rollout_reached_target"
     assert 1 <= closed.quality.iterations <= 6
     assert not np.allclose(closed.contact_motions, open_loop.contact_motions)
@@ -41,5 +41,5 @@ def test_a_press_by_the_targets_displacement_misses_and_corrected_reaches_it() -
 
 
 def test_an_answer_that_reaches_its_target_spends_no_correction() -> None:
-    _, _, answer = _press("composite", 1, corrections=6)
+    _, _, answer = _press("ellipsoid", 1, corrections=6)
     assert answer.quality.success and answer.quality.iterations == 0

@@ -30,11 +30,19 @@ def test_fold_moves_keypoints_to_their_mirror_images() -> None:
         assert np.linalg.norm(p) == np.linalg.norm(q) or abs(np.linalg.norm(p) - np.linalg.norm(q)) < 1e-9
 
 
-def test_push_goes_into_the_body() -> None:
-    blob = make_body("plasticine", "sphere", seed=0)
-    m = plasticine_push(blob, np.random.default_rng(0))
-    inward = -np.einsum("ij,ij->i", blob.normals[m.contacts], m.motions)
-    assert np.all(inward > 0)
+def test_push_is_one_or_two_fingertip_presses_of_upward_regions_into_the_body() -> None:
+    counts = set()
+    for kind, seed in (("sphere", 0), ("box", 1), ("composite", 2), ("blob", 3), ("ellipsoid", 4)):
+        body = make_body("plasticine", kind, seed=seed)
+        for k in range(4):
+            m = plasticine_push(body, np.random.default_rng(k))
+            counts.add(len(m.contacts))
+            assert len(set(m.contacts.tolist())) == len(m.contacts) and m.motions.shape == (len(m.contacts), 3)
+            inward = -np.einsum("ij,ij->i", body.normals[m.contacts], m.motions)
+            assert np.all(inward > 0) and np.all(m.motions[:, 2] < 0)  # pressed down, into the body
+            depth = np.linalg.norm(m.motions, axis=1) / body.size
+            assert np.all((depth > 0.099) & (depth < 0.26))
+    assert counts == {1, 2}
 
 
 def test_unseen_headings() -> None:
