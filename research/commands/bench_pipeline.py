@@ -71,6 +71,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--compare-method", default=None,
                    help="run the same requests through this checkout with this method too, side by side (e.g. "
                         "--method network --compare-method random_contacts)")
+    p.add_argument("--simulate", default="off", choices=("off", "check", "search"),
+                   help="the simulated grasp test (`PhysicsMode`; the service's default is check: each returned "
+                   "proposal tested, verified only if it held; off: geometric only)")
+    p.add_argument("--compare-simulate", default=None, choices=("off", "check", "search"),
+                   help="run the same requests through this checkout with this physics mode too, side by side "
+                   "(e.g. --simulate check --compare-simulate off)")
     p.add_argument(
         "--weights", default=str(ROOT / "manifoundation/core/weights/cpu1k"), help="network weights (method network)"
     )
@@ -104,6 +110,7 @@ def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
                 out.append({"hand": hand, "set": args.set, "object": obj, "name": name, "path": path,
                             "seed": seed, "task": args.task,
                             "geometry": args.geometry, "proposals": args.proposals, "method": args.method,
+                            "simulate": args.simulate,
                             "weights": str(Path(args.weights).resolve()),
                             "points": args.points, "audit": n < args.audit and args.set != "box",
                             "box": str(ROOT / "examples/data/box.npz")})
@@ -124,6 +131,9 @@ def run(args: argparse.Namespace) -> int:
     if args.compare_method:
         trees[args.compare_method] = str(ROOT)
         changes[args.compare_method] = {"method": args.compare_method}
+    if args.compare_simulate:
+        trees[f"simulate {args.compare_simulate}"] = str(ROOT)
+        changes[f"simulate {args.compare_simulate}"] = {"simulate": args.compare_simulate}
     if args.workers > 1:
         return _batch(args, specs, trees, changes)
     workers = {name: _Worker(tree, changes[name]) for name, tree in trees.items()}

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-STAGES = ("prepare", "network", "initialisation", "refinement", "verification")
+STAGES = ("prepare", "network", "initialisation", "refinement", "verification", "physics")
 IDENTICAL_TOL = 1e-9
 
 
@@ -69,7 +69,7 @@ def print_report(specs: list[dict[str, Any]], records: dict[str, list[dict[str, 
     table = Table(title=f"one request through run_pipeline: set {spec0['set']}, task {spec0['task']}, "
                         f"{spec0['proposals']} proposal(s), method {spec0['method']}, one thread per worker")
     cols = ("hand", "tree", "req", "p50 s", "p90 s", "mean s", "ok/s", "ok %", "prep", "init", "refine",
-            "verify", "iters", "lin ms", "contact", "guards", "solve ms", "audited", "audit %", "false",
+            "verify", "physics", "iters", "lin ms", "contact", "guards", "solve ms", "audited", "audit %", "false",
             "fallback %")  # fmt: skip
     for c in cols:
         table.add_column(c, justify="left" if c in ("hand", "tree") else "right")
@@ -81,13 +81,15 @@ def print_report(specs: list[dict[str, Any]], records: dict[str, list[dict[str, 
             table.add_row(hand, name, f"{s['n']:.0f}", f"{s['p50']:.3f}", f"{s['p90']:.3f}", f"{s['mean']:.3f}",
                           f"{s['verified_per_s']:.2f}", f"{100 * s['best_success']:.0f}", f"{s['prepare']:.3f}",
                           f"{s['initialisation']:.3f}", f"{s['refinement']:.3f}", f"{s['verification']:.3f}",
-                          f"{s['iterations']:.1f}", f"{s['linearise_ms']:.1f}", f"{s['contacts_ms']:.1f}",
+                          f"{s['physics']:.3f}", f"{s['iterations']:.1f}", f"{s['linearise_ms']:.1f}",
+                          f"{s['contacts_ms']:.1f}",
                           f"{s['guards_ms']:.1f}", f"{s['solve_ms']:.1f}", f"{s['audited']:.0f}",
                           f"{100 * s['audit_best']:.0f}", f"{s['false_claims']:.0f}",
                           f"{100 * s['fallback']:.0f}")  # fmt: skip
     console.print(table)
     console.print(f"load average during the run (1, 5, 15 min): {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
-    console.print("ok/s: verified grasps per second; ok %: best proposal verified; prep .. verify: mean s per "
+    console.print("ok/s: verified grasps per second (where the simulated test ran, verified = geometric and "
+                  "held); ok %: best proposal verified; prep .. physics: mean s per "
                   "request; lin ms: per linearisation, of which contact (real-surface model) and guards (its "
                   "object-point rows); solve ms: per SCP solve; audit %: best proposal passes the outside audit; "
                   "false: claimed successes the audit rejects; fallback %: proposals whose network heatmap was flat "
