@@ -24,7 +24,7 @@ import numpy as np
 from manifoundation.core.physics.object_model import ObjectShape
 from manifoundation.core.physics.protocol import MotionTrial, PhysicsResult, Protocol
 from manifoundation.core.physics.scene import Scene, build_scene
-from manifoundation.core.physics.trial import _angle, _drive, _reset, _touching, start
+from manifoundation.core.physics.trial import _angle, _drive, _reset, _touching, diverged_count, start
 
 if TYPE_CHECKING:
     from manifoundation.core.robots.hand import Hand
@@ -54,7 +54,7 @@ def simulate_motion(
         return PhysicsResult(False, [], "penetration", pen, gaps, 0, pre, squeeze, time.perf_counter() - t0,
                              test="motion", object_pieces=shape.source)  # fmt: skip
     trial, touching = _carry(sc, pre, q, squeeze, np.asarray(translation, float), rotation, p)
-    reason = "reached" if trial.reached else "dropped" if trial.dropped else "missed"
+    reason = "reached" if trial.reached else "unstable" if trial.unstable else "dropped" if trial.dropped else "missed"
     return PhysicsResult(trial.reached, [], reason, pen, gaps, touching, pre, squeeze, time.perf_counter() - t0,
                          test="motion", motion=trial, object_pieces=shape.source)  # fmt: skip
 
@@ -110,6 +110,8 @@ def _carry(
         d.mocap_quat[0] = _mul(r, palm_quat)
         mujoco.mj_step(m, d)
     mujoco.mj_step(m, d, nstep=max(1, round(p.motion_hold_seconds / p.timestep)))
+    if diverged_count(sc) > 0:  # mjData was reset along the way: where the object ended says nothing
+        return MotionTrial(float("inf"), 180.0, False, False, unstable=True), touching
     target_quat = _mul(_quat(axis, angle), quat0)
     err = float(np.linalg.norm(d.xipos[sc.object_body] - (centre + translation)))
     turned = _angle(target_quat, d.qpos[a + 3 : a + 7])

@@ -84,6 +84,7 @@ class MotionTrial:
     rotation_error: float
     dropped: bool
     reached: bool
+    unstable: bool = False  # the simulation diverged (MuJoCo reset its state): no verdict but failure
 
 
 @dataclass
@@ -93,7 +94,9 @@ class PhysicsResult:
     Attributes:
         success: the object held in every direction.
         trials: the directions run (all six unless ``stop_at_first_failure`` or the start failed).
-        reason: "held", "moved" (a trial failed) or "penetration" (the pregrasp penetrates > ``max_penetration``).
+        reason: "held", "moved" (a trial failed), "unstable" (a trial's simulation diverged: MuJoCo reset its state
+            mid-trial, so it failed whatever the object's pose said) or "penetration" (the pregrasp penetrates
+            > ``max_penetration``); motion: "reached", "missed", "dropped", "unstable", "penetration".
         penetration: deepest hand-object or hand-hand penetration at the pregrasp, m (≥ 0).
         tip_gaps: (m,) distance from each fingertip body to the object at the grasp pose (negative: penetrating), m.
         contacts_after_squeeze: hand bodies touching the object after the squeeze of the first trial.

@@ -47,14 +47,27 @@ def simulate_grasp(
                              object_pieces=shape.source)
     squeezed = _squeezed(sc, pre, q, squeeze, p)
     touching = _touching(sc)
+    unstable = False
     for d, name in zip(DIRECTIONS, DIRECTION_NAMES, strict=True):
-        trial = _push(sc, squeezed, d, name, p)
+        trial, diverged = _push(sc, squeezed, d, name, p)
         trials.append(trial)
+        unstable |= diverged
         if not trial.held and p.stop_at_first_failure:
             break
     ok = len(trials) == len(DIRECTIONS) and all(t.held for t in trials)
-    return PhysicsResult(ok, trials, "held" if ok else "moved", pen, gaps, touching, pre, squeeze,
-                         time.perf_counter() - t0, object_pieces=shape.source)  # fmt: skip
+    reason = "held" if ok else "unstable" if unstable else "moved"
+    return PhysicsResult(ok, trials, reason, pen, gaps, touching, pre, squeeze, time.perf_counter() - t0,
+                         object_pieces=shape.source)  # fmt: skip
+
+
+BAD_ACCELERATION = mujoco.mjtWarning.mjWARN_BADQACC
+
+
+def diverged_count(sc: Scene) -> int:
+    """How often MuJoCo found a NaN / huge acceleration since the last reset. It then *resets* mjData to the model's
+    initial state and carries on, which puts the object back where it started: a push of a diverged simulation
+    pushes nothing, so a trial that diverged counts as failed ("unstable"), never as held."""
+    return int(sc.data.warning[BAD_ACCELERATION].number)
 
 
 def start(
@@ -180,6 +193,7 @@ class Squeezed:
     start_pos: np.ndarray  # (3,) the object's centre of mass at the pregrasp
     start_quat: np.ndarray  # (4,) wxyz
     state: np.ndarray  # mj_getState(mjSTATE_INTEGRATION)
+    diverged: bool  # the approach itself diverged (`diverged_count`): every push fails
 
 
 def _squeezed(sc: Scene, pre: np.ndarray, q: np.ndarray, squeeze: np.ndarray, p: Protocol) -> Squeezed:
@@ -191,14 +205,16 @@ def _squeezed(sc: Scene, pre: np.ndarray, q: np.ndarray, squeeze: np.ndarray, p:
     _drive(sc, q, squeeze, p)
     state = np.empty(mujoco.mj_stateSize(sc.model, INTEGRATION))
     mujoco.mj_getState(sc.model, sc.data, state, INTEGRATION)
-    return Squeezed(start_pos, start_quat, state)
+    return Squeezed(start_pos, start_quat, state, diverged_count(sc) > 0)
 
 
 INTEGRATION = mujoco.mjtState.mjSTATE_INTEGRATION
 
 
-def _push(sc: Scene, squeezed: Squeezed, direction: np.ndarray, name: str, p: Protocol) -> Trial:
+def _push(sc: Scene, squeezed: Squeezed, direction: np.ndarray, name: str, p: Protocol) -> tuple[Trial, bool]:
+    """One push from the squeezed state; whether the simulation diverged in it (or before it)."""
     mujoco.mj_setState(sc.model, sc.data, squeezed.state, INTEGRATION)  # xfrc_applied back to zero too
+    warned = diverged_count(sc)
     a = sc.object_qpos
     start_pos, start_quat = squeezed.start_pos, squeezed.start_quat
     sc.data.xfrc_applied[sc.object_body, :3] = p.force_factor * p.mass * direction
@@ -210,8 +226,11 @@ def _push(sc: Scene, squeezed: Squeezed, direction: np.ndarray, name: str, p: Pr
         turned = _angle(start_quat, sc.data.qpos[a + 3 : a + 7])
         if moved >= p.max_translation or turned >= p.max_rotation or not np.isfinite(moved):
             break
-    held = bool(np.isfinite(moved) and moved < p.max_translation and turned < p.max_rotation)
-    return Trial(name, moved, turned, held)
+        if diverged_count(sc) > warned:
+            break
+    diverged = squeezed.diverged or diverged_count(sc) > warned
+    held = bool(np.isfinite(moved) and moved < p.max_translation and turned < p.max_rotation) and not diverged
+    return Trial(name, moved if np.isfinite(moved) else float("inf"), turned, held), diverged
 
 
 def _angle(q1: np.ndarray, q2: np.ndarray) -> float:

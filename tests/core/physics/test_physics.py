@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import ast
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
 
-from manifoundation.core.physics import PhysicsResult, Protocol, from_mesh, from_points, simulate_grasp
+from manifoundation.core.physics import PhysicsResult, Protocol, from_mesh, from_points, simulate_grasp, simulate_motion
 from manifoundation.core.physics.visual import physics_description, prefer_visual
 from manifoundation.core.robots import get_hand
 
@@ -225,3 +226,25 @@ def test_pregrasp_and_squeeze_move_each_contact_one_cm_along_its_normal(distance
         # a finger at the edge of its reach (the lemon's thumb, squeezing, stretched out: 6.1 mm, 2 mm across):
         # as far as it goes, never farther, and mostly along the normal
         assert 0.5 < along / distance <= 1.0 + 1e-3 and across < 0.5 * abs(along), (along, across)
+
+
+def test_a_simulation_that_diverges_fails_as_unstable_never_held() -> None:
+    """MuJoCo answers a NaN / huge acceleration by resetting mjData, which puts the object back where it started: a
+    diverged push measures no displacement at all. It must fail (DexGraspBench cross-check: most of our Shadow
+    holds were such resets). A stiffness of 1e12 N/m makes the Panda's finger diverge at the first step."""
+    unstable = replace(Protocol(), kp_prismatic=1e12)
+    r = simulate_grasp(
+        get_hand("panda_gripper"), PALM_POS, PALM_QUAT, np.array([HALF]),
+        np.array([[0.0, HALF, PAD_Z], [0.0, -HALF, PAD_Z]]), np.array([[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]]),
+        get_hand("panda_gripper").fingertip_links, from_mesh(_box().vertices, _box().faces), protocol=unstable,
+    )  # fmt: skip
+    assert not r.success and r.reason == "unstable"
+    assert len(r.trials) == 6 and all(not t.held for t in r.trials)
+    assert max(t.translation for t in r.trials) < 1e-3  # what the reset shows: nothing moved
+    m = simulate_motion(
+        get_hand("panda_gripper"), PALM_POS, PALM_QUAT, np.array([HALF]),
+        np.array([[0.0, HALF, PAD_Z], [0.0, -HALF, PAD_Z]]), np.array([[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]]),
+        get_hand("panda_gripper").fingertip_links, from_mesh(_box().vertices, _box().faces),
+        np.array([0.0, 0.0, 0.05]), protocol=unstable,
+    )  # fmt: skip
+    assert not m.success and m.reason == "unstable"
