@@ -6,8 +6,10 @@ stages and deadlines, and answers a `SynthesisResult` with no proposals and ``mo
 job walks repair, planning (one stage time per segment) and contacts, and answers the straight poses start →
 waypoints with no steps. It is NOT the science: it exists so the queue mechanics can be tested the way arq tests use
 a burst worker. Fault injection for tests: a request whose ``options.seed`` equals ``crash_seed`` kills its worker
-process (SIGKILL), one equal to ``fail_seed`` raises. A job given a registered robot reports its joint count as
-``timings["robot_dof"]``, so tests can tell which registration (whose URDF) a job ran with.
+process (SIGKILL), one equal to ``fail_seed`` raises; a registration of the robot named ``slow_robot`` takes
+``robot_seconds`` to load (in Python, a little at a time: a loader that outlives its deadline). A job given a registered
+robot reports its joint count as ``timings["robot_dof"]``, so tests can tell which registration (whose URDF) a job ran
+with.
 """
 
 from __future__ import annotations
@@ -66,6 +68,8 @@ class StagedPipeline:
         crash_seed: int | None = None,
         fail_seed: int | None = None,
         model_loaded: bool = True,
+        slow_robot: str | None = None,
+        robot_seconds: float = 0.0,
     ) -> None:
         self.stage_seconds = stage_seconds
         self.batch_seconds = stage_seconds if batch_seconds is None else batch_seconds
@@ -73,11 +77,17 @@ class StagedPipeline:
         self.crash_seed = crash_seed
         self.fail_seed = fail_seed
         self.model_loaded = model_loaded
+        self.slow_robot = slow_robot
+        self.robot_seconds = robot_seconds
 
     def robots(self) -> list[RobotPublic]:
         return [TEST_HAND]
 
     def validate_robot(self, robot: RobotRegister) -> RobotPublic:
+        if robot.name == self.slow_robot:
+            end = time.monotonic() + self.robot_seconds
+            while time.monotonic() < end:
+                time.sleep(0.01)
         try:
             root = ET.fromstring(robot.urdf or robot.mjcf or "")
         except ET.ParseError as exc:

@@ -16,7 +16,8 @@ directory, `mani worker` / `mani serve` children), all killed at the end:
 - slow headers: connections sending their request head a byte at a time: how many the server closed, how soon.
 - gRPC batches (issue 62, item 3): concurrent `SubmitBatch` of large messages: /healthz latency, API RSS peak,
   after and once the queue drained.
-- include bomb (item 1): an MJCF include bomb registered twice beside a normal registration, on the real loader.
+- include bomb (item 1): an MJCF include bomb registered twice beside a normal registration and a synthesis with a
+  20 s deadline, on the real loader.
 - MCP bodies (item 2): large `upload_object` posts to ``/mcp`` at once, and one over ``MANI_MCP_MAX_BODY_BYTES``.
 - embedded SIGSTOP (item 6): the embedded worker running a job stopped: seconds until the job is delivered again.
 - MCP streams (item 7): `GET /mcp` streams from one key: how many were answered, how many outlive
@@ -454,7 +455,7 @@ async def include_bomb(args: argparse.Namespace) -> dict[str, Any]:
     """Issue 62, item 1: an include bomb of ``--bomb-depth`` levels registered twice at once beside a normal
     registration (the same archive without includes), on the real loader (`ModelsPipeline`, one worker, hand
     barrett): each bomb's status and seconds, the worker's peak RSS meanwhile, the normal one's status and
-    seconds."""
+    seconds, and those of a synthesis (20 s deadline, `/v1/synthesize`) sent beside them."""
     import base64
 
     import httpx
@@ -480,20 +481,29 @@ async def include_bomb(args: argparse.Namespace) -> dict[str, Any]:
                 answer = await http.post("/v1/robots", json={"name": "plain", "archive": plain, "fingertips": ["tip"]})
                 return answer.status_code, time.perf_counter() - t0
 
+            async def job() -> tuple[int, float]:  # a synthesis with a 20 s deadline, sent just after the bombs
+                body = request_body(256, "barrett", "direct_grasp")
+                body["options"].update(timeout=20, max_iterations=20)
+                await asyncio.sleep(0.05)
+                t0 = time.perf_counter()
+                answer = await http.post("/v1/synthesize", json=body)
+                return answer.status_code, time.perf_counter() - t0
+
             before = sum(rss_mb(pid).get("VmRSS", 0.0) for pid in workers)
-            work = asyncio.ensure_future(asyncio.gather(register("bomb1"), register("bomb2"), normal()))
+            work = asyncio.ensure_future(asyncio.gather(register("bomb1"), register("bomb2"), normal(), job()))
             peak = 0.0
             while not work.done():
                 peak = max(peak, sum(rss_mb(pid).get("VmRSS", 0.0) for pid in workers))
                 await asyncio.sleep(0.02)
-            first, second, (normal_status, normal_s) = work.result()
+            first, second, (normal_status, normal_s), (job_status, job_s) = work.result()
     finally:
         _stop(proc)
     return {
         "depth": args.bomb_depth, "archive_bytes": len(base64.b64decode(archive)),
         "statuses": [first[0], second[0]], "error": first[1], "seconds": [round(first[2], 2), round(second[2], 2)],
         "worker_rss_before_mb": round(before, 0), "worker_rss_peak_mb": round(peak, 0),
-        "normal": normal_status, "normal_s": round(normal_s, 2),
+        "normal": normal_status, "normal_s": round(normal_s, 2), "job_deadline_20s": job_status,
+        "job_s": round(job_s, 2),
     }  # fmt: skip
 
 
@@ -600,7 +610,7 @@ def _gone(pid: int) -> bool:
 
 async def mcp_streams(args: argparse.Namespace) -> dict[str, Any]:
     """Issue 62, item 7: ``--streams`` `GET /mcp` event streams from one key (``MANI_MCP_MAX_STREAMS`` 8): how many
-    were answered 200 and 429, and how many are still open ``--stream-max-s`` + 2 s later."""
+    were answered 200 and 429, the most open at once, and how many are still open ``--stream-max-s`` + 2 s later."""
     import httpx
 
     key = "bench-faults-key-1"
@@ -608,22 +618,23 @@ async def mcp_streams(args: argparse.Namespace) -> dict[str, Any]:
                         MANI_MCP_STREAM_MAX_S=str(args.stream_max_s))  # fmt: skip
     headers = {"Accept": "text/event-stream", "Authorization": f"Bearer {key}"}
     codes: list[int] = []
-    open_streams = 0
+    open_streams = peak = 0
     try:
         limits = httpx.Limits(max_connections=None)
         async with httpx.AsyncClient(base_url=base, timeout=args.budget, limits=limits) as http:
 
             async def hold() -> None:
-                nonlocal open_streams
+                nonlocal open_streams, peak
                 try:
                     async with http.stream("GET", "/mcp", headers=headers) as answer:
                         codes.append(answer.status_code)
-                        open_streams += 1
+                        open_streams += answer.status_code == 200
+                        peak = max(peak, open_streams)
                         try:
                             async for _ in answer.aiter_bytes():
                                 pass
                         finally:
-                            open_streams -= 1
+                            open_streams -= answer.status_code == 200
                 except httpx.HTTPError:
                     codes.append(0)
 
@@ -638,7 +649,7 @@ async def mcp_streams(args: argparse.Namespace) -> dict[str, Any]:
     finally:
         _stop(proc)
     return {
-        "streams": args.streams, "answers": dict(Counter(codes)), "open_after_1s": open_at_1s,
+        "streams": args.streams, "answers": dict(Counter(codes)), "open_peak": peak, "open_after_1s": open_at_1s,
         "stream_max_s": args.stream_max_s, f"open_after_{args.stream_max_s + 2:g}s": still_open,
     }  # fmt: skip
 

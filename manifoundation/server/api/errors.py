@@ -14,11 +14,12 @@ Each class is one member of the contract's `ErrorType`, which also gives its HTT
     ├── InvalidInput        422   schema validation failed (detail names each field and problem)
     │   └── RobotRejected   422   a robot description the hardened loader refused
     ├── RateLimited         429   per-key token bucket empty (Retry-After)
-    └── Unavailable         503   shutting down / queue unreachable (Retry-After)
+    ├── Unavailable         503   shutting down / queue unreachable (Retry-After)
+    └── DeadlineExceeded    504   a registration still loading at its deadline (its worker stopped and replaced)
 
-Queue errors (`QueueFull`, `JobNotFound`, `RobotInvalid`, `RobotLimitReached` → 409, `QueueUnavailable`), pydantic's
-`ValidationError` and FastAPI's own request validation are mapped here too, so routes raise and never build error
-bodies.
+Queue errors (`QueueFull`, `JobNotFound`, `RobotInvalid`, `RobotLimitReached` → 409, `RobotDeadlineExceeded` → 504,
+`QueueUnavailable`), pydantic's `ValidationError` and FastAPI's own request validation are mapped here too, so routes
+raise and never build error bodies.
 """
 
 from __future__ import annotations
@@ -36,7 +37,14 @@ from starlette.responses import Response
 from manifoundation.contract import ErrorBody, ErrorType, FieldError
 from manifoundation.contract.validation import field_errors, summary
 from manifoundation.server.api.encoding import respond
-from manifoundation.server.queue import JobNotFound, QueueFull, QueueUnavailable, RobotInvalid, RobotLimitReached
+from manifoundation.server.queue import (
+    JobNotFound,
+    QueueFull,
+    QueueUnavailable,
+    RobotDeadlineExceeded,
+    RobotInvalid,
+    RobotLimitReached,
+)
 
 log = logging.getLogger("manifoundation.server.api.errors")
 
@@ -135,6 +143,10 @@ class Unavailable(ApiError):
         super().__init__(message, headers={"Retry-After": retry_after_header(retry_after)})
 
 
+class DeadlineExceeded(ApiError):
+    kind = ErrorType.DEADLINE_EXCEEDED
+
+
 def retry_after_header(seconds: float) -> str:
     """Retry-After takes whole seconds; round up, at least 1."""
     return str(max(1, math.ceil(seconds))) if math.isfinite(seconds) else "60"
@@ -164,6 +176,8 @@ def from_exception(exc: Exception) -> ApiError:
         return RobotRejected(f"urdf: {message}", detail=[FieldError(field="urdf", problem=message)])
     if isinstance(exc, RobotLimitReached):
         return Conflict(str(exc))
+    if isinstance(exc, RobotDeadlineExceeded):
+        return DeadlineExceeded(str(exc))
     if isinstance(exc, QueueUnavailable):
         return Unavailable(str(exc) or "queue unavailable")
     if isinstance(exc, StarletteHTTPException):
@@ -212,7 +226,7 @@ async def handle(request: Request, exc: Exception) -> Response:
     error = from_exception(exc)
     if error.status == 405:
         error.headers["Allow"] = ", ".join(allowed_methods(request))
-    if error.status >= 500 and not isinstance(error, Unavailable):
+    if error.status >= 500 and not isinstance(error, Unavailable | DeadlineExceeded):
         log.error("unhandled error", exc_info=exc)
     request.state.error_type = error.type
     return respond(request, error.body(), status=error.status, headers=error.headers)
@@ -229,6 +243,7 @@ def install(app: FastAPI) -> None:
         JobNotFound,
         RobotInvalid,
         RobotLimitReached,
+        RobotDeadlineExceeded,
         QueueUnavailable,
         Exception,
     ):

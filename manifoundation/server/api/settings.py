@@ -81,7 +81,9 @@ class Settings(BaseSettings):
     batch_page_max: int = Field(1000, ge=1, le=MAX_BATCH_SIZE, description="Largest page of GET /v1/batches.")
     robots_cache_s: float = Field(5.0, ge=0, description="How long the hand list is cached for 404 checks.")
     sse_interval: float = Field(0.25, gt=0, le=10, description="Polling interval of the events stream, s.")
-    robot_register_timeout: float = Field(30.0, gt=0, le=600)
+    robot_register_timeout: float = Field(
+        30.0, gt=0, le=600, description="A registration's deadline, s: the worker still loading it is replaced (504)."
+    )
     body_timeout: float = Field(60.0, gt=0, le=3600, description="A request body must arrive within this, s (408).")
     body_idle_timeout: float = Field(10.0, gt=0, le=600, description="Longest pause within a body, s (408).")
     header_timeout: float = Field(

@@ -48,6 +48,11 @@ class RobotInvalid(QueueError):
     """A worker rejected a robot description (hardened URDF loader); the message says why."""
 
 
+class RobotDeadlineExceeded(QueueError):
+    """A registration was still loading at its deadline: the worker loading it was stopped and replaced (or no
+    worker answered by then); the message says which."""
+
+
 class RobotLimitReached(QueueError):
     """A key already holds as many registered robots, or as many of their bytes, as its limits allow."""
 
@@ -183,8 +188,13 @@ class JobQueue(ABC):
         With ``limits``, ``owner``'s slot and bytes are reserved atomically in the store before the worker is
         asked (`manifoundation.server.queue.robot_quota`), and released when it answers.
 
+        ``timeout`` is the registration's deadline, counted from now: the worker still loading the robot then ends
+        itself and is replaced (`manifoundation.server.worker.overrun`), so a slow description holds no worker
+        beyond it.
+
         Raises:
             RobotInvalid: the description was rejected (message says why).
+            RobotDeadlineExceeded: not validated within ``timeout`` (its worker stopped and replaced).
             RobotLimitReached: ``owner`` holds as many robots or bytes as ``limits`` allow.
         """
 

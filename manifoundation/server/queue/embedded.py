@@ -20,7 +20,6 @@ import logging
 import threading
 import time
 from collections.abc import Sequence
-from typing import Any
 
 from manifoundation.contract import (
     DeadLetter,
@@ -28,29 +27,23 @@ from manifoundation.contract import (
     JobRequest,
     JobState,
     QueueStats,
-    RobotPublic,
-    RobotRegister,
     SynthesisRequest,
     WorkerPublic,
     kind_of,
 )
-from manifoundation.contract.codec import pack
 from manifoundation.server.queue.base import (
     JobNotFound,
     JobQueue,
     QueueFull,
     QueueUnavailable,
-    RobotInvalid,
-    RobotLimits,
 )
 from manifoundation.server.queue.embedded_parts import JobRecord, WorkerHandle
 from manifoundation.server.queue.embedded_payloads import packed
-from manifoundation.server.queue.embedded_pump import EmbeddedPump
+from manifoundation.server.queue.embedded_robots import EmbeddedRobots
 from manifoundation.server.queue.records import (
     cancelled_error,
     new_id,
     result_expired_error,
-    scoped_robot,
     shutdown_error,
     with_answer,
 )
@@ -58,7 +51,7 @@ from manifoundation.server.queue.records import (
 log = logging.getLogger("manifoundation.server.queue.embedded")
 
 
-class EmbeddedQueue(EmbeddedPump, JobQueue):
+class EmbeddedQueue(EmbeddedRobots, JobQueue):
     """In-process queue + ``concurrency`` spawned worker processes (see module doc)."""
 
     backend = "embedded"
@@ -239,60 +232,3 @@ class EmbeddedQueue(EmbeddedPump, JobQueue):
     async def dead_letters(self, limit: int = 50) -> list[DeadLetter]:
         with self._lock:
             return list(self._dead)[::-1][:limit]
-
-    async def list_robots(self, *, owner: str | None = None) -> list[RobotPublic]:
-        with self._lock:
-            mine = [r for key, r in self._robots.items() if r.builtin or key == scoped_robot(owner, r.name)]
-        return sorted(mine, key=lambda r: (not r.builtin, r.name))
-
-    async def register_robot(
-        self, robot: RobotRegister, timeout: float = 30.0, *, owner: str | None = None,
-        limits: RobotLimits | None = None,
-    ) -> RobotPublic:  # fmt: skip
-        with self._lock:
-            ready = [w for w in self._workers.values() if w.info is not None]
-            existing = self._robots.get(robot.name)
-        if existing is not None and existing.builtin:
-            raise RobotInvalid(f"name: '{robot.name}' is a built-in hand")
-        if not ready:
-            raise QueueUnavailable("no worker is running to validate the robot")
-        worker = min(ready, key=lambda w: len(w.inflight))
-        rid, loop = new_id(), asyncio.get_running_loop()
-        payload = pack(robot.model_dump(mode="python", exclude_none=True))
-        future: asyncio.Future[dict[str, Any]] = loop.create_future()
-        with self._lock:
-            self._reserve_robot(rid, robot, owner, limits)
-            self._robot_replies[rid] = (loop, future)
-        try:
-            worker.send({"op": "robot", "rid": rid}, payload)
-            reply = await asyncio.wait_for(future, timeout)
-        except TimeoutError as exc:
-            raise QueueUnavailable(f"no worker validated the robot within {timeout} s") from exc
-        finally:
-            with self._lock:
-                self._robot_replies.pop(rid, None)
-                self._robot_reservations.pop(rid, None)
-        if "error" in reply:
-            raise RobotInvalid(reply["error"])
-        public = RobotPublic.model_validate(reply["robot"])
-        key = scoped_robot(owner, robot.name)
-        with self._lock:
-            self._registered[key] = payload
-            self._robots[key] = public
-        return public
-
-    async def delete_robot(self, name: str, *, owner: str | None = None) -> None:
-        key = scoped_robot(owner, name)
-        with self._lock:
-            robot = self._robots.get(key)
-            if robot is None or robot.builtin:
-                raise JobNotFound(f"no registered robot {name!r}")
-            del self._robots[key]
-            self._registered.pop(key, None)
-
-
-
-
-
-
-

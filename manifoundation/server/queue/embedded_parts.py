@@ -10,8 +10,9 @@ import time
 from multiprocessing.connection import Connection
 from typing import Any
 
-from manifoundation.contract import ErrorBody, JobKind, JobProgress, JobPublic, JobState, WorkerPublic
+from manifoundation.contract import ErrorBody, ErrorType, JobKind, JobProgress, JobPublic, JobState, WorkerPublic
 from manifoundation.contract.codec import pack
+from manifoundation.server.queue.records import STILL_LOADING
 
 
 class JobRecord:
@@ -96,8 +97,34 @@ class WorkerHandle:
         self.lock = threading.Lock()
         self.info: WorkerPublic | None = None
         self.inflight: set[str] = set()
+        self.registering: dict[str, float] = {}  # registrations sent to it, not yet answered: rid -> deadline (epoch)
+        self.leaving = False  # it answered a registration at its deadline and is ending itself
         self.jobs_done = 0
         self.last_seen = time.monotonic()  # any message (hello, heartbeat, progress, outcome) read from it
+
+    @property
+    def ready(self) -> bool:
+        """Said hello and is not ending itself."""
+        return self.info is not None and not self.leaving
+
+    @property
+    def idle(self) -> bool:
+        """Ready, and neither running jobs nor loading a robot (a job is never queued behind a registration)."""
+        return self.ready and not self.inflight and not self.registering
+
+    def answered(self, msg: dict[str, Any]) -> None:
+        """Its answer to a registration arrived (one stopped at its deadline: it is ending itself)."""
+        self.registering.pop(msg["rid"], None)
+        self.leaving = self.leaving or msg.get("type") == ErrorType.DEADLINE_EXCEEDED.value
+
+    def unanswered(self, detail: str) -> dict[str, dict[str, Any]]:
+        """The answers of the registrations it took with it (it died): past their deadline, it was stopped there
+        (`manifoundation.server.worker.overrun`); before, it died of something else (``detail``)."""
+        now, registering, self.registering = time.time(), self.registering, {}
+        late = {"error": STILL_LOADING, "type": ErrorType.DEADLINE_EXCEEDED.value}
+        died = {"error": f"the worker loading the robot died ({detail}); try again"}
+        died["type"] = ErrorType.UNAVAILABLE.value
+        return {rid: late if now >= deadline else died for rid, deadline in registering.items()}
 
     def send(self, message: dict[str, Any], *frames: bytes) -> None:
         """``message``, then the payload frames it announces (see `manifoundation.server.worker.child`)."""

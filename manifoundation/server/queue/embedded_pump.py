@@ -27,12 +27,10 @@ from manifoundation.contract import (
     JobProgress,
     JobState,
     RobotPublic,
-    RobotRegister,
     Stage,
     WorkerPublic,
 )
 from manifoundation.contract.codec import unpack
-from manifoundation.server.queue.base import RobotLimits
 from manifoundation.server.queue.embedded_parts import ChildProcess, JobRecord, WorkerHandle, settle
 from manifoundation.server.queue.embedded_payloads import FreedPayloads
 from manifoundation.server.queue.records import (
@@ -44,7 +42,6 @@ from manifoundation.server.queue.records import (
     state_for_error,
     worker_lost_error,
 )
-from manifoundation.server.queue.robot_quota import check_in_memory
 from manifoundation.server.worker.settings import QueueSettings
 from manifoundation.server.worker.supervisor import spawn, stop_all
 
@@ -82,15 +79,7 @@ class EmbeddedPump:
 
     def _live(self, worker: WorkerHandle) -> bool:
         """Ready and heard from within ``heartbeat_timeout`` (a silent worker is not live, as on Redis)."""
-        return worker.info is not None and time.monotonic() - worker.last_seen <= self.settings.heartbeat_timeout
-
-    def _reserve_robot(self, rid: str, robot: RobotRegister, owner: str | None, limits: RobotLimits | None) -> None:
-        """Check ``owner``'s limits (`robot_quota.check`) on its registered robots and registrations in flight, and
-        reserve this one's slot and bytes under ``rid`` (call with the lock held: check and reservation are one step).
-        """
-        if limits is not None:
-            check_in_memory(self._robots, self._robot_reservations.values(), owner, robot, limits)
-        self._robot_reservations[rid] = (owner, robot.name, robot.stored_bytes)
+        return worker.ready and time.monotonic() - worker.last_seen <= self.settings.heartbeat_timeout
 
     def _join(self, workers: list[WorkerHandle]) -> None:
         """Wait for workers told to stop (they finish their batch), killing those that outlive the grace."""
@@ -174,9 +163,10 @@ class EmbeddedPump:
                         self._finish(job, result=result)
                     else:
                         self._finish(job, error=ErrorBody.model_validate(msg["error"]))
-            elif op == "robot" and (reply := self._robot_replies.get(msg["rid"])):
-                loop, future = reply
-                loop.call_soon_threadsafe(settle, future, msg)
+            elif op == "robot":
+                worker.answered(msg)
+                if reply := self._robot_replies.get(msg["rid"]):
+                    reply[0].call_soon_threadsafe(settle, reply[1], msg)
 
     def _replace_silent(self) -> None:
         """Kill every ready worker not heard from for ``heartbeat_timeout`` (stopped, hung in native code, swapped
@@ -215,6 +205,9 @@ class EmbeddedPump:
                     log.warning("job re-queued after worker loss",
                                 extra={"job_id": job.id, "request_id": job.request_id})  # fmt: skip
             worker.inflight.clear()
+            for rid, answer in worker.unanswered(detail).items():
+                if reply := self._robot_replies.get(rid):
+                    reply[0].call_soon_threadsafe(settle, reply[1], answer)
             if self._running and worker.info is not None:
                 self._spawn()
             elif self._running:
@@ -225,7 +218,7 @@ class EmbeddedPump:
     def _dispatch(self) -> None:
         sends: list[tuple[WorkerHandle, list[dict[str, Any]], list[bytes]]] = []
         with self._lock:
-            idle = [w for w in self._workers.values() if w.info is not None and not w.inflight]
+            idle = [w for w in self._workers.values() if w.idle]
             now = time.time()
             for worker in idle:
                 batch: list[dict[str, Any]] = []

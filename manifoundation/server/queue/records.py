@@ -8,9 +8,26 @@ decides the terminal state (`ErrorType.job_state`): ``Cancelled`` → cancelled,
 from __future__ import annotations
 
 import uuid
+from typing import Any
 
-from manifoundation.contract import ErrorBody, ErrorType, JobKind, JobPublic, JobState, PlanResult, SynthesisResult
+from manifoundation.contract import (
+    ErrorBody,
+    ErrorType,
+    JobKind,
+    JobPublic,
+    JobState,
+    PlanResult,
+    RobotPublic,
+    SynthesisResult,
+)
 from manifoundation.contract.codec import unpack
+from manifoundation.server.queue.base import QueueUnavailable, RobotDeadlineExceeded, RobotInvalid
+
+REGISTRATION_GRACE_S = 3.0
+"""Seconds the service waits for a worker's answer beyond a registration's deadline: the worker answers at the
+deadline (`manifoundation.server.worker.overrun`), or its hard stop ends it a second later."""
+STILL_LOADING = "the robot was still loading: the worker loading it was stopped and replaced"
+NO_ANSWER = "no worker answered by then (a worker still loading the robot is stopped and replaced)"
 
 
 def state_for_error(error: ErrorBody) -> JobState:
@@ -48,6 +65,24 @@ def shutdown_error(detail: str = "queue shut down") -> ErrorBody:
 
 def worker_lost_error(detail: str, delivery: int, max_deliveries: int) -> ErrorBody:
     return ErrorBody.of(ErrorType.WORKER_LOST, f"{detail} (delivery {delivery} of {max_deliveries})")
+
+
+def robot_reply(reply: dict[str, Any], timeout: float) -> RobotPublic:
+    """The robot a worker's answer to a registration holds (``robot``), or the queue error its ``error`` stands
+    for (``type``: ``DeadlineExceeded``, ``Unavailable``; anything else: the description was refused)."""
+    if "error" not in reply:
+        return RobotPublic.model_validate(reply["robot"])
+    message, kind = str(reply["error"]), reply.get("type")
+    if kind == ErrorType.DEADLINE_EXCEEDED.value:
+        raise RobotDeadlineExceeded(registration_overrun(timeout, message))
+    if kind == ErrorType.UNAVAILABLE.value:
+        raise QueueUnavailable(message)
+    raise RobotInvalid(message)
+
+
+def registration_overrun(timeout: float, what: str = STILL_LOADING) -> str:
+    """The message of a registration stopped at its deadline."""
+    return f"registration deadline of {timeout:g} s passed (MANI_ROBOT_REGISTER_TIMEOUT): {what}"
 
 
 def new_id() -> str:

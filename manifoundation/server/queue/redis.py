@@ -50,9 +50,25 @@ from manifoundation.contract import (
     kind_of,
 )
 from manifoundation.contract.codec import pack, unpack
-from manifoundation.server.queue.base import JobNotFound, JobQueue, QueueFull, QueueUnavailable, RobotInvalid
+from manifoundation.server.queue.base import (
+    JobNotFound,
+    JobQueue,
+    QueueFull,
+    QueueUnavailable,
+    RobotDeadlineExceeded,
+    RobotInvalid,
+)
 from manifoundation.server.queue.persistence import check_persistence_async
-from manifoundation.server.queue.records import new_id, result_expired_error, scoped_robot, with_answer
+from manifoundation.server.queue.records import (
+    NO_ANSWER,
+    REGISTRATION_GRACE_S,
+    new_id,
+    registration_overrun,
+    result_expired_error,
+    robot_reply,
+    scoped_robot,
+    with_answer,
+)
 from manifoundation.server.queue.redis_lua import CANCEL, GROUP, SUBMIT, Keys
 from manifoundation.server.queue.robot_quota import RESERVE_ROBOT, RobotLimits, refusal
 from manifoundation.server.worker.settings import QueueSettings
@@ -105,7 +121,6 @@ def job_from_hash(job_id: str, h: dict[bytes, bytes], result: bytes | None, has_
     return with_answer(job, result or None)
 
 
-
 _SCRIPT_DETAIL = re.compile(r"[.,]?\s*script: [0-9a-f]{40}.*$", re.DOTALL)
 
 
@@ -116,6 +131,7 @@ def public_reason(exc: BaseException) -> str:
     if isinstance(exc, OutOfMemoryError) or text.startswith("OOM"):
         return "Redis is out of memory (its maxmemory is reached): nothing can be written until memory is freed"
     return _SCRIPT_DETAIL.sub("", text).strip() or type(exc).__name__
+
 
 class RedisQueue(JobQueue):
     """Client side of the Redis Streams backend (the service's queue with ``MANI_REDIS_URL``)."""
@@ -385,7 +401,7 @@ class RedisQueue(JobQueue):
             raise QueueUnavailable("no worker is running to validate the robot")
         rid = new_id()
         if limits is not None:
-            await self._reserve(robot, rid, owner, limits, timeout)
+            await self._reserve(robot, rid, owner, limits, timeout + REGISTRATION_GRACE_S)
         try:
             return await self._validated(robot, rid, owner, timeout)
         finally:
@@ -409,12 +425,13 @@ class RedisQueue(JobQueue):
             raise refusal(int(code), int(held), robot.stored_bytes, limits)
 
     async def _validated(self, robot: RobotRegister, rid: str, owner: str | None, timeout: float) -> RobotPublic:
-        """Send the registration to a worker and wait for its verdict (stored by the worker when accepted)."""
+        """Send the registration to a worker and wait for its verdict (stored by the worker when accepted); its
+        deadline, ``timeout`` from now, travels with it (the worker stops there) and bounds the wait."""
         payload = pack(robot.model_dump(mode="python", exclude_none=True))
-        loop, end = asyncio.get_running_loop(), time.monotonic() + timeout
+        loop, end = asyncio.get_running_loop(), time.monotonic() + timeout + REGISTRATION_GRACE_S
         async with self._guard():
-            fields = {"k": "robot", "id": rid, "p": payload} | ({"o": owner} if owner else {})
-            await self._client.xadd(self.keys.stream, fields)
+            fields = {"k": "robot", "id": rid, "p": payload, "d": repr(time.time() + timeout)}
+            await self._client.xadd(self.keys.stream, fields | ({"o": owner} if owner else {}))
         while True:
             future: asyncio.Future[None] = loop.create_future()
             self._waiters.setdefault(f"robot:{rid}", []).append(future)
@@ -426,11 +443,8 @@ class RedisQueue(JobQueue):
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(future, min(1.0, end - time.monotonic()))
         if reply is None:
-            raise QueueUnavailable(f"no worker validated the robot within {timeout} s")
-        answer = unpack(reply)
-        if "error" in answer:
-            raise RobotInvalid(answer["error"])
-        return RobotPublic.model_validate(answer["robot"])
+            raise RobotDeadlineExceeded(registration_overrun(timeout, NO_ANSWER))
+        return robot_reply(unpack(reply), timeout)
 
     async def delete_robot(self, name: str, *, owner: str | None = None) -> None:
         key = scoped_robot(owner, name)

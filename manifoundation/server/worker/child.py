@@ -6,7 +6,8 @@ announces them, so a request or a result is never encoded inside another message
 then per job its request frame and, when it names a registered robot, the robot's frame), ``cancel`` (id), ``robot``
 (then the registration's frame: validate it), ``stop`` (finish the current batch, then exit). Child → parent: ``hello``
 (worker info and built-in robots), ``heartbeat``, ``progress``, ``done`` (state, error, timings; then the result's frame
-when it succeeded), ``robot`` (validation answer).
+when it succeeded), ``robot`` (validation answer). A ``robot`` message carries its ``deadline``: still loading then,
+the child answers and exits (`manifoundation.server.worker.overrun`), and the parent spawns another.
 """
 
 from __future__ import annotations
@@ -140,11 +141,13 @@ def _run(core: WorkerCore, link: _Link, msg: dict[str, Any]) -> None:
 
 
 def _robot(core: WorkerCore, link: _Link, msg: dict[str, Any]) -> None:
-    try:
-        robot = core.validate_robot(msg["frames"][0])
-        link.send({"op": "robot", "rid": msg["rid"], "robot": robot.model_dump(mode="python", exclude_none=True)})
-    except Exception as exc:
-        link.send({"op": "robot", "rid": msg["rid"], "error": str(exc) or exc.__class__.__name__})
+    """Validate a registration and answer it; one still loading at its ``deadline`` is answered and this process
+    ends there (the parent replaces it)."""
+
+    def answer(reply: dict[str, Any]) -> None:
+        link.send({"op": "robot", "rid": msg["rid"], **reply})
+
+    answer(core.validate_robot(msg["frames"][0], msg.get("deadline"), answer))
 
 
 if __name__ == "__main__":

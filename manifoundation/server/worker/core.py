@@ -22,9 +22,11 @@ import socket
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 from manifoundation.contract import (
     ErrorBody,
+    ErrorType,
     JobKind,
     JobProgress,
     JobState,
@@ -38,9 +40,10 @@ from manifoundation.contract import (
     WorkerPublic,
 )
 from manifoundation.contract.codec import pack, unpack
-from manifoundation.server.queue.records import state_for_error
+from manifoundation.server.queue.records import STILL_LOADING, state_for_error
 from manifoundation.server.worker.heap import HeapTrimmer
 from manifoundation.server.worker.logs import job_context
+from manifoundation.server.worker.overrun import DeadlinePassed, stopped_at
 from manifoundation.server.worker.pipeline import CancelFn, JobInput, Pipeline, PlanJob, error_from_exception
 from manifoundation.server.worker.runner import run_batch, run_plan
 
@@ -103,13 +106,27 @@ class WorkerCore:
         """The built-in hands this worker can use."""
         return self.pipeline.robots()
 
-    def validate_robot(self, raw: bytes) -> RobotPublic:
-        """A user's robot registration, loaded with the hardened loader. Raises with the reason when refused.
+    def validate_robot(
+        self, raw: bytes, deadline: float | None = None, answer: Callable[[dict[str, Any]], None] | None = None
+    ) -> dict[str, Any]:
+        """A user's robot registration, loaded with the hardened loader, as the answer a shell sends back (never
+        raises): ``{"robot": RobotPublic}`` (its ``stored_bytes`` the registration's own, what the key's byte quota
+        counts, whatever the pipeline), or ``{"error": why}`` (``"type": "DeadlineExceeded"`` for a deadline).
 
-        Its ``stored_bytes`` are the registration's own (what the key's byte quota counts), whatever the pipeline.
+        ``deadline`` (epoch s): a registration still loading then is answered through ``answer`` and this process
+        ends (`manifoundation.server.worker.overrun`; its supervisor replaces it); one past it is not loaded.
         """
-        robot = RobotRegister.model_validate(unpack(raw))
-        return self.pipeline.validate_robot(robot).model_copy(update={"stored_bytes": robot.stored_bytes})
+        try:
+            robot = RobotRegister.model_validate(unpack(raw))
+            with stopped_at(deadline, lambda: (answer or _nobody)(_overrun(STILL_LOADING))):
+                public = self.pipeline.validate_robot(robot)
+        except DeadlinePassed as exc:
+            log.warning("registration dropped before start: %s", exc)
+            return _overrun(f"no worker was free to load the robot before it ({exc})")
+        except Exception as exc:
+            return {"error": str(exc) or exc.__class__.__name__}
+        public = public.model_copy(update={"stored_bytes": robot.stored_bytes})
+        return {"robot": public.model_dump(mode="python", exclude_none=True)}
 
     def run(self, raw_jobs: list[RawJob], sink: ProgressSink, should_cancel: CancelFn) -> list[Finished]:
         """Decode, run and encode one micro-batch; one outcome per job, in order; never raises.
@@ -163,6 +180,14 @@ def runs_of(raw_jobs: list[RawJob]) -> list[list[RawJob]]:
     takes seconds to minutes; the syntheses' outcomes are not held back for it)."""
     syntheses = [raw for raw in raw_jobs if raw.kind is not JobKind.PLAN]
     return ([syntheses] if syntheses else []) + [[raw] for raw in raw_jobs if raw.kind is JobKind.PLAN]
+
+
+def _overrun(what: str) -> dict[str, Any]:
+    return {"error": what, "type": ErrorType.DEADLINE_EXCEEDED.value}
+
+
+def _nobody(_: dict[str, Any]) -> None:
+    """No one to answer (the service side says it)."""
 
 
 def _encoded(job_id: str, outcome: SynthesisResult | PlanResult | ErrorBody, timings: dict[str, float]) -> Finished:

@@ -299,15 +299,22 @@ class RedisWorker:
         return entries
 
     def _handle(self, entries: list[tuple[bytes, dict[bytes, bytes]]]) -> None:
+        """Run the jobs taken, then the registrations (a job never waits for a robot's loading, up to its
+        registration deadline)."""
+        robots = [(entry, fields) for entry, fields in entries if fields.get(b"k") == b"robot"]
+        try:
+            self._handle_jobs([(entry, fields) for entry, fields in entries if fields.get(b"k") != b"robot"])
+        finally:
+            for entry, fields in robots:
+                self._robot(entry.decode(), fields)
+
+    def _handle_jobs(self, entries: list[tuple[bytes, dict[bytes, bytes]]]) -> None:
         raw_jobs: list[RawJob] = []
         entry_of: dict[str, str] = {}
         refused: RedisError | None = None
         for index, (entry_raw, fields) in enumerate(entries):
             entry = entry_raw.decode()
             try:
-                if fields.get(b"k") == b"robot":
-                    self._robot(entry, fields)
-                    continue
                 job_id = fields[b"id"].decode()
                 request_id = fields[b"r"].decode() if fields.get(b"r") else None  # entries of older services lack it
                 with job_context(job_id, request_id):
@@ -464,19 +471,28 @@ class RedisWorker:
             return False
 
     def _robot(self, entry: str, fields: dict[bytes, bytes]) -> None:
-        rid = fields[b"id"].decode()
+        """Validate a registration and answer it; one still loading at its deadline (``d``) is answered and this
+        process ends there (`manifoundation.server.worker.overrun`; `mani worker` starts another). The heartbeat
+        keeps the entry this worker's while it loads."""
+        deadline = float(fields[b"d"]) if fields.get(b"d") else None  # entries of older services lack d
+        with self.lock:
+            self.inflight[entry] = ""
         try:
-            public = self._core.validate_robot(fields[b"p"])
-            answer: dict[str, Any] = {"robot": public.model_dump(mode="python", exclude_none=True)}
-            key = scoped_robot(fields[b"o"].decode() if fields.get(b"o") else None, public.name)
-            pipe = self.r.pipeline()
+            answer = self._core.validate_robot(fields[b"p"], deadline, lambda a: self._answer(entry, fields, a))
+            self._answer(entry, fields, answer)
+        finally:
+            with self.lock:
+                self.inflight.pop(entry, None)
+
+    def _answer(self, entry: str, fields: dict[bytes, bytes], answer: dict[str, Any]) -> None:
+        """Store an accepted robot for every worker, and the answer for the service, in one step."""
+        pipe = self.r.pipeline()
+        if "robot" in answer:
+            key = scoped_robot(fields[b"o"].decode() if fields.get(b"o") else None, answer["robot"]["name"])
             pipe.hset(self.keys.robots, key, pack(answer["robot"]))
             pipe.hset(self.keys.robot_urdf, key, fields[b"p"])
-            pipe.hset(self.keys.robot_size, key, public.stored_bytes or 0)
-            pipe.execute()
-        except Exception as exc:
-            answer = {"error": str(exc) or exc.__class__.__name__}
-        pipe = self.r.pipeline()
+            pipe.hset(self.keys.robot_size, key, answer["robot"].get("stored_bytes") or 0)
+        rid = fields[b"id"].decode()
         pipe.set(self.keys.robot_reply(rid), pack(answer), ex=300)
         pipe.xack(self.keys.stream, GROUP, entry)
         pipe.xdel(self.keys.stream, entry)

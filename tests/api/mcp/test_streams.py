@@ -70,6 +70,18 @@ def test_a_key_holds_at_most_its_streams_and_another_key_is_not_affected(base: s
     assert again == [200]
 
 
+def test_a_burst_of_streams_from_one_key_gets_its_limit_and_no_more(base: str) -> None:
+    """The count is taken with the check: 12 streams opened at once got 12 × 200 before (every check passed before
+    any stream was counted)."""
+    codes: list[int] = []
+    burst = [threading.Thread(target=_open, args=(base, KEYS[0], [], codes)) for _ in range(12)]
+    for thread in burst:
+        thread.start()
+    for thread in burst:
+        thread.join(timeout=20)
+    assert sorted(codes) == [200] * 2 + [429] * 10, codes
+
+
 def test_a_body_declared_over_the_mcp_limit_is_refused_before_it_is_read(base: str) -> None:
     """MANI_MCP_MAX_BODY_BYTES (8 MiB by default): the SDK parses bodies on the event loop, so big ones are refused
     with a 413 that says where large clouds go, before the body is read."""

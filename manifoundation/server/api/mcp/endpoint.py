@@ -48,6 +48,9 @@ class McpEndpoint:
                 caller = await authorize(request, self.services.settings)
                 declared = declared_length(request, self.services.settings.max_body_bytes)
                 self._check(caller.tenant, stream, declared)
+                if stream:  # counted in the same step as the check (no await between): a burst cannot overshoot
+                    self.streams[caller.tenant] += 1
+                    held.callback(self._closed, caller.tenant)
                 if not stream and self.services.bodies.large(declared):
                     await held.enter_async_context(self.services.bodies.slot())  # 503 after MANI_BODY_TIMEOUT
                 if self.services.mcp is None:
@@ -61,14 +64,13 @@ class McpEndpoint:
             if not stream:
                 await app(scope, receive, send)
                 return
-            self.streams[caller.tenant] += 1
-            try:
-                ending = _EndingStream(receive, send, self.services.settings.mcp_stream_max_s)
-                await app(scope, ending.receive, ending.send)
-            finally:
-                self.streams[caller.tenant] -= 1
-                if not self.streams[caller.tenant]:
-                    del self.streams[caller.tenant]
+            ending = _EndingStream(receive, send, self.services.settings.mcp_stream_max_s)
+            await app(scope, ending.receive, ending.send)
+
+    def _closed(self, tenant: str | None) -> None:
+        self.streams[tenant] -= 1
+        if not self.streams[tenant]:
+            del self.streams[tenant]
 
     def _check(self, tenant: str | None, stream: bool, declared: int | None) -> None:
         """Refuse a body declared over the MCP limit (413) and an event stream over the key's count (429)."""

@@ -82,6 +82,10 @@ def _summary(robot: RobotPublic) -> str:
     responses={
         201: {"model": RobotPublic},
         409: {"model": ErrorBody, "description": "A built-in name, or the key's robot count or bytes reached"},
+        504: {
+            "model": ErrorBody,
+            "description": "Still loading at MANI_ROBOT_REGISTER_TIMEOUT: its worker was stopped and replaced",
+        },
         **ERRORS,
     },
 )
