@@ -38,8 +38,8 @@ class PhysicsQuality(WireModel):
     held: bool = Field(..., description="The test passed: the object held in all six directions (closure) or "
                        "reached the target pose (motion).")
     reason: str = Field(..., description="held, moved (a push moved or turned it too far), unstable (the "
-                        "simulation diverged: a failure) or penetration (the pregrasp penetrates more than 1 cm); "
-                        "motion: reached, missed, dropped or unstable.")
+                        "simulation diverged under both of MuJoCo's solvers: a failure) or penetration (the pregrasp "
+                        "penetrates more than 1 cm); motion: reached, missed, dropped or unstable.")
     test: Literal["closure", "motion"] = Field("closure", description="Which test ran: closure (six pushes, gravity "
                                                "off; force_closure and wrench tasks) or motion (delta_pose: the "
                                                "palm carried along the task's motion under gravity).")

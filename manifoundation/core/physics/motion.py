@@ -24,7 +24,15 @@ import numpy as np
 from manifoundation.core.physics.object_model import ObjectShape
 from manifoundation.core.physics.protocol import MotionTrial, PhysicsResult, Protocol
 from manifoundation.core.physics.scene import Scene, build_scene
-from manifoundation.core.physics.trial import _angle, _drive, _reset, _touching, diverged_count, start
+from manifoundation.core.physics.trial import (
+    FALLBACK_SOLVER,
+    _angle,
+    _drive,
+    _reset,
+    _touching,
+    diverged_count,
+    start,
+)
 
 if TYPE_CHECKING:
     from manifoundation.core.robots.hand import Hand
@@ -54,6 +62,10 @@ def simulate_motion(
         return PhysicsResult(False, [], "penetration", pen, gaps, 0, pre, squeeze, time.perf_counter() - t0,
                              test="motion", object_pieces=shape.source)  # fmt: skip
     trial, touching = _carry(sc, pre, q, squeeze, np.asarray(translation, float), rotation, p)
+    if trial.unstable:  # Newton diverged: the same physics once more with the fallback solver (see trial)
+        sc = build_scene(hand, palm_position, palm_quaternion, shape, p, moving=True)
+        sc.model.opt.solver = FALLBACK_SOLVER
+        trial, touching = _carry(sc, pre, q, squeeze, np.asarray(translation, float), rotation, p)
     reason = "reached" if trial.reached else "unstable" if trial.unstable else "dropped" if trial.dropped else "missed"
     return PhysicsResult(trial.reached, [], reason, pen, gaps, touching, pre, squeeze, time.perf_counter() - t0,
                          test="motion", motion=trial, object_pieces=shape.source)  # fmt: skip

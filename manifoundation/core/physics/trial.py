@@ -40,20 +40,14 @@ def simulate_grasp(
     sc = build_scene(hand, palm_position, palm_quaternion, shape, p)
     q = np.asarray(joints, float)
     pre, squeeze, gaps, pen = start(sc, hand, q, contact_points, contact_normals, fingertips, p)
-    trials: list[Trial] = []
-    touching = 0
     if pen > p.max_penetration:
-        return PhysicsResult(False, [], "penetration", pen, gaps, 0, pre, squeeze, time.perf_counter() - t0,
-                             object_pieces=shape.source)
-    squeezed = _squeezed(sc, pre, q, squeeze, p)
-    touching = _touching(sc)
-    unstable = False
-    for d, name in zip(DIRECTIONS, DIRECTION_NAMES, strict=True):
-        trial, diverged = _push(sc, squeezed, d, name, p)
-        trials.append(trial)
-        unstable |= diverged
-        if not trial.held and p.stop_at_first_failure:
-            break
+        return PhysicsResult(
+            False, [], "penetration", pen, gaps, 0, pre, squeeze, time.perf_counter() - t0, object_pieces=shape.source
+        )
+    trials, touching, unstable = _pushes(sc, pre, q, squeeze, p)
+    if unstable:  # Newton diverged: the same physics once more with the projected Gauss-Seidel solver
+        sc.model.opt.solver = FALLBACK_SOLVER
+        trials, touching, unstable = _pushes(sc, pre, q, squeeze, p)
     ok = len(trials) == len(DIRECTIONS) and all(t.held for t in trials)
     reason = "held" if ok else "unstable" if unstable else "moved"
     return PhysicsResult(ok, trials, reason, pen, gaps, touching, pre, squeeze, time.perf_counter() - t0,
@@ -61,6 +55,13 @@ def simulate_grasp(
 
 
 BAD_ACCELERATION = mujoco.mjtWarning.mjWARN_BADQACC
+FALLBACK_SOLVER = mujoco.mjtSolver.mjSOL_PGS
+"""The constraint solver a diverged run is simulated again with. Newton (MuJoCo's default and the benchmark's)
+diverges on some hands' frictional self-contacts under elliptic cones: two of Shadow's finger links touching (0.005
+mm deep) sent its knuckle joints' accelerations to 3e6 rad/s² in one step, 32 of 43 Shadow answers on third-party
+objects. PGS solves the same constraints (same cones, friction, solref) without diverging there; where Newton does
+not diverge the verdicts agree (LEAP 7/43, LEAP Hand 12/43, Allegro 9/43 held with either), and PGS costs about 1.5×,
+so it runs only after a divergence."""
 
 
 def diverged_count(sc: Scene) -> int:
@@ -95,7 +96,12 @@ PREGRASP_ITERATIONS = 30
 
 
 def moved_contacts(
-    sc: Scene, q: np.ndarray, points: np.ndarray, normals: np.ndarray, fingertips: list[str], distance: float,
+    sc: Scene,
+    q: np.ndarray,
+    points: np.ndarray,
+    normals: np.ndarray,
+    fingertips: list[str],
+    distance: float,
     limits: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
     """(D,) joints that move each contact point ``distance`` along its outward normal (negative: inward), within
@@ -209,6 +215,24 @@ def _squeezed(sc: Scene, pre: np.ndarray, q: np.ndarray, squeeze: np.ndarray, p:
 
 
 INTEGRATION = mujoco.mjtState.mjSTATE_INTEGRATION
+
+
+def _pushes(
+    sc: Scene, pre: np.ndarray, q: np.ndarray, squeeze: np.ndarray, p: Protocol
+) -> tuple[list[Trial], int, bool]:
+    """The approach, then the six pushes from its end: (trials, hand bodies touching after the squeeze, whether the
+    simulation diverged)."""
+    squeezed = _squeezed(sc, pre, q, squeeze, p)
+    touching = _touching(sc)
+    trials: list[Trial] = []
+    unstable = False
+    for d, name in zip(DIRECTIONS, DIRECTION_NAMES, strict=True):
+        trial, diverged = _push(sc, squeezed, d, name, p)
+        trials.append(trial)
+        unstable |= diverged
+        if not trial.held and p.stop_at_first_failure:
+            break
+    return trials, touching, unstable
 
 
 def _push(sc: Scene, squeezed: Squeezed, direction: np.ndarray, name: str, p: Protocol) -> tuple[Trial, bool]:

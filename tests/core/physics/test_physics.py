@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import ast
+import json
 from dataclasses import replace
 from pathlib import Path
 
+import mujoco
 import numpy as np
 import pytest
 import trimesh
@@ -248,3 +250,30 @@ def test_a_simulation_that_diverges_fails_as_unstable_never_held() -> None:
         np.array([0.0, 0.0, 0.05]), protocol=unstable,
     )  # fmt: skip
     assert not m.success and m.reason == "unstable"
+
+
+def test_a_run_that_newton_diverges_on_is_judged_again_by_the_fallback_solver(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Shadow's answer on gymnasium-robotics' kitchen oven handle (the service's, seed 0): two finger links touch
+    0.005 mm deep while closing and MuJoCo's Newton solver diverges (the run could only say "unstable"). The same
+    physics under the fallback solver runs to the end: a verdict with the object's real displacements (it does not
+    hold)."""
+    from manifoundation.core.physics import trial
+    from research.audit.objects import load_third_party, site_packages
+
+    path = site_packages() / "gymnasium_robotics/envs/assets/kitchen_franka/kitchen_assets/meshes/ovenhandle.stl"
+    if not path.exists():
+        pytest.skip("gymnasium-robotics' kitchen oven handle mesh is not installed")
+    obj = load_third_party("oven_handle", path)
+    assert obj is not None
+    d = json.loads((Path(__file__).parent / "shadow_oven_handle.json").read_text())
+    args = (
+        get_hand("shadow"), np.array(d["palm_position"]), np.array(d["palm_quaternion"]), np.array(d["joints"]),
+        np.array(d["contact_points"]), np.array(d["contact_normals"]), d["fingertips"],
+        from_mesh(obj.mesh.vertices, obj.mesh.faces),
+    )  # fmt: skip
+    judged = simulate_grasp(*args)
+    assert judged.reason in ("held", "moved") and len(judged.trials) == 6
+    assert all(np.isfinite(t.translation) for t in judged.trials)
+    assert max(t.translation for t in judged.trials) > 1e-3  # pushed, not put back by a reset
+    monkeypatch.setattr(trial, "FALLBACK_SOLVER", mujoco.mjtSolver.mjSOL_NEWTON)  # no fallback: Newton twice
+    assert simulate_grasp(*args).reason == "unstable"
