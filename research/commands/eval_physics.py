@@ -171,6 +171,10 @@ def run_physics(args: argparse.Namespace) -> int:
                     [t.direction, t.translation, t.rotation, t.held] for t in p.physics.trials],
                 "motion": None if m is None else [m.translation_error, m.rotation_error, m.dropped],
                 "pipeline_s": seconds, "physics_s": r.seconds, "object_pieces": shapes[obj.name].source,
+                # the answer as the test ran it (object frame; free joints by name): what `eval dexgraspbench` converts
+                "palm_position": p.palm_position.tolist(), "palm_quaternion": p.palm_quaternion.tolist(),
+                "joints": list(hand.joint_names), "grasp": p.joint_values.tolist(),
+                "pregrasp": r.pregrasp.tolist(), "squeeze": r.squeeze.tolist(),
             })  # fmt: skip
     table = Table(
         title=f"simulated grasp test of the service's answers: {len(objects)} third-party objects, "
