@@ -135,8 +135,8 @@ def _records(args: argparse.Namespace, hands: list[str], work: Path) -> list[dic
         path = str(work / "physics.json")
         ns = argparse.Namespace(
             hand=",".join(hands), objects=args.objects, proposals=1, points=2048, geometry="points", method="network",
-            weights=None, seed=0, judge="mesh", kp_revolute=None, damping_revolute=None, simulate=None,
-            no_close=False, task="closure", json=path,
+            weights=None, seed=0, judge="mesh", kp_revolute=None, damping_revolute=None, armature_revolute=None,
+            simulate=None, no_close=False, task="closure", json=path,
         )  # fmt: skip
         from research.commands.eval_physics import WEIGHTS
 
