@@ -63,6 +63,8 @@ def add_physics_parser(sub: Any) -> None:
                    "(default: Protocol's 3, MuJoCo Menagerie's LEAP Hand; its Allegro has 10)")
     a.add_argument("--damping-revolute", type=float, default=None, help="revolute joint damping, N·m·s/rad "
                    "(default: Protocol's 0.1; Menagerie's Allegro has 1)")
+    a.add_argument("--armature-revolute", type=float, default=None, help="revolute joint armature, kg·m² "
+                   "(default: Protocol's 0.01; DexGraspBench's LEAP Hand and Allegro have 0)")
     a.add_argument("--simulate", action=argparse.BooleanOptionalAction, default=None,
                    help="options.simulate: unset, the pipeline tests what it returns (the service's default); "
                    "--simulate, it searches candidates until enough hold (at least 8); --no-simulate, no test")
@@ -121,6 +123,8 @@ def run_physics(args: argparse.Namespace) -> int:
         protocol = replace(protocol, kp_revolute=args.kp_revolute)
     if args.damping_revolute is not None:
         protocol = replace(protocol, damping_revolute=args.damping_revolute)
+    if args.armature_revolute is not None:
+        protocol = replace(protocol, armature_revolute=args.armature_revolute)
     hands = [h for h in args.hand.split(",") if h]
     every = third_party_objects()
     pick = np.unique(np.linspace(0, len(every) - 1, min(args.objects, len(every))).round().astype(int))
@@ -171,13 +175,18 @@ def run_physics(args: argparse.Namespace) -> int:
                     [t.direction, t.translation, t.rotation, t.held] for t in p.physics.trials],
                 "motion": None if m is None else [m.translation_error, m.rotation_error, m.dropped],
                 "pipeline_s": seconds, "physics_s": r.seconds, "object_pieces": shapes[obj.name].source,
+                # the answer as the test ran it (object frame; free joints by name): what `eval dexgraspbench` converts
+                "palm_position": p.palm_position.tolist(), "palm_quaternion": p.palm_quaternion.tolist(),
+                "joints": list(hand.joint_names), "grasp": p.joint_values.tolist(),
+                "pregrasp": r.pregrasp.tolist(), "squeeze": r.squeeze.tolist(),
             })  # fmt: skip
     table = Table(
         title=f"simulated grasp test of the service's answers: {len(objects)} third-party objects, "
         f"{'force closure' if motion is None else 'target motion ' + args.task}, method {args.method}, "
         f"{args.geometry} sent, {args.proposals} proposal(s), "
         f"{'no closing' if args.no_close else 'closed'}, {MODE_TITLE[args.simulate]}"
-        f"kp {protocol.kp_revolute:g} N·m/rad, damping {protocol.damping_revolute:g}, judged on the {args.judge}"
+        f"kp {protocol.kp_revolute:g} N·m/rad, damping {protocol.damping_revolute:g}, "
+        f"armature {protocol.armature_revolute:g}, judged on the {args.judge}"
     )
     for col in ("hand", "requests", "first holds", "best holds", "proposals", "verified", "verified & hold", "hold",
                 "median tip gap mm", "tips ≤ 0.5 mm", "none touching", "physics s", "request s",

@@ -19,6 +19,7 @@ from typing import Any
 
 from research.commands.eval_audit import add_audit_parser
 from research.commands.eval_deformable import add_deformable
+from research.commands.eval_dexgraspbench import add_dexgraspbench_parser
 from research.commands.eval_labels import add_labels_parser
 from research.commands.eval_network import add_network_parser
 from research.commands.eval_physics import add_physics_parser
@@ -29,18 +30,21 @@ EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
 def register(subparsers: Any) -> None:
     """Add ``eval`` with its ``refine`` (Table II), ``network`` (Table I), ``labels`` (the network's top point on
     re-sampled labels), ``audit``, ``deformable`` (Table I, deformable columns) and ``physics`` (the simulated grasp
-    test) sub-commands to ``mani``."""
+    test) and ``dexgraspbench`` (the same answers in DexGraspBench's own evaluation) sub-commands to ``mani``."""
     p = subparsers.add_parser(
         "eval", help="evaluate refinement / network", description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    sub = p.add_subparsers(dest="eval_command", metavar="{refine,network,labels,audit,deformable,physics}")
+    sub = p.add_subparsers(
+        dest="eval_command", metavar="{refine,network,labels,audit,deformable,physics,dexgraspbench}"
+    )
     add_refine(sub)
     add_network_parser(sub)
     add_labels_parser(sub)
     add_audit_parser(sub)
     add_deformable(sub)
     add_physics_parser(sub)
+    add_dexgraspbench_parser(sub)
     p.set_defaults(func=lambda args: (p.print_help(), EXIT_USAGE)[1])
 
 

@@ -23,6 +23,9 @@ def test_eval_physics_prints_the_table_and_writes_every_proposal(
     records = json.loads(out.read_text())
     assert len(records) == 2 and {r["hand"] for r in records} == {"panda_gripper"}
     assert all(len(r["tip_gaps"]) == 2 and r["reason"] in ("held", "moved", "penetration") for r in records)
+    # the answer as the test ran it, for `eval dexgraspbench`
+    assert all(len(r["pregrasp"]) == len(r["squeeze"]) == len(r["grasp"]) == len(r["joints"]) == 1 for r in records)
+    assert all(len(r["palm_position"]) == 3 and len(r["palm_quaternion"]) == 4 for r in records)
     false_claims = sum(r["verified"] and not r["holds"] for r in records)
     assert code == (1 if false_claims else 0)
     text = capsys.readouterr().out
