@@ -133,10 +133,32 @@ def moved_contacts(
         J, e = np.vstack(rows), np.concatenate(err)
         if np.max(np.abs(e)) < 1e-7:
             break
-        dq = np.linalg.solve(J.T @ J + PREGRASP_DAMPING * np.eye(J.shape[1]), J.T @ e)
+        dq = _bounded_step(J, e, cur, lo, hi)
+        if not np.any(dq):
+            break
         dq *= min(1.0, PREGRASP_STEP / max(float(np.max(np.abs(dq))), 1e-12))
         cur = np.clip(cur + dq, lo, hi)
     return np.asarray(cur)
+
+
+def _bounded_step(J: np.ndarray, e: np.ndarray, q: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(D,) the damped least-squares step for J (3m, D) dq ≈ e (3m,) that leaves every joint at a limit the step
+    would push past where it is: those joints are taken out and the step solved again with the others (an active
+    set). Clipping the free solution instead moves the other joints of that finger as if the blocked one had moved
+    too: a LEAP thumb at its lower limit then moved its contact 14 mm *outward* for a 10 mm inward squeeze."""
+    free = np.ones(len(q), bool)
+    dq = np.zeros(len(q))
+    for _ in range(len(q)):
+        Jf = J[:, free]
+        dq = np.zeros(len(q))
+        dq[free] = np.linalg.solve(Jf.T @ Jf + PREGRASP_DAMPING * np.eye(Jf.shape[1]), Jf.T @ e)
+        blocked = free & (((q <= lo) & (dq < 0)) | ((q >= hi) & (dq > 0)))
+        if not blocked.any():
+            return dq
+        free &= ~blocked
+        if not free.any():
+            return np.zeros(len(q))
+    return dq
 
 
 def tip_gaps(sc: Scene, fingertips: list[str]) -> list[float]:

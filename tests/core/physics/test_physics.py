@@ -277,3 +277,23 @@ def test_a_run_that_newton_diverges_on_is_judged_again_by_the_fallback_solver(mo
     assert max(t.translation for t in judged.trials) > 1e-3  # pushed, not put back by a reset
     monkeypatch.setattr(trial, "FALLBACK_SOLVER", mujoco.mjtSolver.mjSOL_NEWTON)  # no fallback: Newton twice
     assert simulate_grasp(*args).reason == "unstable"
+
+
+def test_a_joint_at_its_limit_is_left_there_and_the_others_solve_the_step() -> None:
+    """Joint 0 moves the contact along x and y, joint 1 along y only; asked for +x, the free solution turns joint 0
+    and undoes its y with joint 1. With joint 0 at its upper limit, clipping keeps joint 1's share alone: the
+    contact sweeps 1 cm sideways and gets no nearer (worse than not moving). The step instead leaves joint 0 out and
+    solves with joint 1, which cannot help: it stays put. Away from the limit both are the free solution."""
+    from manifoundation.core.physics.trial import PREGRASP_DAMPING, _bounded_step
+
+    J = np.array([[1.0, 0.0], [1.0, 1.0], [0.0, 0.0]])  # rows x, y, z; columns joint 0, joint 1
+    e = np.array([0.01, 0.0, 0.0])
+    lo, hi = np.array([-1.0, -1.0]), np.array([0.5, 1.0])
+    free = np.linalg.solve(J.T @ J + PREGRASP_DAMPING * np.eye(2), J.T @ e)
+    at_limit = np.array([0.5, 0.0])
+    clipped = np.clip(at_limit + free, lo, hi) - at_limit
+    assert np.linalg.norm(J @ clipped - e) > np.linalg.norm(e) + 1e-3  # clipping moves it the wrong way
+    dq = _bounded_step(J, e, at_limit, lo, hi)
+    assert dq[0] == 0.0 and abs(dq[1]) < 1e-9
+    assert np.allclose(_bounded_step(J, e, np.zeros(2), lo, hi), free)
+    assert np.allclose(_bounded_step(J, -e, at_limit, lo, hi), -free)  # moving away from the limit is allowed
