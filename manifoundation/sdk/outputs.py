@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from manifoundation.contract import ObjectIn, Proposal, SynthesisResult
+from manifoundation.contract import ObjectIn, PhysicsQuality, Proposal, SynthesisResult
 from manifoundation.sdk.extras import require
 
 
@@ -49,7 +49,26 @@ def quality_text(proposal: Proposal) -> str:
     ]
     if q.epsilon is not None:
         parts.append(f"ε {q.epsilon:.3f}")
+    if q.physics is not None:
+        parts.append(physics_text(q.physics))
     return ", ".join(parts)
+
+
+def physics_text(physics: PhysicsQuality) -> str:
+    """The simulated test's verdict in a few words: held / reached, or why not with the worst push or the motion's
+    final error."""
+    if physics.test == "motion":
+        m = physics.motion
+        where = "" if m is None else f" ({m.translation_error * 100:.1f} cm, {m.rotation_error:.0f}° off)"
+        return ("physics: reached" if physics.held else f"physics: {physics.reason}") + where
+    if physics.held:
+        worst = max((t.translation for t in physics.trials), default=0.0)
+        return f"physics: held (moved ≤ {worst * 100:.1f} cm)"
+    failed = [t for t in physics.trials if not t.held]
+    if not failed:
+        return f"physics: {physics.reason}"
+    t = max(failed, key=lambda t: t.translation)
+    return f"physics: {physics.reason} (push {t.direction}: {t.translation * 100:.1f} cm, {t.rotation:.0f}°)"
 
 
 def _rotation(q: np.ndarray) -> np.ndarray:

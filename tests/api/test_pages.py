@@ -69,7 +69,7 @@ def test_viewer_draws_the_result(service: str) -> None:
     assert "could not load" not in dom
     assert "Ferrari–Canny ε" in dom and "converged" in dom and "fake_hand" in dom
     assert "proposal 0" in dom and "proposal 1" not in dom  # numbered as the CLI and `result.proposals[i]`
-    assert "not asked: options.simulate" in dom  # no physics test was asked for
+    assert "not run: options.simulate false" in dom  # no physics test ran
 
 
 def test_viewer_shows_the_physics_trials(service: str) -> None:

@@ -39,3 +39,20 @@ def test_figure_shows_object_heatmap_contacts_forces_and_palm(
     assert bare.data[0].name == "contacts" and bare.layout.title.text == "t"
     html = fig.to_html(include_plotlyjs=False)
     assert "contacts" in html
+
+
+def test_the_quality_line_says_whether_it_held_in_physics(result_factory: Callable[..., Any]) -> None:
+    from manifoundation.contract import PhysicsQuality, PhysicsTrial
+    from manifoundation.sdk.outputs import quality_text
+
+    result = result_factory()
+    p = result.proposals[0]
+    assert "physics" not in quality_text(p)
+    pushes = [PhysicsTrial(direction=d, translation=0.002, rotation=1.0, held=True) for d in ("-x", "+x", "-y")]
+    moved = PhysicsTrial(direction="+y", translation=0.046, rotation=81.0, held=False)
+    common = {"penetration": 0.0, "touching_after_squeeze": 3, "seconds": 0.2, "object_pieces": "hull"}
+    p.quality.physics = PhysicsQuality(held=False, reason="moved", trials=[*pushes, moved], **common)
+    assert "physics: moved (push +y: 4.6 cm, 81°)" in quality_text(p)
+    p.quality.physics = PhysicsQuality(held=True, reason="held", trials=pushes, **common)
+    assert "physics: held (moved ≤ 0.2 cm)" in quality_text(p)
+    assert "physics: held" in result_figure(result).layout.title.text

@@ -143,7 +143,7 @@ function sphereMesh(spheres) {
 
 // The simulated grasp test (options.simulate): its verdict, then each push direction's displacement and turn.
 function physicsRows(physics) {
-  if (!physics) return [["physics test", "- (not asked: options.simulate)"]];
+  if (!physics) return [["physics test", "- (not run: options.simulate false, or not a rigid grasp with a hand)"]];
   const trials = (physics.trials || []).map((t) => ["push " + t.direction,
     (t.held ? "held" : "moved") + ", " + (1000 * t.translation).toFixed(1) + " mm, " + t.rotation.toFixed(1) + "°"]);
   const gaps = (physics.tip_gaps || []).map((g) => (1000 * g).toFixed(1)).join(", ");
