@@ -5,7 +5,8 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-stamp
 HOST ?= 127.0.0.1
-PORT ?= 8000
+# HTTP's port; unset: 8000, or a free port printed at start when 8000 is taken (`make serve PORT=8080`)
+PORT ?=
 # gRPC's port; unset: 50051, or a free port printed at start when 50051 is taken (`make serve GRPC_PORT=50052`)
 GRPC_PORT ?=
 
@@ -32,7 +33,7 @@ $(STAMP): pyproject.toml distributions/client/pyproject.toml research/pyproject.
 install: $(STAMP)
 
 serve: $(STAMP)
-	$(BIN)/mani serve --host $(HOST) --port $(PORT) $(if $(GRPC_PORT),--grpc-port $(GRPC_PORT))
+	$(BIN)/mani serve --host $(HOST) $(if $(PORT),--port $(PORT)) $(if $(GRPC_PORT),--grpc-port $(GRPC_PORT))
 
 lint: $(STAMP)
 	$(BIN)/ruff check .

@@ -13,8 +13,8 @@ EXAMPLE = """examples:
   mani serve --port 9000 --workers 4
   mani serve --redis redis://localhost:6379/0 # API only; run `mani worker --redis ...` elsewhere
   mani serve --grpc-port 50052                # gRPC on another port (default 50051; --no-grpc: HTTP only)
-ports: both are checked before anything loads. A taken HTTP port is an error; a taken default gRPC port (50051)
-  is replaced by a free one, printed at start; a gRPC port you set (--grpc-port, MANI_GRPC_PORT) must be free.
+ports: both are checked before anything loads. A taken default port (HTTP 8000, gRPC 50051) is replaced by a
+  free one, printed at start; a port you set (--port, MANI_PORT, --grpc-port, MANI_GRPC_PORT) must be free.
 environment: MANI_HOST, MANI_PORT, MANI_GRPC_PORT, MANI_GRPC_MAX_MESSAGE_BYTES, MANI_CONCURRENCY,
   MANI_REDIS_URL, MANI_API_KEYS, MANI_RATE_LIMIT_PER_S, ..."""
 
@@ -92,29 +92,39 @@ def _free_port(host: str, avoid: int) -> int:
             return port
 
 
-def check_ports(settings: Any) -> tuple[Any, str | None]:
-    """``settings`` once both ports are known to be free, and a line to print when gRPC moved; `PortTaken` when the
-    HTTP port, or a gRPC port the user set (``--grpc-port`` / ``MANI_GRPC_PORT``), cannot be listened on. Run before
-    anything loads, so a busy port costs a second, not the model loading."""
+def check_ports(settings: Any) -> tuple[Any, list[str]]:
+    """``settings`` once both ports are known to be free, and the lines to print for ports that moved; `PortTaken`
+    when a port the user set (``--port`` / ``MANI_PORT``, ``--grpc-port`` / ``MANI_GRPC_PORT``) cannot be listened
+    on. A taken *default* port (8000, 50051) is replaced by a free one, as Jupyter does, so the README's first
+    command runs on a busy machine. Run before anything loads, so a busy port costs a second, not the model
+    loading."""
+    notes: list[str] = []
     if settings.port:
         why = _cannot_listen(settings.host, settings.port)
-        if why:
+        if why and "port" in settings.model_fields_set:
             raise PortTaken(f"mani serve: cannot listen on {settings.host}:{settings.port} ({why}): choose another "
                             "port with --port or MANI_PORT (make serve PORT=...)")  # fmt: skip
+        if why:
+            port = _free_port(settings.host, settings.grpc_port)
+            notes.append(f"mani serve: port {settings.port} is taken ({why}); the service listens on "
+                         f"http://{settings.host}:{port} instead: point clients there (--url, MANI_URL) or choose "
+                         "with --port or MANI_PORT (make serve PORT=...)")  # fmt: skip
+            settings = settings.model_copy(update={"port": port})
     if not settings.grpc_port:
-        return settings, None
+        return settings, notes
     host = settings.grpc_host or settings.host
     same = settings.port and settings.grpc_port == settings.port and host == settings.host
     why = "the HTTP port" if same else _cannot_listen(host, settings.grpc_port)
     if not why:
-        return settings, None
+        return settings, notes
     if "grpc_port" in settings.model_fields_set:
         raise PortTaken(f"mani serve: cannot listen for gRPC on {host}:{settings.grpc_port} ({why}): choose another "
                         "port with --grpc-port or MANI_GRPC_PORT (make serve GRPC_PORT=...), or --no-grpc")  # fmt: skip
     port = _free_port(host, settings.port)
-    note = (f"mani serve: gRPC port {settings.grpc_port} is taken ({why}); gRPC listens on {host}:{port} instead "
-            "(choose with --grpc-port or MANI_GRPC_PORT, make serve GRPC_PORT=...; --no-grpc: none)")  # fmt: skip
-    return settings.model_copy(update={"grpc_port": port}), note
+    notes.append(f"mani serve: gRPC port {settings.grpc_port} is taken ({why}); gRPC listens on {host}:{port} "
+                 "instead (choose with --grpc-port or MANI_GRPC_PORT, make serve GRPC_PORT=...; "
+                 "--no-grpc: none)")  # fmt: skip
+    return settings.model_copy(update={"grpc_port": port}), notes
 
 
 def uvicorn_config(app: Any, settings: Any) -> Any:
@@ -154,8 +164,8 @@ def serve(args: argparse.Namespace) -> int:
     except PortTaken as exc:
         print(exc, file=sys.stderr)
         return 2
-    if moved:
-        print(moved, file=sys.stderr, flush=True)
+    for line in moved:
+        print(line, file=sys.stderr, flush=True)
 
     import uvicorn
 

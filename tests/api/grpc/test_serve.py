@@ -1,6 +1,6 @@
 """`mani serve` serves gRPC beside HTTP in its one process (default on), `--no-grpc` turns it off; busy ports are
-found before anything loads (the HTTP one and a gRPC one the user set: one line and exit 2; the default gRPC one:
-a free port instead, printed)."""
+found before anything loads (a port the user set: one line and exit 2; a default one, HTTP 8000 or gRPC 50051: a
+free port instead, printed)."""
 
 from __future__ import annotations
 
@@ -178,6 +178,41 @@ def test_a_busy_default_grpc_port_is_replaced_by_a_free_one() -> None:
                 health = health_pb2_grpc.HealthStub(channel)
                 reply = health.Check(health_pb2.HealthCheckRequest(service=SERVICE_NAME), timeout=5)
                 assert reply.status == health_pb2.HealthCheckResponse.SERVING
+        finally:
+            _stop(proc)
+    finally:
+        holder.close()
+
+
+def test_a_busy_default_http_port_is_replaced_by_a_free_one() -> None:
+    """The README's first command on a busy machine: 8000 taken, no port asked for → a free port, printed."""
+    default = Settings.model_fields["port"].default
+    holder = socket.socket()
+    try:
+        holder.bind(("127.0.0.1", default))
+        holder.listen()
+    except OSError as exc:  # another program holds it already: just as busy
+        assert exc.errno == errno.EADDRINUSE, exc
+    try:
+        cmd = [sys.executable, "-m", "manifoundation.cli.main", "serve", "--workers", "1", "--no-grpc"]
+        proc = subprocess.Popen(cmd, cwd=ROOT, env=_env(MANI_PORT=None), stdout=subprocess.DEVNULL,
+                                stderr=subprocess.PIPE)  # fmt: skip
+        try:
+            assert proc.stderr is not None
+            line = proc.stderr.readline().decode()
+            assert f"port {default} is taken" in line and "--port" in line and "MANI_URL" in line, line
+            moved = int(line.split("listens on http://127.0.0.1:")[1].split()[0])
+            assert moved != default
+            end = time.monotonic() + 60
+            while True:
+                assert proc.poll() is None, "mani serve exited"
+                try:
+                    if httpx.get(f"http://127.0.0.1:{moved}/readyz", timeout=1).status_code == 200:
+                        break
+                except httpx.HTTPError:
+                    pass
+                assert time.monotonic() < end, "mani serve did not become ready on the port it printed"
+                time.sleep(0.1)
         finally:
             _stop(proc)
     finally:
