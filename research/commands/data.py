@@ -32,6 +32,9 @@ def register(subparsers: Any) -> None:
         "--targeted-per-grasp", type=int, default=0,
         help="examples of a chosen task per grasp (a lift most often, else a push or a turn; firm forces)",
     )  # fmt: skip
+    g.add_argument("--physics", choices=("off", "closure"), default="off",
+                   help="closure: only sampled grasps that hold in the simulated six-push test label examples "
+                        "(research/data/physics_labels.py); off: every feasible grasp")
     g.add_argument("--articulated-fraction", type=float, default=0.2)
     g.add_argument("--test-fraction", type=float, default=0.15)
     g.add_argument(
@@ -130,6 +133,7 @@ def _generate(args: argparse.Namespace) -> int:
         palms=args.palms,
         max_set=args.max_set,
         test_objects_only=args.test_objects_only,
+        physics=args.physics,
     )
     from manifoundation.core.robots import list_hands
 

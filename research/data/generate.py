@@ -60,6 +60,7 @@ class DataConfig:
     num_points: int = 2048
     kinds: tuple[str, ...] = ()  # empty: every kind of manifoundation.core.objects
     test_objects_only: bool = False  # label test objects only (the evaluation set, ~7x faster); shards keep all ids
+    physics: str = "off"  # "closure": only sampled grasps that hold in the six-push test label (physics_labels)
 
     def to_dict(self) -> dict[str, Any]:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
@@ -107,6 +108,7 @@ def run_shard(cfg: DataConfig, index: int, out_dir: str) -> ShardResult:
     from manifoundation.core.robots import get_hand
     from research.data.checks import ObjectField
     from research.data.examples import ObjectInfo, make_example
+    from research.data.physics_labels import held_grasps
     from research.data.sampling import sample_grasps
     from research.data.targeted import make_targeted_example
 
@@ -150,6 +152,11 @@ def run_shard(cfg: DataConfig, index: int, out_dir: str) -> ShardResult:
             except Exception as exc:  # a hand under construction must not kill a long run; counted
                 counts[f"errors/{hand_name}/{type(exc).__name__}"] += 1
                 continue
+            if cfg.physics == "closure":
+                judged = held_grasps(hand, grasps, obj.mesh)
+                counts[f"physics/tested/{hand_name}"] += len(grasps)
+                counts[f"physics/held/{hand_name}"] += len(judged.held)
+                grasps = judged.held
             for g in grasps:
                 for nth in range(cfg.examples_per_grasp + cfg.targeted_per_grasp):
                     if hand_name in held or split == "test":
