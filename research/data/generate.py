@@ -128,18 +128,9 @@ def run_shard(cfg: DataConfig, index: int, out_dir: str) -> ShardResult:
         obj = make_dataset_object(cfg, i)
         split = object_split(obj.id, cfg.test_fraction)
         info = ObjectInfo.from_object(obj)
-        for key, val in (
-            ("ids", obj.id),
-            ("kinds", obj.kind),
-            ("points", obj.points),
-            ("normals", obj.normals),
-            ("scale", info.scale),
-            ("centre", info.centre),
-            ("mass", info.mass),
-            ("inertia", info.inertia),
-            ("length", info.length),
-            ("split", split),
-        ):
+        values = (obj.id, obj.kind, obj.points, obj.normals, info.scale, info.centre, info.mass, info.inertia,
+                  info.length, split)  # fmt: skip
+        for key, val in zip(objs, values, strict=True):  # objs' keys in this order
             objs[key].append(val)
         if cfg.test_objects_only and split != "test":
             continue  # the object stays in the shard (global indices unchanged), without examples
