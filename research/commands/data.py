@@ -35,6 +35,9 @@ def register(subparsers: Any) -> None:
     g.add_argument("--physics", choices=("off", "closure"), default="off",
                    help="closure: only sampled grasps that hold in the simulated six-push test label examples "
                         "(research/data/physics_labels.py); off: every feasible grasp")
+    g.add_argument("--closure-mu", type=float, default=None,
+                   help="sample grasps aiming for force closure at this friction coefficient (pinching palms, "
+                        "closure pre-test; research/data/sampling.py) instead of any feasible grasp")
     g.add_argument("--articulated-fraction", type=float, default=0.2)
     g.add_argument("--test-fraction", type=float, default=0.15)
     g.add_argument(
@@ -134,6 +137,7 @@ def _generate(args: argparse.Namespace) -> int:
         max_set=args.max_set,
         test_objects_only=args.test_objects_only,
         physics=args.physics,
+        closure_mu=args.closure_mu,
     )
     from manifoundation.core.robots import list_hands
 

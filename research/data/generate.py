@@ -61,6 +61,7 @@ class DataConfig:
     kinds: tuple[str, ...] = ()  # empty: every kind of manifoundation.core.objects
     test_objects_only: bool = False  # label test objects only (the evaluation set, ~7x faster); shards keep all ids
     physics: str = "off"  # "closure": only sampled grasps that hold in the six-push test label (physics_labels)
+    closure_mu: float | None = None  # sample grasps aiming for force closure at this μ (sampling.sample_grasps)
 
     def to_dict(self) -> dict[str, Any]:
         return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
@@ -139,7 +140,8 @@ def run_shard(cfg: DataConfig, index: int, out_dir: str) -> ShardResult:
             rng = np.random.default_rng([cfg.seed, i, all_hands.index(hand_name)])
             try:
                 hand = get_hand(hand_name)
-                grasps = sample_grasps(hand, fieldobj, obj.size, rng, palms=cfg.palms, max_grasps=cfg.grasps_per_job)
+                grasps = sample_grasps(hand, fieldobj, obj.size, rng, palms=cfg.palms, max_grasps=cfg.grasps_per_job,
+                                       closure_mu=cfg.closure_mu)  # fmt: skip
             except Exception as exc:  # a hand under construction must not kill a long run; counted
                 counts[f"errors/{hand_name}/{type(exc).__name__}"] += 1
                 continue
