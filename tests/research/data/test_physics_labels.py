@@ -47,9 +47,10 @@ def test_a_shard_with_physics_labels_only_grasps_that_held(tmp_path: Path) -> No
 
 
 def test_closure_sampling_reaches_the_sampler(tmp_path: Path) -> None:
-    """``closure_mu`` samples pinching palms: on a box the Panda's grasps are then found and tested."""
+    """``closure_mu`` samples pinching palms: on an 8 cm box (seed 3's first object) the Panda's grasps are then
+    found and tested."""
     cfg = DataConfig(objects=1, objects_per_shard=1, hands=("panda_gripper",), held_out_hands=(), palms=6,
                      grasps_per_job=3, examples_per_grasp=1, num_points=256, kinds=("box",), physics="closure",
-                     closure_mu=0.6)  # fmt: skip
+                     closure_mu=0.6, seed=3)  # fmt: skip
     result = run_shard(cfg, 0, str(tmp_path))
     assert result.counts["physics/tested/panda_gripper"] > 0
