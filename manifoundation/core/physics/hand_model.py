@@ -3,8 +3,8 @@ joints with the description's limits, armature and damping, a position actuator 
 joints as joint equalities, every link's meshes as mesh geoms (collided as convex hulls), the palm welded to the
 world at the answer's pose.
 
-Bodies get a nominal 30 g and (1e-5 kg·m²) inertia each: with the palm welded, only the fingers' inertia matters,
-and the armature dominates it.
+Bodies get a nominal 30 g and (1e-5 kg·m²) inertia each: with the palm welded, only the fingers' inertia matters
+(revolute joints carry no armature, as the benchmark's hands; prismatic ones `Protocol.armature_prismatic`).
 """
 
 from __future__ import annotations

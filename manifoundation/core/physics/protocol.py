@@ -29,7 +29,8 @@ class Protocol:
         mass: object mass, kg. friction: sliding, torsional. force_factor: the force is ``force_factor × mass`` N.
         pregrasp_distance: contacts moved this far outward (m) for the pregrasp and as far inward for the squeeze.
         kp_revolute: position gain of revolute joints, N·m/rad; kp_prismatic: of prismatic joints, N/m.
-        armature_revolute (kg·m²) / armature_prismatic (kg): reflected rotor inertia, which keeps the 4 ms step stable.
+        armature_revolute (kg·m²) / armature_prismatic (kg): reflected rotor inertia; revolute joints have none, as
+            DexGraspBench's hands (0.01 kg·m² made the test more lenient than the benchmark's own code).
         damping_revolute (N·m·s/rad) / damping_prismatic (N·s/m): joint damping (ζ ≈ 0.3 and 0.9 with those gains).
         max_translation (m) / max_rotation (deg): what the object may move / turn; max_penetration (m) at the start.
         Target motion (``simulate_motion``, issue 63): after the squeeze, gravity (m/s², along −z) on and the palm
@@ -50,7 +51,7 @@ class Protocol:
     pregrasp_distance: float = 0.01
     kp_revolute: float = 3.0
     kp_prismatic: float = 300.0
-    armature_revolute: float = 0.01
+    armature_revolute: float = 0.0
     armature_prismatic: float = 0.1
     damping_revolute: float = 0.1
     damping_prismatic: float = 10.0
