@@ -59,9 +59,9 @@ FALLBACK_SOLVER = mujoco.mjtSolver.mjSOL_PGS
 """The constraint solver a diverged run is simulated again with. Newton (MuJoCo's default and the benchmark's)
 diverges on some hands' frictional self-contacts under elliptic cones: two of Shadow's finger links touching (0.005
 mm deep) sent its knuckle joints' accelerations to 3e6 rad/s² in one step, 32 of 43 Shadow answers on third-party
-objects. PGS solves the same constraints (same cones, friction, solref) without diverging there; where Newton does
-not diverge the verdicts agree (LEAP 7/43, LEAP Hand 12/43, Allegro 9/43 held with either, at 0.01 kg·m² armature), and PGS costs about 1.5×,
-so it runs only after a divergence."""
+objects (measured with a 0.01 kg·m² joint armature). PGS solves the same constraints (same cones, friction, solref)
+without diverging there; where Newton does not diverge the verdicts agree (LEAP 7/43, LEAP Hand 12/43, Allegro 9/43
+held with either), and PGS costs about 1.5×, so it runs only after a divergence."""
 
 
 def diverged_count(sc: Scene) -> int:
