@@ -6,7 +6,7 @@ joint values for the same pregrasp / grasp / squeeze targets; the object's conve
 evaluated by DGB's ``fcMocapEval`` in DGB's own venv (``research/benchmarks/dexgraspbench/dgb_driver.py``). The
 table counts, per hand: answers, held by our test, held by DGB, held by both, disagreements and the difference in
 points (DGB − ours), for each ``--armature`` variant: ``fetched`` (DGB's hands as they are) or a value in kg·m² set on
-every DGB hand joint (``ours`` = our test's 0.01, `manifoundation.core.physics.Protocol.armature_revolute`).
+every DGB hand joint (``ours`` = our test's, `manifoundation.core.physics.Protocol.armature_revolute`: 0, as DGB's).
 "DGB resets": grasps during which MuJoCo's state diverged and was reset (DGB does not check; counted failed here).
 
 Nothing is downloaded: DGB's work tree and venv are set up once (research/benchmarks/dexgraspbench/README.md) and
@@ -14,7 +14,7 @@ named by ``--dgb-dir`` / ``--dgb-python`` (or ``$DGB_SRC`` / ``$DGB_PYTHON``).
 
 Example:
     mani-lab eval physics --hand leap_hand,allegro,shadow --objects 20 --json physics.json
-    mani-lab eval dexgraspbench --json-in physics.json --armature fetched,ours
+    mani-lab eval dexgraspbench --json-in physics.json --armature fetched,0.01
 """
 
 from __future__ import annotations
@@ -47,8 +47,8 @@ def add_dexgraspbench_parser(sub: Any) -> None:
                    help="the Python of DGB's venv (default $DGB_PYTHON)")  # fmt: skip
     a.add_argument(
         "--armature",
-        default="fetched,ours",
-        help="comma-separated variants: fetched (DGB's hands as they are), ours (0.01) or kg·m²",
+        default="fetched",
+        help="comma-separated variants: fetched (DGB's hands as they are), ours (our test's armature) or kg·m²",
     )
     a.add_argument("--workdir", default=None, help="where DGB's files go (default: a temporary folder)")
     a.add_argument("--json", default=None, help="also write every answer's verdicts to this file")
@@ -69,7 +69,7 @@ def setup_problem(dgb_dir: str | None, dgb_python: str | None) -> str | None:
 
 
 def armatures(text: str) -> list[float | None]:
-    """``fetched,ours,0.005`` -> [None, 0.01, 0.005].
+    """``fetched,ours,0.005`` -> [None, our armature, 0.005].
 
     Raises:
         ValueError: anything else.

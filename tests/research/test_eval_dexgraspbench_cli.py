@@ -35,7 +35,9 @@ def test_without_the_setup_it_says_how_and_exits_2(tmp_path: Path, capsys: pytes
 
 
 def test_armature_variants() -> None:
-    assert armatures("fetched,ours,0.005") == [None, 0.01, 0.005]
+    from manifoundation.core.physics import Protocol
+
+    assert armatures("fetched,ours,0.005") == [None, Protocol().armature_revolute, 0.005]
     with pytest.raises(ValueError):
         armatures("heavy")
 
