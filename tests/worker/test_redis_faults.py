@@ -212,7 +212,7 @@ def test_writes_refused_at_maxmemory_are_retried_not_left_for_the_visibility_tim
         with redis_server(tmp_path, extra=extra) as server:
             queue = client(server.url)
             await queue.start()
-            iterations = 8 if when == "outcome" else 2  # ≈ 3 s: still running once Redis is full
+            iterations = 16 if when == "outcome" else 2  # ≈ 6 s: still running once Redis is full, under load too
             ids = await queue.submit([small_request(i) for i in range(4)])
             filled = await asyncio.to_thread(_fill, server.url) if when == "delivery" else 0
             options = {"stage_seconds": 0.1, "iterations": iterations}
