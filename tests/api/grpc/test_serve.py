@@ -4,6 +4,7 @@ free port instead, printed)."""
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
 import signal
@@ -11,6 +12,7 @@ import socket
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 import grpc
@@ -58,16 +60,37 @@ def _serve(
         *flags,
     ]
     proc = subprocess.Popen(cmd, cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    _until_ready(proc, port)
+    return proc, port
+
+
+def _until_ready(proc: subprocess.Popen[bytes], port: int) -> None:
+    """Wait (≤ 60 s) until the `mani serve` in ``proc`` answers /readyz on ``port``."""
     end = time.monotonic() + 60
     while True:
         assert proc.poll() is None, proc.stderr.read().decode() if proc.stderr else ""
         try:
             if httpx.get(f"http://127.0.0.1:{port}/readyz", timeout=1).status_code == 200:
-                return proc, port
+                return
         except httpx.HTTPError:
             pass
         assert time.monotonic() < end, "mani serve did not become ready"
         time.sleep(0.1)
+
+
+@contextlib.contextmanager
+def _busy(port: int) -> Iterator[None]:
+    """``port`` on 127.0.0.1 held as another program would hold it (or found held already: just as busy)."""
+    holder = socket.socket()
+    try:
+        try:
+            holder.bind(("127.0.0.1", port))
+            holder.listen()
+        except OSError as exc:
+            assert exc.errno == errno.EADDRINUSE, exc
+        yield
+    finally:
+        holder.close()
 
 
 def _stop(proc: subprocess.Popen[bytes]) -> None:
@@ -160,13 +183,7 @@ def test_a_busy_grpc_port_that_was_set_fails_at_once_with_one_line() -> None:
 
 def test_a_busy_default_grpc_port_is_replaced_by_a_free_one() -> None:
     default = Settings.model_fields["grpc_port"].default
-    holder = socket.socket()
-    try:
-        holder.bind(("127.0.0.1", default))
-        holder.listen()
-    except OSError as exc:  # another program holds it already: just as busy
-        assert exc.errno == errno.EADDRINUSE, exc
-    try:
+    with _busy(default):
         proc, _ = _serve(env=_env(MANI_GRPC_PORT=None))  # neither flag nor environment: the default
         try:
             assert proc.stderr is not None
@@ -180,20 +197,12 @@ def test_a_busy_default_grpc_port_is_replaced_by_a_free_one() -> None:
                 assert reply.status == health_pb2.HealthCheckResponse.SERVING
         finally:
             _stop(proc)
-    finally:
-        holder.close()
 
 
 def test_a_busy_default_http_port_is_replaced_by_a_free_one() -> None:
     """The README's first command on a busy machine: 8000 taken, no port asked for → a free port, printed."""
     default = Settings.model_fields["port"].default
-    holder = socket.socket()
-    try:
-        holder.bind(("127.0.0.1", default))
-        holder.listen()
-    except OSError as exc:  # another program holds it already: just as busy
-        assert exc.errno == errno.EADDRINUSE, exc
-    try:
+    with _busy(default):
         cmd = [sys.executable, "-m", "manifoundation.cli.main", "serve", "--workers", "1", "--no-grpc"]
         proc = subprocess.Popen(cmd, cwd=ROOT, env=_env(MANI_PORT=None), stdout=subprocess.DEVNULL,
                                 stderr=subprocess.PIPE)  # fmt: skip
@@ -203,17 +212,6 @@ def test_a_busy_default_http_port_is_replaced_by_a_free_one() -> None:
             assert f"port {default} is taken" in line and "--port" in line and "MANI_URL" in line, line
             moved = int(line.split("listens on http://127.0.0.1:")[1].split()[0])
             assert moved != default
-            end = time.monotonic() + 60
-            while True:
-                assert proc.poll() is None, "mani serve exited"
-                try:
-                    if httpx.get(f"http://127.0.0.1:{moved}/readyz", timeout=1).status_code == 200:
-                        break
-                except httpx.HTTPError:
-                    pass
-                assert time.monotonic() < end, "mani serve did not become ready on the port it printed"
-                time.sleep(0.1)
+            _until_ready(proc, moved)  # ready on the port it printed
         finally:
             _stop(proc)
-    finally:
-        holder.close()
