@@ -24,15 +24,7 @@ import numpy as np
 from manifoundation.core.physics.object_model import ObjectShape
 from manifoundation.core.physics.protocol import MotionTrial, PhysicsResult, Protocol
 from manifoundation.core.physics.scene import Scene, build_scene
-from manifoundation.core.physics.trial import (
-    FALLBACK_SOLVER,
-    _angle,
-    _drive,
-    _reset,
-    _touching,
-    diverged_count,
-    start,
-)
+from manifoundation.core.physics.trial import FALLBACK_SOLVER, _angle, _drive, _reset, _touching, diverged_count, start
 
 if TYPE_CHECKING:
     from manifoundation.core.robots.hand import Hand

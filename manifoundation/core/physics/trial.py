@@ -41,9 +41,8 @@ def simulate_grasp(
     q = np.asarray(joints, float)
     pre, squeeze, gaps, pen = start(sc, hand, q, contact_points, contact_normals, fingertips, p)
     if pen > p.max_penetration:
-        return PhysicsResult(
-            False, [], "penetration", pen, gaps, 0, pre, squeeze, time.perf_counter() - t0, object_pieces=shape.source
-        )
+        return PhysicsResult(False, [], "penetration", pen, gaps, 0, pre, squeeze, time.perf_counter() - t0,
+                             object_pieces=shape.source)  # fmt: skip
     trials, touching, unstable = _pushes(sc, pre, q, squeeze, p)
     if unstable:  # Newton diverged: the same physics once more with the projected Gauss-Seidel solver
         sc.model.opt.solver = FALLBACK_SOLVER
@@ -96,12 +95,7 @@ PREGRASP_ITERATIONS = 30
 
 
 def moved_contacts(
-    sc: Scene,
-    q: np.ndarray,
-    points: np.ndarray,
-    normals: np.ndarray,
-    fingertips: list[str],
-    distance: float,
+    sc: Scene, q: np.ndarray, points: np.ndarray, normals: np.ndarray, fingertips: list[str], distance: float,
     limits: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
     """(D,) joints that move each contact point ``distance`` along its outward normal (negative: inward), within
