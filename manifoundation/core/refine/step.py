@@ -150,7 +150,7 @@ def solve_step(lin: Linearisation, params: StepParams) -> StepSolution:
         prob.leq(Rows.beside(Rows.dense(-t["pair_rows"], iq), Rows.eye(b, isl + a, -1.0)), t["pair_rhs"])
     if a + b:
         prob.leq(Rows.eye(a + b, isl, -1.0), np.zeros(a + b))
-    cones = cone_rows(lin.normals, cone_mu(lin.task, lin.mu))
+    cones = cone_rows(lin.normals, cone_mu(lin.task, lin.mu, m))
     for i in range(m):
         prob.soc(Rows.dense(-cones[i], iff + 3 * i), np.zeros(3))
     x, status = prob.solve()
@@ -179,7 +179,7 @@ def solve_step_cvxpy(lin: Linearisation, params: StepParams) -> StepSolution:
         + params.regularisation * cp.sum_squares(cp.multiply(1 / np.maximum(params.trust, 1e-9), dq))
         + params.penalty * (cp.sum(sig_s) + cp.sum(sig_p))
     )
-    cones = cone_rows(lin.normals, cone_mu(lin.task, lin.mu))
+    cones = cone_rows(lin.normals, cone_mu(lin.task, lin.mu, m))
     f0 = lin.forces.reshape(-1)
     cons = [dq >= t["lo"], dq <= t["hi"], cp.abs(f - f0) <= params.trust_force]
     normal = []
