@@ -82,3 +82,20 @@ def test_forces_are_projected_into_their_cones():
         other = np.array([t[0], t[1], -fn])
         assert np.linalg.norm(out[1] - forces[1]) <= np.linalg.norm(other - forces[1]) + 1e-12
     assert np.allclose(out[2], 0.0)
+
+
+def test_closure_is_designed_for_a_narrower_cone_with_three_or_more_contacts():
+    """A thumb on a face and two fingers on the opposite one, their normals tilted 20° (tan 20° = 0.364): the
+    fingers' pushes balance only with that much friction. Three or more contacts are designed for 0.3 μ
+    (`CLOSURE_CONE_SHRINK`): 0.30 at μ 1 is too little, 0.45 at μ 1.5 enough. Two contacts keep 0.9 μ: 0.45 at μ 0.5
+    holds the thumb and one tilted finger on the line between them, 0.27 at μ 0.3 does not."""
+    tilt = np.deg2rad(20.0)
+    finger = np.array([np.cos(tilt), 0.0, np.sin(tilt)])
+    points = np.array([[-0.03, 0.0, 0.0], [0.03, 0.02, 0.0], [0.03, -0.02, 0.0]])
+    normals = np.array([[-1.0, 0.0, 0.0], finger, finger])
+    task = closure_task(np.zeros(3), 0.05)
+    assert solve_forces(task, points, normals, 1.0).residual_norm > 1e-3
+    assert solve_forces(task, points, normals, 1.5).residual_norm < 1e-6
+    two = np.array([[-0.03, 0.0, 0.0], [0.03, 0.0, 0.0]])
+    assert solve_forces(task, two, normals[:2], 0.5).residual_norm < 1e-6
+    assert solve_forces(task, two, normals[:2], 0.3).residual_norm > 1e-3
