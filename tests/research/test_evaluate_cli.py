@@ -40,6 +40,8 @@ def test_eval_refine_logs_progress_and_keeps_ground_truths(tmp_path: Path, capsy
     assert len(next(iter(again.values()))[0]) == len(candidates)
 
 
+# 20 s: a whole `mani-lab eval deformable` run beside its random baseline: `make test-slow`
+@pytest.mark.slow
 def test_eval_deformable_judges_the_goal_only_beside_a_random_baseline(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -52,6 +52,8 @@ def test_a_slide_example_labels_exactly_the_candidate_sets_that_reach_the_slid_b
                 assert ex.heat[i] < 1.0
 
 
+# 23 s: simulates every candidate set on two slides (a data-generation run): `make test-slow`
+@pytest.mark.slow
 def test_a_margin_keeps_the_sets_that_also_reach_a_longer_slide_which_drops_a_handkerchief_pushed_from_behind() -> None:
     handkerchief = make_body("cloth", "square", 100, {"friction": 0.6, "density": 600.0, "stretch": 1e3,
                                                       "bending": 1e-5})  # fmt: skip
