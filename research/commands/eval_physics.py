@@ -155,11 +155,12 @@ def run_physics(args: argparse.Namespace) -> int:
         t0 = time.perf_counter()
         out = run_pipeline(inp, predictor=predictor)
         seconds = time.perf_counter() - t0
+        scenes = sim.SceneCache(shapes[obj.name])  # the request's proposals judged in one compiled scene
         for k, p in enumerate(out.proposals):
             assert p.palm_position is not None and p.palm_quaternion is not None and p.joint_values is not None
             grasp = (hand, p.palm_position, p.palm_quaternion, p.joint_values, p.contact_points, p.contact_normals,
                      p.fingertips, shapes[obj.name])  # fmt: skip
-            r = (sim.simulate_grasp(*grasp, protocol=protocol) if motion is None
+            r = (sim.simulate_grasp(*grasp, protocol=protocol, scenes=scenes) if motion is None
                  else sim.simulate_motion(*grasp, np.array(motion[0]), np.array(motion[1]), protocol))  # fmt: skip
             m = r.motion
             records.append({

@@ -13,6 +13,7 @@ from manifoundation.core.physics.protocol import (
     Trial,
     physics_order,
 )
+from manifoundation.core.physics.scene import SceneCache
 from manifoundation.core.physics.trial import simulate_grasp
 
 __all__ = [
@@ -20,6 +21,7 @@ __all__ = [
     "ObjectShape",
     "PhysicsResult",
     "Protocol",
+    "SceneCache",
     "Trial",
     "from_mesh",
     "from_points",

@@ -11,7 +11,7 @@ import numpy as np
 
 from manifoundation.core.physics.object_model import ObjectShape
 from manifoundation.core.physics.protocol import DIRECTION_NAMES, DIRECTIONS, PhysicsResult, Protocol, Trial
-from manifoundation.core.physics.scene import Scene, build_scene
+from manifoundation.core.physics.scene import Scene, SceneCache, build_scene
 
 if TYPE_CHECKING:
     from manifoundation.core.robots.hand import Hand
@@ -23,7 +23,7 @@ GAP_RANGE = 0.05
 def simulate_grasp(
     hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, joints: np.ndarray,
     contact_points: np.ndarray, contact_normals: np.ndarray, fingertips: list[str], shape: ObjectShape,
-    protocol: Protocol | None = None,
+    protocol: Protocol | None = None, scenes: SceneCache | None = None,
 ) -> PhysicsResult:  # fmt: skip
     """Judge one grasp.
 
@@ -34,10 +34,14 @@ def simulate_grasp(
             one per fingertip link in ``fingertips``: the pregrasp moves each of them ``pregrasp_distance`` outward.
         shape: the object (`object_model`).
         protocol: settings (default: the benchmark's).
+        scenes: compiled scenes of ``shape`` to re-pose instead of compiling one (`SceneCache`).
     """
     p = protocol or Protocol()
     t0 = time.perf_counter()
-    sc = build_scene(hand, palm_position, palm_quaternion, shape, p)
+    if scenes is not None and scenes.shape is not shape:
+        raise ValueError("scenes: a cache of another object's scenes")
+    sc = (build_scene(hand, palm_position, palm_quaternion, shape, p) if scenes is None
+          else scenes.scene(hand, palm_position, palm_quaternion, p))  # fmt: skip
     q = np.asarray(joints, float)
     pre, squeeze, gaps, pen = start(sc, hand, q, contact_points, contact_normals, fingertips, p)
     if pen > p.max_penetration:

@@ -21,6 +21,7 @@ from manifoundation.core.physics import (
     ObjectShape,
     PhysicsResult,
     Protocol,
+    SceneCache,
     from_mesh,
     from_points,
     physics_order,
@@ -34,11 +35,13 @@ if TYPE_CHECKING:
 
 
 class PhysicsJudge:
-    """The simulated test for one request's proposals; the object is built once, at the first proposal."""
+    """The simulated test for one request's proposals; the object is built once, at the first proposal, and its
+    scene compiled once for every grasp tested (`SceneCache`)."""
 
     def __init__(self, prep: Prepared) -> None:
         self.prep = prep
         self._shape: ObjectShape | None = None
+        self._scenes: SceneCache | None = None
 
     def shape(self) -> ObjectShape:
         """The object the test builds: the sent mesh, else patches from the points and their normals."""
@@ -64,7 +67,9 @@ class PhysicsJudge:
             translation = np.zeros(3) if task.translation is None else np.asarray(task.translation, float)
             rotation = np.array([1.0, 0, 0, 0]) if task.rotation is None else np.asarray(task.rotation, float)
             return simulate_motion(*grasp, translation, rotation)
-        return simulate_grasp(*grasp, protocol=Protocol(stop_at_first_failure=not complete))
+        if self._scenes is None:  # the object's scene compiled once, re-posed for each grasp
+            self._scenes = SceneCache(self.shape())
+        return simulate_grasp(*grasp, protocol=Protocol(stop_at_first_failure=not complete), scenes=self._scenes)
 
     def complete_trials(self, proposals: list[ProposalOutput]) -> None:
         """Every push of each returned proposal whose search stopped at its first failing one."""

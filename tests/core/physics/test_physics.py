@@ -298,3 +298,48 @@ def test_a_joint_at_its_limit_is_left_there_and_the_others_solve_the_step() -> N
     assert dq[0] == 0.0 and abs(dq[1]) < 1e-9
     assert np.allclose(_bounded_step(J, e, np.zeros(2), lo, hi), free)
     assert np.allclose(_bounded_step(J, -e, at_limit, lo, hi), -free)  # moving away from the limit is allowed
+
+
+def _verdict(r: PhysicsResult) -> tuple[object, ...]:
+    return (r.reason, r.tip_gaps, r.penetration, r.contacts_after_squeeze, r.pregrasp.tolist(), r.squeeze.tolist(),
+            [(t.direction, t.translation, t.rotation, t.held) for t in r.trials])  # fmt: skip
+
+
+def test_a_scene_compiled_once_and_reposed_judges_each_grasp_as_a_new_scene_would() -> None:
+    """A request's search tests up to 8 grasps of one object: `SceneCache` compiles the object's scene once per
+    hand and moves the fixed palm (`Scene.place_palm`) instead of compiling again. Every figure of the verdict is
+    bit-identical to a freshly compiled scene's, in either order: the LEAP lemon answer that holds and the same hand
+    pulled back 2 cm, which does not."""
+    from manifoundation.core.physics import SceneCache
+
+    hand, shape = get_hand("leap"), _lemon()
+    back = -LEMON_PALM / np.linalg.norm(LEMON_PALM)
+    held = (hand, LEMON_PALM, LEMON_QUAT, LEMON_Q, LEMON_CONTACTS, LEMON_NORMALS, hand.fingertip_links, shape)
+    pulled = (hand, LEMON_PALM - 0.02 * back, LEMON_QUAT, LEMON_Q, LEMON_CONTACTS - 0.02 * back, LEMON_NORMALS,
+              hand.fingertip_links, shape)  # fmt: skip
+    fresh = {id(a): _verdict(simulate_grasp(*a)) for a in (held, pulled)}
+    assert fresh[id(held)][0] == "held" and fresh[id(pulled)][0] != "held"
+    cache = SceneCache(shape)
+    for a in (pulled, held, pulled):
+        assert _verdict(simulate_grasp(*a, scenes=cache)) == fresh[id(a)]
+    first = cache.scene(hand, LEMON_PALM, LEMON_QUAT, Protocol())
+    assert cache.scene(hand, -LEMON_PALM, LEMON_QUAT, Protocol()) is first  # compiled once
+    with pytest.raises(ValueError, match="another object"):
+        simulate_grasp(*held[:-1], from_mesh(_box().vertices, _box().faces), scenes=cache)
+
+
+def test_a_reposed_scene_starts_again_with_the_protocols_solver() -> None:
+    """A trial that diverges under Newton switches its scene to the fallback solver; the next grasp judged in the
+    same cached scene starts with Newton again (the gripper's box grasp holds after a diverging one)."""
+    from manifoundation.core.physics import SceneCache
+
+    hand, box = get_hand("panda_gripper"), _box()
+    shape = from_mesh(box.vertices, box.faces)
+    contacts = np.array([[0.0, HALF, PAD_Z], [0.0, -HALF, PAD_Z]])
+    normals = np.array([[0.0, 1.0, 0.0], [0.0, -1.0, 0.0]])
+    args = (hand, PALM_POS, PALM_QUAT, np.array([HALF]), contacts, normals, hand.fingertip_links, shape)
+    cache = SceneCache(shape)
+    sc = cache.scene(hand, PALM_POS, PALM_QUAT, Protocol())
+    sc.model.opt.solver = mujoco.mjtSolver.mjSOL_PGS  # as a trial's fallback leaves it
+    assert _verdict(simulate_grasp(*args, scenes=cache)) == _verdict(simulate_grasp(*args))
+    assert sc.model.opt.solver == mujoco.mjtSolver.mjSOL_NEWTON
