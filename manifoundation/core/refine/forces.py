@@ -30,10 +30,10 @@ CLOSURE_CONE_SHRINK = 0.3
 """Force closure with three or more contacts is designed for 0.3 μ (0.15 at the default μ 0.5), as BODex designs
 for 0.1 what the benchmark tests at 0.6: a position-controlled squeeze presses each finger along its normal with
 whatever stiffness the finger has there, so the pushes balance only where the normals nearly oppose, which a narrow
-cone demands. First answers on 43 third-party objects that held in the simulated grasp test (exact mesh) with 0.9 →
-0.3: LEAP 4 → 11, LEAP Hand 7 → 11, Allegro 11 → 11, Shadow 3 → 13, Barrett 11 → 23, Kinova 15 → 19; 0.5 and 0.2 held
-fewer over the four dexterous hands (research/results/physics.md). Verification solves the same cones, so fewer
-answers are verified (LEAP 41 → 29 of 43) and refinement takes longer (median LEAP 0.55 → 1.1 s)."""
+cone demands. First answers on 43 third-party objects that held in the simulated grasp test (exact mesh, `mani-lab
+eval physics`) with 0.9 → 0.3: LEAP 4 → 12, LEAP Hand 7 → 13, Allegro 11 → 14, Shadow 3 → 17, Barrett 14 → 18, Kinova
+17 → 21; 0.5 and 0.2 held fewer over the four dexterous hands (research/results/physics.md). Verification solves the
+same cones, so fewer answers are verified (LEAP 41 → 29 of 43) and refinement takes longer (p50 LEAP 0.55 → 1.1 s)."""
 TWO_CONTACT_CONE_SHRINK = 0.9
 """Two contacts (a parallel gripper's pads) keep 0.9 μ: two flat pads on parallel faces touch in patches, and the
 offset between the points the contact model picks on them is an artefact a narrow cone makes refinement chase (a
