@@ -51,8 +51,10 @@ class Scene:
 
     def place_palm(self, palm_position: np.ndarray, palm_quaternion: np.ndarray) -> None:
         """Move the (fixed) palm to a new pose (3,), (4,) wxyz in the compiled model, as compiling with that pose
-        would place it (the quaternion normalised as MuJoCo's compiler does), with fresh data and the protocol's
-        solver (a trial may have switched it to `trial.FALLBACK_SOLVER`). Closure scenes only (not ``moving``)."""
+        would place it (the quaternion normalised as MuJoCo's compiler does), with fresh data and MuJoCo's default
+        solver, Newton, as `build_scene` leaves it (a trial may have switched it to `trial.FALLBACK_SOLVER`). Closure
+        scenes only (not ``moving``), whose compiler placed the palm's inertial frame at its body frame (`SceneCache`
+        checks)."""
         palm = int(self.hand_bodies[0])
         quat = np.array(palm_quaternion, dtype=np.float64)
         mujoco.mju_normalize4(quat)
