@@ -88,6 +88,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--bomb-depth", type=int, default=4, help="include bomb: levels of 60 includes (4)")
     parser.add_argument("--mcp-posts", type=int, default=4, help="MCP: large upload_object posts at once (4)")
     parser.add_argument("--mcp-points", type=int, default=50_000, help="MCP: points per upload (50000: 6.6 MB)")
+    parser.add_argument("--mcp-indent", type=int, default=None, help="MCP: pretty-print uploads with this indent")
     parser.add_argument("--streams", type=int, default=40, help="MCP streams: GET /mcp streams opened (40)")
     parser.add_argument("--stream-max-s", type=float, default=3.0, help="MCP streams: MANI_MCP_STREAM_MAX_S (3)")
     parser.add_argument("--only", default=",".join(SCENARIOS), help=f"scenarios to run ({','.join(SCENARIOS)})")
@@ -509,30 +510,42 @@ async def include_bomb(args: argparse.Namespace) -> dict[str, Any]:
 
 async def mcp_bodies(args: argparse.Namespace) -> dict[str, Any]:
     """Issue 62, item 2: ``--mcp-posts`` `upload_object` calls of ``--mcp-points`` points posted to ``/mcp`` at once
-    (JSON, parsed by the MCP SDK) and one of 36.5 MB (refused by ``MANI_MCP_MAX_BODY_BYTES`` before it is read):
-    /healthz latency meanwhile, API RSS peak and after."""
+    (JSON, decoded in the service's body processes) and one over ``MANI_MCP_MAX_BODY_BYTES`` (refused before it is
+    read): /healthz latency meanwhile, API RSS peak and after; ``stored_mb``, the arrays of the objects the
+    service kept (at most ``MANI_MAX_OBJECTS`` per key: the other uploads are refused by the tool, ``tool_errors``)."""
     import httpx
     import numpy as np
 
+    from manifoundation.server.api.settings import Settings
     from research.bench.probes import health_probe
 
     p = np.random.default_rng(0).normal(size=(args.mcp_points, 3))
     p /= np.linalg.norm(p, axis=1, keepdims=True)
     call = {"jsonrpc": "2.0", "id": 1, "method": "tools/call",
             "params": {"name": "upload_object", "arguments": {"points": (0.04 * p).tolist(), "normals": p.tolist()}}}
-    data = json.dumps(call).encode()
-    huge = data + b" " * max(0, 36_500_000 - len(data))  # the issue's 36.5 MB, whitespace-padded
+    data = json.dumps(call, indent=args.mcp_indent).encode()
+    huge = data + b" " * max(0, Settings().mcp_max_body_bytes + 1 - len(data))  # over the limit, whitespace-padded
     headers = {"Content-Type": "application/json", "Accept": "application/json, text/event-stream"}
     proc, base = _serve(max_queue=10, stage_seconds=0.0)
     try:
-        before = rss_mb(proc.pid).get("VmRSS", 0.0)
         async with httpx.AsyncClient(base_url=base, timeout=args.budget, headers=headers) as http:
+            await http.post("/mcp", json={"jsonrpc": "2.0", "id": 0, "method": "tools/list"})  # the SDK loaded
+            before = rss_mb(proc.pid).get("VmRSS", 0.0)
+
+            kept: list[int] = []
+            tool_errors: list[str] = []
 
             async def post(body: bytes) -> int:
                 try:
-                    return (await http.post("/mcp", content=body)).status_code
+                    answer = await http.post("/mcp", content=body)
                 except httpx.HTTPError:
                     return 0
+                result = answer.json().get("result", {}) if answer.status_code == 200 else {}
+                if result.get("isError"):
+                    tool_errors.append(result["content"][0]["text"])
+                elif "structuredContent" in result:
+                    kept.append(int(result["structuredContent"]["bytes"]))
+                return answer.status_code
 
             with health_probe(f"{base}/healthz") as health:
                 t0 = time.perf_counter()
@@ -550,6 +563,7 @@ async def mcp_bodies(args: argparse.Namespace) -> dict[str, Any]:
         _stop(proc)
     return {
         "posts": args.mcp_posts, "post_mb": round(len(data) / 1e6, 1), "answers": dict(Counter(statuses)),
+        "stored": len(kept), "stored_mb": round(sum(kept) / 1e6, 1), "tool_errors": len(tool_errors),
         "huge_mb": round(len(huge) / 1e6, 1), "huge_answer": refused,
         "healthz_p50_ms": _pct(health, 0.5), "healthz_p99_ms": _pct(health, 0.99), "healthz_max_ms": _pct(health, 1.0),
         "api_rss_before_mb": round(before, 0), "api_rss_peak_mb": round(max(peak, after.get("VmHWM", 0.0)), 0),

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import importlib
 import json
 import pickle
 import sys
@@ -26,6 +27,8 @@ from manifoundation.contract.validation import field_errors
 
 ModelT = TypeVar("ModelT", bound=BaseModel)
 
+DECODE_AS = "manifoundation.server.api.bodies:decode_as"
+"""The decoder a child runs for `BodyPool.decode`."""
 PROTOBUF = "application/x-protobuf"
 """The "content type" of a gRPC request message: the contract's protobuf message of the model's name."""
 
@@ -46,6 +49,13 @@ def decode(cls: type[ModelT], data: bytes, content_type: str | None) -> tuple[st
         return "invalid", field_errors(exc)
     except (ValueError, TypeError, RecursionError) as exc:
         return "bad", f"body could not be read: {exc}"
+
+
+def decode_as(data: bytes, cls_path: str, content_type: str | None) -> tuple[str, Any]:
+    """`decode` for the model named ``"module:Name"`` (how a child process is told which model to decode)."""
+    module, _, name = cls_path.partition(":")
+    cls: type[BaseModel] = getattr(importlib.import_module(module), name)
+    return decode(cls, data, content_type)
 
 
 def _from_protobuf(cls: type[ModelT], data: bytes) -> tuple[str, Any]:
@@ -106,12 +116,19 @@ class BodyPool:
     ) -> tuple[str, Any]:
         """`decode` in a child process of the body ``chunks`` streamed to it as they come (call while holding a
         `slot`). The exceptions of ``chunks`` (408, 413) pass through; the child is then killed."""
+        return await self.run(DECODE_AS, chunks, f"{cls.__module__}:{cls.__qualname__}", content_type)
+
+    async def run(self, decoder: str, chunks: AsyncIterator[bytes], *args: str | int | None) -> tuple[str, Any]:
+        """``decoder(body, *args)`` in a child process (``decoder``: ``"module:function"``, a function of the
+        body's bytes and ``args`` (JSON values) answering a picklable ``(kind, value)``, importing no server code), with the
+        body ``chunks`` streamed to it as they come (call while holding a `slot`). The exceptions of ``chunks``
+        (408, 413) pass through; the child is then killed."""
         from manifoundation.server.api.errors import Unavailable
 
         child = self._idle.pop() if self._idle else await self._spawn()
         try:
             assert child.stdin is not None and child.stdout is not None
-            header = json.dumps({"cls": f"{cls.__module__}:{cls.__qualname__}", "ct": content_type}).encode()
+            header = json.dumps({"decoder": decoder, "args": list(args)}).encode()
             child.stdin.write(len(header).to_bytes(4, "big") + header)
             async for chunk in chunks:
                 child.stdin.write(len(chunk).to_bytes(4, "big"))

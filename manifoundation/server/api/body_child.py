@@ -1,10 +1,11 @@
 """A body-decoding process (``python -m manifoundation.server.api.body_child``): reads framed bodies on stdin, answers
 on stdout.
 
-Frame in: 4-byte big-endian header length, the header (JSON: ``cls`` "module:Name", ``ct`` content type), then the body
-as chunks, each a 4-byte big-endian length and that many bytes, ended by a chunk of length 0. Frame out: 8-byte
-big-endian length, then the pickled ``(kind, value)`` of `manifoundation.server.api.bodies.decode`. Imports `clients`
-and pydantic only: no torch, no server code. Exits at EOF.
+Frame in: 4-byte big-endian header length, the header (JSON: ``decoder`` "module:function", ``args`` a list of
+JSON values), then the body as chunks, each a 4-byte big-endian length and that many bytes, ended by a chunk of length 0.
+Frame out: 8-byte big-endian length, then the pickled ``(kind, value)`` that ``decoder(body, *args)`` answered
+(`manifoundation.server.api.bodies.decode_as`, `manifoundation.server.api.mcp.uploads.stage_upload`). Decoders import
+the contract and pydantic only: no torch, no queue or worker. Exits at EOF.
 """
 
 from __future__ import annotations
@@ -17,8 +18,6 @@ from typing import BinaryIO
 
 
 def main() -> None:
-    from manifoundation.server.api.bodies import decode
-
     source, sink = sys.stdin.buffer, sys.stdout.buffer
     sys.stdout = sys.stderr  # nothing but frames ever goes to the real stdout
     while True:
@@ -27,10 +26,10 @@ def main() -> None:
             return
         header = json.loads(source.read(int.from_bytes(head, "big")))
         data = _body(source)
-        module, _, name = header["cls"].partition(":")
-        cls = getattr(importlib.import_module(module), name)
+        module, _, name = header["decoder"].partition(":")
+        decoder = getattr(importlib.import_module(module), name)
         try:
-            blob = pickle.dumps(decode(cls, data, header["ct"]), protocol=pickle.HIGHEST_PROTOCOL)
+            blob = pickle.dumps(decoder(data, *header["args"]), protocol=pickle.HIGHEST_PROTOCOL)
         except Exception as exc:  # an answer that cannot be pickled is still an answer
             blob = pickle.dumps(("bad", f"body could not be read: {exc}"))
         sink.write(len(blob).to_bytes(8, "big") + blob)

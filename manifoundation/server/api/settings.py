@@ -108,8 +108,8 @@ class Settings(BaseSettings):
     )
     mcp_max_streams: int = Field(8, ge=1, le=10_000, description="Open `GET /mcp` event streams per key (429 beyond).")
     mcp_max_body_bytes: int = Field(
-        8 * 1024 * 1024, ge=1024, le=MAX_BODY_BYTES, description="Body limit of `POST /mcp` (413 beyond): the MCP "
-        "SDK parses JSON on the event loop, so large clouds belong on `/v1` (msgpack, decoded in a worker process)."
+        MAX_BODY_BYTES, ge=1024, le=MAX_BODY_BYTES, description="Body limit of `POST /mcp` (413 beyond). A body over "
+        "`MANI_PARSE_OFFLOAD_BYTES` must be an `upload_object` call: it is decoded in a body process, as `/v1`'s are."
     )
 
     # --- observability

@@ -5,10 +5,12 @@ A ``GET /mcp`` is a session's event stream, which the SDK keeps open for as long
 hold ``MANI_MCP_MAX_STREAMS`` at once (429 beyond), and each is ended after ``MANI_MCP_STREAM_MAX_S`` by telling
 the SDK's response that the client left (a client that still listens opens a new one, as SSE clients do).
 
-A ``POST /mcp`` body is parsed by the SDK on the event loop: bodies are limited to ``MANI_MCP_MAX_BODY_BYTES`` (413
-before reading, when declared larger), and a large one (over ``MANI_PARSE_OFFLOAD_BYTES``, or of unknown length)
-holds one of the service's large-body slots while the SDK reads and parses it, so that a few of them at once cannot
-stall every other request.
+A ``POST /mcp`` body is limited to ``MANI_MCP_MAX_BODY_BYTES`` (413 before reading, when declared larger). The SDK
+parses bodies on the event loop, so a large one (over ``MANI_PARSE_OFFLOAD_BYTES``, or of unknown length) waits for
+one of the service's large-body slots and is decoded in a body process first
+(`manifoundation.server.api.mcp.uploads`): an ``upload_object`` call reaches the SDK with its arrays emptied and its
+object already validated; any other call that large is refused (413); a small body of unknown length goes on as
+sent.
 """
 
 from __future__ import annotations
@@ -23,9 +25,11 @@ from starlette.types import Message, Receive, Scope, Send
 
 from manifoundation.server.api.deps import authorize
 from manifoundation.server.api.encoding import respond
-from manifoundation.server.api.errors import PayloadTooLarge, RateLimited, Unavailable, from_exception
-from manifoundation.server.api.negotiation import declared_length
+from manifoundation.server.api.errors import BadRequest, PayloadTooLarge, RateLimited, Unavailable, from_exception
+from manifoundation.server.api.mcp import uploads
+from manifoundation.server.api.negotiation import body_chunks, declared_length
 from manifoundation.server.api.services import AppServices
+from manifoundation.server.worker.heap import HeapTrimmer
 
 PATH = "/mcp"
 CALLER_KEY = "mani_caller"
@@ -39,6 +43,8 @@ class McpEndpoint:
         self.services = services
         self.streams: Counter[str | None] = Counter()
         """Open event streams per tenant (None: the service runs without keys)."""
+        self.heap = HeapTrimmer()
+        """Trims the C heap after large bodies (at most every 2 s): glibc keeps their freed arrays otherwise."""
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         request = Request(scope, receive)
@@ -51,8 +57,10 @@ class McpEndpoint:
                 if stream:  # counted in the same step as the check (no await between): a burst cannot overshoot
                     self.streams[caller.tenant] += 1
                     held.callback(self._closed, caller.tenant)
+                body: bytes | None = None
                 if not stream and self.services.bodies.large(declared):
                     await held.enter_async_context(self.services.bodies.slot())  # 503 after MANI_BODY_TIMEOUT
+                    body = await self._decoded(request, scope)
                 if self.services.mcp is None:
                     raise Unavailable("the service is not started")
                 app = await self.services.mcp.app()
@@ -61,8 +69,15 @@ class McpEndpoint:
                 await respond(request, error.body(), status=error.status, headers=error.headers)(scope, receive, send)
                 return
             scope.setdefault("state", {})[CALLER_KEY] = caller
+            if body is not None:
+                scope, receive = _with_body(scope, receive, body)
             if not stream:
-                await app(scope, receive, send)
+                try:
+                    await app(scope, receive, send)
+                finally:  # the server keeps a connection's last scope until its next request: not the arrays
+                    scope["state"].pop(uploads.STAGED_KEY, None)
+                if body is not None:  # its arrays were let go (or stored): give glibc's freed pages back
+                    self.heap.maybe_trim()
                 return
             ending = _EndingStream(receive, send, self.services.settings.mcp_stream_max_s)
             await app(scope, ending.receive, ending.send)
@@ -71,6 +86,26 @@ class McpEndpoint:
         self.streams[tenant] -= 1
         if not self.streams[tenant]:
             del self.streams[tenant]
+
+    async def _decoded(self, request: Request, scope: Scope) -> bytes:
+        """Read a large body into a body process (`stage_upload`); the body the SDK is to read instead. A staged
+        upload's object is left in ``scope``'s state. Raises 400 (large and not JSON), 413 (large and not an
+        upload, or over the limit), 408 (too slow)."""
+        settings = self.services.settings
+        chunks = body_chunks(request, settings.mcp_max_body_bytes, settings.body_timeout, settings.body_idle_timeout)
+        kind, value = await self.services.bodies.run(uploads.DECODER, chunks, settings.parse_offload_bytes)
+        if kind == "decode":
+            raise BadRequest(str(value))
+        if kind == "other":
+            raise PayloadTooLarge(
+                f"MCP bodies over {settings.parse_offload_bytes} bytes (MANI_PARSE_OFFLOAD_BYTES) carry "
+                f"{uploads.TOOL} calls only, not {value}; upload the object once and use its object_id"
+            )
+        if kind == "as_is":
+            return bytes(value)
+        staged: uploads.Staged = value
+        scope.setdefault("state", {})[uploads.STAGED_KEY] = staged
+        return staged.call
 
     def _check(self, tenant: str | None, stream: bool, declared: int | None) -> None:
         """Refuse a body declared over the MCP limit (413) and an event stream over the key's count (429)."""
@@ -83,6 +118,23 @@ class McpEndpoint:
         if stream and self.streams[tenant] >= settings.mcp_max_streams:
             raise RateLimited(f"at most {settings.mcp_max_streams} open MCP event streams per key "
                               "(MANI_MCP_MAX_STREAMS): close one first", retry_after=5.0)  # fmt: skip
+
+
+def _with_body(scope: Scope, receive: Receive, body: bytes) -> tuple[Scope, Receive]:
+    """``scope`` and ``receive`` for an app that is to read ``body`` (its length in the headers) as the request's
+    body; after it, ``receive`` waits for the client's disconnect as before."""
+    headers = [(k, v) for k, v in scope["headers"] if k.lower() not in (b"content-length", b"transfer-encoding")]
+    scope = {**scope, "headers": [*headers, (b"content-length", str(len(body)).encode())]}
+    sent = False
+
+    async def replay() -> Message:
+        nonlocal sent
+        if sent:
+            return await receive()
+        sent = True
+        return {"type": "http.request", "body": body, "more_body": False}
+
+    return scope, replay
 
 
 class _EndingStream:

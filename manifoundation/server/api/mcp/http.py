@@ -22,6 +22,7 @@ from manifoundation.server.api.errors import Unavailable
 from manifoundation.server.api.mcp.backend import ServiceBackend
 from manifoundation.server.api.mcp.endpoint import CALLER_KEY, PATH
 from manifoundation.server.api.mcp.tools import Session, SessionFn, build_server
+from manifoundation.server.api.mcp.uploads import STAGED_KEY, Staged
 from manifoundation.server.api.security import Caller
 
 if TYPE_CHECKING:
@@ -38,7 +39,8 @@ def session_maker(services: AppServices) -> SessionFn:
         scope_state = request.scope.get("state", {})
         caller: Caller = scope_state.get(CALLER_KEY) or Caller()
         backend = ServiceBackend(services, caller, str(scope_state.get("request_id", "")), str(request.base_url))
-        return Session(backend, tenant=caller.tenant or "", files=False)
+        staged: Staged | None = scope_state.get(STAGED_KEY)
+        return Session(backend, tenant=caller.tenant or "", files=False, staged=staged)
 
     return session_of
 

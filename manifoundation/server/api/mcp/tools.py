@@ -23,9 +23,12 @@ from mcp.server.mcpserver.exceptions import ToolError
 from pydantic import Field
 
 from manifoundation.contract import MAX_PROPOSALS, ErrorBody, ErrorType, ObjectIn, PlanRequest, SynthesisRequest
+from manifoundation.contract.validation import summary
+from manifoundation.server.api.errors import InvalidInput
 from manifoundation.server.api.mcp.backend import Backend, error_body
 from manifoundation.server.api.mcp.objects import ObjectStore
 from manifoundation.server.api.mcp.shapes import primitive
+from manifoundation.server.api.mcp.uploads import Staged, object_from_arrays
 from manifoundation.server.api.mcp.summaries import batch_summary, error_summary, hand_summary, job_summary
 
 MAX_WAIT_S = 60.0
@@ -41,6 +44,8 @@ class Session:
     backend: Backend
     tenant: str
     files: bool = False
+    staged: Staged | None = None
+    """This call's ``upload_object`` arrays, decoded by the ``/mcp`` endpoint in a body process (large calls)."""
 
 
 SessionFn = Callable[[Context], Awaitable[Session]]
@@ -225,6 +230,11 @@ def _uploaded(
     faces: list[list[int]] | None, path: str | None, friction: float | None, num_points: int,
 ) -> ObjectIn:  # fmt: skip
     """The object an upload describes, validated by the contract (a file only where the session allows)."""
+    staged = session.staged
+    if staged is not None and staged.errors is not None:
+        raise InvalidInput(summary(staged.errors), detail=staged.errors)
+    if staged is not None and staged.object is not None:
+        return staged.object
     properties = {} if friction is None else {"friction": friction}
     if shape is not None:
         try:
@@ -241,5 +251,4 @@ def _uploaded(
             return object_from_file(path, properties=properties)
         except OSError as exc:
             raise _fail(ErrorBody.of(ErrorType.VALIDATION_ERROR, f"path: cannot read {path!r} ({exc})")) from exc
-    mesh = None if vertices is None and faces is None else {"vertices": vertices, "faces": faces}
-    return ObjectIn.model_validate({"points": points, "normals": normals, "mesh": mesh, "properties": properties})
+    return object_from_arrays(points, normals, vertices, faces, friction)
