@@ -119,10 +119,10 @@ class BodyPool:
         return await self.run(DECODE_AS, chunks, f"{cls.__module__}:{cls.__qualname__}", content_type)
 
     async def run(self, decoder: str, chunks: AsyncIterator[bytes], *args: str | int | None) -> tuple[str, Any]:
-        """``decoder(body, *args)`` in a child process (``decoder``: ``"module:function"``, a function of the
-        body's bytes and ``args`` (JSON values) answering a picklable ``(kind, value)``, importing no server code), with the
-        body ``chunks`` streamed to it as they come (call while holding a `slot`). The exceptions of ``chunks``
-        (408, 413) pass through; the child is then killed."""
+        """``decoder(body, *args)`` in a child process, the body ``chunks`` streamed to it as they come (call while
+        holding a `slot`). ``decoder``: ``"module:function"``, a function of the body's bytes and ``args`` (JSON
+        values) that answers a picklable ``(kind, value)`` and imports no queue or worker code. The exceptions of
+        ``chunks`` (408, 413) pass through; the child is then killed."""
         from manifoundation.server.api.errors import Unavailable
 
         child = self._idle.pop() if self._idle else await self._spawn()

@@ -2,7 +2,8 @@
 on stdout.
 
 Frame in: 4-byte big-endian header length, the header (JSON: ``decoder`` "module:function", ``args`` a list of
-JSON values), then the body as chunks, each a 4-byte big-endian length and that many bytes, ended by a chunk of length 0.
+JSON values), then the body as chunks, each a 4-byte big-endian length and that many bytes, ended by a chunk of
+length 0.
 Frame out: 8-byte big-endian length, then the pickled ``(kind, value)`` that ``decoder(body, *args)`` answered
 (`manifoundation.server.api.bodies.decode_as`, `manifoundation.server.api.mcp.uploads.stage_upload`). Decoders import
 the contract and pydantic only: no torch, no queue or worker. Exits at EOF.

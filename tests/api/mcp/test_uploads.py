@@ -116,10 +116,10 @@ def test_a_refused_large_upload_is_not_kept_by_its_connection() -> None:
     call = {"jsonrpc": "2.0", "id": 1, "method": "tools/call",
             "params": {"name": "upload_object", "arguments": {"points": points, "normals": normals}}}  # fmt: skip
     settings = Settings(api_keys=[KEY], rate_limit_per_s=0, parse_offload_bytes=OFFLOAD, max_objects=1)
-    with serving(create_app(settings, queue=FakeQueue())) as url:  # type: ignore[arg-type]
-        with httpx.Client(base_url=url, headers=HEADERS, timeout=30) as client:  # one kept-alive connection
-            answers = [client.post("/mcp", json=call).json()["result"] for _ in range(2)]
-            assert answers[0]["isError"] is False and answers[1]["isError"] is True  # stored, then refused
-            gc.collect()
-            alive = [o for o in gc.get_objects() if isinstance(o, ObjectIn) and o.num_points == n]
-            assert len(alive) == 1  # the stored one only
+    app = create_app(settings, queue=FakeQueue())  # type: ignore[arg-type]
+    with serving(app) as url, httpx.Client(base_url=url, headers=HEADERS, timeout=30) as client:  # one connection
+        answers = [client.post("/mcp", json=call).json()["result"] for _ in range(2)]
+        assert answers[0]["isError"] is False and answers[1]["isError"] is True  # stored, then refused
+        gc.collect()
+        alive = [o for o in gc.get_objects() if isinstance(o, ObjectIn) and o.num_points == n]
+        assert len(alive) == 1  # the stored one only

@@ -32,6 +32,8 @@ from manifoundation.server.api.services import AppServices
 from manifoundation.server.worker.heap import HeapTrimmer
 
 PATH = "/mcp"
+MAX_DECLARED = 1 << 62
+"""No limit on a declared length as `declared_length` parses it: `McpEndpoint._check` names the MCP limit."""
 CALLER_KEY = "mani_caller"
 """Where `McpEndpoint` leaves the request's `Caller` in the ASGI scope's state for the tools."""
 
@@ -52,7 +54,7 @@ class McpEndpoint:
         async with contextlib.AsyncExitStack() as held:
             try:
                 caller = await authorize(request, self.services.settings)
-                declared = declared_length(request, self.services.settings.max_body_bytes)
+                declared = declared_length(request, MAX_DECLARED)  # 400 if malformed; its limit: `_check`
                 self._check(caller.tenant, stream, declared)
                 if stream:  # counted in the same step as the check (no await between): a burst cannot overshoot
                     self.streams[caller.tenant] += 1

@@ -78,9 +78,9 @@ def stage_upload(data: bytes, small: int) -> tuple[str, Any]:
     if arrays.get("points") is None:
         return "staged", Staged(call)
     friction = arguments.get("friction")
+    friction = friction if isinstance(friction, int | float) else None  # a bad one: the SDK's error, as for small
     try:
-        obj = object_from_arrays(arrays.get("points"), arrays.get("normals"), arrays.get("mesh_vertices"),
-                                 arrays.get("mesh_faces"), friction if isinstance(friction, int | float) else None)  # fmt: skip
+        obj = object_from_arrays(*(arrays.get(name) for name in ARRAYS), friction)
     except ValidationError as exc:
         return "staged", Staged(call, errors=field_errors(exc))
     return "staged", Staged(call, object=obj)
