@@ -80,7 +80,8 @@ def stage_upload(data: bytes, small: int) -> tuple[str, Any]:
     friction = arguments.get("friction")
     friction = friction if isinstance(friction, int | float) else None  # a bad one: the SDK's error, as for small
     try:
-        obj = object_from_arrays(*(arrays.get(name) for name in ARRAYS), friction)
+        points, normals, vertices, faces = (arrays.get(name) for name in ARRAYS)
+        obj = object_from_arrays(points, normals, vertices, faces, friction)
     except ValidationError as exc:
         return "staged", Staged(call, errors=field_errors(exc))
     return "staged", Staged(call, object=obj)
