@@ -184,7 +184,7 @@ class IterationOutput:
     step: float
 
 
-SIMULATE_CANDIDATES = 8
+SIMULATE_CANDIDATES = 16
 """Searching (``simulate`` "search"): the fewest starts drawn, one after another until ``num_proposals`` held
 (`physics_search`). On 43 third-party objects (K = 1) the first answer held for LEAP in 15 with 4, 20 with 8;
 Allegro 17 and 21; the median request 2.0 → 2.2 s and 1.0 → 1.8 s (research/results/physics.md)."""

@@ -83,8 +83,8 @@ def test_a_burst_of_streams_from_one_key_gets_its_limit_and_no_more(base: str) -
 
 
 def test_a_body_declared_over_the_mcp_limit_is_refused_before_it_is_read(base: str) -> None:
-    """MANI_MCP_MAX_BODY_BYTES (8 MiB by default): the SDK parses bodies on the event loop, so big ones are refused
-    with a 413 that says where large clouds go, before the body is read."""
+    """MANI_MCP_MAX_BODY_BYTES (the HTTP body limit by default): a body declared larger is refused with a 413 that
+    names the limit and says where larger clouds go, before the body is read."""
     limit = Settings().mcp_max_body_bytes
     headers = {"Authorization": f"Bearer {KEYS[0]}", "Content-Type": "application/json",
                "Accept": "application/json, text/event-stream"}  # fmt: skip
