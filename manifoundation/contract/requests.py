@@ -78,9 +78,9 @@ class SynthesisOptions(WireModel):
         "gravity on and the palm carried along the task's motion over 1 s, success within 1 cm and 10° of the "
         "target pose; docs/physics.md). Unset (the default): each returned proposal is tested once, "
         "`quality.success` requires that it passed and the ones that passed come first (about 0.05-0.35 s a "
-        "proposal on one core). true: search — up to 8 candidates (or `num_proposals`) are refined and tested one "
-        "after another until `num_proposals` passed, the best first (held and verified, held, verified); about "
-        "0.4-1.9 s a request instead of 0.15-0.3 s. false: no test (geometric verification only: faster, and a "
+        "proposal on one core). true: search — up to 16 candidates (or `num_proposals`) are refined and tested one "
+        "after another until `num_proposals` passed, the best first (held and verified, held, verified); a "
+        "median of 0.8-4.6 s a request by hand instead of 0.5-0.9 s. false: no test (geometric verification only: faster, and a "
         "proposal it calls a success may not hold). `quality.physics` carries the test (`test`: closure or "
         "motion).",
     )

@@ -87,7 +87,7 @@ def add_physics_parser(sub: Any) -> None:
         action=argparse.BooleanOptionalAction,
         default=None,
         help="options.simulate: unset, the pipeline tests what it returns (the service's default); "
-        "--simulate, it searches candidates until enough hold (at least 8); --no-simulate, no test",
+        "--simulate, it searches candidates until enough hold (at least 16); --no-simulate, no test",
     )
     a.add_argument(
         "--no-close", action="store_true", help="leave the fingertips where the refinement put them (no closing stage)"

@@ -134,7 +134,7 @@ def build_scene(
 
 class SceneCache:
     """The closure scenes of one object, compiled once per hand and protocol and re-posed for each grasp
-    (`Scene.place_palm`): compiling costs 0.29 s for LEAP's 103 convex pieces, a request's search tests up to 8
+    (`Scene.place_palm`): compiling costs 0.29 s for LEAP's 103 convex pieces, a request's search tests up to 16
     grasps of one object, and the palm is a fixed body, so a re-posed scene holds the same numbers as a new one
     (the verdicts are bit-identical: tests/core/physics)."""
 

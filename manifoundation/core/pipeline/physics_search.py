@@ -4,7 +4,7 @@ more candidates drawn until enough of them hold.
 The geometric checks cannot tell which of several verified proposals holds in physics (on 43 third-party objects
 the pipeline's first of four held for LEAP in 9, the best of the four by the test in 24;
 research/results/physics.md). So with ``simulate`` the pipeline draws `SynthesisInput.candidates` starts (network
-samples and opposed contact sets; at least 8), refines and judges them one after another, stops as soon as
+samples and opposed contact sets; at least 16), refines and judges them one after another, stops as soon as
 ``num_proposals`` of them are verified and held, and returns the ``num_proposals`` best in `physics_order`
 (verified and held, held, verified). The test (`manifoundation.core.physics`) is the one `mani-lab eval physics`
 runs: force closure's six pushes, or for a ``delta_pose`` task the executed motion; on the sent mesh, else on the

@@ -186,8 +186,9 @@ class IterationOutput:
 
 SIMULATE_CANDIDATES = 16
 """Searching (``simulate`` "search"): the fewest starts drawn, one after another until ``num_proposals`` held
-(`physics_search`). On 43 third-party objects (K = 1) the first answer held for LEAP in 15 with 4, 20 with 8;
-Allegro 17 and 21; the median request 2.0 → 2.2 s and 1.0 → 1.8 s (research/results/physics.md)."""
+(`physics_search`). On 43 third-party objects (K = 1, 0.3 μ design) the first answer held for LEAP in 24 with 8,
+29 with 16; Allegro 33 and 35; the median request 4.3 → 4.6 s and 1.6 → 1.7 s, the 90th percentile 6.5 → 11.7 s and
+4.0 → 6.6 s (those that find none search longer; research/results/physics.md)."""
 
 
 @dataclass

@@ -42,8 +42,8 @@ def _inp(**kw: object) -> SynthesisInput:
 
 
 @pytest.mark.parametrize("mode", ["off", "check"])
-def test_candidates_are_eight_or_as_many_as_asked(mode: PhysicsMode) -> None:
-    assert [_inp(num_proposals=k).candidates for k in (1, 2, 8, 12)] == [8, 8, 8, 12]
+def test_candidates_are_sixteen_or_as_many_as_asked(mode: PhysicsMode) -> None:
+    assert [_inp(num_proposals=k).candidates for k in (1, 2, 16, 20)] == [16, 16, 16, 20]
     assert [_inp(num_proposals=k, simulate=mode).candidates for k in (1, 3)] == [1, 3]
 
 
@@ -54,7 +54,7 @@ def test_a_grasp_that_holds_ends_the_search_at_once() -> None:
     (best,) = out.proposals
     assert best.physics is not None and best.physics.success and len(best.physics.trials) == 6
     assert best.physics.object_pieces == "hull"
-    assert fractions == [0.125]  # one candidate of eight refined, judged, enough
+    assert fractions == [1 / 16]  # one candidate of sixteen refined, judged, enough
     assert out.timings["physics"] > 0
 
 
@@ -64,7 +64,7 @@ def test_without_a_grasp_that_holds_every_candidate_is_tried_and_the_answer_list
     out = run_pipeline(_inp(method="contacts", contacts=np.array([[0.02, 0.01, 0], [0.02, -0.01, 0]]), refine=False),
                        progress=lambda stage, f: fractions.append(f) if stage == "verification" else None)  # fmt: skip
     (best,) = out.proposals
-    assert fractions[-1] == 1.0 and len(fractions) == 8
+    assert fractions[-1] == 1.0 and len(fractions) == 16
     assert best.physics is not None and not best.physics.success
     # searching stopped at the first push that moved it; the answer lists all six
     assert best.physics.reason == "moved"
