@@ -80,9 +80,9 @@ class SynthesisOptions(WireModel):
         "`quality.success` requires that it passed and the ones that passed come first (about 0.05-0.35 s a "
         "proposal on one core). true: search — up to 16 candidates (or `num_proposals`) are refined and tested one "
         "after another until `num_proposals` passed, the best first (held and verified, held, verified); a "
-        "median of 0.8-4.6 s a request by hand instead of 0.5-0.9 s. false: no test (geometric verification only: faster, and a "
-        "proposal it calls a success may not hold). `quality.physics` carries the test (`test`: closure or "
-        "motion).",
+        "median of 0.8-4.6 s a request by hand instead of 0.5-0.9 s. false: no test (geometric verification "
+        "only: faster, and a proposal it calls a success may not hold). `quality.physics` carries the test "
+        "(`test`: closure or motion).",
     )
     rollout_corrections: int = Field(
         0,
