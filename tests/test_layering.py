@@ -20,18 +20,10 @@ SERVER = {"manifoundation.server"}
 FORBIDDEN: dict[str, set[str]] = {
     "manifoundation": {"research"},
     "manifoundation/core": SERVER | CLIENT | WEB | {"research", "rich"},
-    "manifoundation/contract": {
-        "manifoundation.core",
-        "manifoundation.sdk",
-        "manifoundation.cli",
-        "torch",
-        "numba",
-        "fastapi",
-        "uvicorn",
-    }
-    | SERVER,
-    "manifoundation/sdk": {"manifoundation.core", "manifoundation.cli", "torch", "numba", "fastapi", "uvicorn"}
-    | SERVER,
+    "manifoundation/contract": {"manifoundation.core", "manifoundation.sdk", "manifoundation.cli", "torch", "numba",
+                                "fastapi", "uvicorn"} | SERVER,
+    "manifoundation/sdk": {"manifoundation.core", "manifoundation.cli", "torch", "numba", "fastapi",
+                           "uvicorn"} | SERVER,
     "manifoundation/cli": {"manifoundation.core", "torch", "numba", "fastapi", "uvicorn"} | SERVER,
     "manifoundation/server/api": SCIENCE_LIBS | {"manifoundation.core", "ray"},
     "manifoundation/server/offline": {"manifoundation.server.api"},
@@ -115,15 +107,8 @@ def test_ray_is_imported_inside_functions_only() -> None:
     assert not offenders, offenders
 
 
-@pytest.mark.parametrize(
-    "module",
-    [
-        "manifoundation.server.api.app",
-        "manifoundation.server.commands.offline",
-        "manifoundation.server.offline.batch",
-        "manifoundation.server.offline.ray_pool",
-    ],
-)
+@pytest.mark.parametrize("module", ["manifoundation.server.api.app", "manifoundation.server.commands.offline",
+                                    "manifoundation.server.offline.batch", "manifoundation.server.offline.ray_pool"])
 def test_ray_free_at_run_time(module: str) -> None:
     assert not {m for m in _modules_after_import(module) if _banned(m, {"ray"})}
 

@@ -49,32 +49,17 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
 def add_request_args(parser: argparse.ArgumentParser) -> None:
     """The options that make a request from an object file (shared with ``mani batch submit``)."""
     req = parser.add_argument_group("request")
-    req.add_argument(
-        "--hand",
-        default="leap",
-        help="built-in or registered hand name (default %(default)s); "
-        "'none' for a deformable's contacts and motions for any gripper",
-    )
-    req.add_argument(
-        "--simulate",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="rigid objects: each answer is tested in MuJoCo (six pushes, or the executed motion for a "
-        "delta task) and 'ok' means it held; --simulate searches candidates until one holds, "
-        "--no-simulate skips the test (simulate: unset, true, false)",
-    )
-    req.add_argument(
-        "--rollout",
-        action="store_true",
-        help="deformables: simulate the answer and judge it by the shape metric (simulate_rollout)",
-    )
-    req.add_argument(
-        "--corrections",
-        type=int,
-        default=0,
-        metavar="C",
-        help="with --rollout: up to C more rollouts correcting a missing answer's motions (rollout_corrections)",
-    )
+    req.add_argument("--hand", default="leap", help="built-in or registered hand name (default %(default)s); "
+                     "'none' for a deformable's contacts and motions for any gripper")
+    req.add_argument("--simulate", action=argparse.BooleanOptionalAction, default=None,
+                     help="rigid objects: each answer is tested in MuJoCo (six pushes, or the executed motion for a "
+                     "delta task) and 'ok' means it held; --simulate searches candidates until one holds, "
+                     "--no-simulate skips the test (simulate: unset, true, false)")
+    req.add_argument("--rollout", action="store_true",
+                     help="deformables: simulate the answer and judge it by the shape metric (simulate_rollout)")
+    req.add_argument("--corrections", type=int, default=0, metavar="C",
+                     help="with --rollout: up to C more rollouts correcting a missing answer's motions "
+                     "(rollout_corrections)")
     req.add_argument("--urdf", type=Path, help="an inline URDF hand instead of --hand (needs --fingertips)")
     req.add_argument("--fingertips", help="comma-separated fingertip links of the --urdf hand")
     req.add_argument("--task", default="force_closure", help=TASK_HELP)
@@ -85,12 +70,8 @@ def add_request_args(parser: argparse.ArgumentParser) -> None:
         help="how contacts are found (default %(default)s; direct_grasp needs no trained model)",
     )
     req.add_argument("--proposals", type=int, default=1, help="hand proposals to return (default 1)")
-    req.add_argument(
-        "--stop-after",
-        type=int,
-        metavar="N",
-        help="stop once N proposals are verified: the later ones are not refined (stop_after_verified)",
-    )
+    req.add_argument("--stop-after", type=int, metavar="N",
+                     help="stop once N proposals are verified: the later ones are not refined (stop_after_verified)")
     req.add_argument("--seed", type=int, default=0, help="sampling seed (default 0)")
     req.add_argument("--timeout", type=float, default=30.0, help="seconds to wait for the answer (default 30)")
     req.add_argument("--max-iterations", type=int, default=100, help="refinement iterations (default 100)")

@@ -32,12 +32,11 @@ class SynthesisOptions(WireModel):
     """How to run the synthesis."""
 
     method: Method = Method.AUTO
-    num_proposals: int = Field(1, ge=1, le=MAX_PROPOSALS, description="Hand proposals to return (K latent samples).")
+    num_proposals: int = Field(
+        1, ge=1, le=MAX_PROPOSALS, description="Hand proposals to return (K latent samples)."
+    )
     stop_after_verified: int | None = Field(
-        None,
-        ge=1,
-        le=MAX_PROPOSALS,
-        description="Stop once this many proposals are verified: the later ones are "
+        None, ge=1, le=MAX_PROPOSALS, description="Stop once this many proposals are verified: the later ones are "
         "neither refined nor returned, so fewer than `num_proposals` may come back (a caller that needs one grasp, "
         "with fallbacks, waits only for the first good one). Unset: all `num_proposals`.",
     )
@@ -49,8 +48,7 @@ class SynthesisOptions(WireModel):
     return_force_map: bool = False
     return_history: bool = False
     return_all_heatmaps: bool = Field(
-        False,
-        description="Return every latent sample's heatmap (`heatmaps`, K × N; each proposal names its "
+        False, description="Return every latent sample's heatmap (`heatmaps`, K × N; each proposal names its "
         "`network_sample`), not only the best proposal's.",
     )
     return_hand_mesh: bool = Field(
@@ -59,10 +57,7 @@ class SynthesisOptions(WireModel):
         "100-400 kB a proposal).",
     )
     num_contacts: int | None = Field(
-        None,
-        ge=1,
-        le=8,
-        description="Deformables without a robot: contacts per proposal (default 2). With a "
+        None, ge=1, le=8, description="Deformables without a robot: contacts per proposal (default 2). With a "
         "robot the contacts are its fingertips.",
     )
     simulate_rollout: bool = Field(
@@ -85,10 +80,7 @@ class SynthesisOptions(WireModel):
         "(`test`: closure or motion).",
     )
     rollout_corrections: int = Field(
-        0,
-        ge=0,
-        le=8,
-        description="Deformables with `simulate_rollout`: a proposal whose rollout misses the "
+        0, ge=0, le=8, description="Deformables with `simulate_rollout`: a proposal whose rollout misses the "
         "target may spend up to this many more rollouts correcting its post-contact motions (closed loop through "
         "the simulator: a plasticine press springs back, so pushing by the target's displacement stops short); "
         "the best rollout's motions are returned and `quality.iterations` counts the rollouts spent.",
@@ -97,14 +89,11 @@ class SynthesisOptions(WireModel):
     @model_validator(mode="after")
     def _enough_within_proposals(self) -> SynthesisOptions:
         if self.stop_after_verified is not None and self.stop_after_verified > self.num_proposals:
-            raise ValueError(
-                f"stop_after_verified: {self.stop_after_verified} is more than num_proposals "
-                f"({self.num_proposals}): it could never stop early"
-            )
+            raise ValueError(f"stop_after_verified: {self.stop_after_verified} is more than num_proposals "
+                             f"({self.num_proposals}): it could never stop early")
         if self.rollout_corrections and not self.simulate_rollout:
-            raise ValueError(
-                f"rollout_corrections: {self.rollout_corrections} needs simulate_rollout: the corrections are rollouts"
-            )
+            raise ValueError(f"rollout_corrections: {self.rollout_corrections} needs simulate_rollout: the "
+                             "corrections are rollouts")
         return self
 
 
@@ -127,8 +116,7 @@ class SynthesisRequest(WireModel):
     object: ObjectIn
     task: TaskIn
     robot: RobotIn | None = Field(
-        None,
-        description="The hand. Optional only for a deformable object with a per-point task (point_motion, "
+        None, description="The hand. Optional only for a deformable object with a per-point task (point_motion, "
         "target_points): the answer is then contact points with their post-contact motions, for any gripper.",
     )
     options: SynthesisOptions = Field(default_factory=SynthesisOptions)

@@ -23,16 +23,10 @@ class PhysicsTrial(WireModel):
 class PhysicsMotion(WireModel):
     """The target-motion trial of the simulated test (``delta_pose`` tasks): where the object ended."""
 
-    translation_error: float = Field(
-        ...,
-        ge=0,
-        description="Distance of the object's centre of mass from the target's at the end, m (success < 1 cm).",
-    )
-    rotation_error: float = Field(
-        ...,
-        ge=0,
-        description="Angle of the object's orientation from the target's at the end, degrees (success < 10°).",
-    )
+    translation_error: float = Field(..., ge=0, description="Distance of the object's centre of mass from the "
+                                     "target's at the end, m (success < 1 cm).")
+    rotation_error: float = Field(..., ge=0, description="Angle of the object's orientation from the target's at "
+                                  "the end, degrees (success < 10°).")
     dropped: bool = Field(..., description="No hand body touched the object at the end.")
     reached: bool = Field(..., description="Ended within 1 cm and 10° of the target pose, not dropped.")
 
@@ -41,68 +35,41 @@ class PhysicsQuality(WireModel):
     """The simulated grasp test (``options.simulate``: unset, each returned proposal; true, a search; MuJoCo,
     DexGraspBench's protocol, docs/physics.md)."""
 
-    held: bool = Field(
-        ...,
-        description="The test passed: the object held in all six directions (closure) or "
-        "reached the target pose (motion).",
-    )
-    reason: str = Field(
-        ...,
-        description="held, moved (a push moved or turned it too far), unstable (the "
-        "simulation diverged under both of MuJoCo's solvers: a failure) or penetration (the pregrasp "
-        "penetrates more than 1 cm); motion: reached, missed, dropped or unstable.",
-    )
-    test: Literal["closure", "motion"] = Field(
-        "closure",
-        description="Which test ran: closure (six pushes, gravity "
-        "off; force_closure and wrench tasks) or motion (delta_pose: the "
-        "palm carried along the task's motion under gravity).",
-    )
-    trials: list[PhysicsTrial] = Field(
-        default_factory=list, description="The six pushes (closure; none after penetration)."
-    )
+    held: bool = Field(..., description="The test passed: the object held in all six directions (closure) or "
+                       "reached the target pose (motion).")
+    reason: str = Field(..., description="held, moved (a push moved or turned it too far), unstable (the "
+                        "simulation diverged under both of MuJoCo's solvers: a failure) or penetration (the pregrasp "
+                        "penetrates more than 1 cm); motion: reached, missed, dropped or unstable.")
+    test: Literal["closure", "motion"] = Field("closure", description="Which test ran: closure (six pushes, gravity "
+                                               "off; force_closure and wrench tasks) or motion (delta_pose: the "
+                                               "palm carried along the task's motion under gravity).")
+    trials: list[PhysicsTrial] = Field(default_factory=list, description="The six pushes (closure; none after "
+                                       "penetration).")
     motion: PhysicsMotion | None = Field(None, description="The target-motion trial (test motion).")
-    penetration: float = Field(
-        ..., ge=0, description="Deepest hand-object or hand-hand penetration at the pregrasp, m."
-    )
-    tip_gaps: list[float] = Field(
-        default_factory=list,
-        description="Per fingertip, the signed distance from its "
-        "real mesh to the object at the grasp pose, m (negative: penetrating).",
-    )
-    touching_after_squeeze: int = Field(
-        ..., ge=0, description="Hand bodies touching the object after the squeeze (first push)."
-    )
-    pregrasp: list[float] = Field(
-        default_factory=list, description="Joint targets of the pregrasp (contacts 1 cm out), in `joint_names` order."
-    )
-    squeeze: list[float] = Field(
-        default_factory=list,
-        description="Joint targets of the squeeze (contacts 1 cm in, within the joint limits), in `joint_names` order.",
-    )
+    penetration: float = Field(..., ge=0, description="Deepest hand-object or hand-hand penetration at the "
+                               "pregrasp, m.")
+    tip_gaps: list[float] = Field(default_factory=list, description="Per fingertip, the signed distance from its "
+                                  "real mesh to the object at the grasp pose, m (negative: penetrating).")
+    touching_after_squeeze: int = Field(..., ge=0, description="Hand bodies touching the object after the squeeze "
+                                        "(first push).")
+    pregrasp: list[float] = Field(default_factory=list, description="Joint targets of the pregrasp (contacts 1 cm "
+                                  "out), in `joint_names` order.")
+    squeeze: list[float] = Field(default_factory=list, description="Joint targets of the squeeze (contacts 1 cm "
+                                 "in, within the joint limits), in `joint_names` order.")
     seconds: float = Field(..., ge=0, description="Wall time of the test.")
-    object_pieces: str = Field(
-        ...,
-        description="How the object was built: hull (the sent mesh, convex), "
-        "mesh_patches (non-convex mesh), point_hull (points only, lying on their convex "
-        "hull) or point_patches (other points).",
-    )
+    object_pieces: str = Field(..., description="How the object was built: hull (the sent mesh, convex), "
+                               "mesh_patches (non-convex mesh), point_hull (points only, lying on their convex "
+                               "hull) or point_patches (other points).")
 
 
 class Quality(WireModel):
     """Verification figures of one proposal (docs/evaluation.md)."""
 
     success: bool = Field(..., description="All criteria below met (verification on the exact geometry).")
-    converged: bool = Field(
-        ...,
-        description="The refinement's own, stricter stopping test held (fingertips within "
-        "2 mm on the points' surface); a proposal can succeed without it.",
-    )
-    reason: str = Field(
-        ...,
-        description="Why refinement stopped: converged, verified (verification accepted a "
-        "nearly converged pose), stalled, max_iterations, deadline, ...",
-    )
+    converged: bool = Field(..., description="The refinement's own, stricter stopping test held (fingertips within "
+                            "2 mm on the points' surface); a proposal can succeed without it.")
+    reason: str = Field(..., description="Why refinement stopped: converged, verified (verification accepted a "
+                        "nearly converged pose), stalled, max_iterations, deadline, ...")
     iterations: int = Field(..., ge=0, description="Refinement iterations spent on this proposal, restarts included.")
     wrench_residual: float = Field(..., ge=0, description="‖Σ G f − w‖² for the normalised target.")
     max_tip_distance: float = Field(..., ge=0, description="Largest |Φ(p_tip)| of a contact fingertip, m.")
@@ -120,8 +87,7 @@ class Quality(WireModel):
         "oriented points' surface, which keeps concavities).",
     )
     physics: PhysicsQuality | None = Field(
-        None,
-        description="The simulated grasp test (rigid objects with a robot, unless `options.simulate` is "
+        None, description="The simulated grasp test (rigid objects with a robot, unless `options.simulate` is "
         "false); `success` then also requires that the object held (a failed test adds 'physics' to `failures`).",
     )
 
@@ -183,22 +149,18 @@ class Proposal(WireModel):
         None, description="Deformables: the post-contact motion of each contact (m): grasp it and move it so."
     )
     rollout_points: Rows3 | None = Field(
-        None,
-        description="Deformables with `options.simulate_rollout`: where the object's points end after the "
+        None, description="Deformables with `options.simulate_rollout`: where the object's points end after the "
         "simulated manipulation (N, 3), m, in the request's order.",
     )
     shape_error: float | None = Field(
-        None,
-        ge=0,
-        description="Deformables with `options.simulate_rollout`: mean distance between the rollout "
+        None, ge=0, description="Deformables with `options.simulate_rollout`: mean distance between the rollout "
         "and the target over the most-moving points, in the paper's 2 m normalised cube.",
     )
     network_sample: int | None = Field(
         None, ge=0, description="Which of the network's latent samples proposed these contacts."
     )
     network_forces: Rows3 | None = Field(
-        None,
-        description="The network's force prediction at each of its contacts (its normalised units), beside the "
+        None, description="The network's force prediction at each of its contacts (its normalised units), beside the "
         "refined `forces`.",
     )
 

@@ -176,11 +176,8 @@ def audit_grasp(
 
 
 def _object_distances_and_normals(
-    points: np.ndarray,
-    mesh: trimesh.Trimesh | None,
-    object_points: ArrayLike | None,
-    object_normals: ArrayLike | None,
-    notes: list[str],
+    points: np.ndarray, mesh: trimesh.Trimesh | None, object_points: ArrayLike | None,
+    object_normals: ArrayLike | None, notes: list[str],
 ) -> tuple[np.ndarray, np.ndarray]:
     """(H,) distance of each contact to the object's surface and (H, 3) the outward unit normal there (the
     caller's normals when given, else the mesh's face normals)."""
@@ -198,13 +195,8 @@ def _object_distances_and_normals(
 
 
 def _cone_audits(
-    fingertips: Sequence[str],
-    forces: np.ndarray,
-    normals: np.ndarray,
-    finger: np.ndarray,
-    obj_dist: np.ndarray,
-    mu: float,
-    failures: list[str],
+    fingertips: Sequence[str], forces: np.ndarray, normals: np.ndarray, finger: np.ndarray, obj_dist: np.ndarray,
+    mu: float, failures: list[str],
 ) -> list[ContactAudit]:
     """Each contact's force split against its friction cone; a pull or a slip is added to ``failures``."""
     contacts = []
@@ -221,12 +213,7 @@ def _cone_audits(
 
 
 def _penetration(
-    hand: AuditHand,
-    poses: dict[str, np.ndarray],
-    mesh: trimesh.Trimesh,
-    spacing: float,
-    seed: int,
-    tol: float,
+    hand: AuditHand, poses: dict[str, np.ndarray], mesh: trimesh.Trimesh, spacing: float, seed: int, tol: float,
     report: AuditReport,
 ) -> PenetrationAudit:
     """The deepest hand-object overlap; an overlap beyond ``tol`` is added to the report's failures."""

@@ -60,24 +60,11 @@ CANDIDATES: tuple[tuple[str, str], ...] = (
     ("cabinet_base", f"{_KITCHEN}/cabinetbase.stl"),
     ("hinge_handle", f"{_KITCHEN}/hingehandle.stl"),
     ("oven", f"{_KITCHEN}/oven.stl"),
-    *(
-        (f"shadow_{name.lower()}", f"{_STLS}/hand/{name}.stl")
-        for name in ("F1", "F2", "F3", "TH1_z", "TH2_z", "TH3_z", "knuckle", "lfmetacarpal")
-    ),
-    *(
-        (f"fetch_{name}", f"{_STLS}/fetch/{name}_link_collision.stl")
-        for name in (
-            "elbow_flex",
-            "forearm_roll",
-            "head_pan",
-            "head_tilt",
-            "shoulder_lift",
-            "shoulder_pan",
-            "upperarm_roll",
-            "wrist_flex",
-            "wrist_roll",
-        )
-    ),
+    *((f"shadow_{name.lower()}", f"{_STLS}/hand/{name}.stl")
+      for name in ("F1", "F2", "F3", "TH1_z", "TH2_z", "TH3_z", "knuckle", "lfmetacarpal")),
+    *((f"fetch_{name}", f"{_STLS}/fetch/{name}_link_collision.stl")
+      for name in ("elbow_flex", "forearm_roll", "head_pan", "head_tilt", "shoulder_lift", "shoulder_pan",
+                   "upperarm_roll", "wrist_flex", "wrist_roll")),
     ("fetch_gripper", f"{_STLS}/fetch/gripper_link.stl"),
 )
 """(name, path under site-packages) of the candidate third-party objects, in the order they are returned."""

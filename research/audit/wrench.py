@@ -109,12 +109,7 @@ def primitive_wrenches(
 
 
 def closure_epsilon(
-    points: np.ndarray,
-    normals: np.ndarray,
-    mu: float,
-    centre: np.ndarray,
-    length: float,
-    sides: int = CLOSURE_SIDES,
+    points: np.ndarray, normals: np.ndarray, mu: float, centre: np.ndarray, length: float, sides: int = CLOSURE_SIDES,
     torsion: float = 0.0,
 ) -> float:
     """Distance from the origin to the boundary of the convex hull of the primitive wrenches.

@@ -49,18 +49,8 @@ from research.bench.service import _free_port, request_body
 from research.hostile_archives import include_bomb as bomb_archive
 
 STAGED = "research.staged_pipeline:StagedPipeline"
-SCENARIOS = (
-    "soak",
-    "poison",
-    "large_bodies",
-    "full_queue",
-    "slow_headers",
-    "grpc_batches",
-    "include_bomb",
-    "mcp_bodies",
-    "embedded_sigstop",
-    "mcp_streams",
-)
+SCENARIOS = ("soak", "poison", "large_bodies", "full_queue", "slow_headers", "grpc_batches", "include_bomb",
+             "mcp_bodies", "embedded_sigstop", "mcp_streams")
 EXAMPLE = """examples (the README's figures):
   mani-lab bench faults --jobs 120 --kills 4 --restarts 2 --poison-batches 4 --bodies 100 --body-mb 8
   mani-lab bench faults --only large_bodies,full_queue --bodies 100 --body-mb 50
@@ -88,17 +78,10 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--slow-interval", type=float, default=2.0, help="slow headers: s between bytes (2)")
     parser.add_argument("--slow-seconds", type=float, default=30.0, help="slow headers: s watched (30)")
     parser.add_argument("--rounds", type=int, default=1, help="full queue: bursts of each kind (1); medians reported")
-    parser.add_argument(
-        "--checkouts",
-        metavar="DIRS",
-        help="full queue: one service per checkout (comma-separated), side by side, bursts alternating",
-    )
-    parser.add_argument(
-        "--fsync",
-        choices=("always", "everysec"),
-        default="always",
-        help="soak: the private Redis's appendfsync (always: no acknowledged write lost on kill -9)",
-    )
+    parser.add_argument("--checkouts", metavar="DIRS",
+                        help="full queue: one service per checkout (comma-separated), side by side, bursts alternating")
+    parser.add_argument("--fsync", choices=("always", "everysec"), default="always",
+                        help="soak: the private Redis's appendfsync (always: no acknowledged write lost on kill -9)")
     parser.add_argument("--grpc-calls", type=int, default=3, help="gRPC: concurrent SubmitBatch calls (3)")
     parser.add_argument("--grpc-requests", type=int, default=6, help="gRPC: requests per batch (6)")
     parser.add_argument("--grpc-points", type=int, default=200_000, help="gRPC: points per request (200000)")
@@ -538,12 +521,8 @@ async def mcp_bodies(args: argparse.Namespace) -> dict[str, Any]:
 
     p = np.random.default_rng(0).normal(size=(args.mcp_points, 3))
     p /= np.linalg.norm(p, axis=1, keepdims=True)
-    call = {
-        "jsonrpc": "2.0",
-        "id": 1,
-        "method": "tools/call",
-        "params": {"name": "upload_object", "arguments": {"points": (0.04 * p).tolist(), "normals": p.tolist()}},
-    }
+    call = {"jsonrpc": "2.0", "id": 1, "method": "tools/call",
+            "params": {"name": "upload_object", "arguments": {"points": (0.04 * p).tolist(), "normals": p.tolist()}}}
     data = json.dumps(call, indent=args.mcp_indent).encode()
     huge = data + b" " * max(0, Settings().mcp_max_body_bytes + 1 - len(data))  # over the limit, whitespace-padded
     headers = {"Content-Type": "application/json", "Accept": "application/json, text/event-stream"}

@@ -160,7 +160,5 @@ def _print(rows: list[Row], args: argparse.Namespace) -> None:
     print("|---|--:|--:|--:|--:|--:|--:|--:|")
     for r in rows:
         overhead = (r.seconds * r.workers / r.items - work) * 1000
-        print(
-            f"| {r.backend} | {r.workers} | {r.items} | {r.seconds:.2f} | {r.first:.2f} | {r.rate:.1f} "
-            f"| {r.steady:.1f} | {overhead:.1f} |"
-        )
+        print(f"| {r.backend} | {r.workers} | {r.items} | {r.seconds:.2f} | {r.first:.2f} | {r.rate:.1f} "
+              f"| {r.steady:.1f} | {overhead:.1f} |")

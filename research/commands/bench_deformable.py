@@ -27,26 +27,14 @@ EXIT_OK = 0
 
 def register(subparsers: Any) -> None:
     """Add ``deformable`` to the ``mani-lab bench`` sub-commands."""
-    p = subparsers.add_parser(
-        "deformable",
-        help="flex simulation steps/s and stability per material",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = subparsers.add_parser("deformable", help="flex simulation steps/s and stability per material",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--materials", default="cloth,rope,plasticine", help="comma-separated materials")
     p.add_argument("--bodies", type=int, default=2, help="seeds per shape kind (default 2)")
-    p.add_argument(
-        "--registration",
-        type=int,
-        default=0,
-        help="also measure optimal-transport registration on this many simulated pairs per material",
-    )
-    p.add_argument(
-        "--rebuilt",
-        type=int,
-        default=0,
-        help="also compare rollouts on bodies rebuilt from clouds with the generator's, N per material",
-    )
+    p.add_argument("--registration", type=int, default=0,
+                   help="also measure optimal-transport registration on this many simulated pairs per material")
+    p.add_argument("--rebuilt", type=int, default=0,
+                   help="also compare rollouts on bodies rebuilt from clouds with the generator's, N per material")
     p.add_argument("--seed", type=int, default=0)
     p.set_defaults(func=run)
 
@@ -71,17 +59,8 @@ def run(args: argparse.Namespace) -> int:
     from manifoundation.core.deformable.simulate import simulate
 
     table = Table(title="MuJoCo 4.0 flex rollouts (discrete integrator, one thread)")
-    for col in (
-        "material",
-        "kind",
-        "properties",
-        "vertices",
-        "rollouts",
-        "stable %",
-        "steps/s",
-        "s/rollout",
-        "track err mm",
-    ):
+    for col in ("material", "kind", "properties", "vertices", "rollouts", "stable %", "steps/s", "s/rollout",
+                "track err mm"):
         table.add_column(col, justify="right" if col not in ("material", "kind", "properties") else "left")
     for material in args.materials.split(",") if args.bodies else []:
         for kind in KINDS[material]:
@@ -97,17 +76,9 @@ def run(args: argparse.Namespace) -> int:
                     r = simulate(body, np.array([i]), motion)
                     rows.append((len(body.vertices), r.stable, r.steps / r.seconds, r.seconds, r.tracking_error))
                 a = np.array(rows, dtype=np.float64)
-                table.add_row(
-                    material,
-                    kind,
-                    "stiff" if stiff else "soft",
-                    f"{a[:, 0].mean():.0f}",
-                    str(len(a)),
-                    f"{100 * a[:, 1].mean():.0f}",
-                    f"{np.median(a[:, 2]):.0f}",
-                    f"{np.median(a[:, 3]):.2f}",
-                    f"{1000 * np.max(a[:, 4]):.2f}",
-                )
+                table.add_row(material, kind, "stiff" if stiff else "soft", f"{a[:, 0].mean():.0f}", str(len(a)),
+                              f"{100 * a[:, 1].mean():.0f}", f"{np.median(a[:, 2]):.0f}",
+                              f"{np.median(a[:, 3]):.2f}", f"{1000 * np.max(a[:, 4]):.2f}")
     console = Console(width=140)
     console.print(table)
     if args.registration:
@@ -130,21 +101,10 @@ def registration_table(materials: list[str], pairs: int, seed: int) -> Any:
     from manifoundation.core.deformable.shapes import KINDS, make_body
     from manifoundation.core.deformable.simulate import simulate
 
-    table = Table(
-        title="unordered targets: per-point motion by registration vs the simulated one "
-        "(errors in the 2 m normalised cube)"
-    )
-    for col in (
-        "material",
-        "method",
-        "pairs",
-        "median |motion|",
-        "median error",
-        "mean error",
-        "p90 error",
-        "exact matches %",
-        "ms a pair",
-    ):
+    table = Table(title="unordered targets: per-point motion by registration vs the simulated one "
+                        "(errors in the 2 m normalised cube)")
+    for col in ("material", "method", "pairs", "median |motion|", "median error", "mean error", "p90 error",
+                "exact matches %", "ms a pair"):
         table.add_column(col, justify="left" if col in ("material", "method") else "right")
     for material in materials:
         rows: dict[str, list[Any]] = {"cpd": [], "ot": []}
@@ -165,17 +125,10 @@ def registration_table(materials: list[str], pairs: int, seed: int) -> Any:
         for method, got in rows.items():
             e = np.concatenate([d * s for d, s, _ in got])
             exact = np.concatenate([d < 1e-9 for d, _, _ in got])
-            table.add_row(
-                material,
-                "CPD + OT" if method == "cpd" else "OT",
-                str(pairs),
-                f"{np.median(np.concatenate(sizes)):.3f}",
-                f"{np.median(e):.3f}",
-                f"{e.mean():.3f}",
-                f"{np.percentile(e, 90):.3f}",
-                f"{100 * exact.mean():.1f}",
-                f"{1000 * np.median([t for _, _, t in got]):.0f}",
-            )
+            table.add_row(material, "CPD + OT" if method == "cpd" else "OT", str(pairs),
+                          f"{np.median(np.concatenate(sizes)):.3f}", f"{np.median(e):.3f}", f"{e.mean():.3f}",
+                          f"{np.percentile(e, 90):.3f}", f"{100 * exact.mean():.1f}",
+                          f"{1000 * np.median([t for _, _, t in got]):.0f}")
     return table
 
 
@@ -192,19 +145,10 @@ def rebuilt_table(materials: list[str], bodies: int, seed: int) -> Any:
     from manifoundation.core.deformable.shapes import KINDS, make_body
     from manifoundation.core.deformable.simulate import simulate
 
-    table = Table(
-        title="bodies rebuilt from clouds (simulate_rollout) vs the generator's meshes: the rebuilt "
-        "rollout scored against the native one (2 m normalised cube)"
-    )
-    for col in (
-        "material",
-        "bodies",
-        "agree by the metric %",
-        "median top-mean error",
-        "median |motion|",
-        "error / motion",
-        "ms to rebuild",
-    ):
+    table = Table(title="bodies rebuilt from clouds (simulate_rollout) vs the generator's meshes: the rebuilt "
+                        "rollout scored against the native one (2 m normalised cube)")
+    for col in ("material", "bodies", "agree by the metric %", "median top-mean error", "median |motion|",
+                "error / motion", "ms to rebuild"):
         table.add_column(col, justify="left" if col == "material" else "right")
     for material in materials:
         agree, errors, motions, builds = [], [], [], []
@@ -223,13 +167,7 @@ def rebuilt_table(materials: list[str], bodies: int, seed: int) -> Any:
             errors.append(score.top_mean_error)
             motions.append(still.top_mean_error)
         e, d = np.array(errors), np.array(motions)
-        table.add_row(
-            material,
-            str(bodies),
-            f"{100 * np.mean(agree):.0f}",
-            f"{np.median(e):.3f}",
-            f"{np.median(d):.3f}",
-            f"{np.median(e / np.maximum(d, 1e-12)):.2f}",
-            f"{1000 * np.median(builds):.0f}",
-        )
+        table.add_row(material, str(bodies), f"{100 * np.mean(agree):.0f}", f"{np.median(e):.3f}",
+                      f"{np.median(d):.3f}", f"{np.median(e / np.maximum(d, 1e-12)):.2f}",
+                      f"{1000 * np.median(builds):.0f}")
     return table

@@ -45,12 +45,8 @@ PARTS = ("linearise", "contacts", "guards", "solve")
 
 def register(subparsers: Any) -> None:
     """Add ``pipeline`` to the ``mani-lab bench`` sub-commands."""
-    p = subparsers.add_parser(
-        "pipeline",
-        help="one request per stage, p50/p90, verified grasps/s (vs a reference)",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = subparsers.add_parser("pipeline", help="one request per stage, p50/p90, verified grasps/s (vs a reference)",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(p)
     p.set_defaults(func=run)
 
@@ -61,14 +57,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--set", default="third_party", choices=("third_party", "procedural", "box"))
     p.add_argument("--objects", type=int, default=18, help="objects of the set (third_party: at most 43)")
     p.add_argument("--seeds", type=int, default=3, help="requests per object (seeds 0..N-1)")
-    p.add_argument(
-        "--order",
-        default="hand",
-        choices=("hand", "object"),
-        help="hand: each hand's requests in turn (an object's seeds in a row); object: each object's "
-        "requests for every hand in a row (an object sent again, as a planner or a batch of one "
-        "object's tasks does)",
-    )
+    p.add_argument("--order", default="hand", choices=("hand", "object"),
+                   help="hand: each hand's requests in turn (an object's seeds in a row); object: each object's "
+                        "requests for every hand in a row (an object sent again, as a planner or a batch of one "
+                        "object's tasks does)")
     p.add_argument("--task", default="lift", choices=("lift", "closure"))
     p.add_argument("--geometry", default="mesh", choices=("mesh", "points"), help="send the mesh or points only")
     p.add_argument("--proposals", type=int, default=1)
@@ -76,39 +68,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--points", type=int, default=2048, help="surface points sent (third_party)")
     p.add_argument("--audit", type=int, default=0, help="audit the proposals of the first N requests per hand")
     p.add_argument("--compare", default=None, help="a reference checkout's root, run side by side")
-    p.add_argument(
-        "--compare-method",
-        default=None,
-        help="run the same requests through this checkout with this method too, side by side (e.g. "
-        "--method network --compare-method random_contacts)",
-    )
-    p.add_argument(
-        "--simulate",
-        default="off",
-        choices=("off", "check", "search"),
-        help="the simulated grasp test (`PhysicsMode`; the service's default is check: each returned "
-        "proposal tested, verified only if it held; off: geometric only)",
-    )
-    p.add_argument(
-        "--compare-simulate",
-        default=None,
-        choices=("off", "check", "search"),
-        help="run the same requests through this checkout with this physics mode too, side by side "
-        "(e.g. --simulate check --compare-simulate off)",
-    )
+    p.add_argument("--compare-method", default=None,
+                   help="run the same requests through this checkout with this method too, side by side (e.g. "
+                        "--method network --compare-method random_contacts)")
+    p.add_argument("--simulate", default="off", choices=("off", "check", "search"),
+                   help="the simulated grasp test (`PhysicsMode`; the service's default is check: each returned "
+                   "proposal tested, verified only if it held; off: geometric only)")
+    p.add_argument("--compare-simulate", default=None, choices=("off", "check", "search"),
+                   help="run the same requests through this checkout with this physics mode too, side by side "
+                   "(e.g. --simulate check --compare-simulate off)")
     p.add_argument(
         "--weights", default=str(ROOT / "manifoundation/core/weights/cpu1k"), help="network weights (method network)"
     )
     p.add_argument("--json", default=None, help="also write every request's record here")
-    p.add_argument(
-        "--workers",
-        type=int,
-        default=1,
-        help="N > 1: the batch mode, every request through N worker processes at once (one thread "
-        "each), each checkout in turn, twice (A B B A); prints verified grasps/s of the wall time "
-        "(the objects are read and sampled before the clock starts; an audited request counts its "
-        "audit: use --audit 0 for throughput)",
-    )
+    p.add_argument("--workers", type=int, default=1,
+                   help="N > 1: the batch mode, every request through N worker processes at once (one thread "
+                        "each), each checkout in turn, twice (A B B A); prints verified grasps/s of the wall time "
+                        "(the objects are read and sampled before the clock starts; an audited request counts its "
+                        "audit: use --audit 0 for throughput)")
 
 
 def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
@@ -130,25 +107,13 @@ def requests(args: argparse.Namespace) -> list[dict[str, Any]]:
         for obj in range(count):
             for seed in range(args.seeds):
                 name, path = files[obj] if files else ("", "")
-                out.append(
-                    {
-                        "hand": hand,
-                        "set": args.set,
-                        "object": obj,
-                        "name": name,
-                        "path": path,
-                        "seed": seed,
-                        "task": args.task,
-                        "geometry": args.geometry,
-                        "proposals": args.proposals,
-                        "method": args.method,
-                        "simulate": args.simulate,
-                        "weights": str(Path(args.weights).resolve()),
-                        "points": args.points,
-                        "audit": n < args.audit and args.set != "box",
-                        "box": str(ROOT / "examples/data/box.npz"),
-                    }
-                )
+                out.append({"hand": hand, "set": args.set, "object": obj, "name": name, "path": path,
+                            "seed": seed, "task": args.task,
+                            "geometry": args.geometry, "proposals": args.proposals, "method": args.method,
+                            "simulate": args.simulate,
+                            "weights": str(Path(args.weights).resolve()),
+                            "points": args.points, "audit": n < args.audit and args.set != "box",
+                            "box": str(ROOT / "examples/data/box.npz")})
                 n += 1
     if getattr(args, "order", "hand") == "object":
         out.sort(key=lambda spec: (spec["object"], spec["seed"]))  # stable: the hands in their order
@@ -266,14 +231,8 @@ class _Worker:
     def __init__(self, tree: str, change: dict[str, Any] | None = None) -> None:
         self.change = dict(change or {})
         env = dict(os.environ, PYTHONPATH=tree, OMP_NUM_THREADS="1", MKL_NUM_THREADS="1")
-        self.proc = subprocess.Popen(
-            [sys.executable, str(Path(__file__).resolve()), "--worker"],
-            env=env,
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            text=True,
-            cwd=tree,
-        )
+        self.proc = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker"], env=env,
+                                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, cwd=tree)
 
     def ask(self, spec: dict[str, Any]) -> dict[str, Any]:
         assert self.proc.stdin is not None and self.proc.stdout is not None
@@ -292,9 +251,8 @@ class _Worker:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command without the ``mani`` entry point (``python -m research.commands.bench_pipeline ...``)."""
-    p = argparse.ArgumentParser(
-        prog="mani-lab bench pipeline", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
-    )
+    p = argparse.ArgumentParser(prog="mani-lab bench pipeline", description=__doc__,
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
     add_arguments(p)
     return run(p.parse_args(argv))
 

@@ -66,10 +66,8 @@ def print_report(specs: list[dict[str, Any]], records: dict[str, list[dict[str, 
     console = Console(width=200)
     hands = list(dict.fromkeys(s["hand"] for s in specs))
     spec0 = specs[0]
-    table = Table(
-        title=f"one request through run_pipeline: set {spec0['set']}, task {spec0['task']}, "
-        f"{spec0['proposals']} proposal(s), method {spec0['method']}, one thread per worker"
-    )
+    table = Table(title=f"one request through run_pipeline: set {spec0['set']}, task {spec0['task']}, "
+                        f"{spec0['proposals']} proposal(s), method {spec0['method']}, one thread per worker")
     cols = ("hand", "tree", "req", "p50 s", "p90 s", "mean s", "ok/s", "ok %", "prep", "init", "refine",
             "verify", "physics", "iters", "lin ms", "contact", "guards", "solve ms", "audited", "audit %", "false",
             "fallback %")  # fmt: skip
@@ -90,14 +88,12 @@ def print_report(specs: list[dict[str, Any]], records: dict[str, list[dict[str, 
                           f"{100 * s['fallback']:.0f}")  # fmt: skip
     console.print(table)
     console.print(f"load average during the run (1, 5, 15 min): {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
-    console.print(
-        "ok/s: verified grasps per second (where the simulated test ran, verified = geometric and "
-        "held); ok %: best proposal verified; prep .. physics: mean s per "
-        "request; lin ms: per linearisation, of which contact (real-surface model) and guards (its "
-        "object-point rows); solve ms: per SCP solve; audit %: best proposal passes the outside audit; "
-        "false: claimed successes the audit rejects; fallback %: proposals whose network heatmap was flat "
-        "(random contacts instead)"
-    )
+    console.print("ok/s: verified grasps per second (where the simulated test ran, verified = geometric and "
+                  "held); ok %: best proposal verified; prep .. physics: mean s per "
+                  "request; lin ms: per linearisation, of which contact (real-surface model) and guards (its "
+                  "object-point rows); solve ms: per SCP solve; audit %: best proposal passes the outside audit; "
+                  "false: claimed successes the audit rejects; fallback %: proposals whose network heatmap was flat "
+                  "(random contacts instead)")
     if len(records) == 2:
         current, reference = list(records)
         for hand in hands:

@@ -80,20 +80,8 @@ def run(args: argparse.Namespace) -> int:
     seeds = [int(s) for s in args.seeds.split(",") if s.strip()]
     table = Table(title=f"plan bench: {hand.name}, {args.waypoints} waypoints, {args.obstacles} obstacles, "
                         f"{args.method}, steps {args.translation_step} m / {args.rotation_step} rad")  # fmt: skip
-    for col in (
-        "seed",
-        "repaired",
-        "RRT segs",
-        "planning s",
-        "steps",
-        "synthesis s",
-        "kept med s",
-        "new med s",
-        "step p90 s",
-        "kept %",
-        "regrasps",
-        "failed",
-    ):
+    for col in ("seed", "repaired", "RRT segs", "planning s", "steps", "synthesis s", "kept med s",
+                "new med s", "step p90 s", "kept %", "regrasps", "failed"):
         table.add_column(col, justify="right")
     all_steps: list[Any] = []
     plans = []

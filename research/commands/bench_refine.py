@@ -20,12 +20,8 @@ EXIT_OK = 0
 
 def register(subparsers: Any) -> None:
     """Add ``refine`` to the ``mani-lab bench`` sub-commands."""
-    p = subparsers.add_parser(
-        "refine",
-        help="SCP step: native Clarabel vs rebuilt CVXPY (ratio)",
-        description=__doc__,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
-    )
+    p = subparsers.add_parser("refine", help="SCP step: native Clarabel vs rebuilt CVXPY (ratio)",
+                              description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--hand", default="allegro", help="hand name (default allegro)")
     p.add_argument("--steps", type=int, default=40, help="linearisations to time (default 40)")
     p.add_argument("--refinements", type=int, default=0, help="also time this many full refinements")
@@ -82,10 +78,8 @@ def run(args: argparse.Namespace) -> int:
         table.add_row(name, f"{1e3 * np.median(t):.2f}", f"{1e3 * np.percentile(t, 90):.2f}")
     console = Console(width=120)
     console.print(table)
-    console.print(
-        f"ratio (median cvxpy / median native): {np.median(rebuilt) / np.median(native):.1f}x; "
-        f"max relative objective gap {max(gaps):.1e}"
-    )
+    console.print(f"ratio (median cvxpy / median native): {np.median(rebuilt) / np.median(native):.1f}x; "
+                  f"max relative objective gap {max(gaps):.1e}")
     if args.refinements:
         # the same starts for the adaptive trust region (default) and the paper's fixed s_q, s_f
         starts = []
@@ -105,13 +99,8 @@ def run(args: argparse.Namespace) -> int:
                 times.append(time.process_time() - t0)
                 its.append(res.iterations)
                 conv.append(res.converged)
-            rows.add_row(
-                label,
-                f"{100 * np.mean(conv):.0f}",
-                f"{np.median(times):.3f}",
-                f"{np.percentile(times, 90):.3f}",
-                f"{np.median(its):.0f}",
-                f"{1e3 * np.sum(times) / max(1, np.sum(its)):.1f}",
-            )
+            rows.add_row(label, f"{100 * np.mean(conv):.0f}", f"{np.median(times):.3f}",
+                         f"{np.percentile(times, 90):.3f}", f"{np.median(its):.0f}",
+                         f"{1e3 * np.sum(times) / max(1, np.sum(its)):.1f}")
         console.print(rows)
     return EXIT_OK

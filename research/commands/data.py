@@ -16,13 +16,9 @@ def register(subparsers: Any) -> None:
     g.add_argument("--objects", type=int, default=400, help="number of objects")
     g.add_argument("--seed", type=int, default=0)
     g.add_argument("--workers", type=int, default=2, help="worker processes (Ray actors with --ray)")
-    g.add_argument(
-        "--ray",
-        metavar="ADDRESS",
-        default=None,
-        help="rigid and articulated shards on Ray Data at ADDRESS (auto, HOST:6379, ray://HOST:10001; "
-        "local: a cluster of its own); docs/offline.md",
-    )
+    g.add_argument("--ray", metavar="ADDRESS", default=None,
+                   help="rigid and articulated shards on Ray Data at ADDRESS (auto, HOST:6379, ray://HOST:10001; "
+                        "local: a cluster of its own); docs/offline.md")
     g.add_argument("--objects-per-shard", type=int, default=2)
     g.add_argument(
         "--hands", default=None, help="comma-separated training hands (default: allegro,leap,panda_gripper,kinova3f)"
@@ -36,20 +32,12 @@ def register(subparsers: Any) -> None:
         "--targeted-per-grasp", type=int, default=0,
         help="examples of a chosen task per grasp (a lift most often, else a push or a turn; firm forces)",
     )  # fmt: skip
-    g.add_argument(
-        "--physics",
-        choices=("off", "closure"),
-        default="off",
-        help="closure: only sampled grasps that hold in the simulated six-push test label examples "
-        "(research/data/physics_labels.py); off: every feasible grasp",
-    )
-    g.add_argument(
-        "--closure-mu",
-        type=float,
-        default=None,
-        help="sample grasps aiming for force closure at this friction coefficient (pinching palms, "
-        "closure pre-test; research/data/sampling.py) instead of any feasible grasp",
-    )
+    g.add_argument("--physics", choices=("off", "closure"), default="off",
+                   help="closure: only sampled grasps that hold in the simulated six-push test label examples "
+                        "(research/data/physics_labels.py); off: every feasible grasp")
+    g.add_argument("--closure-mu", type=float, default=None,
+                   help="sample grasps aiming for force closure at this friction coefficient (pinching palms, "
+                        "closure pre-test; research/data/sampling.py) instead of any feasible grasp")
     g.add_argument("--articulated-fraction", type=float, default=0.2)
     g.add_argument("--test-fraction", type=float, default=0.15)
     g.add_argument(
@@ -118,9 +106,8 @@ def _generate(args: argparse.Namespace) -> int:
     if not 0.0 <= args.stiff_ends <= 1.0 or (args.stiff_ends and not args.stiff):
         raise SystemExit(f"--stiff-ends: {args.stiff_ends} must lie in [0, 1] and needs --stiff")
     if args.paired_ends and (not args.stiff or args.stiff_ends or "plasticine" in materials):
-        raise SystemExit(
-            "--paired-ends: needs --stiff, not --stiff-ends, and cloth or rope only (plasticine has no ends)"
-        )
+        raise SystemExit("--paired-ends: needs --stiff, not --stiff-ends, and cloth or rope only (plasticine has no "
+                         "ends)")
     if deformable:
         from research.data.deformable_generate import DeformableDataConfig
         from research.data.deformable_generate import generate as generate_deformable
@@ -177,10 +164,8 @@ def _labels(args: argparse.Namespace) -> int:
     from research.data.dataset import example_sets, load_examples
     from research.data.label_density import label_density
 
-    print(
-        "| data | split | examples | valid grasps an example | points in the valid region | in its own grasp's "
-        "| hit: random point | hit: most-opposed normal | hit: farthest point |"
-    )
+    print("| data | split | examples | valid grasps an example | points in the valid region | in its own grasp's "
+          "| hit: random point | hit: most-opposed normal | hit: farthest point |")
     print("|---|---|--:|--:|--:|--:|--:|--:|--:|")
     for d in args.data:
         for split in args.splits.split(","):
@@ -195,8 +180,6 @@ def _labels(args: argparse.Namespace) -> int:
                 set_heat, _ = example_sets(ex, int(i), slice(None))
                 rows.append((ex.points[o], ex.normals[o], ex.motion[i], set_heat, ex.heat[i]))
             r = label_density(rows, args.seed)
-            print(
-                f"| {d} | {split} | {r.examples} | {r.set_size:.1f} | {r.coverage:.1%} | {r.own:.1%} | "
-                f"{r.hit_random:.1%} | {r.hit_push:.1%} | {r.hit_far:.1%} |"
-            )
+            print(f"| {d} | {split} | {r.examples} | {r.set_size:.1f} | {r.coverage:.1%} | {r.own:.1%} | "
+                  f"{r.hit_random:.1%} | {r.hit_push:.1%} | {r.hit_far:.1%} |")
     return 0

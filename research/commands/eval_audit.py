@@ -70,16 +70,8 @@ def run_audit(args: argparse.Namespace) -> int:
                     seconds = []
                     for obj in objects:
                         t0 = time.perf_counter()
-                        rows = audit_service(
-                            hand,
-                            obj,
-                            task,
-                            num_points=args.points,
-                            proposals=args.proposals,
-                            method=args.method,
-                            seed=args.seed,
-                            send_mesh=geometry == "mesh",
-                        )
+                        rows = audit_service(hand, obj, task, num_points=args.points, proposals=args.proposals,
+                                             method=args.method, seed=args.seed, send_mesh=geometry == "mesh")
                         seconds.append(time.perf_counter() - t0)
                         claimed += rows[0].claimed
                         passed += rows[0].audited

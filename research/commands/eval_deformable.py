@@ -32,25 +32,14 @@ def add_deformable(sub: Any) -> None:
     d = sub.add_parser("deformable", help="cloth / rope / plasticine: simulated rollout vs target, with baselines")
     d.add_argument("--materials", default="cloth,rope,plasticine", help="comma-separated materials")
     d.add_argument("--splits", default="test_so,test_uo", help="test_so (seen objects), test_uo (unseen objects)")
-    d.add_argument(
-        "--methods",
-        default="random_motion,random_target_motion,moving_target_motion,ground_truth,network",
-        help="comma-separated, of random_motion, random_target_motion, moving_target_motion, "
-        "moving_corrected, ground_truth, ground_truth_cut, network, network_samples, network_checked, "
-        "random_checked",
-    )
-    d.add_argument(
-        "--proposals",
-        type=int,
-        default=8,
-        help="K answers a request of network_samples / network_checked / random_checked asks for",
-    )
-    d.add_argument(
-        "--corrections",
-        type=int,
-        default=4,
-        help="rollouts moving_corrected may spend correcting its motions (default 4)",
-    )
+    d.add_argument("--methods", default="random_motion,random_target_motion,moving_target_motion,ground_truth,network",
+                   help="comma-separated, of random_motion, random_target_motion, moving_target_motion, "
+                   "moving_corrected, ground_truth, ground_truth_cut, network, network_samples, network_checked, "
+                   "random_checked")
+    d.add_argument("--proposals", type=int, default=8,
+                   help="K answers a request of network_samples / network_checked / random_checked asks for")
+    d.add_argument("--corrections", type=int, default=4,
+                   help="rollouts moving_corrected may spend correcting its motions (default 4)")
     d.add_argument("--cases", type=int, default=10, help="cases per (material, split)")
     d.add_argument("--contacts", type=int, default=2, help="contacts of the random baselines (default 2)")
     d.add_argument("--hand", default="panda_gripper", help="hand the network is conditioned on (H ≤ fingertips)")
@@ -58,32 +47,18 @@ def add_deformable(sub: Any) -> None:
                    help="checkpoint directory of the network (DIR@S: at prior scale S)")  # fmt: skip
     d.add_argument("--seed", type=int, default=0, help="seed of the cases and the baselines")
     d.add_argument("--data-seed", type=int, default=0, help="seed of the data set whose bodies are used")
-    d.add_argument(
-        "--sensitivity",
-        type=int,
-        default=0,
-        help="also run the property pairs (handkerchief vs card, rope vs stick) on this many shapes",
-    )
-    d.add_argument(
-        "--figure",
-        type=int,
-        default=0,
-        help="also run the paper's property figure (the same slide asked of both members) on this many shapes",
-    )
-    d.add_argument(
-        "--figure-samples",
-        type=int,
-        default=0,
-        help="also answer the figure's shapes with this many latent samples (the service at seeds SEED, "
-        "SEED + 1, ...) and count every answer's side and success; needs --figure",
-    )
-    d.add_argument(
-        "--separation",
-        action="store_true",
-        help="also print, per material, whether the metric separates (issue 59: ground_truth ≥ 95 %%, "
-        "random_motion ≤ 5 %%, random_target_motion ≤ 20 %%), by the rule and by the paper's all-points "
-        "rule, every split together",
-    )
+    d.add_argument("--sensitivity", type=int, default=0,
+                   help="also run the property pairs (handkerchief vs card, rope vs stick) on this many shapes")
+    d.add_argument("--figure", type=int, default=0,
+                   help="also run the paper's property figure (the same slide asked of both members) on this many "
+                   "shapes")
+    d.add_argument("--figure-samples", type=int, default=0,
+                   help="also answer the figure's shapes with this many latent samples (the service at seeds SEED, "
+                   "SEED + 1, ...) and count every answer's side and success; needs --figure")
+    d.add_argument("--separation", action="store_true",
+                   help="also print, per material, whether the metric separates (issue 59: ground_truth ≥ 95 %%, "
+                   "random_motion ≤ 5 %%, random_target_motion ≤ 20 %%), by the rule and by the paper's all-points "
+                   "rule, every split together")
     d.add_argument("--json", default=None, help="also write the summary to this JSON file")
     d.add_argument("--no-progress", action="store_true")
     d.set_defaults(func=run_deformable)
@@ -119,15 +94,11 @@ def _goal_lines(material: str, rates: dict[str, float]) -> list[str]:
             continue
         present = [b for b in baselines if b in rates]
         if not present:
-            lines.append(
-                f"{material}: {method} {rates[method]:.1f} % on unseen objects; no random baseline in this "
-                "run, so the goal (≥ 85 %, ≥ baseline + 30) is not judged"
-            )
+            lines.append(f"{material}: {method} {rates[method]:.1f} % on unseen objects; no random baseline in this "
+                         "run, so the goal (≥ 85 %, ≥ baseline + 30) is not judged")
         for b in present:
-            lines.append(
-                f"{material}: {method} {rates[method]:.1f} % on unseen objects against {BASELINES[b]} "
-                f"{rates[b]:.1f} %: goal (≥ 85 %, ≥ baseline + 30) {_goal(rates[method], rates[b])}"
-            )
+            lines.append(f"{material}: {method} {rates[method]:.1f} % on unseen objects against {BASELINES[b]} "
+                         f"{rates[b]:.1f} %: goal (≥ 85 %, ≥ baseline + 30) {_goal(rates[method], rates[b])}")
     return lines
 
 
@@ -181,11 +152,8 @@ def deformable_figures(args: argparse.Namespace) -> dict[str, Any] | None:
         from research.commands.weights import load_weights
 
         hand = get_hand(args.hand)
-        predictor = (
-            load_weights(args.weights)
-            if {"network", "network_samples", "network_checked"} & set(methods) or args.figure
-            else None
-        )
+        predictor = load_weights(args.weights) if {"network", "network_samples", "network_checked"} & set(methods) \
+            or args.figure else None
         network = pipeline_network(predictor, hand, args.seed) if predictor is not None else None
         service = service_answers(predictor, hand, args.seed, args.proposals)
     data = DeformableDataConfig(seed=args.data_seed)
@@ -196,44 +164,24 @@ def deformable_figures(args: argparse.Namespace) -> dict[str, Any] | None:
         for split in splits:
             for case in build_cases(material, split, args.cases, args.seed, data):
                 report.cases.append(case)
-                report.results.append(
-                    evaluate_case(case, methods, args.contacts, rng, network, args.corrections, service)
-                )
+                report.results.append(evaluate_case(case, methods, args.contacts, rng, network, args.corrections,
+                                                    service))
                 bar.update(1)
     bar.close()
-    table = Table(
-        title=f"deformables: simulated rollout vs target (shape metric; plasticine: issue 59's rule), "
-        f"{args.cases} cases per row group, seed {args.seed}"
-    )
-    for col in (
-        "material",
-        "split",
-        "method",
-        "cases",
-        "success %",
-        "paper's 3D rule %",
-        "median closure",
-        "median mean err",
-        "median top err",
-        "network's own contacts (successes)",
-        "head's motion / target's",
-    ):
+    table = Table(title=f"deformables: simulated rollout vs target (shape metric; plasticine: issue 59's rule), "
+                        f"{args.cases} cases per row group, seed {args.seed}")
+    for col in ("material", "split", "method", "cases", "success %", "paper's 3D rule %", "median closure",
+                "median mean err", "median top err",
+                "network's own contacts (successes)", "head's motion / target's"):
         table.add_column(col, justify="left" if col in ("material", "split", "method") else "right")
     rows = report.summary()
     for r in rows:
-        table.add_row(
-            str(r["material"]),
-            str(r["split"]),
-            str(r["method"]),
-            str(r["cases"]),
-            f"{r['success']:.1f}",
-            f"{r['paper_success']:.1f}" if r["material"] == "plasticine" else "-",
-            f"{r['closure']:.2f}",
-            f"{r['mean_error']:.3f}",
-            f"{r['top_mean_error']:.3f}",
-            f"{r['network_contacts']} ({r['network_successes']})" if str(r["method"]).startswith("network") else "-",
-            _readback(r),
-        )
+        table.add_row(str(r["material"]), str(r["split"]), str(r["method"]), str(r["cases"]),
+                      f"{r['success']:.1f}", f"{r['paper_success']:.1f}" if r["material"] == "plasticine" else "-",
+                      f"{r['closure']:.2f}", f"{r['mean_error']:.3f}", f"{r['top_mean_error']:.3f}",
+                      f"{r['network_contacts']} ({r['network_successes']})" if str(r["method"]).startswith("network")
+                      else "-",
+                      _readback(r))
     console = Console(width=160)
     console.print(table)
     for material in materials:  # the issue's goals, on unseen objects
@@ -248,14 +196,8 @@ def deformable_figures(args: argparse.Namespace) -> dict[str, Any] | None:
         from research.evaluation.property_pairs import SENSITIVITY_PAIRS, property_sensitivity
 
         pairs = Table(title=f"property sensitivity: one shape, two property sets, {args.sensitivity} shapes each")
-        for col in (
-            "pair",
-            "shapes",
-            "median rollout gap (same manipulation)",
-            "network contacts differ",
-            "network (not fallback) answers",
-            "own properties' answer better (ties)",
-        ):
+        for col in ("pair", "shapes", "median rollout gap (same manipulation)", "network contacts differ",
+                    "network (not fallback) answers", "own properties' answer better (ties)"):
             pairs.add_column(col, justify="left" if col == "pair" else "right")
         figures["sensitivity"] = []
         for material in [m for m in materials if m in SENSITIVITY_PAIRS]:
@@ -265,24 +207,12 @@ def deformable_figures(args: argparse.Namespace) -> dict[str, Any] | None:
             own = sum(s == "network" for r in res for s in r.sources)
             wins = [r.matched_wins() for r in res] if network is not None else []
             better = f"{sum(w for w, _ in wins)}/{2 * len(res)} ({sum(t for _, t in wins)})" if wins else "-"
-            pairs.add_row(
-                f"{a} / {b}",
-                str(len(res)),
-                f"{np.median([r.rollout_gap for r in res]):.3f}",
-                f"{sum(differ)}/{len(differ)}" if differ else "-",
-                f"{own}/{2 * len(res)}",
-                better,
-            )
-            figures["sensitivity"].append(
-                {
-                    "pair": f"{a}/{b}",
-                    "gaps": [r.rollout_gap for r in res],
-                    "differ": differ,
-                    "network_answers": own,
-                    "matched_error": [r.matched_error for r in res],
-                    "swapped_error": [r.swapped_error for r in res],
-                }
-            )
+            pairs.add_row(f"{a} / {b}", str(len(res)), f"{np.median([r.rollout_gap for r in res]):.3f}",
+                          f"{sum(differ)}/{len(differ)}" if differ else "-", f"{own}/{2 * len(res)}", better)
+            figures["sensitivity"].append({"pair": f"{a}/{b}", "gaps": [r.rollout_gap for r in res],
+                                           "differ": differ, "network_answers": own,
+                                           "matched_error": [r.matched_error for r in res],
+                                           "swapped_error": [r.swapped_error for r in res]})
         console.print(pairs)
     if args.figure and network is not None:
         figures["figure"] = _print_figure(console, materials, args.figure, args.seed, network)
@@ -305,13 +235,8 @@ def _print_figure_samples(console: Console, materials: list[str], count: int, se
     rows: list[dict[str, object]] = []
     for material in [m for m in materials if m in SENSITIVITY_PAIRS]:
         for t in figure_per_sample(material, count, seed, answers):
-            table.add_row(
-                t.name,
-                str(t.answers),
-                f"{t.reaches} ({100 * t.reaches / t.answers:.0f} %)",
-                f"{t.ahead} ({t.ahead_reaching})",
-                f"{t.behind} ({t.behind_reaching})",
-            )
+            table.add_row(t.name, str(t.answers), f"{t.reaches} ({100 * t.reaches / t.answers:.0f} %)",
+                          f"{t.ahead} ({t.ahead_reaching})", f"{t.behind} ({t.behind_reaching})")
             rows.append(vars(t))
     console.print(table)
     return rows
@@ -326,15 +251,9 @@ def _print_figure(console: Console, materials: list[str], count: int, seed: int,
 
     table = Table(title=f"property figure: the same cloud slid by {FIGURE_SLIDE} × size, {count} shapes a pair")
     names = ("front_pair", "rear_one", "centre", "far_pair")
-    for col in (
-        "member",
-        "own answer reaches",
-        "the other member's answer reaches",
-        "contacts along d (median)",
-        "network's own answers",
-        "of them ahead / behind the centre (reaching)",
-        *(f"{n} reaches" for n in names),
-    ):
+    for col in ("member", "own answer reaches", "the other member's answer reaches", "contacts along d (median)",
+                "network's own answers", "of them ahead / behind the centre (reaching)",
+                *(f"{n} reaches" for n in names)):
         table.add_column(col, justify="left" if col == "member" else "right")
     rows: list[object] = []
     for material in [m for m in materials if m in SENSITIVITY_PAIRS]:

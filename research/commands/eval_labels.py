@@ -58,11 +58,9 @@ def _run(args: argparse.Namespace) -> int:
             tops[w].append(out.heatmaps.argmax(axis=1))
     reports = [label_agreement(regions, t) for t in tops]
     report = reports[0]
-    print(
-        f"{args.hand}, {args.split}: {report.cases} unmasked rigid cases of {len(objects)} objects; "
-        f"{args.resamples} re-samplings of each object ({cfg.palms} palms, {cfg.grasps_per_job} grasps); "
-        f"K = {args.samples}"
-    )
+    print(f"{args.hand}, {args.split}: {report.cases} unmasked rigid cases of {len(objects)} objects; "
+          f"{args.resamples} re-samplings of each object ({cfg.palms} palms, {cfg.grasps_per_job} grasps); "
+          f"K = {args.samples}")
     own = np.mean([np.isfinite(c.grasp_contacts[:, 0, 0]).sum() for c in cases if c.grasp_contacts is not None])
     print(f"valid grasps a case: the data's {own:.1f}, a re-sampling's {np.mean(counts):.1f}")
     heads = " | ".join(f"top point: {w}" for w in weights)
@@ -76,8 +74,6 @@ def _run(args: argparse.Namespace) -> int:
     print(f"\n| label sources in the union (the data's first) | points it marks | {heads} |\n|--:|--:|{rule}")
     for k, cov in enumerate(report.denser_coverage):
         print(f"| {k + 1} | {cov:.1%} | " + " | ".join(f"{r.denser_top_hit[k]:.1%}" for r in reports) + " |")
-    print(
-        f"\nlabel sources against each other: a point of one region in another {report.oracle_pair:.1%}; "
-        f"the point most of the others mark in the held-out one {report.oracle_held_out:.1%}"
-    )
+    print(f"\nlabel sources against each other: a point of one region in another {report.oracle_pair:.1%}; "
+          f"the point most of the others mark in the held-out one {report.oracle_held_out:.1%}")
     return 0

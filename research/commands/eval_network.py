@@ -31,42 +31,22 @@ def add_network_parser(eval_subparsers: Any) -> None:
     p.add_argument("--samples", type=int, default=8, help="K for the diversity and heatmap figures")
     p.add_argument("--no-audit", action="store_true", help="skip the outside audit of claimed successes")
     p.add_argument("--no-random", action="store_true", help="skip the random-contacts rows (e.g. run separately)")
-    p.add_argument(
-        "--oracle",
-        action="store_true",
-        help="also the ceiling: each case's own valid grasps as the heatmaps (research.evaluation.oracle)",
-    )
-    p.add_argument(
-        "--resamples",
-        type=int,
-        default=0,
-        help="also judge the top point on the union of the data's valid region and this many "
-        "re-sampled ones per case (a lower bound of its hit on the true valid region)",
-    )
-    p.add_argument(
-        "--resample-seed", type=int, default=7000, help="re-sampling r uses the generator [seed + r, object]"
-    )
+    p.add_argument("--oracle", action="store_true",
+                   help="also the ceiling: each case's own valid grasps as the heatmaps (research.evaluation.oracle)")
+    p.add_argument("--resamples", type=int, default=0,
+                   help="also judge the top point on the union of the data's valid region and this many "
+                        "re-sampled ones per case (a lower bound of its hit on the true valid region)")
+    p.add_argument("--resample-seed", type=int, default=7000,
+                   help="re-sampling r uses the generator [seed + r, object]")
     p.add_argument("--workers", type=int, default=2, help="processes re-sampling the objects")
-    p.add_argument(
-        "--deformables",
-        type=int,
-        default=0,
-        help="also the deformable goals: this many unseen-body cases of cloth, rope and plasticine, the "
-        "network (first weights) against the paper's random baseline and random points with the "
-        "target's motion (`mani-lab eval deformable`)",
-    )
-    p.add_argument(
-        "--deformable-data-seed",
-        type=int,
-        default=5,
-        help="seed of the data set whose bodies the deformable cases use (the shipped weights: 5)",
-    )
-    p.add_argument(
-        "--figure",
-        type=int,
-        default=0,
-        help="also the paper's property figure (handkerchief / card, rope / stick) on this many shapes",
-    )
+    p.add_argument("--deformables", type=int, default=0,
+                   help="also the deformable goals: this many unseen-body cases of cloth, rope and plasticine, the "
+                        "network (first weights) against the paper's random baseline and random points with the "
+                        "target's motion (`mani-lab eval deformable`)")
+    p.add_argument("--deformable-data-seed", type=int, default=5,
+                   help="seed of the data set whose bodies the deformable cases use (the shipped weights: 5)")
+    p.add_argument("--figure", type=int, default=0,
+                   help="also the paper's property figure (handkerchief / card, rope / stick) on this many shapes")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--json", default=None, help="write all figures to this JSON file")
     p.add_argument("--no-progress", action="store_true")
@@ -123,16 +103,13 @@ def _run(args: argparse.Namespace) -> int:
         for budget in budgets:
             run("valid grasps (oracle)", "network", oracle, budget)
         props["valid grasps (oracle)"] = dataclasses.asdict(
-            evaluate_properties(cases, hand, oracle, k=args.samples, seed=args.seed)
-        )
+            evaluate_properties(cases, hand, oracle, k=args.samples, seed=args.seed))
     for budget in [] if args.no_random else budgets:
         run("random contacts", "random_contacts", None, budget)
     n = len(cases)
     kinds = ", ".join(f"{v} {k}" for k, v in sorted(Counter(motion_kind(c) for c in cases).items()))
-    print(
-        f"{args.hand}, {args.split}: {n} rigid cases ({kinds}) of {len({c.object_id for c in cases})} objects, "
-        f"{args.proposals} proposals, seed {args.seed}; success: best proposal verified / confirmed by the audit"
-    )
+    print(f"{args.hand}, {args.split}: {n} rigid cases ({kinds}) of {len({c.object_id for c in cases})} objects, "
+          f"{args.proposals} proposals, seed {args.seed}; success: best proposal verified / confirmed by the audit")
     print("\n| contacts + refinement | budget | success (verification) | success (audit) | median iterations "
           "| fallback cases |\n|---|--:|--:|--:|--:|--:|")  # fmt: skip
     for r in sorted(runs, key=lambda r: (-r["budget"], r["name"])):
@@ -141,19 +118,15 @@ def _run(args: argparse.Namespace) -> int:
               f"{float(np.median(r['iterations'])) if r['iterations'] else 0:.0f} | {r['fallbacks']} |")  # fmt: skip
     union_head = f"top point in the union of {args.resamples + 1} valid regions (a lower bound) | "
     union_head = union_head if args.resamples else ""
-    print(
-        f"\n| weights | flat heatmaps (samples; unmasked cases) | top point in a valid region (unmasked cases) | "
-        f"{union_head}distinct sets of K = {args.samples} | contacts inside the mask "
-        f"| inference p50 (batch 1, K = 1) |\n|---|--:|--:|{'--:|' if args.resamples else ''}--:|--:|--:|"
-    )
+    print(f"\n| weights | flat heatmaps (samples; unmasked cases) | top point in a valid region (unmasked cases) | "
+          f"{union_head}distinct sets of K = {args.samples} | contacts inside the mask "
+          f"| inference p50 (batch 1, K = 1) |\n|---|--:|--:|{'--:|' if args.resamples else ''}--:|--:|--:|")
     for w, p in props.items():
-        union = f"{p['top_in_union']:.0%} (a random point {p['union_share']:.0%}) | " if args.resamples else ""
-        print(
-            f"| {w} | {p['empty_selections']:.0%}; {p['empty_unmasked']:.0%} | "
-            f"{p['top_in_region']:.0%} ({p['top_cases']}; a random point {p['region_share']:.0%}) | {union}"
-            f"{p['mean_modes']:.2f} | {p['mask_compliance']:.0%} ({p['mask_cases']} masked cases) | "
-            f"{p['inference_ms_p50']:.0f} ms |"
-        )
+        union = (f"{p['top_in_union']:.0%} (a random point {p['union_share']:.0%}) | " if args.resamples else "")
+        print(f"| {w} | {p['empty_selections']:.0%}; {p['empty_unmasked']:.0%} | "
+              f"{p['top_in_region']:.0%} ({p['top_cases']}; a random point {p['region_share']:.0%}) | {union}"
+              f"{p['mean_modes']:.2f} | {p['mask_compliance']:.0%} ({p['mask_cases']} masked cases) | "
+              f"{p['inference_ms_p50']:.0f} ms |")
     deformables = _deformables(args, weights[0]) if args.deformables or args.figure else None
     if args.json:
         with open(args.json, "w") as fh:
@@ -170,10 +143,8 @@ def _deformables(args: argparse.Namespace, weights: str) -> dict[str, Any] | Non
     from research.commands.eval_deformable import add_deformable, deformable_figures
 
     cases = max(args.deformables, 1)
-    print(
-        f"\ndeformables: {cases} unseen-body case(s) a material, data seed {args.deformable_data_seed}, "
-        f"weights {weights}"
-    )
+    print(f"\ndeformables: {cases} unseen-body case(s) a material, data seed {args.deformable_data_seed}, "
+          f"weights {weights}")
     parser = argparse.ArgumentParser(prog="mani-lab eval")
     add_deformable(parser.add_subparsers())
     options = parser.parse_args([

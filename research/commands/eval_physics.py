@@ -57,47 +57,22 @@ def add_physics_parser(sub: Any) -> None:
     a.add_argument("--method", default="network", help="request method (network = auto without contacts)")
     a.add_argument("--weights", default=str(WEIGHTS), help="network weights (method network)")
     a.add_argument("--seed", type=int, default=0)
-    a.add_argument(
-        "--judge",
-        choices=("mesh", "points"),
-        default="mesh",
-        help="the object the physics test builds: the exact mesh (default) or the sent points' patches",
-    )
-    a.add_argument(
-        "--kp-revolute",
-        type=float,
-        default=None,
-        help="position gain of revolute joints, N·m/rad "
-        "(default: Protocol's 3, MuJoCo Menagerie's LEAP Hand; its Allegro has 10)",
-    )
-    a.add_argument(
-        "--damping-revolute",
-        type=float,
-        default=None,
-        help="revolute joint damping, N·m·s/rad (default: Protocol's 0.1; Menagerie's Allegro has 1)",
-    )
-    a.add_argument(
-        "--armature-revolute",
-        type=float,
-        default=None,
-        help="revolute joint armature, kg·m² (default: Protocol's 0.01; DexGraspBench's LEAP Hand and Allegro have 0)",
-    )
-    a.add_argument(
-        "--simulate",
-        action=argparse.BooleanOptionalAction,
-        default=None,
-        help="options.simulate: unset, the pipeline tests what it returns (the service's default); "
-        "--simulate, it searches candidates until enough hold (at least 16); --no-simulate, no test",
-    )
-    a.add_argument(
-        "--no-close", action="store_true", help="leave the fingertips where the refinement put them (no closing stage)"
-    )
-    a.add_argument(
-        "--task",
-        default="closure",
-        help="closure (force closure, six pushes), lift (= delta:0,0,0.05) or delta:x,y,z[,qw,qx,qy,qz] "
-        "(the target-motion test)",
-    )
+    a.add_argument("--judge", choices=("mesh", "points"), default="mesh",
+                   help="the object the physics test builds: the exact mesh (default) or the sent points' patches")
+    a.add_argument("--kp-revolute", type=float, default=None, help="position gain of revolute joints, N·m/rad "
+                   "(default: Protocol's 3, MuJoCo Menagerie's LEAP Hand; its Allegro has 10)")
+    a.add_argument("--damping-revolute", type=float, default=None, help="revolute joint damping, N·m·s/rad "
+                   "(default: Protocol's 0.1; Menagerie's Allegro has 1)")
+    a.add_argument("--armature-revolute", type=float, default=None, help="revolute joint armature, kg·m² "
+                   "(default: Protocol's 0.01; DexGraspBench's LEAP Hand and Allegro have 0)")
+    a.add_argument("--simulate", action=argparse.BooleanOptionalAction, default=None,
+                   help="options.simulate: unset, the pipeline tests what it returns (the service's default); "
+                   "--simulate, it searches candidates until enough hold (at least 16); --no-simulate, no test")
+    a.add_argument("--no-close", action="store_true",
+                   help="leave the fingertips where the refinement put them (no closing stage)")
+    a.add_argument("--task", default="closure",
+                   help="closure (force closure, six pushes), lift (= delta:0,0,0.05) or delta:x,y,z[,qw,qx,qy,qz] "
+                   "(the target-motion test)")
     a.add_argument("--json", default=None, help="also write every proposal's record to this file")
     a.set_defaults(func=run_physics)
 

@@ -32,9 +32,7 @@ def register(subparsers: Any) -> None:
     re-sampled labels), ``audit``, ``deformable`` (Table I, deformable columns) and ``physics`` (the simulated grasp
     test) and ``dexgraspbench`` (the same answers in DexGraspBench's own evaluation) sub-commands to ``mani``."""
     p = subparsers.add_parser(
-        "eval",
-        help="evaluate refinement / network",
-        description=__doc__,
+        "eval", help="evaluate refinement / network", description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sub = p.add_subparsers(
@@ -61,19 +59,12 @@ def add_refine(sub: Any) -> None:
     r.add_argument("--retreat", type=float, default=0.30, help="start distance behind the feasible pose (m, paper 0.3)")
     r.add_argument("--max-iterations", type=int, default=100, help="refinement iteration cap (default 100)")
     r.add_argument("--mu", type=float, default=0.5, help="friction coefficient (default 0.5)")
-    r.add_argument(
-        "--ground-truth",
-        choices=("sampled", "refined"),
-        default="sampled",
-        help="source of the known-feasible poses: the data generator's grasp sampling (default) or "
-        "our own refinement from a random approach (the original, circular protocol)",
-    )
-    r.add_argument(
-        "--ground-truth-cache",
-        default=None,
-        help="pickle file keeping the sampled ground truths between runs (read if present, then "
-        "updated); delete it after changing the sampler",
-    )
+    r.add_argument("--ground-truth", choices=("sampled", "refined"), default="sampled",
+                   help="source of the known-feasible poses: the data generator's grasp sampling (default) or "
+                        "our own refinement from a random approach (the original, circular protocol)")
+    r.add_argument("--ground-truth-cache", default=None,
+                   help="pickle file keeping the sampled ground truths between runs (read if present, then "
+                        "updated); delete it after changing the sampler")
     r.add_argument("--json", default=None, help="also write every trial to this JSON file")
     r.set_defaults(func=run_refine)
 
@@ -121,9 +112,8 @@ def run_refine(args: argparse.Namespace) -> int:
             pickle.dump(store, dst)
         os.replace(tmp, args.ground_truth_cache)
 
-    with Progress(
-        TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=console
-    ) as bar:
+    with Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(),
+                  console=console) as bar:
         for hand in hand_objs:
             cache: dict[Any, Any] = {}  # sampled ground truths shared by the modes of this hand
             for mode in modes:
@@ -135,81 +125,33 @@ def run_refine(args: argparse.Namespace) -> int:
                     if done % args.grasps:
                         return
                     if not console.is_terminal:  # a log file gets no live bar: one line per object instead
-                        console.print(
-                            f"{label}: {done}/{args.objects * args.grasps} grasps, "
-                            f"{bar.tasks[job].elapsed or 0.0:.0f} s"
-                        )
+                        console.print(f"{label}: {done}/{args.objects * args.grasps} grasps, "
+                                      f"{bar.tasks[job].elapsed or 0.0:.0f} s")
                     if args.ground_truth_cache and done > args.grasps:
                         save_store()  # the previous object's ground truths: an interrupted run resumes from here
 
-                reports.append(
-                    evaluate(
-                        hand,
-                        objects,
-                        mode,
-                        args.grasps,
-                        args.seed,
-                        mu=args.mu,
-                        retreat=args.retreat,
-                        config=config,
-                        on_trial=advance,
-                        ground_truth=args.ground_truth,
-                        cache=cache,
-                        store=store,
-                    )
-                )
+                reports.append(evaluate(
+                    hand, objects, mode, args.grasps, args.seed, mu=args.mu, retreat=args.retreat, config=config,
+                    on_trial=advance, ground_truth=args.ground_truth, cache=cache, store=store,
+                ))
                 if args.ground_truth_cache:
                     save_store()
-    table = Table(
-        title=f"refinement: {args.objects} objects x {args.grasps} grasps, seed {args.seed}, "
-        f"retreat {args.retreat} m, mu {args.mu}, ground truth {args.ground_truth}"
-    )
-    for col in (
-        "hand",
-        "mode",
-        "n",
-        "skipped",
-        "success %",
-        "median s",
-        "p90 s",
-        "median it",
-        "baseline %",
-        "baseline median s",
-    ):
+    table = Table(title=f"refinement: {args.objects} objects x {args.grasps} grasps, seed {args.seed}, "
+                        f"retreat {args.retreat} m, mu {args.mu}, ground truth {args.ground_truth}")
+    for col in ("hand", "mode", "n", "skipped", "success %", "median s", "p90 s", "median it",
+                "baseline %", "baseline median s"):
         table.add_column(col, justify="right")
     for rep in reports:
         s = rep.summary()
         if not s.get("n"):
             table.add_row(rep.hand, rep.mode, "0", str(s["skipped"]), *["-"] * 6)
             continue
-        table.add_row(
-            rep.hand,
-            rep.mode,
-            str(s["n"]),
-            str(s["skipped"]),
-            f"{s['success']:.1f}",
-            f"{s['median_s']:.3f}",
-            f"{s['p90_s']:.3f}",
-            f"{s['median_iterations']:.0f}",
-            f"{s['baseline_success']:.1f}",
-            f"{s['baseline_median_s']:.3f}",
-        )
+        table.add_row(rep.hand, rep.mode, str(s["n"]), str(s["skipped"]), f"{s['success']:.1f}",
+                      f"{s['median_s']:.3f}", f"{s['p90_s']:.3f}", f"{s['median_iterations']:.0f}",
+                      f"{s['baseline_success']:.1f}", f"{s['baseline_median_s']:.3f}")
     console.print(table)
     if args.json:
         with open(args.json, "w") as fh:
-            json.dump(
-                [
-                    {
-                        "hand": r.hand,
-                        "mode": r.mode,
-                        "ground_truth": r.ground_truth,
-                        "summary": r.summary(),
-                        "trials": [asdict(t) for t in r.trials],
-                    }
-                    for r in reports
-                ],
-                fh,
-                indent=1,
-                default=float,
-            )
+            json.dump([{"hand": r.hand, "mode": r.mode, "ground_truth": r.ground_truth, "summary": r.summary(),
+                        "trials": [asdict(t) for t in r.trials]} for r in reports], fh, indent=1, default=float)
     return EXIT_OK

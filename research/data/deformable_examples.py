@@ -180,3 +180,4 @@ def _holding(body: DeformableBody, displacement: np.ndarray, fraction: float,
     kept, shortfalls, seconds = reaching_sets(body, longer, {m.procedure for m in sets})
     names = {m.procedure for m in kept}
     return [m for m in sets if m.procedure in names], shortfalls, seconds
+

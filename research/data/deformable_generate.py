@@ -50,14 +50,8 @@ class DeformableDataConfig:
 
     def to_dict(self) -> dict[str, Any]:
         out = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(self).items()}
-        for name, default in (
-            ("verify_moving", False),
-            ("slides", 0.0),
-            ("stiff", False),
-            ("slide_margin", 0.0),
-            ("stiff_ends", 0.0),
-            ("paired_ends", False),
-        ):
+        for name, default in (("verify_moving", False), ("slides", 0.0), ("stiff", False), ("slide_margin", 0.0),
+                              ("stiff_ends", 0.0), ("paired_ends", False)):
             if out[name] == default:  # data sets made before the option keep their manifests' configuration
                 del out[name]
         return out
@@ -110,7 +104,6 @@ def _shape_index(cfg: DeformableDataConfig, i: int) -> int:
 def run_body(cfg: DeformableDataConfig, material: str, i: int, out_dir: str) -> BodyResult:
     """Generate and write body ``i`` of ``material``."""
     from research.data.deformable_examples import make_example, make_slide_example
-
     t0 = time.perf_counter()
     body = dataset_body(cfg, material, i)
     split = body_split(cfg, material, i)

@@ -122,14 +122,8 @@ class Report:
 
 
 def feasible_grasp(
-    hand: Hand,
-    cloud: PointCloudField,
-    mesh: Any,
-    task: WrenchTask,
-    mu: float,
-    rng: np.random.Generator,
-    attempts: int = 10,
-    config: RefineConfig | None = None,
+    hand: Hand, cloud: PointCloudField, mesh: Any, task: WrenchTask, mu: float, rng: np.random.Generator,
+    attempts: int = 10, config: RefineConfig | None = None,
 ) -> HandPose | None:
     """A verified force-closure pose from random contacts (protocol step 1), or None."""
     rest = rest_geometry(hand)
@@ -167,17 +161,8 @@ class SampledGroundTruth:
     """
 
     def __init__(
-        self,
-        hand: Hand,
-        obj: Any,
-        cloud: PointCloudField,
-        closure: WrenchTask,
-        mu: float,
-        seed: int,
-        index: int,
-        rounds: int = SAMPLER_ROUNDS,
-        palms: int = SAMPLER_PALMS,
-        max_grasps: int = SAMPLER_MAX_GRASPS,
+        self, hand: Hand, obj: Any, cloud: PointCloudField, closure: WrenchTask, mu: float, seed: int, index: int,
+        rounds: int = SAMPLER_ROUNDS, palms: int = SAMPLER_PALMS, max_grasps: int = SAMPLER_MAX_GRASPS,
     ) -> None:
         self.hand, self.obj, self.cloud, self.closure, self.mu = hand, obj, cloud, closure, mu
         self.seed, self.index, self.rounds, self.palms, self.max_grasps = seed, index, rounds, palms, max_grasps
@@ -194,27 +179,13 @@ class SampledGroundTruth:
         size = float(getattr(self.obj, "size", np.ptp(self.obj.points, axis=0).max()))
         r = self.rounds_done
         self.rounds_done += 1
-        facing = sample_grasps(
-            self.hand,
-            self._field,
-            size,
-            np.random.default_rng([self.seed, self.index, 1000 + r]),
-            palms=self.palms,
-            max_grasps=self.max_grasps,
-        )
-        pinching = sample_grasps(
-            self.hand,
-            self._field,
-            size,
-            np.random.default_rng([self.seed, self.index, 2000 + r]),
-            palms=self.palms,
-            max_grasps=self.max_grasps,
-            closure_mu=self.mu,
-        )
+        facing = sample_grasps(self.hand, self._field, size, np.random.default_rng([self.seed, self.index, 1000 + r]),
+                               palms=self.palms, max_grasps=self.max_grasps)
+        pinching = sample_grasps(self.hand, self._field, size, np.random.default_rng([self.seed, self.index, 2000 + r]),
+                                 palms=self.palms, max_grasps=self.max_grasps, closure_mu=self.mu)
         for g in facing + pinching:
-            pose = HandPose(
-                np.asarray(g.palm_pos, np.float64), np.asarray(g.palm_quat, np.float64), np.asarray(g.q, np.float64)
-            )
+            pose = HandPose(np.asarray(g.palm_pos, np.float64), np.asarray(g.palm_quat, np.float64),
+                            np.asarray(g.q, np.float64))
             ver = verify(self.hand, pose, self.cloud, self.closure, self.mu, self.obj.mesh)
             self.candidates.append(SampledCandidate(pose, ver))
 
@@ -226,10 +197,7 @@ class SampledGroundTruth:
 
 
 def sampled_ground_truth(
-    sampler: SampledGroundTruth,
-    mode: str,
-    start: int,
-    rng: np.random.Generator,
+    sampler: SampledGroundTruth, mode: str, start: int, rng: np.random.Generator,
 ) -> tuple[HandPose, WrenchTask, int] | None:
     """The first eligible sampled grasp at index ≥ ``start`` for ``mode``, its task, and the index after it.
 
@@ -249,7 +217,8 @@ def sampled_ground_truth(
         c, length = sampler.closure.centre, sampler.closure.length
         w = feasible_wrench(ver.tips, ver.normals, sampler.mu, c, length, rng)
         task = rigid_task(np.concatenate([w[:3], w[3:] * length]), c, length)
-        if verify(sampler.hand, cand.pose, sampler.cloud, task, sampler.mu, sampler.obj.mesh, collisions=False).success:
+        if verify(sampler.hand, cand.pose, sampler.cloud, task, sampler.mu, sampler.obj.mesh,
+                  collisions=False).success:
             return cand.pose, task, i
     return None
 
@@ -271,14 +240,8 @@ def approach_start(
 
 
 def feasible_wrench(
-    tips: np.ndarray,
-    normals: np.ndarray,
-    mu: float,
-    centre: np.ndarray,
-    length: float,
-    rng: np.random.Generator,
-    max_normal_force: float = 1.0,
-    tries: int = 200,
+    tips: np.ndarray, normals: np.ndarray, mu: float, centre: np.ndarray, length: float,
+    rng: np.random.Generator, max_normal_force: float = 1.0, tries: int = 200,
 ) -> np.ndarray:
     """A unit scaled wrench the contacts can produce within the force bound (protocol step 2)."""
     t1, t2 = tangents(normals)
@@ -301,12 +264,8 @@ def feasible_wrench(
 
 
 def perturb(
-    hand: Hand,
-    pose: HandPose,
-    rng: np.random.Generator,
-    retreat: float = 0.30,
-    max_angle_deg: float = 60.0,
-    max_shift: float = 0.05,
+    hand: Hand, pose: HandPose, rng: np.random.Generator, retreat: float = 0.30,
+    max_angle_deg: float = 60.0, max_shift: float = 0.05,
 ) -> HandPose:
     """Protocol step 3: retreat along the approach axis, random rotation ≤ max angle, shift ≤ max_shift."""
     rot = Rotation.from_quat(pose.palm_quat[[1, 2, 3, 0]])
@@ -397,16 +356,9 @@ def evaluate(
             base_s = time.process_time() - t0
             base = verify(hand, base_pose, cloud, task, mu, obj.mesh)
             trial = Trial(
-                object_id=obj.id,
-                grasp=j,
-                success=ver.success,
-                seconds=seconds,
-                iterations=res.iterations,
-                reason=res.reason,
-                failures=ver.failures,
-                baseline_success=base.success,
-                baseline_seconds=base_s,
-                baseline_failures=base.failures,
+                object_id=obj.id, grasp=j, success=ver.success, seconds=seconds, iterations=res.iterations,
+                reason=res.reason, failures=ver.failures, baseline_success=base.success,
+                baseline_seconds=base_s, baseline_failures=base.failures,
             )
             report.trials.append(trial)
             if on_trial:

@@ -82,16 +82,8 @@ def print_separation(console: Console, report: DeformableReport, materials: list
         bodies = {c.body.id: c.body.kind for c in report.cases if c.material == material}
         table = Table(title=f"{material}: does the metric separate? {rows[0].cases} cases on {len(bodies)} bodies "
                             f"of {len(set(bodies.values()))} kinds (issue 59's criteria)")  # fmt: skip
-        for col in (
-            "method",
-            "cases",
-            "success % (rule)",
-            "paper's all-points rule %",
-            "median closure",
-            "median top err",
-            "criterion",
-            "met",
-        ):
+        for col in ("method", "cases", "success % (rule)", "paper's all-points rule %", "median closure",
+                    "median top err", "criterion", "met"):
             table.add_column(col, justify="left" if col in ("method", "criterion") else "right")
         for r in rows:
             table.add_row(r.method, str(r.cases), f"{r.success:.1f}", f"{r.paper_success:.1f}", f"{r.closure:.2f}",

@@ -24,20 +24,13 @@ def initialise_from(model: ManiFoundationNet, source: ManiFoundationNet) -> None
     Raises:
         ValueError: the configurations differ otherwise.
     """
-    head_fields = {
-        "name": "",
-        "deformable_head": [],
-        "deformable_motion_gain": False,
-        "deformable_frame": False,
-        "deformable_frame_slides_only": False,
-    }
+    head_fields = {"name": "", "deformable_head": [], "deformable_motion_gain": False, "deformable_frame": False,
+                   "deformable_frame_slides_only": False}
     mine = {**model.config.to_dict(), **head_fields}
     theirs = {**source.config.to_dict(), **head_fields}
-    same_head = (
-        source.config.deformable_head == model.config.deformable_head
-        and (model.config.deformable_motion_gain or not source.config.deformable_motion_gain)
-        and (model.config.deformable_frame or not source.config.deformable_frame)
-    )
+    same_head = source.config.deformable_head == model.config.deformable_head and (
+        model.config.deformable_motion_gain or not source.config.deformable_motion_gain
+    ) and (model.config.deformable_frame or not source.config.deformable_frame)
     if mine != theirs or (source.config.deformable_head and not same_head):
         raise ValueError(f"init_from: a {source.config.name!r} network cannot start a {model.config.name!r} one")
     state = source.state_dict()
@@ -49,13 +42,8 @@ def initialise_from(model: ManiFoundationNet, source: ManiFoundationNet) -> None
             state[key] = grown
     for key, weight in list(state.items()):  # a head layer with more inputs (the frame's come last): zero on them
         want = target.get(key)
-        if (
-            key.startswith("deformable_head.")
-            and want is not None
-            and weight.dim() == 2
-            and weight.shape[0] == want.shape[0]
-            and weight.shape[1] < want.shape[1]
-        ):
+        if key.startswith("deformable_head.") and want is not None and weight.dim() == 2 \
+                and weight.shape[0] == want.shape[0] and weight.shape[1] < want.shape[1]:
             grown = torch.zeros_like(want)
             grown[:, : weight.shape[1]] = weight
             state[key] = grown

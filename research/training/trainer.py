@@ -200,6 +200,7 @@ def train(cfg: TrainConfig, resume: bool = False, progress: bool = True) -> Trai
     return TrainResult(out, epoch, time.perf_counter() - t_start, final, best)
 
 
+
 def _load(cfg: TrainConfig) -> list[Source]:
     """The sources of ``cfg.data``: its rigid shard directories as one source, its deformable data directories
     (``mani-lab data generate --materials cloth,rope,plasticine``; clouds resampled to the network's point count)

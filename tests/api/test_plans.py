@@ -111,12 +111,8 @@ def test_errors_name_the_field_and_another_key_sees_nothing(science: Science) ->
     answer = httpx.post(f"{science.base}/v1/plans", json=too_many, headers=science.auth())
     assert answer.status_code == 422 and answer.json()["detail"][0]["field"] == "waypoints"
     with pytest.raises(grpc.RpcError) as caught:  # the same refusal over gRPC, before a job exists
-        science.stub.SubmitPlan(
-            to_proto(PlanRequest.model_validate(body), pb.PlanRequest).__class__(
-                start=pb.PoseIn(position=[0, 0, 0]), robot=pb.RobotIn(name=HAND)
-            ),
-            metadata=science.metadata(),
-        )
+        science.stub.SubmitPlan(to_proto(PlanRequest.model_validate(body), pb.PlanRequest).__class__(
+            start=pb.PoseIn(position=[0, 0, 0]), robot=pb.RobotIn(name=HAND)), metadata=science.metadata())
     assert caught.value.code() is grpc.StatusCode.INVALID_ARGUMENT and "object" in (caught.value.details() or "")
 
 
@@ -135,14 +131,9 @@ def test_the_viewer_plays_the_plan(science: Science) -> None:
     from .browser import chromium, dump_dom
 
     chromium()
-    body = {
-        "object": box_object(128),
-        "start": {"position": [-0.1, 0, 0.05]},
-        "waypoints": [{"position": [0.1, 0, 0.05]}],
-        "robot": {"name": HAND},
-        "scene": {"obstacles": [WALL], "support_plane": {"height": 0.0}},
-        "options": {"contacts": False, "seed": 2},
-    }
+    body = {"object": box_object(128), "start": {"position": [-0.1, 0, 0.05]},
+            "waypoints": [{"position": [0.1, 0, 0.05]}], "robot": {"name": HAND},
+            "scene": {"obstacles": [WALL], "support_plane": {"height": 0.0}}, "options": {"contacts": False, "seed": 2}}
     job_id = httpx.post(f"{science.base}/v1/plans", json=body, headers=science.auth()).json()["id"]
     job = _terminal(science, job_id)
     assert job.plan is not None

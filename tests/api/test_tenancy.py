@@ -52,9 +52,8 @@ class World:
 @pytest.fixture(scope="module", params=["embedded", "redis"])
 def world(request: pytest.FixtureRequest) -> Iterator[World]:
     with start_queue_and_workers(request, stage_seconds=0.01, iterations=500) as queue:
-        settings = Settings(
-            api_keys=[A, B], admin_keys=[ADMIN], rate_limit_per_s=0, sync_wait_max=20, auth_failures_burst=50
-        )  # one keyless call per route: more than the default 10
+        settings = Settings(api_keys=[A, B], admin_keys=[ADMIN], rate_limit_per_s=0, sync_wait_max=20,
+                            auth_failures_burst=50)  # one keyless call per route: more than the default 10
         with serving(create_app(settings, queue=queue)) as base:
             clients = {
                 k: httpx.Client(base_url=base, headers={"Authorization": f"Bearer {k}"}, timeout=60)

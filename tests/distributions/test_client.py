@@ -76,4 +76,6 @@ def test_every_library_the_client_imports_is_a_dependency_of_the_client_distribu
         names = {VIA.get(_name(d), _name(d)) for d in providers.get(module, [module])}
         if not names & declared:
             undeclared[module] = sorted(files)
-    assert not undeclared, f"imported by the client packages but not declared in distributions/client: {undeclared}"
+    assert not undeclared, (
+        f"imported by the client packages but not declared in distributions/client: {undeclared}"
+    )

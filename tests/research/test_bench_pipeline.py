@@ -17,24 +17,13 @@ WEIGHTS = "manifoundation/core/weights/cpu1k"  # the shipped weights
 def _record(wall: float, success: list[bool], answer: float = 0.0, audit: list[bool] | None = None) -> dict:
     parts = {"linearise": 0.02, "contacts": 0.01, "guards": 0.002, "solve": 0.01}
     calls = {f"{p}_calls": 2 for p in parts}
-    return {
-        "wall": wall,
-        "stages": {"refinement": wall / 2},
-        **parts,
-        **calls,
-        "iterations": 2,
-        "success": success,
-        "answers": [[answer] * 10 for _ in success],
-        "audit": audit,
-    }
+    return {"wall": wall, "stages": {"refinement": wall / 2}, **parts, **calls, "iterations": 2,
+            "success": success, "answers": [[answer] * 10 for _ in success], "audit": audit}
 
 
 def test_summary_figures() -> None:
-    recs = [
-        _record(0.1, [True], audit=[True]),
-        _record(0.3, [False], audit=[False]),
-        _record(0.2, [True], audit=[False]),
-    ]
+    recs = [_record(0.1, [True], audit=[True]), _record(0.3, [False], audit=[False]),
+            _record(0.2, [True], audit=[False])]
     s = summary(recs)
     assert s["p50"] == pytest.approx(0.2)
     assert s["verified_per_s"] == pytest.approx(2 / 0.6)
@@ -78,19 +67,9 @@ def test_worker_times_a_real_request() -> None:
     before = refine_module.linearise
     timers = _Timers()
     timers.install()
-    spec = {
-        "hand": "panda_gripper",
-        "set": "box",
-        "object": 0,
-        "seed": 0,
-        "task": "lift",
-        "geometry": "mesh",
-        "proposals": 1,
-        "method": "random_contacts",
-        "points": 1024,
-        "audit": False,
-        "box": "examples/data/box.npz",
-    }
+    spec = {"hand": "panda_gripper", "set": "box", "object": 0, "seed": 0, "task": "lift", "geometry": "mesh",
+            "proposals": 1, "method": "random_contacts", "points": 1024, "audit": False,
+            "box": "examples/data/box.npz"}
     try:
         rec = run_one(spec, _Objects(), timers)
     finally:

@@ -32,7 +32,9 @@ def test_eval_physics_prints_the_table_and_writes_every_proposal(
     assert "verified & hold" in text and "best holds" in text and "panda_gripper" in text
 
 
-def test_eval_physics_task_lift_runs_the_target_motion_test(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_eval_physics_task_lift_runs_the_target_motion_test(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     p = argparse.ArgumentParser()
     add_physics_parser(p.add_subparsers())
     out = tmp_path / "lift.json"

@@ -21,21 +21,8 @@ def _parse(argv: list[str]) -> argparse.Namespace:
 
 def test_eval_refine_logs_progress_and_keeps_ground_truths(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     cache = tmp_path / "gt.pkl"
-    argv = [
-        "refine",
-        "--hand",
-        "panda_gripper",
-        "--mode",
-        "task",
-        "--objects",
-        "1",
-        "--grasps",
-        "1",
-        "--ground-truth-cache",
-        str(cache),
-        "--json",
-        str(tmp_path / "trials.json"),
-    ]
+    argv = ["refine", "--hand", "panda_gripper", "--mode", "task", "--objects", "1", "--grasps", "1",
+            "--ground-truth-cache", str(cache), "--json", str(tmp_path / "trials.json")]
     args = _parse(argv)
     assert args.func(args) == 0
     out = capsys.readouterr().out
@@ -82,17 +69,8 @@ def test_eval_deformable_judges_the_goal_only_beside_a_random_baseline(
     out = capsys.readouterr().out
     assert "against the paper's baseline" in out and "with the target's motion" not in out
     # the service asked for K answers: the rollout-checked network against random contacts at the same budget
-    args = p.parse_args(
-        [
-            *common,
-            "--methods",
-            "network_samples,network_checked,random_checked",
-            "--proposals",
-            "2",
-            "--sensitivity",
-            "0",
-        ]
-    )
+    args = p.parse_args([*common, "--methods", "network_samples,network_checked,random_checked", "--proposals", "2",
+                         "--sensitivity", "0"])
     assert args.func(args) == 0
     out = capsys.readouterr().out
     assert "network_checked" in out and "network_samples" in out

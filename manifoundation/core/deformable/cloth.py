@@ -44,18 +44,8 @@ def _disc(rng: np.random.Generator) -> np.ndarray:
 
 def _tshirt(rng: np.random.Generator) -> np.ndarray:
     w, s, n, h = rng.uniform(0.26, 0.34), rng.uniform(0.18, 0.26), rng.uniform(0.08, 0.12), rng.uniform(0.18, 0.26)
-    pts = [
-        (-w, -0.5),
-        (w, -0.5),
-        (w, 0.5 - h - 0.05),
-        (w + s, 0.5 - h),
-        (w + s * 0.8, 0.5 - 0.02),
-        (n, 0.5),
-        (-n, 0.5),
-        (-w - s * 0.8, 0.5 - 0.02),
-        (-w - s, 0.5 - h),
-        (-w, 0.5 - h - 0.05),
-    ]
+    pts = [(-w, -0.5), (w, -0.5), (w, 0.5 - h - 0.05), (w + s, 0.5 - h), (w + s * 0.8, 0.5 - 0.02),
+           (n, 0.5), (-n, 0.5), (-w - s * 0.8, 0.5 - 0.02), (-w - s, 0.5 - h), (-w, 0.5 - h - 0.05)]
     return np.array(pts)
 
 

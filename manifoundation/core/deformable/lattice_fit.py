@@ -91,6 +91,6 @@ def _fitted_lattice(points: np.ndarray, nodes: np.ndarray) -> tuple[float, np.nd
     design = np.zeros((3 * n, 4))
     design[:, 0] = nodes.T.reshape(-1)
     for axis in range(3):
-        design[axis * n : (axis + 1) * n, 1 + axis] = 1.0
+        design[axis * n:(axis + 1) * n, 1 + axis] = 1.0
     solution = np.linalg.lstsq(design, points.T.reshape(-1), rcond=None)[0]
     return float(solution[0]), solution[1:]

@@ -153,4 +153,6 @@ def flex_parameters(material: str, properties: dict[str, float], measure: float)
         )  # square cross-section (manifoundation.core.deformable.rope)
         return FlexParameters(p["youngs_modulus"], p["poisson_ratio"], 0.0, 0.0, mu, float(mass))
     strain = max(p["yield_stress"] / p["youngs_modulus"], MIN_YIELD_STRAIN)
-    return FlexParameters(p["youngs_modulus"], p["poisson_ratio"], 0.0, float(strain), mu, PLASTICINE_DENSITY * measure)
+    return FlexParameters(
+        p["youngs_modulus"], p["poisson_ratio"], 0.0, float(strain), mu, PLASTICINE_DENSITY * measure
+    )

@@ -24,7 +24,7 @@ Inside = Callable[[np.ndarray], np.ndarray]
 
 def _ellipsoid(axes: np.ndarray, centre: np.ndarray | None = None) -> Inside:
     c = np.zeros(3) if centre is None else centre
-    return lambda p: np.square((p - c) / axes).sum(axis=1) <= 1.0
+    return lambda p: (np.square((p - c) / axes).sum(axis=1) <= 1.0)
 
 
 def _shape(kind: str, rng: np.random.Generator) -> Inside:

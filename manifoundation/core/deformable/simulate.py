@@ -124,10 +124,8 @@ def simulate(body: DeformableBody, contacts: np.ndarray, motions: np.ndarray,
     mot = np.stack([mot[inverse == k].mean(axis=0) for k in range(len(verts))]) if len(idx) else mot
     dt = cfg.timestep or TIMESTEP[body.material]
     lift = LIFT[body.material] if cfg.lift is None else cfg.lift
-    bad = [
-        int(w)
-        for w in (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL, mujoco.mjtWarning.mjWARN_BADQACC)
-    ]  # MuJoCo resets the state after these
+    bad = [int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
+                            mujoco.mjtWarning.mjWARN_BADQACC)]  # MuJoCo resets the state after these
     start = np.asarray(body.vertices, dtype=np.float64)[verts]
     move, settle = round(cfg.move_seconds / dt), round(cfg.settle_seconds / dt)
     previous = mujoco.get_mju_user_warning()

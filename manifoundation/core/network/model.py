@@ -89,13 +89,8 @@ class ManiFoundationNet(nn.Module):
         self.force_decoder = Decoder(config, out_dim=3, with_heatmap=True)
         nn.init.constant_(self.contact_decoder.out.bias, math.log(HEAT_PRIOR / (1.0 - HEAT_PRIOR)))
         self.deformable_head = (
-            DeformableHead(
-                config.decoder_head[-1],
-                config.decoder_head[-1],
-                config.deformable_head,
-                config.deformable_motion_gain,
-                config.deformable_frame,
-            )
+            DeformableHead(config.decoder_head[-1], config.decoder_head[-1], config.deformable_head,
+                           config.deformable_motion_gain, config.deformable_frame)
             if config.deformable_head
             else None
         )

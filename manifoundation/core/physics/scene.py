@@ -82,11 +82,7 @@ def _rest_overlaps(hand: Hand) -> frozenset[tuple[str, str]]:
 
 
 def build_scene(
-    hand: Hand,
-    palm_position: np.ndarray,
-    palm_quaternion: np.ndarray,
-    shape: ObjectShape,
-    protocol: Protocol,
+    hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, shape: ObjectShape, protocol: Protocol,
     moving: bool = False,
 ) -> Scene:
     """Compile the scene (palm pose wxyz in the world frame; the object's pieces in the world frame).

@@ -99,12 +99,7 @@ PREGRASP_ITERATIONS = 30
 
 
 def moved_contacts(
-    sc: Scene,
-    q: np.ndarray,
-    points: np.ndarray,
-    normals: np.ndarray,
-    fingertips: list[str],
-    distance: float,
+    sc: Scene, q: np.ndarray, points: np.ndarray, normals: np.ndarray, fingertips: list[str], distance: float,
     limits: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> np.ndarray:
     """(D,) joints that move each contact point ``distance`` along its outward normal (negative: inward), within

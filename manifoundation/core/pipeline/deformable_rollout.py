@@ -42,13 +42,8 @@ class _Trial:
 
 
 def judge_by_rollout(
-    material: str,
-    points: np.ndarray,
-    normals: np.ndarray,
-    motion: np.ndarray,
-    properties: dict[str, float],
-    proposals: list[ProposalOutput],
-    corrections: int = 0,
+    material: str, points: np.ndarray, normals: np.ndarray, motion: np.ndarray, properties: dict[str, float],
+    proposals: list[ProposalOutput], corrections: int = 0,
 ) -> list[ProposalOutput]:
     """Each proposal with its rollout, shape error and the metric's verdict as its quality.
 
@@ -99,12 +94,8 @@ def judge_by_rollout(
 
 
 def _corrected(
-    trial: Callable[[np.ndarray, np.ndarray], _Trial],
-    first: _Trial,
-    target: np.ndarray,
-    at: np.ndarray,
-    contacts: np.ndarray,
-    budget: int,
+    trial: Callable[[np.ndarray, np.ndarray], _Trial], first: _Trial, target: np.ndarray, at: np.ndarray,
+    contacts: np.ndarray, budget: int,
 ) -> tuple[_Trial, int]:
     """Broyden's corrections of ``first``'s motions (module doc): the best trial and the rollouts spent.
 

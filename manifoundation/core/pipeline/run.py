@@ -74,7 +74,8 @@ def _network(batch: Sequence[Prepared | PreparedDeformable], predictor: Any) -> 
     for k, idx in by_k.items():
         rows = [network_input(p) if isinstance(p, PreparedDeformable) else network_inputs([p])[0]
                 for p in (batch[i] for i in idx)]  # fmt: skip
-        res = predictor.predict(rows, num_samples=k, seed=[batch[i].inp.seed for i in idx])
+        res = predictor.predict(rows, num_samples=k,
+                                seed=[batch[i].inp.seed for i in idx])
         for i, out in zip(idx, res, strict=True):
             outputs[i] = out
     return outputs
@@ -166,10 +167,7 @@ def _proposal(
 
 
 def _finish(
-    prep: Prepared,
-    net_out: Any,
-    progress: Progress | None,
-    should_cancel: CancelCheck | None,
+    prep: Prepared, net_out: Any, progress: Progress | None, should_cancel: CancelCheck | None,
     timings: dict[str, float],
 ) -> SynthesisOutput:
     inp, hand = prep.inp, prep.inp.hand
@@ -215,14 +213,8 @@ def _finish(
         enough = inp.stop_after_verified
         if enough is not None and sum(p.quality.success for p in proposals) >= enough:
             break  # enough verified proposals: the rest are neither refined nor returned
-        if (
-            search
-            and k >= inp.num_proposals
-            and (
-                enough_held(proposals, inp.num_proposals)
-                or (inp.deadline is not None and time.monotonic() >= inp.deadline)
-            )
-        ):
+        if search and k >= inp.num_proposals and (enough_held(proposals, inp.num_proposals) or (
+                inp.deadline is not None and time.monotonic() >= inp.deadline)):
             break  # searching: enough held (or no time left): no more candidates
         t0 = time.perf_counter()
         verified = _Verifier(prep)
@@ -271,14 +263,8 @@ def _rank(p: ProposalOutput) -> tuple[bool, float, float]:
 
 
 def _refined(
-    prep: Prepared,
-    start: HandPose,
-    k: int,
-    config: RefineConfig,
-    total: int,
-    report: Progress,
-    should_cancel: CancelCheck | None,
-    verified: _Verifier,
+    prep: Prepared, start: HandPose, k: int, config: RefineConfig, total: int, report: Progress,
+    should_cancel: CancelCheck | None, verified: _Verifier,
 ) -> Any:
     """Proposal ``k``'s refinement from ``start`` (restarted from approach alignments when it stalls), or None
     when the request asks for no refinement. An attempt that stalls but whose pose verification accepts (the
@@ -297,17 +283,8 @@ def _refined(
         return verified(pose, complete=False).success
 
     res = refine(
-        hand,
-        prep.cloud,
-        prep.task,
-        start,
-        prep.mu,
-        config,
-        tip_field=prep.tip_field,
-        deadline=inp.deadline,
-        should_cancel=should_cancel,
-        progress=step_done,
-        accept=accept,
+        hand, prep.cloud, prep.task, start, prep.mu, config, tip_field=prep.tip_field, deadline=inp.deadline,
+        should_cancel=should_cancel, progress=step_done, accept=accept,
     )
     left = inp.max_iterations - res.iterations
     restart = inp.method != "contacts" and inp.initial_pose is None
@@ -315,18 +292,9 @@ def _refined(
         # the initial pose led to a local minimum: restart from approach alignments
         # (manifoundation.core.refine.strategy)
         again = refine_from_start(
-            hand,
-            prep.cloud,
-            prep.task,
-            start,
-            prep.mu,
-            replace(config, max_iterations=left),
-            seed=inp.seed + k,
-            tip_field=prep.tip_field,
-            deadline=inp.deadline,
-            should_cancel=should_cancel,
-            accept=accept,
-            tilts_first=True,
+            hand, prep.cloud, prep.task, start, prep.mu, replace(config, max_iterations=left),
+            seed=inp.seed + k, tip_field=prep.tip_field, deadline=inp.deadline, should_cancel=should_cancel,
+            accept=accept, tilts_first=True,
         )
         again.iterations += res.iterations
         if again.converged or accept(again.pose):

@@ -27,10 +27,8 @@ def _rigid_motion(task: TaskInput, points: np.ndarray, centre: np.ndarray) -> tu
         rot = Rotation.from_quat(quat[[1, 2, 3, 0]]).as_matrix()
         trans = np.zeros(3) if task.translation is None else np.asarray(task.translation, dtype=np.float64)
         return rot, centre + trans - rot @ centre  # rotation about the centre of mass, then translation
-    target = (
-        task.targets
-        if task.kind == "target_points"
-        else (None if task.motion is None else points + np.asarray(task.motion))
+    target = task.targets if task.kind == "target_points" else (
+        None if task.motion is None else points + np.asarray(task.motion)
     )
     if target is None or np.shape(target) != points.shape:
         name = "targets" if task.kind == "target_points" else "motion"
@@ -79,11 +77,7 @@ def build_task(
 
 
 def network_motion(
-    task: TaskInput,
-    points: np.ndarray,
-    centre: np.ndarray,
-    mass: float,
-    inertia: np.ndarray,
+    task: TaskInput, points: np.ndarray, centre: np.ndarray, mass: float, inertia: np.ndarray,
     joint: JointInput | None = None,
 ) -> np.ndarray:
     """(N, 3) per-point motion the network is conditioned on (zeros for force closure)."""

@@ -46,31 +46,14 @@ def plan_to_dict(plan: PlanOutput) -> dict[str, Any]:
         "positions": [np.asarray(p.position).tolist() for p in plan.poses],
         "quaternions": [np.asarray(p.quaternion).tolist() for p in plan.poses],
         "waypoint_indices": list(plan.waypoint_indices),
-        "repairs": [
-            {
-                "index": r.index,
-                "requested": pose_dict(r.requested),
-                "repaired": pose_dict(r.repaired),
-                "distance": r.distance,
-                "obstacles": list(r.obstacles),
-            }
-            for r in plan.repairs
-        ],
+        "repairs": [{"index": r.index, "requested": pose_dict(r.requested), "repaired": pose_dict(r.repaired),
+                     "distance": r.distance, "obstacles": list(r.obstacles)} for r in plan.repairs],
         "segments": [vars(s).copy() for s in plan.segments],
-        "steps": [
-            {
-                "index": s.index,
-                "grasp": s.grasp,
-                "success": s.success,
-                "contact_shift": s.contact_shift,
-                "hand_collisions": list(s.hand_collisions),
-                "dropped": s.dropped,
-                "seconds": s.seconds,
-                "calls": s.calls,
-                "proposal": None if s.proposal is None else proposal_dict(s.proposal),
-            }
-            for s in plan.steps
-        ],
+        "steps": [{"index": s.index, "grasp": s.grasp, "success": s.success, "contact_shift": s.contact_shift,
+                   "hand_collisions": list(s.hand_collisions), "dropped": s.dropped, "seconds": s.seconds,
+                   "calls": s.calls,
+                   "proposal": None if s.proposal is None else proposal_dict(s.proposal)}
+                  for s in plan.steps],
         "regrasps": plan.regrasps,
         "kept_share": plan.kept_share,
         "timings": dict(plan.timings),

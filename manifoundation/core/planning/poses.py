@@ -16,13 +16,11 @@ def quaternion_matrix(quaternion: np.ndarray) -> np.ndarray:
     """The (3, 3) rotation matrix of a unit quaternion (4,) (w, x, y, z) (plain numpy: the planner's validity
     test calls this thousands of times, and a scipy ``Rotation`` costs ~20 µs to build)."""
     w, x, y, z = (float(v) for v in quaternion)
-    return np.array(
-        [
-            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-        ]
-    )
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+    ])
 
 
 def _wxyz(rotation: Rotation) -> np.ndarray:

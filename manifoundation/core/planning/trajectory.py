@@ -89,11 +89,8 @@ def plan_trajectory(
     names = ["start", *(f"waypoints[{i}]" for i in range(len(targets)))]
     positions = np.array([p.position for p in ends])
     planner = SegmentPlanner(
-        scene.object_free,
-        positions.min(0) - options.workspace_margin,
-        positions.max(0) + options.workspace_margin,
-        scene.object_radius,
-        options.collision_resolution,
+        scene.object_free, positions.min(0) - options.workspace_margin, positions.max(0) + options.workspace_margin,
+        scene.object_radius, options.collision_resolution,
     )
     t0 = time.perf_counter()
     poses, indices, segments = [start], [], []

@@ -65,10 +65,8 @@ class NoPathFound(PlanningError):
     code: ClassVar[str] = "NoPathFound"
 
     def __init__(self, segment: int, source: str, target: str, seconds: float) -> None:
-        super().__init__(
-            f"waypoints: no collision-free path from {source} to {target} in {seconds:.2f} s "
-            f"(segment {segment}; raise options.time_limit or move the waypoints)"
-        )
+        super().__init__(f"waypoints: no collision-free path from {source} to {target} in {seconds:.2f} s "
+                         f"(segment {segment}; raise options.time_limit or move the waypoints)")
         self.segment = segment
         self.field = f"waypoints[{segment}]"
         self._args = (segment, source, target, seconds)

@@ -130,9 +130,8 @@ class PointCloudField:
         """(M,) bool: x lies within the convex hull of the points grown by ``HULL_MARGIN`` disc radii (False: x
         is outside the object; the true surface reaches at most about a disc radius beyond its points)."""
         if not hasattr(self, "_hull"):
-            hull_points = (
-                self.points if self.surface is None else np.concatenate([self.points, self.surface.vertices])
-            )  # the samples lie on the surface's faces
+            hull_points = self.points if self.surface is None else np.concatenate(
+                [self.points, self.surface.vertices])  # the samples lie on the surface's faces
             self._hull = GrownHull.of(hull_points, self._dist_points, HULL_MARGIN * self.disc_radius)
         x = np.asarray(x, dtype=np.float64).reshape(-1, 3)
         if self._hull is None or not len(x):

@@ -98,7 +98,9 @@ def iou(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.logical_and(a, b).sum() / union) if union else 0.0
 
 
-def wahba(src_vecs: np.ndarray, dst_vecs: np.ndarray, weights: np.ndarray) -> np.ndarray:
+def wahba(
+    src_vecs: np.ndarray, dst_vecs: np.ndarray, weights: np.ndarray
+) -> np.ndarray:
     """Rotation R minimising Σ w_k ‖R s_k − d_k‖² (SVD)."""
     h = (src_vecs * weights[:, None]).T @ dst_vecs
     u, _, vt = np.linalg.svd(h)
@@ -175,14 +177,8 @@ def fit_palms(
 
 
 def back_off(
-    rot: np.ndarray,
-    t: np.ndarray,
-    rest: RestGeometry,
-    radii: np.ndarray,
-    field: PointCloudField,
-    direction: np.ndarray,
-    max_distance: float = 0.1,
-    step: float = 0.005,
+    rot: np.ndarray, t: np.ndarray, rest: RestGeometry, radii: np.ndarray, field: PointCloudField,
+    direction: np.ndarray, max_distance: float = 0.1, step: float = 0.005,
 ) -> np.ndarray:
     """Move the palm along −direction until no non-fingertip sphere penetrates (at most ``max_distance``)."""
     body = ~rest.tip_sphere

@@ -110,7 +110,7 @@ def merit(lin: Linearisation, cfg: RefineConfig, weight: float = 1.0) -> float:
 
 
 def _stall(merits: list[float], lin: Linearisation, cfg: RefineConfig) -> str:
-    """ "window": the merit fell by less than ``stall_tolerance`` over the last ``stall_window`` iterations;
+    """"window": the merit fell by less than ``stall_tolerance`` over the last ``stall_window`` iterations;
     "stuck": by less than ``stuck_tolerance`` over ``stuck_window`` with a guard deeper than ``stuck_penetration``;
     "" otherwise."""
     value = merits[-1]
@@ -209,10 +209,7 @@ def refine(
         ti = time.perf_counter()
         used_scale = scale
         params = StepParams(
-            trust=base * scale,
-            trust_force=cfg.trust_force * scale,
-            tip_weight=cfg.tip_weight,
-            penalty=cfg.penalty,
+            trust=base * scale, trust_force=cfg.trust_force * scale, tip_weight=cfg.tip_weight, penalty=cfg.penalty,
             residual_weight=weight,
         )
         step = step_fn(lin, params)
@@ -288,3 +285,4 @@ def refine(
         seconds=time.perf_counter() - t0,
         history=history,
     )
+

@@ -20,6 +20,7 @@ if TYPE_CHECKING:
     from manifoundation.core.robots.hand import Hand
 
 
+
 @dataclass(frozen=True)
 class HandPose:
     """Floating palm pose and finger joints (numpy, float64)."""

@@ -42,14 +42,8 @@ if TYPE_CHECKING:
 MIN_ATTEMPT_ITERATIONS = 10
 
 
-def align(
-    hand: Hand,
-    cloud: PointCloudField,
-    start: HandPose,
-    centre: np.ndarray,
-    roll: float = 0.0,
-    tilt: np.ndarray | None = None,
-) -> HandPose:
+def align(hand: Hand, cloud: PointCloudField, start: HandPose, centre: np.ndarray, roll: float = 0.0,
+          tilt: np.ndarray | None = None) -> HandPose:
     """Step 1 of the module doc, with an extra ``roll`` (rad) about the approach axis and optional tilt rotvec."""
     rest = rest_geometry(hand)
     new, d = _aligned_rotation(hand, start, centre, roll, tilt)
@@ -136,18 +130,8 @@ def refine_from_start(
         if budget < MIN_ATTEMPT_ITERATIONS and best is not None:
             break
         pose = align(hand, cloud, start, task.centre, roll, tilt)
-        res = refine(
-            hand,
-            cloud,
-            task,
-            pose,
-            mu,
-            replace(cfg, max_iterations=budget),
-            tip_field=tip_field,
-            deadline=deadline,
-            should_cancel=should_cancel,
-            accept=accept,
-        )
+        res = refine(hand, cloud, task, pose, mu, replace(cfg, max_iterations=budget), tip_field=tip_field,
+                     deadline=deadline, should_cancel=should_cancel, accept=accept)
         total += res.iterations
         budget -= max(res.iterations, 1)
         if best is None or res.converged or _score(res) < _score(best):

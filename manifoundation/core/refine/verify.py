@@ -92,13 +92,8 @@ def produces_wrench(sol: ForceSolution) -> bool:
 
 
 def contact_quality(
-    hand: Hand,
-    contacts: np.ndarray,
-    normals: np.ndarray,
-    task: WrenchTask,
-    mu: float | np.ndarray,
-    max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE,
-    epsilon_below: float | None = None,
+    hand: Hand, contacts: np.ndarray, normals: np.ndarray, task: WrenchTask, mu: float | np.ndarray,
+    max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE, epsilon_below: float | None = None,
 ) -> tuple[ForceSolution, float]:
     """The contact-level tests of `verify`: the optimal forces of Eq. (6-8) (their residual is the wrench test)
     and the Ferrari–Canny ε, for contacts (m, 3) with outward normals (m, 3). The grasp sampler's force-closure

@@ -38,9 +38,9 @@ class SampleCells:
         count = np.bincount(cell)
         order = np.argsort(cell, kind="stable")
         area = np.linalg.norm(weighted, axis=1)
-        centre = (
-            np.stack([np.bincount(cell, area * points[:, k]) for k in range(3)], 1) / np.bincount(cell, area)[:, None]
-        )
+        centre = np.stack([np.bincount(cell, area * points[:, k]) for k in range(3)], 1) / np.bincount(cell, area)[
+            :, None
+        ]
         radius = np.zeros(len(count))
         np.maximum.at(radius, cell, np.linalg.norm(points - centre[cell], axis=1))
         moment = np.stack([np.bincount(cell, weighted[:, k]) for k in range(3)], 1)

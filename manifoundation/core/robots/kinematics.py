@@ -68,7 +68,8 @@ def quat_exp(omega: torch.Tensor) -> torch.Tensor:
 def one_cpu_pose(*tensors: torch.Tensor) -> bool:
     """Whether the compiled path applies: a batch of one, float64 on the CPU, no gradient asked."""
     return all(
-        t.shape[0] == 1 and t.dtype == torch.float64 and t.device.type == "cpu" and not t.requires_grad for t in tensors
+        t.shape[0] == 1 and t.dtype == torch.float64 and t.device.type == "cpu" and not t.requires_grad
+        for t in tensors
     )
 
 

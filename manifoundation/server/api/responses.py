@@ -26,3 +26,5 @@ def errors(*codes: int) -> dict[int | str, dict[str, Any]]:
 
 ERRORS = errors()
 READ_ERRORS = errors(400, 401, 404, 429, 503)
+
+

@@ -90,3 +90,5 @@ def _targets(request: JobRequest, index: np.ndarray) -> np.ndarray | None:
             return task.targets[index].astype(np.float32)
         return evenly(task.targets).astype(np.float32)
     return None
+
+

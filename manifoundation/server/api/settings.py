@@ -103,19 +103,13 @@ class Settings(BaseSettings):
         64 * 1024 * 1024, ge=1024, description="Bytes of uploaded objects' arrays per key (409 beyond)."
     )
     mcp_stream_max_s: float = Field(
-        300.0,
-        gt=0,
-        le=86400,
-        description="A `GET /mcp` event stream is closed after this long, s (the client "
-        "reconnects if it still listens); a stream costs a connection and a file descriptor.",
+        300.0, gt=0, le=86400, description="A `GET /mcp` event stream is closed after this long, s (the client "
+        "reconnects if it still listens); a stream costs a connection and a file descriptor."
     )
     mcp_max_streams: int = Field(8, ge=1, le=10_000, description="Open `GET /mcp` event streams per key (429 beyond).")
     mcp_max_body_bytes: int = Field(
-        MAX_BODY_BYTES,
-        ge=1024,
-        le=MAX_BODY_BYTES,
-        description="Body limit of `POST /mcp` (413 beyond). A body over "
-        "`MANI_PARSE_OFFLOAD_BYTES` must be an `upload_object` call: it is decoded in a body process, as `/v1`'s are.",
+        MAX_BODY_BYTES, ge=1024, le=MAX_BODY_BYTES, description="Body limit of `POST /mcp` (413 beyond). A body over "
+        "`MANI_PARSE_OFFLOAD_BYTES` must be an `upload_object` call: it is decoded in a body process, as `/v1`'s are."
     )
 
     # --- observability

@@ -101,6 +101,7 @@ class Submitter:
                                            "transport": self.transport})  # fmt: skip
         return batch_id
 
+
     async def first_page(self, batch_id: str, size: int = 100) -> BatchPublic:
         """A just-submitted batch as its answer shows it: every job queued, the first ``size`` job ids."""
         job_ids = await self.queue.batch_job_ids(batch_id, owner=self.caller.tenant)

@@ -31,3 +31,6 @@ class Versions:
     def raw_headers(self) -> list[tuple[bytes, bytes]]:
         """The versions as ASGI response headers."""
         return [(name.encode(), value.encode("latin-1")) for name, value in self.metadata()]
+
+
+

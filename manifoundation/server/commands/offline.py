@@ -30,20 +30,12 @@ def register(subparsers: Any) -> None:
     )  # fmt: skip
     p.add_argument("requests", type=Path, help="directory of *.json, *.msgpack and *.jsonl request files")
     p.add_argument("--out", type=Path, required=True, help="results directory (created; a rerun resumes in it)")
-    p.add_argument(
-        "--ray",
-        metavar="ADDRESS",
-        default=None,
-        help="run on Ray Data at ADDRESS (auto, HOST:6379, ray://HOST:10001; local: a cluster of its own)",
-    )
+    p.add_argument("--ray", metavar="ADDRESS", default=None,
+                   help="run on Ray Data at ADDRESS (auto, HOST:6379, ray://HOST:10001; local: a cluster of its own)")
     p.add_argument("--workers", type=int, default=1, help="worker processes, or Ray actors with --ray (default 1)")
     p.add_argument("--batch-size", type=int, default=8, help="requests per micro-batch of a worker (default 8)")
-    p.add_argument(
-        "--window",
-        type=int,
-        default=10_000,
-        help="requests read into memory at a time (default 10000; each window restarts the workers)",
-    )
+    p.add_argument("--window", type=int, default=10_000,
+                   help="requests read into memory at a time (default 10000; each window restarts the workers)")
     p.add_argument("--pipeline", default=MODELS, help="the worker's pipeline, module:attr (default: the models)")
     p.add_argument("--pipeline-options", default="{}", help="the pipeline's keyword options, as JSON")
     p.add_argument("--weights-dir", default=None, help="network weights directory (default: the pipeline's)")

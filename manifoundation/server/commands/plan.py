@@ -107,3 +107,4 @@ def run(args: argparse.Namespace) -> int:
         plan_figure(plan, scene_of(inp), inp.hand).write_html(str(args.html), include_plotlyjs=True)
         print(f"view written to {args.html}")
     return EXIT_OK if plan.success else EXIT_FAILED
+

@@ -92,8 +92,7 @@ def to_input(request: SynthesisRequest, hand: Hand, deadline: float | None = Non
         hand_key=hand.name,
         stop_after_verified=options.stop_after_verified,
         rollout_corrections=options.rollout_corrections,
-        simulate=physics_mode(options.simulate)
-        if obj.material.value == "rigid" and request.robot is not None
+        simulate=physics_mode(options.simulate) if obj.material.value == "rigid" and request.robot is not None
         else "off",
     )
 

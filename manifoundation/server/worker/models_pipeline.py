@@ -201,9 +201,8 @@ class ModelsPipeline:
 
         try:
             hand, inp = self._prepare(job)
-            out = run_pipeline(
-                inp, self.predictor, _reporter(job, progress), lambda: should_cancel(job.id), cache=self.objects
-            )
+            out = run_pipeline(inp, self.predictor, _reporter(job, progress), lambda: should_cancel(job.id),
+                               cache=self.objects)
         except ScienceError as exc:
             return error_from_exception(exc)
         return to_result(out, job.request, self.model_version or "none", hand)
@@ -230,9 +229,8 @@ class ModelsPipeline:
                 r(stage, fraction)
 
         try:
-            outs = run_pipeline_batch(
-                inputs, self.predictor, report, lambda: all(should_cancel(j.id) for j in jobs), cache=self.objects
-            )
+            outs = run_pipeline_batch(inputs, self.predictor, report, lambda: all(should_cancel(j.id) for j in jobs),
+                                      cache=self.objects)
         except Cancelled:
             outs = [Cancelled("cancelled")] * len(inputs)
         for i, hand, out in zip(index, hands, outs, strict=True):
@@ -245,6 +243,7 @@ class ModelsPipeline:
                 outcomes[i] = to_result(out, job.request, self.model_version or "none", hand)
         missing = ErrorBody.of(ErrorType.INTERNAL_ERROR, "the pipeline gave this job no outcome")
         return [o if o is not None else missing for o in outcomes]
+
 
     def plan(self, job: PlanJob, progress: PlanProgressFn, should_cancel: CancelFn) -> PlanOutcome:
         """Plan the manipulation; planner and pipeline errors are the job's (typed: the field they name)."""

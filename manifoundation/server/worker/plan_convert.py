@@ -101,14 +101,8 @@ def to_plan_result(out: PlanOutput, request: PlanRequest, hand: Hand, model_vers
     mesh = request.options.return_hand_mesh
     steps = [
         PlanStep(
-            index=s.index,
-            grasp=s.grasp,
-            success=s.success,
-            contact_shift=float(s.contact_shift),
-            hand_collisions=list(s.hand_collisions),
-            dropped=s.dropped,
-            seconds=float(s.seconds),
-            calls=s.calls,
+            index=s.index, grasp=s.grasp, success=s.success, contact_shift=float(s.contact_shift),
+            hand_collisions=list(s.hand_collisions), dropped=s.dropped, seconds=float(s.seconds), calls=s.calls,
             proposal=None if s.proposal is None else to_proposal(s.proposal, hand, mesh=mesh),
         )
         for s in out.steps

@@ -228,9 +228,8 @@ def test_simulate_asks_for_the_test_and_the_table_shows_its_verdict(object_file:
     best = result.proposals[0].model_copy(update={"contact_source": "random_fallback"})
     assert best.quality.physics is not None and best.quality.physics.reason == "moved"
     out = io.StringIO()
-    Console(file=out, width=common.TABLE_WIDTH, color_system=None).print(
-        result_table(result.model_copy(update={"proposals": [best]}))
-    )
+    Console(file=out, width=common.TABLE_WIDTH, color_system=None).print(result_table(
+        result.model_copy(update={"proposals": [best]})))
     lines = out.getvalue().splitlines()
     assert max(len(line) for line in lines) <= 100
     assert any("physics" in line for line in lines) and any("moved" in line and "random_fallback" in line

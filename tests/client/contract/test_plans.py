@@ -45,13 +45,13 @@ def test_defaults_and_normalised_quaternions() -> None:
 
 
 def test_bad_fields_are_named() -> None:
-    ((field, _),) = _errors(_body(waypoints=[]))
+    (field, _), = _errors(_body(waypoints=[]))
     assert field == "waypoints"
     bad_box = {"obstacles": [{"kind": "box", "size": [0.1, 0, 0.1]}]}
     assert _errors(_body(scene=bad_box))[0][0].startswith("scene.obstacles.0")
     assert _errors(_body(options={"translation_step": 0}))[0][0] == "options.translation_step"
     assert _errors(_body(options={"repair": "ignore"}))[0][0] == "options.repair"
-    ((field, problem),) = _errors(_body(object={"points": POINTS, "material": "cloth"}))
+    (field, problem), = _errors(_body(object={"points": POINTS, "material": "cloth"}))
     assert "rigidly" in problem
 
 

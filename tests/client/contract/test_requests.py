@@ -122,9 +122,7 @@ def test_rollout_corrections_need_the_rollout_and_stay_bounded() -> None:
     assert _errors(_body(options={"rollout_corrections": 3})) == [
         ("options.rollout_corrections", "3 needs simulate_rollout: the corrections are rollouts")
     ]
-    assert (
-        _errors(_body(options={"simulate_rollout": True, "rollout_corrections": 9}))[0][0]
-        == "options.rollout_corrections"
-    )
+    assert _errors(_body(options={"simulate_rollout": True, "rollout_corrections": 9}))[0][0] == \
+        "options.rollout_corrections"
     request = SynthesisRequest.model_validate(_body(options={"simulate_rollout": True, "rollout_corrections": 4}))
     assert request.options.rollout_corrections == 4

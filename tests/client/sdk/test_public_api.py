@@ -57,17 +57,8 @@ def _offenders(loaded: set[str], forbidden: set[str]) -> list[str]:
 
 def test_sdk_and_cli_import_no_server_or_science_code() -> None:
     loaded = _top_level_modules_after("import manifoundation.sdk, manifoundation.cli.main")
-    forbidden = {
-        "torch",
-        "fastapi",
-        "manifoundation.server",
-        "manifoundation.core",
-        "research",
-        "uvicorn",
-        "plotly",
-        "trimesh",
-        "grpc",
-    }
+    forbidden = {"torch", "fastapi", "manifoundation.server", "manifoundation.core", "research", "uvicorn", "plotly",
+                 "trimesh", "grpc"}
     assert not _offenders(loaded, forbidden)
 
 
@@ -78,15 +69,6 @@ def test_our_cli_commands_register_without_heavy_imports() -> None:
         "sub = argparse.ArgumentParser().add_subparsers()\n"
         "for m in (batch, jobs, synthesize): m.register(sub)\n"
     )
-    forbidden = {
-        "torch",
-        "fastapi",
-        "manifoundation.server",
-        "manifoundation.core",
-        "research",
-        "uvicorn",
-        "plotly",
-        "trimesh",
-        "httpx",
-    }
+    forbidden = {"torch", "fastapi", "manifoundation.server", "manifoundation.core", "research", "uvicorn", "plotly",
+                 "trimesh", "httpx"}
     assert not _offenders(loaded, forbidden)

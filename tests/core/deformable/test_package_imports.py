@@ -16,11 +16,8 @@ def test_deformable_imports_only_downwards() -> None:
     offenders = []
     for path in sorted(PACKAGE.rglob("*.py")):
         for node in ast.walk(ast.parse(path.read_text())):
-            names = (
-                [a.name for a in node.names]
-                if isinstance(node, ast.Import)
-                else ([node.module] if isinstance(node, ast.ImportFrom) and node.module and node.level == 0 else [])
-            )
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else (
+                [node.module] if isinstance(node, ast.ImportFrom) and node.module and node.level == 0 else [])
             for name in names:
                 parts = name.split(".")
                 if parts[0] == "models" and len(parts) > 1 and parts[1] in ABOVE:

@@ -203,9 +203,8 @@ def test_link_poses_at_one_pose_are_computed_once_and_match_the_kinematics():
         np.testing.assert_array_equal(pose, exact[name][0].numpy())
     other = link_poses_at(hand, pos + np.array([0.0, 0.0, 0.01]), quat, q)
     assert other is not first
-    np.testing.assert_allclose(
-        other[hand.fingertip_bodies[0]][:3, 3] - first[hand.fingertip_bodies[0]][:3, 3], [0.0, 0.0, 0.01], atol=1e-12
-    )
+    np.testing.assert_allclose(other[hand.fingertip_bodies[0]][:3, 3] - first[hand.fingertip_bodies[0]][:3, 3],
+                               [0.0, 0.0, 0.01], atol=1e-12)
 
 
 def test_depth_inside_a_convex_part_by_chunks_of_half_spaces_is_the_depth_against_all_at_once() -> None:

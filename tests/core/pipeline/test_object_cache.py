@@ -23,16 +23,8 @@ def gripper():
 
 def _inp(box, gripper, **kw):
     pts, nrm, mesh = box
-    base = dict(
-        points=pts,
-        normals=nrm,
-        hand=gripper,
-        task=TaskInput("force_closure"),
-        method="random_contacts",
-        mesh_vertices=np.asarray(mesh.vertices),
-        mesh_faces=np.asarray(mesh.faces),
-        seed=3,
-    )
+    base = dict(points=pts, normals=nrm, hand=gripper, task=TaskInput("force_closure"), method="random_contacts",
+                mesh_vertices=np.asarray(mesh.vertices), mesh_faces=np.asarray(mesh.faces), seed=3)
     base.update(kw)
     return SynthesisInput(**base)
 

@@ -32,14 +32,8 @@ def gripper():
 
 def _inp(box, gripper, **kw):
     pts, nrm = box
-    base = dict(
-        points=pts,
-        normals=nrm,
-        hand=gripper,
-        task=TaskInput("force_closure"),
-        method="contacts",
-        contacts=np.array([[0.02, 0, 0], [-0.02, 0, 0]]),
-    )
+    base = dict(points=pts, normals=nrm, hand=gripper, task=TaskInput("force_closure"), method="contacts",
+                contacts=np.array([[0.02, 0, 0], [-0.02, 0, 0]]))
     base.update(kw)
     return SynthesisInput(**base)
 

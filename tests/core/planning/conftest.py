@@ -31,14 +31,9 @@ def lifted(block):
     """A pure translation of the block, 15 cm along x at 20 cm above a table, carried by the Allegro hand."""
     mesh, pts, nrm = block
     inp = PlanInput(
-        points=pts,
-        normals=nrm,
-        hand=get_hand("allegro"),
-        start=Pose(np.array([-0.075, 0.0, 0.2])),
-        waypoints=[Pose(np.array([0.075, 0.0, 0.2]))],
-        support=SupportPlane(0.0),
-        mesh_vertices=np.asarray(mesh.vertices),
-        mesh_faces=np.asarray(mesh.faces),
+        points=pts, normals=nrm, hand=get_hand("allegro"), start=Pose(np.array([-0.075, 0.0, 0.2])),
+        waypoints=[Pose(np.array([0.075, 0.0, 0.2]))], support=SupportPlane(0.0),
+        mesh_vertices=np.asarray(mesh.vertices), mesh_faces=np.asarray(mesh.faces),
         options=PlanOptions(translation_step=0.05, method="random_contacts", num_proposals=2, seed=1),
     )
     return inp, plan_manipulation(inp)

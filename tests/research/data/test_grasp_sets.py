@@ -59,7 +59,6 @@ def test_a_shard_example_keeps_its_own_grasp_first_and_the_others_that_can_do_it
     np.testing.assert_allclose(sets.contacts[0, 1, :2], _pinch(1)[0])
     assert np.isnan(sets.contacts[1, 1]).all()
 
-
 def _sphere_points(n: int = 200) -> np.ndarray:
     k = np.arange(n) + 0.5
     phi, theta = np.arccos(1 - 2 * k / n), np.pi * (1 + 5**0.5) * k

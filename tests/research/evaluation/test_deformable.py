@@ -28,6 +28,7 @@ def test_the_moving_points_baseline_reaches_a_rope_drag_that_spread_random_point
     assert mean["moving_target_motion"] < mean["random_target_motion"]
 
 
+
 def test_readback_is_the_heads_own_motion_length_over_the_targets_at_its_contacts() -> None:
     from research.evaluation.deformable import motion_readback
     from research.evaluation.deformable_service import Proposal
@@ -67,3 +68,5 @@ def test_a_plasticine_case_is_a_fingertip_press_that_two_contacts_replay() -> No
     # the body left alone does not reach the target: the press left a dent
     still = simulate(case.body, np.zeros(0, dtype=np.int64), np.zeros((0, 3)))
     assert not still.reaches(case.body, case.target)
+
+

@@ -21,9 +21,8 @@ def box_object(box):
 def sampler(box_object, gripper):
     cloud = PointCloudField(box_object.points, box_object.normals)
     closure = closure_task(np.zeros(3), characteristic_length(box_object.points, np.zeros(3)))
-    return SampledGroundTruth(
-        gripper, box_object, cloud, closure, 0.5, seed=0, index=0, rounds=3, palms=8, max_grasps=8
-    )
+    return SampledGroundTruth(gripper, box_object, cloud, closure, 0.5, seed=0, index=0, rounds=3, palms=8,
+                              max_grasps=8)
 
 
 def test_sampled_closure_ground_truth_passes_verify_with_positive_epsilon(sampler, box_object, gripper):

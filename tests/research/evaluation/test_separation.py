@@ -20,11 +20,8 @@ def _report(random_reaches: int) -> DeformableReport:
     target[top, 2] -= 0.01
     report = DeformableReport()
     for k in range(20):
-        report.cases.append(
-            DeformableCase(
-                "plasticine", "test_uo", body, Manipulation(np.array([top]), np.array([[0, 0, -0.01]]), "p"), target
-            )
-        )
+        report.cases.append(DeformableCase("plasticine", "test_uo", body,
+                                           Manipulation(np.array([top]), np.array([[0, 0, -0.01]]), "p"), target))
         report.results.append([
             MethodResult("ground_truth", shape_score("plasticine", start, target, target), 1),
             MethodResult("random_motion", shape_score("plasticine", start, target, target if k < random_reaches
@@ -38,14 +35,9 @@ def _report(random_reaches: int) -> DeformableReport:
 def test_a_metric_that_separates_is_accepted_and_one_random_hit_too_many_is_not() -> None:
     rows = separation(_report(1), "plasticine", ("ground_truth", "random_motion", "random_target_motion", "x"))
     assert [(r.method, r.success, r.met) for r in rows] == [
-        ("ground_truth", 100.0, True),
-        ("random_motion", 5.0, True),
-        ("random_target_motion", 0.0, True),
-    ]
+        ("ground_truth", 100.0, True), ("random_motion", 5.0, True), ("random_target_motion", 0.0, True)]
     assert rows[0].paper_success == 100.0 and rows[2].closure < 0.7
     assert accepted(rows) is True
-    assert (
-        accepted(separation(_report(2), "plasticine", ("ground_truth", "random_motion", "random_target_motion")))
-        is False
-    )  # 10 % > 5 %
+    assert accepted(separation(_report(2), "plasticine", ("ground_truth", "random_motion",
+                                                          "random_target_motion"))) is False  # 10 % > 5 %
     assert accepted(rows[:2]) is None  # a criterion's method missing: not judged

@@ -31,13 +31,8 @@ def test_a_head_grows_a_motion_gain_that_starts_at_zero() -> None:
 
 @pytest.mark.parametrize(
     ("source", "target"),
-    [
-        ("cpu1k_deformable", "cpu1k"),
-        ("cpu", "cpu1k"),
-        ("cpu1k_deformable_gain", "cpu1k_deformable"),
-        ("cpu1k_deformable_frame", "cpu1k_deformable_gain"),
-        ("cpu1k_deformable_slide_frame", "cpu1k_deformable_gain"),
-    ],
+    [("cpu1k_deformable", "cpu1k"), ("cpu", "cpu1k"), ("cpu1k_deformable_gain", "cpu1k_deformable"),
+     ("cpu1k_deformable_frame", "cpu1k_deformable_gain"), ("cpu1k_deformable_slide_frame", "cpu1k_deformable_gain")],
 )
 def test_other_networks_are_refused_by_name(source: str, target: str) -> None:
     with pytest.raises(ValueError, match=f"a '{source}' network cannot start a '{target}' one"):

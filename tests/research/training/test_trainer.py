@@ -37,15 +37,8 @@ def data_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 def test_train_writes_curves_checkpoints_and_resumes(data_dir: Path, tmp_path: Path) -> None:
     cfg = TrainConfig(
-        data=[str(data_dir)],
-        out=str(tmp_path / "run"),
-        epochs=1,
-        batch_size=2,
-        limit=6,
-        val_limit=4,
-        threads=1,
-        warmup_steps=1,
-        heat_contact_weight=4.0,
+        data=[str(data_dir)], out=str(tmp_path / "run"), epochs=1, batch_size=2, limit=6, val_limit=4,
+        threads=1, warmup_steps=1, heat_contact_weight=4.0,
     )
     first = train(cfg, progress=False)
     run = Path(first.out)
@@ -128,14 +121,8 @@ def test_best_is_chosen_among_epochs_measured_on_the_same_validation_examples(da
     import dataclasses
 
     cfg = TrainConfig(
-        data=[str(data_dir)],
-        out=str(tmp_path / "run"),
-        epochs=1,
-        batch_size=2,
-        limit=4,
-        val_limit=1,
-        threads=1,
-        warmup_steps=1,
+        data=[str(data_dir)], out=str(tmp_path / "run"), epochs=1, batch_size=2, limit=4, val_limit=1,
+        threads=1, warmup_steps=1,
     )
     train(cfg, progress=False)
     run = Path(cfg.out)

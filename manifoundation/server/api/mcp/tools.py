@@ -92,10 +92,8 @@ def build_server(objects: ObjectStore, session_of: SessionFn, *, name: str = "ma
 
         return await _guarded(body())
 
-    @server.tool(
-        description="Store an object once and get its object_id: a primitive (shape + size, m), or "
-        "points (N×3, 64..200000, optional normals and mesh), or a file path (mani mcp only)."
-    )
+    @server.tool(description="Store an object once and get its object_id: a primitive (shape + size, m), or "
+                             "points (N×3, 64..200000, optional normals and mesh), or a file path (mani mcp only).")
     async def upload_object(
         ctx: Context,
         shape: Literal["box", "sphere", "cylinder"] | None = None,
@@ -122,14 +120,12 @@ def build_server(objects: ObjectStore, session_of: SessionFn, *, name: str = "ma
 
         return await _guarded(body())
 
-    @server.tool(
-        description="Contacts, forces and a hand pose for an object and a task; waits up to wait_s. "
-        "task: {kind: delta_pose, translation: [x,y,z], rotation: [w,x,y,z]} | "
-        "{kind: force_closure} | {kind: wrench, wrench: [6]}. Each proposal is tested in MuJoCo "
-        "(six pushes, or the executed motion for delta_pose) and success means it held; "
-        "simulate: true searches up to 16 candidates until one holds (a median 0.3-4 s more), false skips "
-        "the test."
-    )
+    @server.tool(description="Contacts, forces and a hand pose for an object and a task; waits up to wait_s. "
+                             "task: {kind: delta_pose, translation: [x,y,z], rotation: [w,x,y,z]} | "
+                             "{kind: force_closure} | {kind: wrench, wrench: [6]}. Each proposal is tested in MuJoCo "
+                             "(six pushes, or the executed motion for delta_pose) and success means it held; "
+                             "simulate: true searches up to 16 candidates until one holds (a median 0.3-4 s "
+                             "more), false skips the test.")
     async def synthesize(
         ctx: Context,
         object_id: str,
@@ -153,13 +149,11 @@ def build_server(objects: ObjectStore, session_of: SessionFn, *, name: str = "ma
 
         return await _guarded(body())
 
-    @server.tool(
-        description="Plan a manipulation: the object (object_id) from start through waypoints, around "
-        "obstacles ({kind: box, size, pose: {position, quaternion}, name}), optionally on a "
-        "table (support_plane: its z). Answers a job: a collision-free trajectory, repaired "
-        "waypoints, a verified grasp per step. options: time_limit, translation_step, "
-        "rotation_step, seed, repair (nearest|report), method, num_proposals, contacts."
-    )
+    @server.tool(description="Plan a manipulation: the object (object_id) from start through waypoints, around "
+                             "obstacles ({kind: box, size, pose: {position, quaternion}, name}), optionally on a "
+                             "table (support_plane: its z). Answers a job: a collision-free trajectory, repaired "
+                             "waypoints, a verified grasp per step. options: time_limit, translation_step, "
+                             "rotation_step, seed, repair (nearest|report), method, num_proposals, contacts.")
     async def plan_manipulation(
         ctx: Context,
         object_id: str,
@@ -186,10 +180,8 @@ def build_server(objects: ObjectStore, session_of: SessionFn, *, name: str = "ma
 
         return await _guarded(body())
 
-    @server.tool(
-        description="Queue many syntheses at once: items [{object_id, task, hand, method, seed}, ...]; "
-        "follow with get_batch."
-    )
+    @server.tool(description="Queue many syntheses at once: items [{object_id, task, hand, method, seed}, ...]; "
+                             "follow with get_batch.")
     async def submit_batch(ctx: Context, items: Annotated[list[dict[str, Any]], Field(min_length=1)]) -> dict[str, Any]:
         async def body() -> dict[str, Any]:
             session = await session_of(ctx)
@@ -220,9 +212,8 @@ def build_server(objects: ObjectStore, session_of: SessionFn, *, name: str = "ma
 
         return await _guarded(body())
 
-    @server.tool(
-        description="A job's state and progress; once ended its result, plan or error (waits up to wait_s for the end)."
-    )
+    @server.tool(description="A job's state and progress; once ended its result, plan or error (waits up to "
+                             "wait_s for the end).")
     async def get_job(ctx: Context, job_id: str, wait_s: Wait = 0.0) -> dict[str, Any]:
         async def body() -> dict[str, Any]:
             session = await session_of(ctx)

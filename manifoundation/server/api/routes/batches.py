@@ -50,3 +50,4 @@ async def get_batch(
 ) -> Response:
     batch = await batch_page(queue, batch_id, caller.scope, offset, min(limit, settings.batch_page_max))
     return respond(request, batch)
+
