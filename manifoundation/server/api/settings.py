@@ -108,8 +108,9 @@ class Settings(BaseSettings):
     )
     mcp_max_streams: int = Field(8, ge=1, le=10_000, description="Open `GET /mcp` event streams per key (429 beyond).")
     mcp_max_body_bytes: int = Field(
-        MAX_BODY_BYTES, ge=1024, le=MAX_BODY_BYTES, description="Body limit of `POST /mcp` (413 beyond). A body over "
-        "`MANI_PARSE_OFFLOAD_BYTES` must be an `upload_object` call: it is decoded in a body process, as `/v1`'s are."
+        MAX_BODY_BYTES, ge=1024, le=MAX_BODY_BYTES, description="Body limit of `POST /mcp` (413 beyond). An "
+        "`upload_object` call over `MANI_PARSE_OFFLOAD_BYTES` is decoded in a body process, as `/v1` bodies are; "
+        "other calls: 1 MiB."
     )
 
     # --- observability

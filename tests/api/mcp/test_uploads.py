@@ -1,8 +1,8 @@
 """Large ``POST /mcp`` bodies are decoded in a body process, not by the SDK on the event loop (reliability issue 62,
 item 2): an ``upload_object`` call over ``MANI_PARSE_OFFLOAD_BYTES`` reaches the tool as an object validated there,
-the same object and the same errors as a small call's; any other call that large is refused (413) before the SDK
-sees it; a small body of unknown length goes on as sent. A real uvicorn server and the MCP SDK's own client; the
-queue is a fake (uploads submit no job)."""
+the same object and the same errors as a small call's; any other call goes on as sent (also of unknown length, or
+with every body offloaded) up to 1 MiB and is refused (413) beyond, before the SDK reads it. A real uvicorn server
+and the MCP SDK's own client; the queue is a fake (uploads submit no job)."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ from mcp.shared._httpx_utils import create_mcp_http_client
 from manifoundation.contract import ObjectIn
 from manifoundation.server.api.app import create_app
 from manifoundation.server.api.mcp.objects import object_bytes
-from manifoundation.server.api.mcp.uploads import object_from_arrays
+from manifoundation.server.api.mcp.uploads import CALL_MAX_BYTES, object_from_arrays
 from manifoundation.server.api.settings import Settings
 
 from ..fakes import FakeQueue
@@ -89,14 +89,29 @@ def test_a_large_invalid_upload_names_the_same_fields_as_a_small_one(base: str) 
     assert large_error["detail"][0]["field"].startswith("points")
 
 
-def test_any_other_call_that_large_is_refused_before_the_sdk_reads_it(base: str) -> None:
+def test_any_other_call_over_its_limit_is_refused_before_the_sdk_reads_it(base: str) -> None:
     call = {"jsonrpc": "2.0", "id": 1, "method": "tools/call", "params": {"name": "list_hands", "arguments": {}}}
-    padded = json.dumps(call).encode() + b" " * (2 * OFFLOAD)
+    padded = json.dumps(call).encode() + b" " * CALL_MAX_BYTES
     answer = httpx.post(f"{base}/mcp", content=padded, headers=HEADERS, timeout=30)
     assert answer.status_code == 413, answer.text
-    assert "MANI_PARSE_OFFLOAD_BYTES" in answer.json()["error"] and "tools/call list_hands" in answer.json()["error"]
-    garbage = httpx.post(f"{base}/mcp", content=b"{" * (2 * OFFLOAD), headers=HEADERS, timeout=30)
+    assert "limited to" in answer.json()["error"] and "tools/call list_hands" in answer.json()["error"]
+    garbage = httpx.post(f"{base}/mcp", content=b"{" * (CALL_MAX_BYTES + 1), headers=HEADERS, timeout=30)
     assert garbage.status_code == 400 and "not JSON" in garbage.json()["error"]
+    listing = json.dumps({"jsonrpc": "2.0", "id": 2, "method": "tools/list"}).encode() + b" " * (2 * OFFLOAD)
+    answer = httpx.post(f"{base}/mcp", content=listing, headers=HEADERS, timeout=30)  # over the offload size only
+    assert answer.status_code == 200 and answer.json()["id"] == 2, answer.text
+
+
+def test_every_body_offloaded_still_answers_small_calls() -> None:
+    """MANI_PARSE_OFFLOAD_BYTES 0 (every body decoded in a body process): calls other than uploads go on as sent."""
+    settings = Settings(api_keys=[KEY], rate_limit_per_s=0, parse_offload_bytes=0)
+    listing = {"jsonrpc": "2.0", "id": 3, "method": "tools/list"}
+    with serving(create_app(settings, queue=FakeQueue())) as url:  # type: ignore[arg-type]
+        answer = httpx.post(f"{url}/mcp", json=listing, headers=HEADERS, timeout=30)
+        assert answer.status_code == 200 and answer.json()["id"] == 3, answer.text
+        points, normals = _cloud(100)
+        (upload,) = asyncio.run(_calls(url, [{"points": points, "normals": normals}]))
+        assert not upload.is_error and upload.structured_content["num_points"] == 100
 
 
 def test_a_small_body_of_unknown_length_goes_on_as_sent(base: str) -> None:

@@ -9,8 +9,7 @@ A ``POST /mcp`` body is limited to ``MANI_MCP_MAX_BODY_BYTES`` (413 before readi
 parses bodies on the event loop, so a large one (over ``MANI_PARSE_OFFLOAD_BYTES``, or of unknown length) waits for
 one of the service's large-body slots and is decoded in a body process first
 (`manifoundation.server.api.mcp.uploads`): an ``upload_object`` call reaches the SDK with its arrays emptied and its
-object already validated; any other call that large is refused (413); a small body of unknown length goes on as
-sent.
+object already validated; any other call goes on as sent up to ``uploads.CALL_MAX_BYTES`` (1 MiB), 413 beyond.
 """
 
 from __future__ import annotations
@@ -95,13 +94,13 @@ class McpEndpoint:
         upload, or over the limit), 408 (too slow)."""
         settings = self.services.settings
         chunks = body_chunks(request, settings.mcp_max_body_bytes, settings.body_timeout, settings.body_idle_timeout)
-        kind, value = await self.services.bodies.run(uploads.DECODER, chunks, settings.parse_offload_bytes)
+        kind, value = await self.services.bodies.run(uploads.DECODER, chunks, uploads.CALL_MAX_BYTES)
         if kind == "decode":
             raise BadRequest(str(value))
         if kind == "other":
             raise PayloadTooLarge(
-                f"MCP bodies over {settings.parse_offload_bytes} bytes (MANI_PARSE_OFFLOAD_BYTES) carry "
-                f"{uploads.TOOL} calls only, not {value}; upload the object once and use its object_id"
+                f"MCP calls other than {uploads.TOOL} are limited to {uploads.CALL_MAX_BYTES} bytes (this one: "
+                f"{value}); upload the object once and use its object_id"
             )
         if kind == "as_is":
             return bytes(value)

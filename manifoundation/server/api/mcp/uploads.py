@@ -6,7 +6,8 @@ tool's arguments): a few-MB cloud holds the loop for hundreds of milliseconds. A
 (`manifoundation.server.api.bodies.BodyPool`), where `stage_upload` parses it and validates the cloud as the
 contract's `ObjectIn`; the SDK then gets the same call with its arrays emptied (a few hundred bytes) and the tool
 takes the object decoded there (`Staged`, left in the request's ASGI scope by the ``/mcp`` endpoint). Only
-``upload_object`` carries arrays: any other call that large is refused (413).
+``upload_object`` carries arrays: any other call goes to the SDK as sent up to `CALL_MAX_BYTES`, and is refused
+(413) beyond.
 
 `object_from_arrays` is the one rule from a tool's array arguments to an `ObjectIn`, for small calls (in the tool)
 and large ones (here). Imports the contract and pydantic only (it runs in the body processes).
@@ -28,6 +29,9 @@ ARRAYS = ("points", "normals", "mesh_vertices", "mesh_faces")
 """The arguments of `TOOL` that carry arrays (emptied in the call the SDK sees)."""
 STAGED_KEY = "mani_staged_upload"
 """Where the ``/mcp`` endpoint leaves a `Staged` in the ASGI scope's state for the tool."""
+CALL_MAX_BYTES = 1 << 20
+"""The largest MCP call other than ``upload_object`` (its other tools take ids and a few numbers: a 1 MiB body
+parses in milliseconds on the event loop), whatever ``MANI_PARSE_OFFLOAD_BYTES`` says."""
 DECODER = "manifoundation.server.api.mcp.uploads:stage_upload"
 """`stage_upload`, as a body process is told to run it."""
 
