@@ -11,8 +11,8 @@ from __future__ import annotations
 import contextlib
 import random
 import warnings
-from collections.abc import Iterator
-from typing import Any, Protocol, TypedDict
+from collections.abc import Callable, Iterator
+from typing import Any, Protocol, TypeAlias, TypedDict
 
 import grpc
 import pydantic
@@ -41,6 +41,15 @@ DEFAULT_TARGET = "127.0.0.1:50051"
 MAX_MESSAGE_BYTES = 64 * 1024 * 1024
 """Largest message sent or received: the service's default limit (``MANI_GRPC_MAX_MESSAGE_BYTES``)."""
 USER_AGENT = "manifoundation-sdk/0.1"
+STREAM_BATCH_BYTES = 8 * 1024 * 1024
+"""Batches whose message is larger than this are sent in pieces (``SubmitBatchStream``, `batch_request`): gRPC
+receives a unary message whole before the service reads a byte of it, so many large ones at once cost the service
+their size; pieces are read one at a time as it decodes them."""
+PIECE_BYTES = 1024 * 1024
+"""The size of a piece of a streamed batch."""
+Request: TypeAlias = Message | Callable[[], Iterator[Message]]
+"""What a call sends: a message, or (a client-streaming call) a function making the stream of its pieces anew for
+each attempt."""
 
 
 class StreamCall(Protocol):
@@ -53,7 +62,7 @@ class UnaryRpc(Protocol):
     """A blocking unary method of a ``grpc`` stub."""
 
     def with_call(
-        self, request: Message, *, timeout: float | None, metadata: tuple[tuple[str, str], ...]
+        self, request: Message | Iterator[Message], *, timeout: float | None, metadata: tuple[tuple[str, str], ...]
     ) -> tuple[Message, grpc.Call]: ...
 
 
@@ -163,6 +172,22 @@ def synthesis_message(request: SynthesisRequest) -> pb.SynthesisRequest:
 def plan_message(request: PlanRequest) -> pb.PlanRequest:
     """The ``SubmitPlan`` request."""
     return to_proto(request, pb.PlanRequest)
+
+
+def sent(request: Request) -> Message | Iterator[Message]:
+    """What one attempt of a call sends (`Request`)."""
+    return request() if callable(request) else request
+
+
+def batch_request(stub: Any, requests: list[SynthesisRequest]) -> tuple[Any, Request]:
+    """The RPC and the request that submit ``requests``: ``SubmitBatch`` with the whole message, or above
+    `STREAM_BATCH_BYTES` ``SubmitBatchStream`` with its `PIECE_BYTES` pieces (the same answer)."""
+    message = batch_message(requests)
+    if message.ByteSize() <= STREAM_BATCH_BYTES:
+        return stub.SubmitBatch, message
+    data = message.SerializeToString()
+    pieces = [pb.MessagePiece(data=data[i : i + PIECE_BYTES]) for i in range(0, len(data), PIECE_BYTES)]
+    return stub.SubmitBatchStream, lambda: iter(pieces)
 
 
 def batch_message(requests: list[SynthesisRequest]) -> pb.BatchCreate:

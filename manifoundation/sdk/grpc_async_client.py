@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import asyncio
 import itertools
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
 from typing import Protocol, Unpack
 
 from manifoundation.sdk.extras import missing_extra
@@ -56,8 +56,8 @@ class AsyncUnaryRpc(Protocol):
     """An awaited unary method of a ``grpc.aio`` stub."""
 
     def __call__(
-        self, request: Message, *, timeout: float | None, metadata: tuple[tuple[str, str], ...]
-    ) -> grpc.aio.UnaryUnaryCall: ...
+        self, request: Message | Iterator[Message], *, timeout: float | None, metadata: tuple[tuple[str, str], ...]
+    ) -> grpc.aio.UnaryUnaryCall | grpc.aio.StreamUnaryCall: ...
 
 
 class AsyncGrpcTransport(GrpcBase, AsyncTransport):
@@ -95,11 +95,11 @@ class AsyncGrpcTransport(GrpcBase, AsyncTransport):
         await self._channel.close()
 
     async def unary(
-        self, rpc: AsyncUnaryRpc, request: Message, *, timeout: float | None = None, idempotent: bool = True
+        self, rpc: AsyncUnaryRpc, request: core.Request, *, timeout: float | None = None, idempotent: bool = True
     ) -> Message:
-        """One awaited unary call, retried as `GrpcBase.next_delay` decides; its answer."""
+        """One awaited unary (or client-streaming) call, retried as `GrpcBase.next_delay` decides; its answer."""
         for attempt in itertools.count():
-            call = rpc(request, timeout=timeout or self.timeout, metadata=self.metadata)
+            call = rpc(core.sent(request), timeout=timeout or self.timeout, metadata=self.metadata)
             try:
                 reply: Message = await call
             except grpc.RpcError as exc:
@@ -146,8 +146,8 @@ class AsyncGrpcTransport(GrpcBase, AsyncTransport):
                     return
 
     async def submit_batch(self, requests: list[SynthesisRequest]) -> str:
-        reply = await self.unary(self._stub.SubmitBatch, core.batch_message(requests), idempotent=False)
-        return core.as_batch(reply).id
+        rpc, request = core.batch_request(self._stub, requests)
+        return core.as_batch(await self.unary(rpc, request, idempotent=False)).id
 
     async def batch(self, batch_id: str, offset: int, limit: int) -> BatchPublic:
         return core.as_batch(await self.unary(self._stub.GetBatch, core.get_batch(batch_id, offset, limit)))

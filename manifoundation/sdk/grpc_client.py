@@ -97,12 +97,12 @@ class GrpcTransport(GrpcBase, Transport):
         self._channel.close()
 
     def unary(
-        self, rpc: UnaryRpc, request: Message, *, timeout: float | None = None, idempotent: bool = True
+        self, rpc: UnaryRpc, request: core.Request, *, timeout: float | None = None, idempotent: bool = True
     ) -> Message:
-        """One unary call with retries; its answer, or the SDK's exception for its failure."""
+        """One unary (or client-streaming) call with retries; its answer, or the SDK's exception for its failure."""
         for attempt in itertools.count():
             try:
-                reply, call = rpc.with_call(request, timeout=timeout or self.timeout, metadata=self.metadata)
+                reply, call = rpc.with_call(core.sent(request), timeout=timeout or self.timeout, metadata=self.metadata)
             except grpc.RpcError as exc:
                 self._sleep(self.next_delay(attempt, exc, idempotent))
                 continue
@@ -145,7 +145,8 @@ class GrpcTransport(GrpcBase, Transport):
                     return
 
     def submit_batch(self, requests: list[SynthesisRequest]) -> str:
-        return core.as_batch(self.unary(self._stub.SubmitBatch, core.batch_message(requests), idempotent=False)).id
+        rpc, request = core.batch_request(self._stub, requests)
+        return core.as_batch(self.unary(rpc, request, idempotent=False)).id
 
     def batch(self, batch_id: str, offset: int, limit: int) -> BatchPublic:
         return core.as_batch(self.unary(self._stub.GetBatch, core.get_batch(batch_id, offset, limit)))

@@ -41,6 +41,7 @@ import sys
 import tempfile
 import time
 from collections import Counter
+from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
@@ -85,6 +86,7 @@ def register(subparsers: argparse._SubParsersAction[argparse.ArgumentParser]) ->
     parser.add_argument("--grpc-calls", type=int, default=3, help="gRPC: concurrent SubmitBatch calls (3)")
     parser.add_argument("--grpc-requests", type=int, default=6, help="gRPC: requests per batch (6)")
     parser.add_argument("--grpc-points", type=int, default=200_000, help="gRPC: points per request (200000)")
+    parser.add_argument("--grpc-stream", action="store_true", help="gRPC: the batches in pieces (SubmitBatchStream)")
     parser.add_argument("--bomb-depth", type=int, default=4, help="include bomb: levels of 60 includes (4)")
     parser.add_argument("--mcp-posts", type=int, default=4, help="MCP: large upload_object posts at once (4)")
     parser.add_argument("--mcp-points", type=int, default=50_000, help="MCP: points per upload (50000: 6.6 MB)")
@@ -395,8 +397,9 @@ def _grpc_batch(requests: int, points: int) -> bytes:
 
 async def grpc_batches(args: argparse.Namespace) -> dict[str, Any]:
     """``--grpc-calls`` concurrent `SubmitBatch` of ``--grpc-requests`` requests of ``--grpc-points`` points
-    (issue 62, item 3: 3 × 6 × 200 000 points, 57.6 MB a call); /healthz polled every 20 ms by a process of its
-    own, API RSS sampled every 20 ms, and read again once the queue drained."""
+    (issue 62, item 3: 3 × 6 × 200 000 points, 57.6 MB a call), or with ``--grpc-stream`` the same batches sent
+    in 1 MiB pieces (`SubmitBatchStream`); /healthz polled every 20 ms by a process of its own, API RSS sampled
+    every 20 ms, and read again once the queue drained."""
     import grpc
     import httpx
 
@@ -406,16 +409,18 @@ async def grpc_batches(args: argparse.Namespace) -> dict[str, Any]:
     port = _free_port()
     proc, base = _serve(max_queue=10 * args.grpc_calls * args.grpc_requests, stage_seconds=0.0, grpc_port=port)
     options = [("grpc.max_send_message_length", -1), ("grpc.max_receive_message_length", -1)]
-    method = "/manifoundation.v1.ManiFoundation/SubmitBatch"
+    method = "/manifoundation.v1.ManiFoundation/SubmitBatch" + ("Stream" if args.grpc_stream else "")
     try:
         before = rss_mb(proc.pid).get("VmRSS", 0.0)
         async with grpc.aio.insecure_channel(f"127.0.0.1:{port}", options=options) as channel:
-            call = channel.unary_unary(method, request_serializer=None, response_deserializer=None)
+            call: Any = (channel.stream_unary if args.grpc_stream else channel.unary_unary)(
+                method, request_serializer=None, response_deserializer=None
+            )
 
             async def one() -> tuple[str, float]:
                 t0 = time.perf_counter()
                 try:
-                    await call(data, timeout=args.budget)
+                    await call(_message_pieces(data) if args.grpc_stream else data, timeout=args.budget)
                     return "OK", time.perf_counter() - t0
                 except grpc.aio.AioRpcError as exc:
                     return exc.code().name, time.perf_counter() - t0
@@ -442,6 +447,7 @@ async def grpc_batches(args: argparse.Namespace) -> dict[str, Any]:
         _stop(proc)
     return {
         "calls": args.grpc_calls, "requests": args.grpc_requests, "points": args.grpc_points,
+        "rpc": method.rsplit("/", 1)[1],
         "call_mb": round(len(data) / 1e6, 1), "answers": dict(Counter(s for s, _ in answers)),
         "healthz_p50_ms": _pct(health, 0.5), "healthz_p99_ms": _pct(health, 0.99),
         "healthz_max_ms": _pct(health, 1.0), "api_rss_before_mb": round(before, 0),
@@ -450,6 +456,14 @@ async def grpc_batches(args: argparse.Namespace) -> dict[str, Any]:
         "api_rss_drained_mb": round(drained.get("VmRSS", 0.0), 0),
         "seconds": round(max((t for _, t in answers), default=0.0), 1),
     }  # fmt: skip
+
+
+async def _message_pieces(data: bytes, size: int = 1 << 20) -> AsyncIterator[bytes]:
+    """``data`` as serialized `MessagePiece` messages of ``size`` bytes (`SubmitBatchStream`)."""
+    from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
+
+    for start in range(0, len(data), size):
+        yield pb.MessagePiece(data=data[start : start + size]).SerializeToString()
 
 
 async def include_bomb(args: argparse.Namespace) -> dict[str, Any]:

@@ -101,3 +101,10 @@ def wait_terminal(service: Service, job_id: str, timeout: float = 20.0) -> pb.Jo
 
 def metrics_text(service: Service) -> str:
     return httpx.get(f"{service.base}/metrics", headers={"Authorization": f"Bearer {KEY}"}).text
+
+
+def calls_ok(service: Service, method: str) -> int:
+    """How many calls of the RPC ``method`` ended OK (the service's own counter)."""
+    line = f'mani_grpc_requests_total{{code="OK",method="{method}"}} '
+    rows = metrics_text(service).splitlines()
+    return next((int(float(row[len(line) :])) for row in rows if row.startswith(line)), 0)

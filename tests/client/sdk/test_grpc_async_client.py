@@ -34,7 +34,7 @@ from manifoundation.sdk import (
 )
 from manifoundation.sdk.grpc_async_client import AsyncGrpcClient, AsyncGrpcJob
 from manifoundation.sdk.grpc_client import GrpcClient
-from tests.api.grpc.conftest import FAIL_SEED, HAND, KEY, OTHER, Service, running
+from tests.api.grpc.conftest import FAIL_SEED, HAND, KEY, OTHER, Service, calls_ok, running
 from tests.api.helpers import request_body, sphere
 from tests.api.server import free_port
 
@@ -219,3 +219,17 @@ def test_robot_registration(service: Service) -> None:
     mine, found, preview = run(service.target, body, key=OTHER)  # another key: the module's key sees one hand
     assert mine.name == found.name == "sdk_async_hand" and found.fingertips == ["tip"] and not found.builtin
     assert preview.method == "robot_preview"
+
+
+def test_a_large_batch_is_sent_in_pieces(service: Service) -> None:
+    """As `GrpcClient`: over `STREAM_BATCH_BYTES` the batch goes as `SubmitBatchStream` pieces, the same answer."""
+    large = [SynthesisRequest.model_validate(request_body(HAND, 100_000, max_iterations=1, seed=s)) for s in (0, 1)]
+
+    async def body(client: AsyncGrpcClient) -> list[JobState]:
+        batch = await client.submit_batch(large)
+        return [item.state for item in await batch.wait(timeout=60)]
+
+    before = calls_ok(service, "SubmitBatchStream")
+    assert run(service.target, body) == [JobState.SUCCEEDED] * 2
+    assert calls_ok(service, "SubmitBatchStream") == before + 1
+

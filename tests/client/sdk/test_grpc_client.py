@@ -30,7 +30,7 @@ from manifoundation.sdk import (
 )
 from manifoundation.sdk.grpc_client import GrpcClient
 from manifoundation.server.api.versions import Versions
-from tests.api.grpc.conftest import FAIL_SEED, HAND, KEY, OTHER, Service, running
+from tests.api.grpc.conftest import FAIL_SEED, HAND, KEY, OTHER, Service, calls_ok, running
 from tests.api.helpers import request_body
 from tests.api.server import free_port
 
@@ -220,3 +220,19 @@ def test_robot_registration_over_grpc(service: Service, tmp_path: Any) -> None:
             other.delete_robot("sdk_grpc_hand")
     with GrpcClient(service.target, KEY) as client:
         assert "sdk_grpc_hand" not in {r.name for r in client.robots()}
+
+
+def test_a_large_batch_is_sent_in_pieces(client: GrpcClient, service: Service) -> None:
+    """Over `STREAM_BATCH_BYTES` the batch goes as `SubmitBatchStream` pieces (the server reads them one at a
+    time), with the same answer; a small one as `SubmitBatch`."""
+    from manifoundation.sdk._grpc_core import STREAM_BATCH_BYTES, batch_message
+
+    large = [SynthesisRequest.model_validate(request_body(HAND, 100_000, max_iterations=1, seed=s)) for s in (0, 1)]
+    assert batch_message(large).ByteSize() > STREAM_BATCH_BYTES
+    before = calls_ok(service, "SubmitBatchStream")
+    batch = client.submit_batch(large)
+    assert batch.total == 2 and calls_ok(service, "SubmitBatchStream") == before + 1
+    assert [i.state for i in batch.wait(timeout=60)] == [JobState.SUCCEEDED] * 2
+    client.submit_batch([synthesis()])
+    assert calls_ok(service, "SubmitBatchStream") == before + 1  # the small one whole
+

@@ -464,6 +464,12 @@ class WatchJobRequest(_message.Message):
     cancel_on_disconnect: bool
     def __init__(self, id: _Optional[str] = ..., cancel_on_disconnect: _Optional[bool] = ...) -> None: ...
 
+class MessagePiece(_message.Message):
+    __slots__ = ("data",)
+    DATA_FIELD_NUMBER: _ClassVar[int]
+    data: bytes
+    def __init__(self, data: _Optional[bytes] = ...) -> None: ...
+
 class BatchCreate(_message.Message):
     __slots__ = ("requests",)
     REQUESTS_FIELD_NUMBER: _ClassVar[int]

@@ -65,6 +65,11 @@ class ManiFoundationStub:
                 request_serializer=manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.BatchCreate.SerializeToString,
                 response_deserializer=manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
                 _registered_method=True)
+        self.SubmitBatchStream = channel.stream_unary(
+                '/manifoundation.v1.ManiFoundation/SubmitBatchStream',
+                request_serializer=manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.MessagePiece.SerializeToString,
+                response_deserializer=manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
+                _registered_method=True)
         self.GetBatch = channel.unary_unary(
                 '/manifoundation.v1.ManiFoundation/GetBatch',
                 request_serializer=manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.GetBatchRequest.SerializeToString,
@@ -137,6 +142,14 @@ class ManiFoundationServicer:
         context.set_details('Method not implemented!')
         raise NotImplementedError('Method not implemented!')
 
+    def SubmitBatchStream(self, request_iterator, context):
+        """SubmitBatch for large batches: a serialized BatchCreate sent in pieces, read as they come (gRPC receives a
+        unary message whole before the service sees it; here the server holds a piece at a time). Same answer.
+        """
+        context.set_code(grpc.StatusCode.UNIMPLEMENTED)
+        context.set_details('Method not implemented!')
+        raise NotImplementedError('Method not implemented!')
+
     def GetBatch(self, request, context):
         """Missing associated documentation comment in .proto file."""
         context.set_code(grpc.StatusCode.UNIMPLEMENTED)
@@ -201,6 +214,11 @@ def add_ManiFoundationServicer_to_server(servicer, server):
             'SubmitBatch': grpc.unary_unary_rpc_method_handler(
                     servicer.SubmitBatch,
                     request_deserializer=manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.BatchCreate.FromString,
+                    response_serializer=manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.BatchPublic.SerializeToString,
+            ),
+            'SubmitBatchStream': grpc.stream_unary_rpc_method_handler(
+                    servicer.SubmitBatchStream,
+                    request_deserializer=manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.MessagePiece.FromString,
                     response_serializer=manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.BatchPublic.SerializeToString,
             ),
             'GetBatch': grpc.unary_unary_rpc_method_handler(
@@ -391,6 +409,33 @@ class ManiFoundation:
             target,
             '/manifoundation.v1.ManiFoundation/SubmitBatch',
             manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.BatchCreate.SerializeToString,
+            manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
+            options,
+            channel_credentials,
+            insecure,
+            call_credentials,
+            compression,
+            wait_for_ready,
+            timeout,
+            metadata,
+            _registered_method=True)
+
+    @staticmethod
+    def SubmitBatchStream(request_iterator,
+            target,
+            options=(),
+            channel_credentials=None,
+            call_credentials=None,
+            insecure=False,
+            compression=None,
+            wait_for_ready=None,
+            timeout=None,
+            metadata=None):
+        return grpc.experimental.stream_unary(
+            request_iterator,
+            target,
+            '/manifoundation.v1.ManiFoundation/SubmitBatchStream',
+            manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.MessagePiece.SerializeToString,
             manifoundation_dot_contract_dot_protos_dot_v1_dot_manifoundation__pb2.BatchPublic.FromString,
             options,
             channel_credentials,

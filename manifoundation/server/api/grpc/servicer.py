@@ -139,6 +139,14 @@ class ManiFoundationService(pb_grpc.ManiFoundationServicer):
         return to_proto(batch, pb.BatchPublic)
 
     @unary
+    async def SubmitBatchStream(
+        self, request: AsyncIterator[pb.MessagePiece], context: Any, caller: Caller
+    ) -> pb.BatchPublic:
+        batch_id = await self.submission.batch_streamed(request, caller, context)
+        batch = await self.submission.submitter(caller, context).first_page(batch_id)
+        return to_proto(batch, pb.BatchPublic)
+
+    @unary
     async def GetBatch(self, request: pb.GetBatchRequest, context: Any, caller: Caller) -> pb.BatchPublic:
         queue, settings = self.submission.queue, self.services.settings
         offset, limit = request.offset, request.limit if request.HasField("limit") else 100

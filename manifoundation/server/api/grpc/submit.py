@@ -12,7 +12,9 @@ A large message (over ``MANI_PARSE_OFFLOAD_BYTES``) is decoded as a large HTTP b
 (``AppServices.bodies``, 503 / UNAVAILABLE after ``MANI_BODY_TIMEOUT``) and go to a body process, which parses and
 validates them (`manifoundation.server.api.bodies`); this process lets go of the bytes as soon as the body process
 has them and never builds the protobuf message, so neither the event loop nor a thread of this process spends the
-GIL on it.
+GIL on it. gRPC receives a unary message whole before any code sees it, so a few very large ones at once still cost
+their size in this process: ``SubmitBatchStream`` takes the same message in pieces (`Submission.streamed`), read
+only once a slot is held and passed on one at a time.
 """
 
 from __future__ import annotations
@@ -26,7 +28,9 @@ from google.protobuf.message import Message
 
 from manifoundation.contract import BatchCreate, SynthesisRequest, WireModel
 from manifoundation.contract.protos.convert import from_proto
+from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
 from manifoundation.server.api.bodies import PROTOBUF
+from manifoundation.server.api.errors import PayloadTooLarge
 from manifoundation.server.api.middleware import request_id_from
 from manifoundation.server.api.negotiation import decoded
 from manifoundation.server.api.security import Caller
@@ -134,3 +138,38 @@ class Submission:
         submitter = self.submitter(caller, context)
         await submitter.admit()
         return await submitter.submit_batch(await self.validate(message, BatchCreate))
+
+    async def batch_streamed(
+        self, pieces: AsyncIterator[pb.MessagePiece], caller: Caller, context: grpc.aio.ServicerContext
+    ) -> str:
+        """`batch` for a ``BatchCreate`` sent in pieces (``SubmitBatchStream``). Returns the batch id."""
+        submitter = self.submitter(caller, context)
+        await submitter.admit()
+        return await submitter.submit_batch(await self.streamed(pieces, pb.BatchCreate, BatchCreate))
+
+    async def streamed(
+        self, pieces: AsyncIterator[pb.MessagePiece], kind: type[Message], model: type[ModelT]
+    ) -> ModelT:
+        """The contract's validation of a ``kind`` message sent in ``pieces``: none is read before a large-body slot
+        is held (UNAVAILABLE after ``MANI_BODY_TIMEOUT``), then each goes to a body process as it comes; more than
+        ``MANI_GRPC_MAX_MESSAGE_BYTES`` in all is RESOURCE_EXHAUSTED. No piece at all is the empty message."""
+        limit = self.services.settings.grpc_max_message_bytes
+        received = 0
+
+        async def data() -> AsyncIterator[bytes]:
+            nonlocal received
+            async for piece in pieces:
+                received += len(piece.data)
+                if received > limit:
+                    raise PayloadTooLarge(f"the pieces exceed the message limit of {limit} bytes "
+                                          "(MANI_GRPC_MAX_MESSAGE_BYTES)")  # fmt: skip
+                if piece.data:
+                    yield piece.data
+
+        bodies = self.services.bodies
+        async with bodies.slot():
+            outcome = await bodies.decode(model, data(), PROTOBUF)
+        if outcome[0] == "empty":  # protobuf's empty message is a message (every field at its default)
+            return await self.validate(kind(), model)
+        value: ModelT = decoded(outcome)
+        return value
