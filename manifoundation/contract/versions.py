@@ -12,7 +12,7 @@ from __future__ import annotations
 import enum
 import re
 
-CONTRACT_VERSION = "1.7"
+CONTRACT_VERSION = "1.8"
 """This contract's version: bump the minor version for an addition, the major one for a break."""
 CONTRACT_HEADER = "x-mani-contract-version"
 """The HTTP header and the gRPC metadata key that carry the service's contract version."""
