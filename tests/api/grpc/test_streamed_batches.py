@@ -7,6 +7,7 @@ body process. The same answer as `SubmitBatch`, the same errors, its own limit.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterator
 
 import grpc
@@ -72,3 +73,27 @@ def test_pieces_over_the_message_limit_are_refused(service: Service) -> None:
         services.settings = settings
     code, details = _error(caught.value)
     assert code is grpc.StatusCode.RESOURCE_EXHAUSTED and "MANI_GRPC_MAX_MESSAGE_BYTES" in details
+
+
+def test_a_sender_too_slow_between_pieces_lets_its_slot_go(service: Service) -> None:
+    """As an HTTP body: a stream that stops sending for MANI_BODY_IDLE_TIMEOUT is ended (it holds a large-body
+    slot meanwhile)."""
+    services = service.app.state.services
+    settings = services.settings
+    services.settings = settings.model_copy(update={"body_idle_timeout": 0.5})
+    pieces = list(_pieces(pb.BatchCreate(requests=[request(n=50_000)])))
+
+    def stalling() -> Iterator[pb.MessagePiece]:
+        yield pieces[0]
+        time.sleep(3)
+        yield from pieces[1:]
+
+    started = time.monotonic()
+    try:
+        with pytest.raises(grpc.RpcError) as caught:
+            service.stub.SubmitBatchStream(stalling(), metadata=service.auth(), timeout=30)
+    finally:
+        services.settings = settings
+    code, details = _error(caught.value)
+    assert code is grpc.StatusCode.DEADLINE_EXCEEDED and "no piece for 0.5 s" in details
+    assert time.monotonic() - started < 3  # answered at the idle limit, not when the sender resumed

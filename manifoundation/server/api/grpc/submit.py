@@ -30,7 +30,7 @@ from manifoundation.contract import BatchCreate, SynthesisRequest, WireModel
 from manifoundation.contract.protos.convert import from_proto
 from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
 from manifoundation.server.api.bodies import PROTOBUF
-from manifoundation.server.api.errors import PayloadTooLarge
+from manifoundation.server.api.errors import PayloadTooLarge, RequestTimeout
 from manifoundation.server.api.middleware import request_id_from
 from manifoundation.server.api.negotiation import decoded
 from manifoundation.server.api.security import Caller
@@ -152,13 +152,28 @@ class Submission:
     ) -> ModelT:
         """The contract's validation of a ``kind`` message sent in ``pieces``: none is read before a large-body slot
         is held (UNAVAILABLE after ``MANI_BODY_TIMEOUT``), then each goes to a body process as it comes; more than
-        ``MANI_GRPC_MAX_MESSAGE_BYTES`` in all is RESOURCE_EXHAUSTED. No piece at all is the empty message."""
-        limit = self.services.settings.grpc_max_message_bytes
+        ``MANI_GRPC_MAX_MESSAGE_BYTES`` in all is RESOURCE_EXHAUSTED, and a sender slower than an HTTP body may be
+        (``MANI_BODY_TIMEOUT`` in all, ``MANI_BODY_IDLE_TIMEOUT`` between two pieces: it holds a slot meanwhile)
+        DEADLINE_EXCEEDED. No piece at all is the empty message."""
+        settings = self.services.settings
+        limit = settings.grpc_max_message_bytes
         received = 0
 
         async def data() -> AsyncIterator[bytes]:
             nonlocal received
-            async for piece in pieces:
+            loop = asyncio.get_running_loop()
+            end = loop.time() + settings.body_timeout
+            stream = aiter(pieces)
+            while True:
+                try:
+                    async with asyncio.timeout_at(min(end, loop.time() + settings.body_idle_timeout)):
+                        piece = await anext(stream, None)
+                except TimeoutError as exc:
+                    late = loop.time() >= end
+                    raise RequestTimeout(f"the pieces did not arrive within {settings.body_timeout:g} s" if late else
+                                         f"no piece for {settings.body_idle_timeout:g} s") from exc  # fmt: skip
+                if piece is None:
+                    return
                 received += len(piece.data)
                 if received > limit:
                     raise PayloadTooLarge(f"the pieces exceed the message limit of {limit} bytes "
