@@ -29,7 +29,10 @@ from manifoundation.server.api.errors import (
 )
 from manifoundation.server.api.services import services_of
 
-__all__ = ["accepted", "body_chunks", "body_openapi", "declared_length", "read_bytes", "read_model", "respond"]
+__all__ = [
+    "accepted", "body_chunks", "body_openapi", "bounded_chunks", "declared_length", "read_bytes", "read_model",
+    "respond",
+]  # fmt: skip
 
 ModelT = TypeVar("ModelT", bound=BaseModel)
 BODY_MEDIA_TYPES = (JSON, MSGPACK)
@@ -54,29 +57,42 @@ def declared_length(request: Request, limit: int) -> int | None:
 
 async def body_chunks(request: Request, limit: int, timeout: float = 60.0, idle: float = 10.0) -> AsyncIterator[bytes]:
     """The raw body chunk by chunk, refusing more than ``limit`` bytes (413) and a sender slower than ``timeout``
-    seconds in all or ``idle`` seconds between two chunks (408: a slow client never holds a connection for ever).
+    seconds in all or ``idle`` seconds between two chunks (408: a slow client never holds a connection for ever)."""
+    declared_length(request, limit)
+    async for chunk in bounded_chunks(request.stream(), limit, timeout, idle):
+        yield chunk
+
+
+async def bounded_chunks(
+    chunks: AsyncIterator[bytes], limit: int, timeout: float, idle: float, *, whole: str = "body",
+    unit: str = "body byte", limit_name: str = "",
+) -> AsyncIterator[bytes]:  # fmt: skip
+    """The non-empty ``chunks`` of a body as they arrive, refusing more than ``limit`` bytes in all (413, naming
+    ``limit_name`` when given) and a sender slower than ``timeout`` seconds in all or ``idle`` seconds between two
+    chunks (408); ``whole`` and ``unit`` name the body and what arrives in the messages (an HTTP body's bytes, a
+    gRPC stream's pieces).
 
     `asyncio.timeout_at` around each wait, not `asyncio.wait_for`: the latter ends every body with a
     StopAsyncIteration whose traceback and wait_for's future form a reference cycle holding the reader's frame,
     and so every chunk of the body, until the garbage collector's rare full pass (one body of RSS per request).
     """
-    declared_length(request, limit)
     total = 0
     loop = asyncio.get_running_loop()
     end = loop.time() + timeout
-    stream = request.stream()
+    stream = aiter(chunks)
     while True:
         try:
             async with asyncio.timeout_at(min(end, loop.time() + idle)):
                 chunk = await anext(stream, None)
         except TimeoutError as exc:
-            why = f"body not received within {timeout:g} s" if loop.time() >= end else f"no body byte for {idle:g} s"
+            why = f"{whole} not received within {timeout:g} s" if loop.time() >= end else f"no {unit} for {idle:g} s"
             raise RequestTimeout(why) from exc
         if chunk is None:
             return
         total += len(chunk)
         if total > limit:
-            raise PayloadTooLarge(f"body exceeds the limit of {limit} bytes")
+            named = f" ({limit_name})" if limit_name else ""
+            raise PayloadTooLarge(f"{whole} exceeds the limit of {limit} bytes{named}")
         if chunk:
             yield chunk
 

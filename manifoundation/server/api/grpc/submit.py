@@ -30,9 +30,8 @@ from manifoundation.contract import BatchCreate, SynthesisRequest, WireModel
 from manifoundation.contract.protos.convert import from_proto
 from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
 from manifoundation.server.api.bodies import PROTOBUF
-from manifoundation.server.api.errors import PayloadTooLarge, RequestTimeout
 from manifoundation.server.api.middleware import request_id_from
-from manifoundation.server.api.negotiation import decoded
+from manifoundation.server.api.negotiation import bounded_chunks, decoded
 from manifoundation.server.api.security import Caller
 from manifoundation.server.api.submission import RequestT, Submitter, running_queue
 
@@ -155,35 +154,13 @@ class Submission:
         ``MANI_GRPC_MAX_MESSAGE_BYTES`` in all is RESOURCE_EXHAUSTED, and a sender slower than an HTTP body may be
         (``MANI_BODY_TIMEOUT`` in all, ``MANI_BODY_IDLE_TIMEOUT`` between two pieces: it holds a slot meanwhile)
         DEADLINE_EXCEEDED. No piece at all is the empty message."""
-        settings = self.services.settings
-        limit = settings.grpc_max_message_bytes
-        received = 0
-
-        async def data() -> AsyncIterator[bytes]:
-            nonlocal received
-            loop = asyncio.get_running_loop()
-            end = loop.time() + settings.body_timeout
-            stream = aiter(pieces)
-            while True:
-                try:
-                    async with asyncio.timeout_at(min(end, loop.time() + settings.body_idle_timeout)):
-                        piece = await anext(stream, None)
-                except TimeoutError as exc:
-                    late = loop.time() >= end
-                    raise RequestTimeout(f"the pieces did not arrive within {settings.body_timeout:g} s" if late else
-                                         f"no piece for {settings.body_idle_timeout:g} s") from exc  # fmt: skip
-                if piece is None:
-                    return
-                received += len(piece.data)
-                if received > limit:
-                    raise PayloadTooLarge(f"the pieces exceed the message limit of {limit} bytes "
-                                          "(MANI_GRPC_MAX_MESSAGE_BYTES)")  # fmt: skip
-                if piece.data:
-                    yield piece.data
-
-        bodies = self.services.bodies
+        settings, bodies = self.services.settings, self.services.bodies
+        data = bounded_chunks(
+            (piece.data async for piece in pieces), settings.grpc_max_message_bytes, settings.body_timeout,
+            settings.body_idle_timeout, whole="message", unit="piece", limit_name="MANI_GRPC_MAX_MESSAGE_BYTES",
+        )  # fmt: skip
         async with bodies.slot():
-            outcome = await bodies.decode(model, data(), PROTOBUF)
+            outcome = await bodies.decode(model, data, PROTOBUF)
         if outcome[0] == "empty":  # protobuf's empty message is a message (every field at its default)
             return await self.validate(kind(), model)
         value: ModelT = decoded(outcome)
