@@ -185,9 +185,14 @@ def batch_request(stub: Any, requests: list[SynthesisRequest]) -> tuple[Any, Req
     message = batch_message(requests)
     if message.ByteSize() <= STREAM_BATCH_BYTES:
         return stub.SubmitBatch, message
-    data = message.SerializeToString()
-    pieces = [pb.MessagePiece(data=data[i : i + PIECE_BYTES]) for i in range(0, len(data), PIECE_BYTES)]
+    pieces = message_pieces(message.SerializeToString())
     return stub.SubmitBatchStream, lambda: iter(pieces)
+
+
+def message_pieces(data: bytes, size: int = PIECE_BYTES) -> list[pb.MessagePiece]:
+    """A serialized message as the `MessagePiece`s of a client-streaming call, ``size`` bytes each (the last
+    shorter)."""
+    return [pb.MessagePiece(data=data[i : i + size]) for i in range(0, len(data), size)]
 
 
 def batch_message(requests: list[SynthesisRequest]) -> pb.BatchCreate:

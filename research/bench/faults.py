@@ -41,7 +41,6 @@ import sys
 import tempfile
 import time
 from collections import Counter
-from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
@@ -403,9 +402,12 @@ async def grpc_batches(args: argparse.Namespace) -> dict[str, Any]:
     import grpc
     import httpx
 
+    from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
+    from manifoundation.sdk._grpc_core import message_pieces
     from research.bench.probes import health_probe
 
     data = _grpc_batch(args.grpc_requests, args.grpc_points)
+    pieces = message_pieces(data) if args.grpc_stream else []  # made once, sent by every call
     port = _free_port()
     proc, base = _serve(max_queue=10 * args.grpc_calls * args.grpc_requests, stage_seconds=0.0, grpc_port=port)
     options = [("grpc.max_send_message_length", -1), ("grpc.max_receive_message_length", -1)]
@@ -413,14 +415,16 @@ async def grpc_batches(args: argparse.Namespace) -> dict[str, Any]:
     try:
         before = rss_mb(proc.pid).get("VmRSS", 0.0)
         async with grpc.aio.insecure_channel(f"127.0.0.1:{port}", options=options) as channel:
-            call: Any = (channel.stream_unary if args.grpc_stream else channel.unary_unary)(
-                method, request_serializer=None, response_deserializer=None
-            )
+            if args.grpc_stream:
+                call: Any = channel.stream_unary(method, request_serializer=pb.MessagePiece.SerializeToString,
+                                                 response_deserializer=None)  # fmt: skip
+            else:
+                call = channel.unary_unary(method, request_serializer=None, response_deserializer=None)
 
             async def one() -> tuple[str, float]:
                 t0 = time.perf_counter()
                 try:
-                    await call(_message_pieces(data) if args.grpc_stream else data, timeout=args.budget)
+                    await call(iter(pieces) if args.grpc_stream else data, timeout=args.budget)
                     return "OK", time.perf_counter() - t0
                 except grpc.aio.AioRpcError as exc:
                     return exc.code().name, time.perf_counter() - t0
@@ -456,14 +460,6 @@ async def grpc_batches(args: argparse.Namespace) -> dict[str, Any]:
         "api_rss_drained_mb": round(drained.get("VmRSS", 0.0), 0),
         "seconds": round(max((t for _, t in answers), default=0.0), 1),
     }  # fmt: skip
-
-
-async def _message_pieces(data: bytes, size: int = 1 << 20) -> AsyncIterator[bytes]:
-    """``data`` as serialized `MessagePiece` messages of ``size`` bytes (`SubmitBatchStream`)."""
-    from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
-
-    for start in range(0, len(data), size):
-        yield pb.MessagePiece(data=data[start : start + size]).SerializeToString()
 
 
 async def include_bomb(args: argparse.Namespace) -> dict[str, Any]:

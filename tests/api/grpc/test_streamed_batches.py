@@ -14,16 +14,15 @@ import grpc
 import pytest
 
 from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
+from manifoundation.sdk._grpc_core import PIECE_BYTES, message_pieces
 
-from .conftest import KEY, Service, metrics_text, request, wait_terminal
+from .conftest import KEY, Service, calls_ok, request, wait_terminal
 
-PIECE = 1 << 20
+PIECE = PIECE_BYTES
 
 
-def _pieces(message: pb.BatchCreate, size: int = PIECE) -> Iterator[pb.MessagePiece]:
-    data = message.SerializeToString()
-    for start in range(0, len(data), size):
-        yield pb.MessagePiece(data=data[start : start + size])
+def _pieces(message: pb.BatchCreate) -> Iterator[pb.MessagePiece]:
+    return iter(message_pieces(message.SerializeToString()))
 
 
 def _error(call: grpc.RpcError) -> tuple[grpc.StatusCode, str]:
@@ -34,11 +33,12 @@ def test_a_batch_in_pieces_is_the_batch(service: Service) -> None:
     big = request(n=50_000, max_iterations=1)
     batch = pb.BatchCreate(requests=[big, request(max_iterations=1)])
     assert batch.ByteSize() > 2 * PIECE  # three pieces or more
+    before = calls_ok(service, "SubmitBatchStream")
     created = service.stub.SubmitBatchStream(_pieces(batch), metadata=service.auth(), timeout=60)
     assert created.total == 2 and len(created.items) == 2
     for item in created.items:
         assert wait_terminal(service, item.job_id, 60).state == "succeeded"
-    assert 'mani_grpc_requests_total{code="OK",method="SubmitBatchStream"}' in metrics_text(service)
+    assert calls_ok(service, "SubmitBatchStream") == before + 1
 
 
 def test_the_errors_of_a_batch_in_pieces_are_submit_batchs(service: Service) -> None:
