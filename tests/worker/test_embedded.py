@@ -9,11 +9,13 @@ import subprocess
 import sys
 import time
 
+import numpy as np
 import pytest
 
-from manifoundation.contract import JobState, RobotRegister, Stage
+from manifoundation.contract import JobState, ObjectIn, RobotRegister, Stage, SynthesisRequest
 from manifoundation.server.queue import JobNotFound, QueueFull, RobotInvalid, create_queue
 from manifoundation.server.queue.embedded import EmbeddedQueue
+from manifoundation.server.spool import SpooledRequest, request_payload
 
 from .helpers import STAGED, assert_only_the_poison_dead_lettered, logged, run, running, small_request, until
 
@@ -263,6 +265,73 @@ def test_a_silent_worker_is_replaced_and_its_jobs_redelivered() -> None:
         finally:
             if stopped is not None:  # the test failed: never leave our stopped process behind
                 os.kill(stopped, signal.SIGKILL)
+            await queue.close()
+
+    run(main())
+
+
+def _cloud_request(points: int, seed: int = 0) -> SynthesisRequest:
+    """`small_request` with ``points`` points (200 000: a 4.8 MB cloud with its normals)."""
+    rng = np.random.default_rng(seed)
+    p = rng.normal(size=(points, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    return small_request(seed).model_copy(update={"object": ObjectIn(points=0.03 * p, normals=p)})
+
+
+def test_large_payloads_wait_in_the_spool_not_in_memory() -> None:
+    """A request whose cloud is over SPOOL_BYTES waits as a file of the queue's spool (its record holds no
+    payload), byte for byte the payload it would have had; one a body process spooled already is adopted as it is;
+    a refused submission leaves no file of its own making and the caller's; cancelling removes the file, closing
+    the queue the spool (issue 62, item 3: the API held every queued batch's payloads)."""
+
+    async def main() -> None:
+        queue = embedded(concurrency=0, max_queue=3)
+        await queue.start()
+        spool = queue.spool
+        assert spool is not None and os.listdir(spool) == []
+        try:
+            big = _cloud_request(100_000)
+            big_id, small_id = await queue.submit([big, small_request()])
+            [name] = os.listdir(spool)
+            with open(os.path.join(spool, name), "rb") as spooled_file:
+                assert spooled_file.read() == request_payload(big)
+            assert queue._jobs[big_id].payload == b"" and queue._jobs[big_id].spooled is not None
+            small = queue._jobs[small_id]
+            assert small.payload == request_payload(small_request()) and small.spooled is None
+            adopted = SpooledRequest.write(spool, _cloud_request(100_000, seed=1))
+            batch = await queue.create_batch([adopted])
+            [adopted_id] = await queue.batch_job_ids(batch)
+            assert queue._jobs[adopted_id].spooled == adopted.path and len(os.listdir(spool)) == 2
+            theirs = SpooledRequest.write(spool, _cloud_request(100_000, seed=2))
+            with pytest.raises(QueueFull):
+                await queue.submit([_cloud_request(100_000, seed=3), theirs])
+            kept = sorted([name, os.path.basename(adopted.path), os.path.basename(theirs.path)])
+            assert sorted(os.listdir(spool)) == kept
+            os.unlink(theirs.path)
+            await queue.cancel(big_id)
+            assert sorted(os.listdir(spool)) == [os.path.basename(adopted.path)]
+        finally:
+            await queue.close()
+        assert not os.path.exists(spool)
+
+    run(main())
+
+
+def test_spooled_jobs_reach_the_worker_whole_and_their_files_go() -> None:
+    """Spooled payloads (the queue's own and one a body process wrote) are read and sent to a real worker, which
+    decodes and runs them; nothing is left in the spool once they ended."""
+
+    async def main() -> None:
+        queue = embedded()
+        await queue.start()
+        try:
+            assert queue.spool is not None
+            adopted = SpooledRequest.write(queue.spool, _cloud_request(200_000, seed=1))
+            ids = await queue.submit([_cloud_request(200_000), adopted, small_request()])
+            done = await asyncio.gather(*(queue.wait(i, 30) for i in ids))
+            assert [j.state for j in done] == [JobState.SUCCEEDED] * 3, [j.error for j in done]
+            assert os.listdir(queue.spool) == []
+        finally:
             await queue.close()
 
     run(main())

@@ -4,9 +4,10 @@ Decoding a 50 MB JSON body (millions of floats into Python lists, then into arra
 a thread would still stall every other request; a process does not. Bodies up to ``offload_bytes`` are decoded
 inline (the common case, ~2 ms); larger ones take one of ``slots`` slots before they are even read and are
 streamed, chunk by chunk as they arrive, to one of ``slots`` child processes (`manifoundation.server.api.body_child`):
-the API process never holds a large body, only the decoded request (its arrays: a third to a fifth of the JSON). A
-request that waits longer than ``wait_s`` for a slot gets 503 with Retry-After. The children import `clients`
-only (no torch, no server code).
+the API process never holds a large body, only the decoded request (its arrays: a third to a fifth of the JSON) —
+and of a large batch not even that, where the queue has a spool (`BodyPool.spool_batch`). A
+request that waits longer than ``wait_s`` for a slot gets 503 with Retry-After. The children import the
+contract and `manifoundation.server.spool` only (no torch, no queue or worker code).
 """
 
 from __future__ import annotations
@@ -29,6 +30,8 @@ ModelT = TypeVar("ModelT", bound=BaseModel)
 
 DECODE_AS = "manifoundation.server.api.bodies:decode_as"
 """The decoder a child runs for `BodyPool.decode`."""
+SPOOL_BATCH = "manifoundation.server.api.bodies:spool_batch_as"
+"""The decoder a child runs for `BodyPool.spool_batch`."""
 PROTOBUF = "application/x-protobuf"
 """The "content type" of a gRPC request message: the contract's protobuf message of the model's name."""
 
@@ -56,6 +59,18 @@ def decode_as(data: bytes, cls_path: str, content_type: str | None) -> tuple[str
     module, _, name = cls_path.partition(":")
     cls: type[BaseModel] = getattr(importlib.import_module(module), name)
     return decode(cls, data, content_type)
+
+
+def spool_batch_as(data: bytes, directory: str, content_type: str | None) -> tuple[str, Any]:
+    """`decode` of a `BatchCreate`, its requests then packed into the queue's spool ``directory``
+    (`manifoundation.server.spool`): ``("ok", SpooledBatch)``, or `decode`'s errors (nothing written)."""
+    from manifoundation.contract import BatchCreate
+    from manifoundation.server.spool import spool_batch
+
+    kind, value = decode(BatchCreate, data, content_type)
+    if kind != "ok":
+        return kind, value
+    return "ok", spool_batch(value.requests, directory)
 
 
 def _from_protobuf(cls: type[ModelT], data: bytes) -> tuple[str, Any]:
@@ -117,6 +132,14 @@ class BodyPool:
         """`decode` in a child process of the body ``chunks`` streamed to it as they come (call while holding a
         `slot`). The exceptions of ``chunks`` (408, 413) pass through; the child is then killed."""
         return await self.run(DECODE_AS, chunks, f"{cls.__module__}:{cls.__qualname__}", content_type)
+
+    async def spool_batch(
+        self, chunks: AsyncIterator[bytes], content_type: str | None, directory: str
+    ) -> tuple[str, Any]:
+        """`decode` of a `BatchCreate` in a child process, which packs its requests into the queue's spool
+        ``directory`` (`spool_batch_as`): this process never holds the batch's arrays (call while holding a
+        `slot`)."""
+        return await self.run(SPOOL_BATCH, chunks, directory, content_type)
 
     async def run(self, decoder: str, chunks: AsyncIterator[bytes], *args: str | int | None) -> tuple[str, Any]:
         """``decoder(body, *args)`` in a child process, the body ``chunks`` streamed to it as they come (call while

@@ -6,7 +6,7 @@ JSON values), then the body as chunks, each a 4-byte big-endian length and that 
 length 0.
 Frame out: 8-byte big-endian length, then the pickled ``(kind, value)`` that ``decoder(body, *args)`` answered
 (`manifoundation.server.api.bodies.decode_as`, `manifoundation.server.api.mcp.uploads.stage_upload`). Decoders import
-the contract and pydantic only: no torch, no queue or worker. Exits at EOF.
+the contract, pydantic and `manifoundation.server.spool` only: no torch, no queue or worker. Exits at EOF.
 """
 
 from __future__ import annotations

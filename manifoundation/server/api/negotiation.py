@@ -15,7 +15,7 @@ from typing import Any, TypeVar
 from pydantic import BaseModel
 from starlette.requests import Request
 
-from manifoundation.contract import FieldError
+from manifoundation.contract import BatchCreate, FieldError
 from manifoundation.contract.codec import JSON, MSGPACK, media_type
 from manifoundation.contract.validation import summary
 from manifoundation.server.api.bodies import decode
@@ -28,9 +28,11 @@ from manifoundation.server.api.errors import (
     UnsupportedMediaType,
 )
 from manifoundation.server.api.services import services_of
+from manifoundation.server.spool import SpooledBatch
 
 __all__ = [
-    "accepted", "body_chunks", "body_openapi", "bounded_chunks", "declared_length", "read_bytes", "read_model",
+    "accepted", "body_chunks", "body_openapi", "bounded_chunks", "declared_length", "read_batch", "read_bytes",
+    "read_model",
     "respond",
 ]  # fmt: skip
 
@@ -106,10 +108,7 @@ async def read_model(request: Request, cls: type[ModelT], limit: int) -> ModelT:
     """Read, decode and validate a body of ``cls`` (400 malformed, 408 too slow, 413 too big, 415 other type,
     422 invalid). A large body waits for a slot and is decoded in a worker process
     (`manifoundation.server.api.bodies`)."""
-    content_type = request.headers.get("content-type")
-    base = (content_type or JSON).split(";", 1)[0].strip().lower()
-    if base not in (JSON, "text/json") and media_type(base) != MSGPACK and not base.endswith("+json"):
-        raise UnsupportedMediaType(f"Content-Type {base!r} is not supported; use {JSON} or {MSGPACK}")
+    content_type = _content_type(request)
     services = services_of(request)
     settings, bodies = services.settings, services.bodies
     timeouts = settings.body_timeout, settings.body_idle_timeout
@@ -117,6 +116,29 @@ async def read_model(request: Request, cls: type[ModelT], limit: int) -> ModelT:
         return decoded(decode(cls, await read_bytes(request, limit, *timeouts), content_type))
     async with bodies.slot():
         return decoded(await bodies.decode(cls, body_chunks(request, limit, *timeouts), content_type))
+
+
+async def read_batch(request: Request, limit: int, spool: str | None) -> BatchCreate | SpooledBatch:
+    """`read_model` of a `BatchCreate`; a large one, where the queue has a ``spool``, packed straight into it by
+    the body process that decodes it (`BodyPool.spool_batch`: its arrays never reach this process)."""
+    services = services_of(request)
+    settings, bodies = services.settings, services.bodies
+    if spool is None or bodies is None or not bodies.large(declared_length(request, limit)):
+        return await read_model(request, BatchCreate, limit)
+    content_type = _content_type(request)
+    chunks = body_chunks(request, limit, settings.body_timeout, settings.body_idle_timeout)
+    async with bodies.slot():
+        value: SpooledBatch = decoded(await bodies.spool_batch(chunks, content_type, spool))
+        return value
+
+
+def _content_type(request: Request) -> str | None:
+    """The body's Content-Type (415 for one that is neither JSON nor msgpack)."""
+    content_type = request.headers.get("content-type")
+    base = (content_type or JSON).split(";", 1)[0].strip().lower()
+    if base not in (JSON, "text/json") and media_type(base) != MSGPACK and not base.endswith("+json"):
+        raise UnsupportedMediaType(f"Content-Type {base!r} is not supported; use {JSON} or {MSGPACK}")
+    return content_type
 
 
 def decoded(outcome: tuple[str, Any]) -> Any:

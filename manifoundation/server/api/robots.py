@@ -7,6 +7,7 @@ import time
 from manifoundation.contract import FieldError, JobRequest, RobotPublic, RobotRegister
 from manifoundation.server.api.errors import Conflict, UnknownHand
 from manifoundation.server.queue import JobQueue, RobotLimits
+from manifoundation.server.spool import SpooledRequest, robot_of
 
 
 class RobotCatalog:
@@ -42,9 +43,11 @@ class RobotCatalog:
             raise UnknownHand(f"unknown hand {name!r}", detail=[FieldError(field="name", problem="unknown hand")])
         return found
 
-    async def check(self, request: JobRequest, owner: str | None = None, field: str = "robot.name") -> None:
+    async def check(
+        self, request: JobRequest | SpooledRequest, owner: str | None = None, field: str = "robot.name"
+    ) -> None:
         """404 when the request names a hand ``owner`` cannot use. Skipped while no worker has published hands."""
-        name = None if request.robot is None else request.robot.name
+        name = robot_of(request)
         if name is None or not await self.all(owner):
             return
         if await self.find(name, owner) is None:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Annotated, TypeVar
 
@@ -30,13 +31,14 @@ from manifoundation.contract import (
 from manifoundation.server.api.deps import CallerDep, MetricsDep, QueueDep, RequestIdDep, RobotsDep, SettingsDep
 from manifoundation.server.api.errors import InvalidInput, QueueFullError, Unavailable
 from manifoundation.server.api.metrics import Metrics
-from manifoundation.server.api.negotiation import read_model
+from manifoundation.server.api.negotiation import read_batch, read_model
 from manifoundation.server.api.robots import RobotCatalog
 from manifoundation.server.api.scenes import SceneStore
 from manifoundation.server.api.security import Caller
 from manifoundation.server.api.services import AppServices, services_of
 from manifoundation.server.api.settings import Settings
 from manifoundation.server.queue import JobQueue
+from manifoundation.server.spool import SpooledBatch, SpooledRequest
 
 log = logging.getLogger("manifoundation.server.api.submission")
 RequestT = TypeVar("RequestT", SynthesisRequest, PlanRequest)
@@ -80,9 +82,20 @@ class Submitter:
                                          "transport": self.transport})  # fmt: skip
         return job_id
 
-    async def submit_batch(self, body: BatchCreate) -> str:
-        """Check the batch's limits and hands, submit it all or none; its id."""
-        count, limit, capacity = len(body.requests), self.settings.max_batch_size, self.queue.capacity
+    async def submit_batch(self, body: BatchCreate | SpooledBatch) -> str:
+        """Check the batch's limits and hands, submit it all or none; its id. A batch already packed into the
+        queue's spool (`manifoundation.server.spool.SpooledBatch`) is the queue's once accepted; refused, its files
+        are removed."""
+        try:
+            return await self._submit_batch(body)
+        except BaseException:
+            if isinstance(body, SpooledBatch):
+                body.discard()
+            raise
+
+    async def _submit_batch(self, body: BatchCreate | SpooledBatch) -> str:
+        requests: Sequence[SynthesisRequest | SpooledRequest] = body.requests
+        count, limit, capacity = len(requests), self.settings.max_batch_size, self.queue.capacity
         if count > limit:
             raise InvalidInput(f"requests: {count} requests, at most {limit} per batch")
         if capacity is not None and count > capacity:
@@ -91,16 +104,15 @@ class Submitter:
                 " (MANI_MAX_QUEUE); split the batch",
                 detail=[FieldError(field="requests", problem=f"more than the queue's capacity of {capacity}")],
             )
-        for index, item in enumerate(body.requests):
+        for index, item in enumerate(requests):
             await self.robots.check(item, self.caller.tenant, field=f"requests.{index}.robot.name")
         tenant = self.caller.tenant
-        batch_id = await self.queue.create_batch(body.requests, request_id=self.request_id, owner=tenant)
+        batch_id = await self.queue.create_batch(requests, request_id=self.request_id, owner=tenant)
         self.metrics.batch_size.observe(count)
         self.metrics.jobs_submitted.labels(kind="batch").inc(count)
         log.info("batch submitted", extra={"batch_id": batch_id, "jobs": count, "request_id": self.request_id,
                                            "transport": self.transport})  # fmt: skip
         return batch_id
-
 
     async def first_page(self, batch_id: str, size: int = 100) -> BatchPublic:
         """A just-submitted batch as its answer shows it: every job queued, the first ``size`` job ids."""
@@ -127,11 +139,11 @@ async def read_and_submit(
     return body, job_id
 
 
-async def read_and_submit_batch(request: Request, submitter: Submitter) -> tuple[BatchCreate, str]:
-    """HTTP: read and validate a batch (`Admitted` has refused a full queue), submit it all or none. Returns the
-    batch and its id."""
-    body = await read_model(request, BatchCreate, submitter.settings.max_body_bytes)
-    return body, await submitter.submit_batch(body)
+async def read_and_submit_batch(request: Request, submitter: Submitter) -> str:
+    """HTTP: read and validate a batch (`Admitted` has refused a full queue; a large one packed into the queue's
+    spool as it is decoded), submit it all or none. Returns its id."""
+    body = await read_batch(request, submitter.settings.max_body_bytes, submitter.queue.spool)
+    return await submitter.submit_batch(body)
 
 
 async def refuse_if_full(queue: JobQueue, count: int = 1) -> None:

@@ -26,6 +26,7 @@ from manifoundation.contract import (
     SynthesisRequest,
     WorkerPublic,
 )
+from manifoundation.server.spool import SpooledRequest
 
 
 class QueueError(Exception):
@@ -74,6 +75,9 @@ class JobQueue(ABC):
     """Submit, observe and cancel jobs (syntheses and plans); the service's only way to get work done."""
 
     backend: str = "abstract"
+    spool: str | None = None
+    """A directory a body process may pack a large batch's requests into (`manifoundation.server.spool`), handing
+    the queue `SpooledRequest` s instead of requests; None: this backend takes requests only."""
 
     @abstractmethod
     async def start(self) -> None:
@@ -89,8 +93,8 @@ class JobQueue(ABC):
 
     @abstractmethod
     async def submit(
-        self, requests: Sequence[JobRequest], *, batch_id: str | None = None, deadline: float | None = None,
-        request_id: str | None = None, owner: str | None = None,
+        self, requests: Sequence[JobRequest | SpooledRequest], *, batch_id: str | None = None,
+        deadline: float | None = None, request_id: str | None = None, owner: str | None = None,
     ) -> list[str]:  # fmt: skip
         """Enqueue jobs atomically (all or none); returns their ids in order. Each job's kind is its request's
         (`manifoundation.contract.kind_of`): a synthesis, or a plan (answered in `JobPublic.plan`).
@@ -101,6 +105,9 @@ class JobQueue(ABC):
         ``request_id``: the ``X-Request-ID`` of the HTTP request submitting them (the same for every job of a
         batch). Kept in each job's record (internal: not part of `JobPublic`) and put on every log line the
         worker writes while it runs the job, next to ``job_id``.
+
+        A `SpooledRequest` (a payload already in `spool`) is the queue's once accepted; refused, its file is still
+        the caller's.
 
         Raises:
             QueueFull: accepting them would exceed the queue's bound.
@@ -148,8 +155,8 @@ class JobQueue(ABC):
 
     @abstractmethod
     async def create_batch(
-        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None,
-        owner: str | None = None,
+        self, requests: Sequence[SynthesisRequest | SpooledRequest], deadline: float | None = None, *,
+        request_id: str | None = None, owner: str | None = None,
     ) -> str:  # fmt: skip
         """Submit a batch of requests (``request_id``, ``owner`` as in `submit`); returns the batch id."""
 

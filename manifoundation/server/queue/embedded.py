@@ -9,6 +9,9 @@ and outcomes back, and notices a dead worker (EOF): its jobs go back to the queu
 ``max_deliveries`` times, then to the dead letters with the error; a replacement is spawned. A job given back
 that way runs alone (a micro-batch of one), so a job that kills its worker fails no batch-mate.
 
+Payloads over `manifoundation.server.spool.SPOOL_BYTES` wait in a spool directory of the queue's own (removed when
+it closes), not in memory; a body process may pack a large batch straight into it (`spool`).
+
 This module is the queue's asyncio API; the state and the pump thread are `manifoundation.server.queue.embedded_pump`.
 """
 
@@ -29,7 +32,6 @@ from manifoundation.contract import (
     QueueStats,
     SynthesisRequest,
     WorkerPublic,
-    kind_of,
 )
 from manifoundation.server.queue.base import (
     JobNotFound,
@@ -38,7 +40,7 @@ from manifoundation.server.queue.base import (
     QueueUnavailable,
 )
 from manifoundation.server.queue.embedded_parts import JobRecord, WorkerHandle
-from manifoundation.server.queue.embedded_payloads import packed
+from manifoundation.server.queue.embedded_payloads import discard_spooled, packed
 from manifoundation.server.queue.embedded_robots import EmbeddedRobots
 from manifoundation.server.queue.records import (
     cancelled_error,
@@ -47,6 +49,7 @@ from manifoundation.server.queue.records import (
     shutdown_error,
     with_answer,
 )
+from manifoundation.server.spool import SpooledRequest, job_kind, new_spool, remove_spool, robot_of
 
 log = logging.getLogger("manifoundation.server.queue.embedded")
 
@@ -61,6 +64,7 @@ class EmbeddedQueue(EmbeddedRobots, JobQueue):
         if self._running:
             return
         self._running = True
+        self.spool = new_spool()
         with self._lock:
             for _ in range(self.settings.concurrency):
                 self._spawn()
@@ -85,29 +89,37 @@ class EmbeddedQueue(EmbeddedRobots, JobQueue):
         await asyncio.get_running_loop().run_in_executor(None, self._join, workers)
         if self._pump is not None:
             await asyncio.get_running_loop().run_in_executor(None, self._pump.join, 10)
+        if self.spool is not None:
+            remove_spool(self.spool)
+            self.spool = None
 
     async def ping(self) -> bool:
         return self._running
 
     # ---- submit / observe ------------------------------------------------------------------------------------
     async def submit(
-        self, requests: Sequence[JobRequest], *, batch_id: str | None = None, deadline: float | None = None,
-        request_id: str | None = None, owner: str | None = None,
+        self, requests: Sequence[JobRequest | SpooledRequest], *, batch_id: str | None = None,
+        deadline: float | None = None, request_id: str | None = None, owner: str | None = None,
     ) -> list[str]:  # fmt: skip
         if not self._running:
             raise QueueUnavailable("the embedded queue is not running")
-        payloads = await packed(requests)
-        with self._lock:
-            if len(self._pending) + len(requests) > self.settings.max_queue:
-                raise QueueFull(f"queue holds {len(self._pending)} jobs (max {self.settings.max_queue})", 1.0)
-            ids = []
-            for request, payload in zip(requests, payloads, strict=True):
-                hand = request.robot.name if request.robot else None
-                kind = kind_of(request)
-                job = JobRecord(new_id(), payload, hand, deadline, batch_id, request_id, owner, kind)
-                self._jobs[job.id] = job
-                self._pending.append(job.id)
-                ids.append(job.id)
+        payloads = await packed(requests, self.spool)
+        try:
+            with self._lock:
+                if len(self._pending) + len(requests) > self.settings.max_queue:
+                    raise QueueFull(f"queue holds {len(self._pending)} jobs (max {self.settings.max_queue})", 1.0)
+                ids = []
+                for request, payload in zip(requests, payloads, strict=True):
+                    data = payload if isinstance(payload, bytes) else b""
+                    job = JobRecord(new_id(), data, robot_of(request), deadline, batch_id, request_id, owner,
+                                    job_kind(request))  # fmt: skip
+                    job.spooled = payload.path if isinstance(payload, SpooledRequest) else None
+                    self._jobs[job.id] = job
+                    self._pending.append(job.id)
+                    ids.append(job.id)
+        except BaseException:  # refused: the payloads this call spooled go
+            discard_spooled(payloads, requests)
+            raise
         self._wake()
         return ids
 
@@ -187,8 +199,8 @@ class EmbeddedQueue(EmbeddedRobots, JobQueue):
             return out
 
     async def create_batch(
-        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None,
-        owner: str | None = None,
+        self, requests: Sequence[SynthesisRequest | SpooledRequest], deadline: float | None = None, *,
+        request_id: str | None = None, owner: str | None = None,
     ) -> str:  # fmt: skip
         batch_id = new_id()
         ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id, owner=owner)

@@ -16,11 +16,12 @@ from manifoundation.server.queue.records import STILL_LOADING
 
 
 class JobRecord:
-    """A job as the embedded queue keeps it (payload dropped once terminal)."""
+    """A job as the embedded queue keeps it: its payload in memory, or in the queue's spool (``spooled``: the
+    file; `manifoundation.server.spool`); dropped once terminal."""
 
     __slots__ = (
         "batch_id", "cancel", "created_at", "deadline", "deliveries", "error", "finished_at", "id", "kind", "owner",
-        "payload", "progress", "request_id", "result", "robot", "started_at", "state", "timings", "worker",
+        "payload", "progress", "request_id", "result", "robot", "spooled", "started_at", "state", "timings", "worker",
     )  # fmt: skip
 
     def __init__(
@@ -29,6 +30,7 @@ class JobRecord:
     ) -> None:  # fmt: skip
         self.id, self.payload, self.robot, self.deadline, self.batch_id = job_id, payload, robot, deadline, batch
         self.kind = kind
+        self.spooled: str | None = None
         self.request_id = request_id  # X-Request-ID of the submitting HTTP request (internal: logs, operators)
         self.owner = owner  # the tenant (internal: never in JobPublic)
         self.created_at = time.time()

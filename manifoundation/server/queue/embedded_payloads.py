@@ -11,7 +11,7 @@ import asyncio
 from collections.abc import Sequence
 
 from manifoundation.contract import JobRequest
-from manifoundation.contract.codec import pack
+from manifoundation.server.spool import SPOOL_BYTES, SpooledBatch, SpooledRequest, request_payload
 from manifoundation.server.worker.heap import HeapTrimmer
 
 PACK_INLINE_BYTES = 1 << 20
@@ -28,15 +28,41 @@ def _cloud_bytes(request: JobRequest) -> int:
     return int(getattr(points, "nbytes", 0))
 
 
-async def packed(requests: Sequence[JobRequest]) -> list[bytes]:
-    """The queue's payloads of ``requests``; large ones (200 000 points pack in ≈ 6 ms) in a thread."""
+async def packed(requests: Sequence[JobRequest | SpooledRequest], spool: str | None) -> list[bytes | SpooledRequest]:
+    """The queue's payloads of ``requests``: bytes, or for a request whose cloud is over `SPOOL_BYTES` its payload
+    written to the ``spool`` directory (None: none, all in memory); a request already spooled as it is. Large ones
+    (200 000 points pack in ≈ 6 ms) are packed in a thread."""
 
-    def pack_all() -> list[bytes]:
-        return [pack(r.model_dump(mode="python", exclude_none=True)) for r in requests]
+    def one(request: JobRequest | SpooledRequest) -> bytes | SpooledRequest:
+        if isinstance(request, SpooledRequest):
+            return request
+        if spool is not None and _cloud_bytes(request) > SPOOL_BYTES:
+            return SpooledRequest.write(spool, request)
+        return request_payload(request)
 
-    if sum(_cloud_bytes(r) for r in requests) > PACK_INLINE_BYTES:
+    def pack_all() -> list[bytes | SpooledRequest]:
+        out: list[bytes | SpooledRequest] = []
+        try:
+            for request in requests:
+                out.append(one(request))
+        except BaseException:
+            discard_spooled(out, requests)
+            raise
+        return out
+
+    plain = [r for r in requests if not isinstance(r, SpooledRequest)]
+    if sum(_cloud_bytes(r) for r in plain) > PACK_INLINE_BYTES:
         return await asyncio.to_thread(pack_all)
     return pack_all()
+
+
+def discard_spooled(
+    payloads: Sequence[bytes | SpooledRequest], requests: Sequence[JobRequest | SpooledRequest]
+) -> None:
+    """Remove the files `packed` spooled for ``requests`` (``payloads``: its answer, or the part made before it
+    failed); a request that came spooled keeps its file (its caller's)."""
+    spooled = [p for p, r in zip(payloads, requests, strict=False) if isinstance(p, SpooledRequest) and p is not r]
+    SpooledBatch(spooled).discard()
 
 
 class FreedPayloads:

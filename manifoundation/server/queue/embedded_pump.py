@@ -13,6 +13,7 @@ import asyncio
 import contextlib
 import logging
 import multiprocessing as mp
+import os
 import socket
 import threading
 import time
@@ -23,6 +24,7 @@ from typing import Any
 from manifoundation.contract import (
     DeadLetter,
     ErrorBody,
+    ErrorType,
     JobKind,
     JobProgress,
     JobState,
@@ -42,6 +44,7 @@ from manifoundation.server.queue.records import (
     state_for_error,
     worker_lost_error,
 )
+from manifoundation.server.spool import open_payload, read_payload, remove_payload
 from manifoundation.server.worker.settings import QueueSettings
 from manifoundation.server.worker.supervisor import spawn, stop_all
 
@@ -76,6 +79,7 @@ class EmbeddedPump:
         self._wake_r, self._wake_w = mp.Pipe(duplex=False)
         self._pump: threading.Thread | None = None
         self._running = False
+        self.spool: str | None = None  # the payload spool's directory while running
 
     def _live(self, worker: WorkerHandle) -> bool:
         """Ready and heard from within ``heartbeat_timeout`` (a silent worker is not live, as on Redis)."""
@@ -216,13 +220,13 @@ class EmbeddedPump:
         worker.conn.close()
 
     def _dispatch(self) -> None:
-        sends: list[tuple[WorkerHandle, list[dict[str, Any]], list[bytes]]] = []
+        sends: list[tuple[WorkerHandle, list[dict[str, Any]], list[bytes | int]]] = []
         with self._lock:
             idle = [w for w in self._workers.values() if w.idle]
             now = time.time()
             for worker in idle:
                 batch: list[dict[str, Any]] = []
-                frames: list[bytes] = []
+                frames: list[bytes | int] = []
                 while self._pending and len(batch) < self.settings.batch_size:
                     job = self._jobs.get(self._pending[0])
                     if job is None or job.state is not JobState.QUEUED:
@@ -232,6 +236,11 @@ class EmbeddedPump:
                     if alone and batch:
                         break  # a job whose worker died runs alone: a poison job takes no batch-mate down; a plan
                         # runs alone: it takes seconds to minutes
+                    try:  # a spooled payload is read outside the lock, from a descriptor opened under it
+                        payload: bytes | int = open_payload(job.spooled) if job.spooled else job.payload
+                    except OSError as exc:
+                        self._finish(job, error=unreadable_error(exc))
+                        continue
                     self._pending.popleft()
                     job.state, job.worker, job.deliveries = JobState.RUNNING, worker.id, job.deliveries + 1
                     job.started_at = now
@@ -240,16 +249,35 @@ class EmbeddedPump:
                         "id": job.id, "deadline": job.deadline, "request_id": job.request_id,
                         "queued_for": now - job.created_at, "robot": robot is not None, "kind": job.kind.value,
                     })  # fmt: skip
-                    frames += [job.payload, robot] if robot is not None else [job.payload]
+                    frames += [payload, robot] if robot is not None else [payload]
                     worker.inflight.add(job.id)
                     if job.deliveries > 1 or job.kind is JobKind.PLAN:
                         break
                 if not batch:
                     break
                 sends.append((worker, batch, frames))
-        for worker, batch, frames in sends:
+        for worker, batch, frames in sends:  # spooled payloads read here, outside the lock
+            try:
+                data = _read_spooled(frames)
+            except OSError as exc:
+                self._unreadable(worker, batch, exc)
+                continue
             with contextlib.suppress(OSError):  # on failure, the EOF on its pipe re-queues the jobs
-                worker.send({"op": "run", "jobs": batch}, *frames)
+                worker.send({"op": "run", "jobs": batch}, *data)
+            read = sum(len(d) for d, f in zip(data, frames, strict=True) if isinstance(f, int))
+            with self._lock:
+                self._freed.add(read)  # the spooled payloads read for it, let go once sent
+
+    def _unreadable(self, worker: WorkerHandle, batch: list[dict[str, Any]], exc: OSError) -> None:
+        """A batch whose spooled payloads could not be read (the disk failed): its jobs fail, nothing is sent."""
+        log.error("spooled payloads could not be read", extra={"error": str(exc)})
+        error = unreadable_error(exc)
+        with self._lock:
+            for entry in batch:
+                worker.inflight.discard(entry["id"])
+                job = self._jobs.get(entry["id"])
+                if job is not None and not job.state.terminal:
+                    self._finish(job, error=error)
 
     def _sweep(self) -> None:
         now = time.time()
@@ -281,7 +309,9 @@ class EmbeddedPump:
         job.finished_at = time.time()
         self._result_bytes += len(result or b"") - len(job.result or b"")
         self._freed.add(len(job.payload))
-        job.result, job.error, job.payload = result, error, b""
+        if job.spooled is not None:
+            remove_payload(job.spooled)  # a dispatch reading it holds its descriptor
+        job.result, job.error, job.payload, job.spooled = result, error, b"", None
         job.state = JobState.SUCCEEDED if error is None else state_for_error(error)
         if job.state is JobState.SUCCEEDED:
             job.progress = JobProgress(stage=Stage.DONE, fraction=1.0)
@@ -291,3 +321,23 @@ class EmbeddedPump:
         self._finished[job.id] = None
         for loop, future in self._waiters.pop(job.id, []):
             loop.call_soon_threadsafe(settle, future, None)
+
+
+def unreadable_error(exc: OSError) -> ErrorBody:
+    """The error of a job whose spooled payload could not be read (the disk failed, or the file was removed)."""
+    return ErrorBody.of(ErrorType.UNAVAILABLE, f"the job's payload could not be read from the spool: {exc}")
+
+
+def _read_spooled(frames: list[bytes | int]) -> list[bytes]:
+    """``frames`` with each spooled payload (an open descriptor, `open_payload`) read and closed; all are closed even
+    when one read fails."""
+    out: list[bytes] = []
+    try:
+        for frame in frames:
+            out.append(read_payload(frame) if isinstance(frame, int) else frame)
+    finally:
+        for frame in frames[len(out) + 1 :]:
+            if isinstance(frame, int):
+                with contextlib.suppress(OSError):
+                    os.close(frame)
+    return out

@@ -47,7 +47,6 @@ from manifoundation.contract import (
     Stage,
     SynthesisRequest,
     WorkerPublic,
-    kind_of,
 )
 from manifoundation.contract.codec import pack, unpack
 from manifoundation.server.queue.base import (
@@ -71,6 +70,15 @@ from manifoundation.server.queue.records import (
 )
 from manifoundation.server.queue.redis_lua import CANCEL, GROUP, SUBMIT, Keys
 from manifoundation.server.queue.robot_quota import RESERVE_ROBOT, RobotLimits, refusal
+from manifoundation.server.spool import (
+    SpooledRequest,
+    job_kind,
+    open_payload,
+    read_payload,
+    remove_payload,
+    request_payload,
+    robot_of,
+)
 from manifoundation.server.worker.settings import QueueSettings
 
 log = logging.getLogger("manifoundation.server.queue.redis")
@@ -221,27 +229,30 @@ class RedisQueue(JobQueue):
 
     # ---- submit / observe ------------------------------------------------------------------------------------
     async def submit(
-        self, requests: Sequence[JobRequest], *, batch_id: str | None = None, deadline: float | None = None,
-        request_id: str | None = None, owner: str | None = None,
+        self, requests: Sequence[JobRequest | SpooledRequest], *, batch_id: str | None = None,
+        deadline: float | None = None, request_id: str | None = None, owner: str | None = None,
     ) -> list[str]:  # fmt: skip
         ids = [new_id() for _ in requests]
         args: list[Any] = [self.keys.prefix, self.settings.max_queue, int(self.settings.record_ttl), time.time()]
         args += [len(requests), int(self.settings.result_ttl * 1000), request_id or "", owner or ""]
         for job_id, request in zip(ids, requests, strict=True):
-            payload = pack(request.model_dump(mode="python", exclude_none=True))
+            kind = job_kind(request)
             args += [
                 job_id,
-                payload,
+                await _payload(request),
                 "" if deadline is None else repr(deadline),
                 batch_id or "",
-                "" if request.robot is None else request.robot.name or "",
-                "" if kind_of(request) is JobKind.SYNTHESIS else kind_of(request).value,
+                robot_of(request) or "",
+                "" if kind is JobKind.SYNTHESIS else kind.value,
             ]
         async with self._guard():
             answer = int(await self._submit(keys=[self.keys.stream, self.keys.recent], args=args))
         if answer < 0:
             depth = -answer - 1
             raise QueueFull(f"queue holds {depth} jobs (max {self.settings.max_queue})", retry_after=1.0)
+        for request in requests:  # accepted: spooled payloads are Redis's now
+            if isinstance(request, SpooledRequest):
+                remove_payload(request.path)
         return ids
 
     @property
@@ -318,8 +329,8 @@ class RedisQueue(JobQueue):
         return jobs
 
     async def create_batch(
-        self, requests: list[SynthesisRequest], deadline: float | None = None, *, request_id: str | None = None,
-        owner: str | None = None,
+        self, requests: Sequence[SynthesisRequest | SpooledRequest], deadline: float | None = None, *,
+        request_id: str | None = None, owner: str | None = None,
     ) -> str:  # fmt: skip
         batch_id = new_id()
         ids = await self.submit(requests, batch_id=batch_id, deadline=deadline, request_id=request_id, owner=owner)
@@ -454,3 +465,10 @@ class RedisQueue(JobQueue):
                 raise JobNotFound(f"no registered robot {name!r}")
             pipe = self._client.pipeline().hdel(self.keys.robots, key).hdel(self.keys.robot_urdf, key)
             await pipe.hdel(self.keys.robot_size, key).execute()
+
+
+async def _payload(request: JobRequest | SpooledRequest) -> bytes:
+    """A job's payload: packed, or read from the spool it was packed into (in a thread)."""
+    if isinstance(request, SpooledRequest):
+        return await asyncio.to_thread(read_payload, open_payload(request.path))
+    return request_payload(request)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import time
 
 import grpc
@@ -157,21 +158,22 @@ def test_grpc_calls_are_counted(service: Service) -> None:
 
 def test_large_messages_are_decoded_in_a_body_process_and_their_memory_given_back(service: Service) -> None:
     """A message over MANI_PARSE_OFFLOAD_BYTES reaches the servicer unparsed and is decoded by the large-body pool
-    HTTP uses (its slots, its processes), not on the event loop or a thread of the API; once the jobs of such
-    batches end, the embedded queue gives their freed payloads back to the OS (issue 62, item 3: 3 × 57.6 MB
-    batches left the API at 515-578 MB)."""
-    from manifoundation.server.api.bodies import PROTOBUF
+    HTTP uses (its slots, its processes), not on the event loop or a thread of the API; a batch's requests are
+    packed there into the embedded queue's spool (the API never holds their arrays), their files removed once
+    their jobs end, and the memory of the payloads sent to the workers is given back to the OS (issue 62, item 3:
+    3 × 57.6 MB batches left the API at 515-578 MB)."""
+    from manifoundation.server.api.bodies import SPOOL_BATCH
 
     services = service.app.state.services
     bodies, queue = services.bodies, services.queue
     seen: list[str] = []
-    decode = bodies.decode
+    run = bodies.run
 
-    async def counting(cls, chunks, content_type):  # type: ignore[no-untyped-def]
-        seen.append(f"{cls.__name__} {content_type}")
-        return await decode(cls, chunks, content_type)
+    async def counting(decoder, chunks, *args):  # type: ignore[no-untyped-def]
+        seen.append(decoder)
+        return await run(decoder, chunks, *args)
 
-    bodies.decode = counting
+    bodies.run = counting
     trims = queue._freed.trims
     try:
         big = request(n=200_000, max_iterations=1)
@@ -189,8 +191,9 @@ def test_large_messages_are_decoded_in_a_body_process_and_their_memory_given_bac
         for item in [*page.items, *small.items]:
             assert wait_terminal(service, item.job_id, 60).state == "succeeded"
     finally:
-        bodies.decode = decode
-    assert seen == [f"BatchCreate {PROTOBUF}"] * 2  # the small batch was parsed at once, as before
+        bodies.run = run
+    assert seen == [SPOOL_BATCH] * 2  # the small batch was parsed at once, as before
+    assert os.listdir(queue.spool) == []  # every payload's file went with its job (the broken batch wrote none)
     end = time.monotonic() + 10
     while queue._freed.trims == trims and time.monotonic() < end:
         time.sleep(0.1)

@@ -7,6 +7,7 @@ body process. The same answer as `SubmitBatch`, the same errors, its own limit.
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Iterator
 
@@ -39,6 +40,7 @@ def test_a_batch_in_pieces_is_the_batch(service: Service) -> None:
     for item in created.items:
         assert wait_terminal(service, item.job_id, 60).state == "succeeded"
     assert calls_ok(service, "SubmitBatchStream") == before + 1
+    assert os.listdir(service.app.state.services.queue.spool) == []  # spooled by the body process, gone with the jobs
 
 
 def test_the_errors_of_a_batch_in_pieces_are_submit_batchs(service: Service) -> None:
@@ -58,6 +60,7 @@ def test_the_errors_of_a_batch_in_pieces_are_submit_batchs(service: Service) -> 
     with pytest.raises(grpc.RpcError) as anonymous:
         service.stub.SubmitBatchStream(_pieces(pb.BatchCreate(requests=[request()])), timeout=30)
     assert anonymous.value.code() is grpc.StatusCode.UNAUTHENTICATED
+    assert os.listdir(service.app.state.services.queue.spool) == []  # a refused batch leaves no payload behind
 
 
 def test_pieces_over_the_message_limit_are_refused(service: Service) -> None:

@@ -54,7 +54,7 @@ LARGE_REQUESTS: dict[str, type[Any]] = {
 """The RPCs whose message may be large: parsed off the event loop when it is (`grpc.submit.LargeMessage`)."""
 
 
-STREAM_LOOKAHEAD_BYTES = 1 << 20
+STREAM_LOOKAHEAD_BYTES = 1 << 18
 """What the server reads ahead on one stream before its handler asks (gRPC's ``grpc.http2.lookahead_bytes``)."""
 
 

@@ -34,6 +34,7 @@ from manifoundation.server.api.middleware import request_id_from
 from manifoundation.server.api.negotiation import bounded_chunks, decoded
 from manifoundation.server.api.security import Caller
 from manifoundation.server.api.submission import RequestT, Submitter, running_queue
+from manifoundation.server.spool import SpooledBatch
 
 if TYPE_CHECKING:
     from manifoundation.server.api.services import AppServices
@@ -133,35 +134,58 @@ class Submission:
         return body, await submitter.submit(body, kind, deadline)
 
     async def batch(self, message: Message | LargeMessage, caller: Caller, context: grpc.aio.ServicerContext) -> str:
-        """Validate and submit a batch, all or none (the HTTP route's limits). Returns the batch id."""
+        """Validate and submit a batch, all or none (the HTTP route's limits); a large one, where the queue has a
+        spool, packed into it by the body process that decodes it. Returns the batch id."""
         submitter = self.submitter(caller, context)
         await submitter.admit()
-        return await submitter.submit_batch(await self.validate(message, BatchCreate))
+        spool, bodies = self.queue.spool, self.services.bodies
+        if spool is None or not isinstance(message, LargeMessage):
+            return await submitter.submit_batch(await self.validate(message, BatchCreate))
+        async with bodies.slot():
+            outcome = await bodies.spool_batch(_pieces(message.take()), PROTOBUF, spool)
+        return await submitter.submit_batch(await self._batch_of(outcome))
 
     async def batch_streamed(
         self, pieces: AsyncIterator[pb.MessagePiece], caller: Caller, context: grpc.aio.ServicerContext
     ) -> str:
-        """`batch` for a ``BatchCreate`` sent in pieces (``SubmitBatchStream``). Returns the batch id."""
+        """`batch` for a ``BatchCreate`` sent in pieces (``SubmitBatchStream``; `streamed`'s limits), packed into
+        the queue's spool by the body process that decodes it where the queue has one. Returns the batch id."""
         submitter = self.submitter(caller, context)
         await submitter.admit()
-        return await submitter.submit_batch(await self.streamed(pieces, pb.BatchCreate, BatchCreate))
+        spool, bodies = self.queue.spool, self.services.bodies
+        if spool is None:
+            return await submitter.submit_batch(await self.streamed(pieces, pb.BatchCreate, BatchCreate))
+        async with bodies.slot():
+            outcome = await bodies.spool_batch(self._bounded(pieces), PROTOBUF, spool)
+        return await submitter.submit_batch(await self._batch_of(outcome))
+
+    async def _batch_of(self, outcome: tuple[str, Any]) -> BatchCreate | SpooledBatch:
+        """The batch a body process's outcome holds, or its error (no piece at all: the empty message's)."""
+        if outcome[0] == "empty":
+            return await self.validate(pb.BatchCreate(), BatchCreate)
+        value: SpooledBatch = decoded(outcome)
+        return value
 
     async def streamed(
         self, pieces: AsyncIterator[pb.MessagePiece], kind: type[Message], model: type[ModelT]
     ) -> ModelT:
         """The contract's validation of a ``kind`` message sent in ``pieces``: none is read before a large-body slot
-        is held (UNAVAILABLE after ``MANI_BODY_TIMEOUT``), then each goes to a body process as it comes; more than
-        ``MANI_GRPC_MAX_MESSAGE_BYTES`` in all is RESOURCE_EXHAUSTED, and a sender slower than an HTTP body may be
-        (``MANI_BODY_TIMEOUT`` in all, ``MANI_BODY_IDLE_TIMEOUT`` between two pieces: it holds a slot meanwhile)
-        DEADLINE_EXCEEDED. No piece at all is the empty message."""
-        settings, bodies = self.services.settings, self.services.bodies
-        data = bounded_chunks(
-            (piece.data async for piece in pieces), settings.grpc_max_message_bytes, settings.body_timeout,
-            settings.body_idle_timeout, whole="message", unit="piece", limit_name="MANI_GRPC_MAX_MESSAGE_BYTES",
-        )  # fmt: skip
+        is held (UNAVAILABLE after ``MANI_BODY_TIMEOUT``), then each goes to a body process as it comes (`_bounded`'s
+        limits). No piece at all is the empty message."""
+        bodies = self.services.bodies
         async with bodies.slot():
-            outcome = await bodies.decode(model, data, PROTOBUF)
+            outcome = await bodies.decode(model, self._bounded(pieces), PROTOBUF)
         if outcome[0] == "empty":  # protobuf's empty message is a message (every field at its default)
             return await self.validate(kind(), model)
         value: ModelT = decoded(outcome)
         return value
+
+    def _bounded(self, pieces: AsyncIterator[pb.MessagePiece]) -> AsyncIterator[bytes]:
+        """The bytes of ``pieces``: more than ``MANI_GRPC_MAX_MESSAGE_BYTES`` in all is RESOURCE_EXHAUSTED, a sender
+        slower than an HTTP body may be (``MANI_BODY_TIMEOUT`` in all, ``MANI_BODY_IDLE_TIMEOUT`` between two
+        pieces: it holds a slot meanwhile) DEADLINE_EXCEEDED."""
+        settings = self.services.settings
+        return bounded_chunks(
+            (piece.data async for piece in pieces), settings.grpc_max_message_bytes, settings.body_timeout,
+            settings.body_idle_timeout, whole="message", unit="piece", limit_name="MANI_GRPC_MAX_MESSAGE_BYTES",
+        )  # fmt: skip

@@ -28,7 +28,7 @@ log = logging.getLogger("manifoundation.server.api.batches")
 )
 async def create_batch(request: Request, submitter: SubmitterDep) -> Response:
     """All or none are enqueued (owned by the caller); 202 with the batch and its first page of job ids."""
-    _, batch_id = await read_and_submit_batch(request, submitter)
+    batch_id = await read_and_submit_batch(request, submitter)
     batch = await submitter.first_page(batch_id)
     url = str(request.url_for("get_batch", batch_id=batch_id))
     return respond(request, batch, status=202, headers={"Location": url})
