@@ -1,5 +1,5 @@
-"""The embedded queue's payloads and the memory they leave: large requests packed off the event loop, and the C
-heap trimmed once enough payloads were let go.
+"""The embedded queue's payloads and the memory they leave: large requests packed off the event loop and kept in the
+queue's spool (`manifoundation.server.spool`), and the C heap trimmed once enough payloads were let go.
 
 Why apart from the queue: both are about the bytes of large requests (issue 62, item 3: 3 × 57.6 MB gRPC batches
 stalled the loop while packing and left the API at 368 MB after the queue drained, 90 MB before them).
@@ -8,10 +8,12 @@ stalled the loop while packing and left the API at 368 MB after the queue draine
 from __future__ import annotations
 
 import asyncio
+import contextlib
+import os
 from collections.abc import Sequence
 
-from manifoundation.contract import JobRequest
-from manifoundation.server.spool import SPOOL_BYTES, SpooledBatch, SpooledRequest, request_payload
+from manifoundation.contract import ErrorBody, ErrorType, JobRequest
+from manifoundation.server.spool import SPOOL_BYTES, SpooledBatch, SpooledRequest, read_payload, request_payload
 from manifoundation.server.worker.heap import HeapTrimmer
 
 PACK_INLINE_BYTES = 1 << 20
@@ -86,3 +88,23 @@ class FreedPayloads:
         """Trim the heap when enough was freed (anything, when ``idle``) and the trimmer's interval allows."""
         if self.freed >= (1 if idle else TRIM_AFTER_FREED_BYTES) and self._heap.maybe_trim():
             self.freed = 0
+
+
+def unreadable_error(exc: OSError) -> ErrorBody:
+    """The error of a job whose spooled payload could not be read (the disk failed, or the file was removed)."""
+    return ErrorBody.of(ErrorType.UNAVAILABLE, f"the job's payload could not be read from the spool: {exc}")
+
+
+def read_spooled(frames: list[bytes | int]) -> list[bytes]:
+    """``frames`` with each spooled payload (an open descriptor, `open_payload`) read and closed; all are closed even
+    when one read fails."""
+    out: list[bytes] = []
+    try:
+        for frame in frames:
+            out.append(read_payload(frame) if isinstance(frame, int) else frame)
+    finally:
+        for frame in frames[len(out) + 1 :]:
+            if isinstance(frame, int):
+                with contextlib.suppress(OSError):
+                    os.close(frame)
+    return out

@@ -4,7 +4,12 @@ dispatch, outcomes, worker loss and retention.
 `manifoundation.server.queue.embedded.EmbeddedQueue` is the queue's API on top of this (the asyncio side). The pump
 thread is the only reader of the workers' pipes (the `manifoundation.server.worker.child` protocol: a map, then the
 payload frames it announces); everything shared between it and the event loop is guarded by ``_lock``, held only
-for bookkeeping (no decoding, no validation, no I/O that can block).
+for bookkeeping (no decoding, no validation, no I/O that can block: a spooled payload's file is opened under it,
+read after it).
+
+Why one module: one lock's state; dispatch, outcomes, worker loss and retention each change the same job records,
+pending list and workers' in-flight sets under it, and its invariants (a job is pending, in one worker's in-flight
+set, or terminal) are read in one place.
 """
 
 from __future__ import annotations
@@ -13,7 +18,6 @@ import asyncio
 import contextlib
 import logging
 import multiprocessing as mp
-import os
 import socket
 import threading
 import time
@@ -24,7 +28,6 @@ from typing import Any
 from manifoundation.contract import (
     DeadLetter,
     ErrorBody,
-    ErrorType,
     JobKind,
     JobProgress,
     JobState,
@@ -34,7 +37,7 @@ from manifoundation.contract import (
 )
 from manifoundation.contract.codec import unpack
 from manifoundation.server.queue.embedded_parts import ChildProcess, JobRecord, WorkerHandle, settle
-from manifoundation.server.queue.embedded_payloads import FreedPayloads
+from manifoundation.server.queue.embedded_payloads import FreedPayloads, read_spooled, unreadable_error
 from manifoundation.server.queue.records import (
     cancelled_error,
     deadline_error,
@@ -44,7 +47,7 @@ from manifoundation.server.queue.records import (
     state_for_error,
     worker_lost_error,
 )
-from manifoundation.server.spool import open_payload, read_payload, remove_payload
+from manifoundation.server.spool import open_payload, remove_payload
 from manifoundation.server.worker.settings import QueueSettings
 from manifoundation.server.worker.supervisor import spawn, stop_all
 
@@ -258,7 +261,7 @@ class EmbeddedPump:
                 sends.append((worker, batch, frames))
         for worker, batch, frames in sends:  # spooled payloads read here, outside the lock
             try:
-                data = _read_spooled(frames)
+                data = read_spooled(frames)
             except OSError as exc:
                 self._unreadable(worker, batch, exc)
                 continue
@@ -322,22 +325,3 @@ class EmbeddedPump:
         for loop, future in self._waiters.pop(job.id, []):
             loop.call_soon_threadsafe(settle, future, None)
 
-
-def unreadable_error(exc: OSError) -> ErrorBody:
-    """The error of a job whose spooled payload could not be read (the disk failed, or the file was removed)."""
-    return ErrorBody.of(ErrorType.UNAVAILABLE, f"the job's payload could not be read from the spool: {exc}")
-
-
-def _read_spooled(frames: list[bytes | int]) -> list[bytes]:
-    """``frames`` with each spooled payload (an open descriptor, `open_payload`) read and closed; all are closed even
-    when one read fails."""
-    out: list[bytes] = []
-    try:
-        for frame in frames:
-            out.append(read_payload(frame) if isinstance(frame, int) else frame)
-    finally:
-        for frame in frames[len(out) + 1 :]:
-            if isinstance(frame, int):
-                with contextlib.suppress(OSError):
-                    os.close(frame)
-    return out

@@ -54,8 +54,6 @@ LARGE_REQUESTS: dict[str, type[Any]] = {
 """The RPCs whose message may be large: parsed off the event loop when it is (`grpc.submit.LargeMessage`)."""
 
 
-STREAM_LOOKAHEAD_BYTES = 1 << 18
-"""What the server reads ahead on one stream before its handler asks (gRPC's ``grpc.http2.lookahead_bytes``)."""
 
 
 class _Handlers:
@@ -96,11 +94,11 @@ class GrpcServer:
                 ("grpc.max_receive_message_length", limit),
                 ("grpc.max_send_message_length", limit),
                 ("grpc.so_reuseport", 0),  # a port in use is an error, not a second server sharing it
-                # each stream reads ahead at most 1 MiB (not a window grown by BDP probing): the pieces of a
-                # SubmitBatchStream waiting for a large-body slot stay with the client (100 × 57.6 MB streamed:
-                # API peak 470 MB; with BDP probing, 40 took it to 2.4 GB); ≈ 10 MB/s a stream at 100 ms RTT
+                # each stream reads ahead at most MANI_GRPC_STREAM_WINDOW_BYTES (not a window grown by BDP probing):
+                # the pieces of a SubmitBatchStream waiting for a large-body slot stay with the client (with BDP
+                # probing, 40 × 57.6 MB streamed took the API to 2.4 GB)
                 ("grpc.http2.bdp_probe", 0),
-                ("grpc.http2.lookahead_bytes", STREAM_LOOKAHEAD_BYTES),
+                ("grpc.http2.lookahead_bytes", settings.grpc_stream_window_bytes),
             ],
         )
         self.services = services

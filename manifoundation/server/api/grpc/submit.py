@@ -14,7 +14,8 @@ validates them (`manifoundation.server.api.bodies`); this process lets go of the
 has them and never builds the protobuf message, so neither the event loop nor a thread of this process spends the
 GIL on it. gRPC receives a unary message whole before any code sees it, so a few very large ones at once still cost
 their size in this process: ``SubmitBatchStream`` takes the same message in pieces (`Submission.streamed`), read
-only once a slot is held and passed on one at a time.
+only once a slot is held and passed on one at a time. A large batch (either RPC) is packed by its body process into
+the embedded queue's spool (`manifoundation.server.spool`), so its arrays never reach this process.
 """
 
 from __future__ import annotations
