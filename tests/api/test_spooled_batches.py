@@ -54,3 +54,22 @@ def test_a_large_batch_is_packed_into_the_spool_by_a_body_process() -> None:
         refused = httpx.post(f"{base}/v1/batches", json=invalid, timeout=60)
         assert refused.status_code == 422 and "requests.2.object" in refused.text, refused.text
         assert len(seen) == 3 and len(os.listdir(spool)) == 3  # spooled, refused and removed; invalid: never written
+
+
+def test_a_spool_that_cannot_be_written_is_503_not_the_callers_fault() -> None:
+    """The spool's disk failing (here: its directory gone) is the service's problem: 503 with Retry-After, for a
+    large batch (written by the body process) and a large single request (written by the queue) alike."""
+    queue = create_queue(None, redis_url=None, concurrency=0, max_queue=10)
+    app = create_app(Settings(rate_limit_per_s=0, parse_offload_bytes=1024), queue=queue)
+    with serving(app) as base:
+        assert queue.spool is not None
+        os.rmdir(queue.spool)
+        batch = {"requests": [request_body("test_gripper", n=256)] * 2}
+        answer = httpx.post(f"{base}/v1/batches", json=batch, timeout=60)
+        assert answer.status_code == 503 and "spool" in answer.json()["error"], answer.text
+        assert "Retry-After" in answer.headers
+        large = request_body("test_gripper", n=60_000)  # a 2.9 MB cloud: over SPOOL_BYTES
+        single = httpx.post(f"{base}/v1/jobs", json=large, timeout=60)
+        assert single.status_code == 503 and "spool" in single.json()["error"], single.text
+        small = httpx.post(f"{base}/v1/jobs", json=request_body("test_gripper"), timeout=60)
+        assert small.status_code == 202, small.text  # a payload kept in memory does not need the disk

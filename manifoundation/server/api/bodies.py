@@ -63,14 +63,18 @@ def decode_as(data: bytes, cls_path: str, content_type: str | None) -> tuple[str
 
 def spool_batch_as(data: bytes, directory: str, content_type: str | None) -> tuple[str, Any]:
     """`decode` of a `BatchCreate`, its requests then packed into the queue's spool ``directory``
-    (`manifoundation.server.spool`): ``("ok", SpooledBatch)``, or `decode`'s errors (nothing written)."""
+    (`manifoundation.server.spool`): ``("ok", SpooledBatch)``, `decode`'s errors, or ``("unavailable", message)``
+    when the spool could not be written (nothing is left written)."""
     from manifoundation.contract import BatchCreate
     from manifoundation.server.spool import spool_batch
 
     kind, value = decode(BatchCreate, data, content_type)
     if kind != "ok":
         return kind, value
-    return "ok", spool_batch(value.requests, directory)
+    try:
+        return "ok", spool_batch(value.requests, directory)
+    except OSError as exc:  # the disk, not the body: 503
+        return "unavailable", f"the queue's spool could not take the batch: {exc}"
 
 
 def _from_protobuf(cls: type[ModelT], data: bytes) -> tuple[str, Any]:

@@ -25,6 +25,7 @@ from manifoundation.server.api.errors import (
     InvalidInput,
     PayloadTooLarge,
     RequestTimeout,
+    Unavailable,
     UnsupportedMediaType,
 )
 from manifoundation.server.api.services import services_of
@@ -151,6 +152,8 @@ def decoded(outcome: tuple[str, Any]) -> Any:
         raise InvalidInput(summary(return_errors), detail=return_errors)
     if kind == "empty":
         raise BadRequest("empty body; send a JSON or msgpack object")
+    if kind == "unavailable":
+        raise Unavailable(str(value), retry_after=5)
     raise BadRequest(str(value))
 
 

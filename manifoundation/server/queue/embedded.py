@@ -103,7 +103,10 @@ class EmbeddedQueue(EmbeddedRobots, JobQueue):
     ) -> list[str]:  # fmt: skip
         if not self._running:
             raise QueueUnavailable("the embedded queue is not running")
-        payloads = await packed(requests, self.spool)
+        try:
+            payloads = await packed(requests, self.spool)
+        except OSError as exc:  # the spool's disk (full, gone): nothing was kept
+            raise QueueUnavailable(f"the queue's spool could not take the payload: {exc}") from exc
         try:
             with self._lock:
                 if len(self._pending) + len(requests) > self.settings.max_queue:
