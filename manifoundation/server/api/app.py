@@ -80,6 +80,7 @@ def create_app(settings: Settings | None = None, *, queue: JobQueue | None = Non
                 await sampler
             await the_queue.close()
             services.bodies.close()
+            services.objects.close()
             log.info("service stopped")
 
     app = FastAPI(

@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+import os
 import time
 
+import numpy as np
 import pytest
 
+from manifoundation.contract import ObjectIn
 from manifoundation.server.api.errors import Conflict, NotFound
 from manifoundation.server.api.mcp.objects import ObjectStore, object_bytes
 from manifoundation.server.api.mcp.shapes import primitive
+from manifoundation.server.spool import SPOOL_BYTES
 
 BOX = primitive("box", [0.05, 0.05, 0.05], 128)
 
@@ -48,3 +52,24 @@ def test_count_and_byte_limits_refuse_the_upload() -> None:
     small.put("a", BOX)
     with pytest.raises(Conflict, match="bytes"):
         small.put("a", BOX)
+
+
+def test_a_large_object_waits_on_disk_and_comes_back_the_same() -> None:
+    """An object over SPOOL_BYTES is kept packed in the store's spool, not in memory; it comes back as the same
+    object (as plain data, what a request's ``object`` is, and validated); its file goes when it is deleted or
+    expires, the spool when the store closes."""
+    big = primitive("sphere", [0.04], 60_000)  # 2.9 MB of arrays
+    store = ObjectStore(ttl_s=60, max_objects=4, max_bytes=10**8)
+    kept, dropped, expiring = store.put("a", big), store.put("a", big), store.put("a", big)
+    assert store.delete("a", dropped.id) and not os.path.exists(dropped.path or "")
+    assert kept.object is None and kept.path is not None and os.path.getsize(kept.path) > SPOOL_BYTES
+    again = ObjectIn.model_validate(store.fields("a", kept.id))
+    assert np.array_equal(again.points, big.points) and np.array_equal(again.normals, big.normals)
+    assert store.get("a", kept.id).model_dump(mode="json") == big.model_dump(mode="json")
+    expiring.expires_at = time.time() - 1  # its time to live is over: the next look removes it and its file
+    assert [o.id for o in store.list("a")] == [kept.id] and not os.path.exists(expiring.path or "")
+    small = store.put("a", BOX)
+    assert small.path is None and store.get("a", small.id) is BOX
+    spool = os.path.dirname(kept.path)
+    store.close()
+    assert not os.path.exists(spool)

@@ -63,4 +63,7 @@ async def serve_stdio(url: str, api_key: str | None) -> None:
         async def session_of(ctx: Any) -> Session:
             return session
 
-        await build_server(objects, session_of).run_stdio_async()
+        try:
+            await build_server(objects, session_of).run_stdio_async()
+        finally:
+            objects.close()

@@ -7,8 +7,10 @@ namespace: another tenant's id is unknown to it, like an id that never existed. 
 ``object_ttl_s`` after the last use, ``max_objects`` per tenant, ``max_object_store_bytes`` of arrays per tenant
 (the least recently used objects are not evicted to make room: the upload is refused, naming the limit).
 
-In memory, per process: behind several replicas an object lives on the replica that took the upload (route an
-agent's session to one replica, or upload again).
+Per process: behind several replicas an object lives on the replica that took the upload (route an agent's
+session to one replica, or upload again). An object over `manifoundation.server.spool.SPOOL_BYTES` is kept packed
+in a spool directory of the store's own (removed by `close`), not in memory: a key's quota of 64 MiB of arrays,
+times every key, would otherwise stay in the API process.
 """
 
 from __future__ import annotations
@@ -17,11 +19,22 @@ import secrets
 import time
 from collections import OrderedDict
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from manifoundation.contract import FieldError, ObjectIn
+from manifoundation.contract.codec import pack, unpack
 from manifoundation.server.api.errors import Conflict, NotFound
+from manifoundation.server.spool import (
+    SPOOL_BYTES,
+    new_spool,
+    open_payload,
+    read_payload,
+    remove_payload,
+    remove_spool,
+    write_payload,
+)
 
 
 def object_bytes(obj: ObjectIn) -> int:
@@ -36,12 +49,13 @@ def object_bytes(obj: ObjectIn) -> int:
 
 @dataclass
 class StoredObject:
-    """One uploaded object."""
+    """One uploaded object: in memory (``object``), or packed in the store's spool (``path``)."""
 
     id: str
-    object: ObjectIn
+    object: ObjectIn | None
     bytes: int
     expires_at: float
+    path: str | None = None
 
 
 class ObjectStore:
@@ -52,12 +66,13 @@ class ObjectStore:
         self.max_objects = max_objects
         self.max_bytes = max_bytes
         self._tenants: dict[str, OrderedDict[str, StoredObject]] = {}
+        self._spool: str | None = None
 
     def _live(self, tenant: str) -> OrderedDict[str, StoredObject]:
         objects = self._tenants.setdefault(tenant, OrderedDict())
         now = time.time()
         for object_id in [k for k, v in objects.items() if v.expires_at <= now]:
-            del objects[object_id]
+            _forget(objects.pop(object_id))
         return objects
 
     def put(self, tenant: str, obj: ObjectIn) -> StoredObject:
@@ -82,15 +97,33 @@ class ObjectStore:
                 detail=[FieldError(field="object", problem=f"more than {self.max_bytes} bytes stored per key")],
             )
         stored = StoredObject("obj_" + secrets.token_hex(8), obj, size, time.time() + self.ttl_s)
+        if size > SPOOL_BYTES:
+            if self._spool is None:
+                self._spool = new_spool()
+            stored.path = write_payload(self._spool, pack(obj.model_dump(mode="python", exclude_none=True)))
+            stored.object = None
         objects[stored.id] = stored
         return stored
 
-    def get(self, tenant: str, object_id: str) -> ObjectIn:
-        """The object (its time to live starts again).
+    def fields(self, tenant: str, object_id: str) -> dict[str, Any]:
+        """The object as the contract's plain data (what a request's ``object`` is; its time to live starts again).
 
         Raises:
             NotFound: no such object for this tenant (never uploaded, expired, deleted, or another tenant's).
         """
+        stored = self._found(tenant, object_id)
+        if stored.path is not None:
+            data: dict[str, Any] = unpack(read_payload(open_payload(stored.path)))
+            return data
+        assert stored.object is not None
+        return stored.object.model_dump(mode="python", exclude_none=True)
+
+    def get(self, tenant: str, object_id: str) -> ObjectIn:
+        """The object (its time to live starts again). Raises `NotFound` as `fields`."""
+        stored = self._found(tenant, object_id)
+        return stored.object if stored.object is not None else ObjectIn.model_validate(self.fields(tenant, object_id))
+
+    def _found(self, tenant: str, object_id: str) -> StoredObject:
         stored = self._live(tenant).get(object_id)
         if stored is None:
             raise NotFound(
@@ -99,12 +132,27 @@ class ObjectStore:
                 detail=[FieldError(field="object_id", problem="unknown or expired object")],
             )
         stored.expires_at = time.time() + self.ttl_s
-        return stored.object
+        return stored
 
     def delete(self, tenant: str, object_id: str) -> bool:
         """Remove an object; whether there was one."""
-        return self._live(tenant).pop(object_id, None) is not None
+        stored = self._live(tenant).pop(object_id, None)
+        if stored is not None:
+            _forget(stored)
+        return stored is not None
 
     def list(self, tenant: str) -> list[StoredObject]:
         """The tenant's live objects, oldest first."""
         return list(self._live(tenant).values())
+
+    def close(self) -> None:
+        """Forget every object and remove the spool."""
+        self._tenants.clear()
+        if self._spool is not None:
+            remove_spool(self._spool)
+            self._spool = None
+
+
+def _forget(stored: StoredObject) -> None:
+    if stored.path is not None:
+        remove_payload(stored.path)

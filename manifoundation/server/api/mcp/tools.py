@@ -82,7 +82,7 @@ def build_server(objects: ObjectStore, session_of: SessionFn, *, name: str = "ma
     server: MCPServer = MCPServer(name, instructions=INSTRUCTIONS)
 
     async def _object(session: Session, object_id: str) -> dict[str, Any]:
-        return objects.get(session.tenant, object_id).model_dump(mode="python", exclude_none=True)
+        return objects.fields(session.tenant, object_id)
 
     @server.tool(description="The robot hands you can use (built-in and registered by your key).")
     async def list_hands(ctx: Context) -> dict[str, Any]:
