@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 import trimesh
 
+from manifoundation.core.physics.hull_files import hull_file
 from manifoundation.core.physics.protocol import Protocol
 from manifoundation.core.robots.description import JointSpec, RobotDescription
 
@@ -154,7 +155,7 @@ def _add_geoms(spec: mujoco.MjSpec, body: mujoco.MjsBody, link: str, desc: Robot
             continue  # degenerate: nothing to collide
         v = _hull_vertices(mesh) @ T[:3, :3].T + T[:3, 3]  # MuJoCo collides the hull: send only its vertices
         name = f"{PREFIX}{link}/{k}"
-        spec.add_mesh(name=name, uservert=v.astype(np.float32).reshape(-1).tolist())
+        spec.add_mesh(name=name, file=hull_file(v))  # by file: MuJoCo's asset cache builds the hull once
         g = body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name)
         g.solref = list(HAND_SOLREF)
         g.solimp = [*HAND_SOLIMP, 0.5, 2.0]
