@@ -264,17 +264,33 @@ def _push(sc: Scene, squeezed: Squeezed, direction: np.ndarray, name: str, p: Pr
     sc.data.xfrc_applied[sc.object_body, :3] = p.force_factor * p.mass * direction
     steps = round(p.hold_seconds / p.timestep)
     moved, turned = 0.0, 0.0
-    for _ in range(max(1, steps // p.check_every)):
+    checks = max(1, steps // p.check_every)
+    last_pos, last_quat, drift = start_pos, start_quat, [(np.inf, np.inf)]
+    for done in range(1, checks + 1):
         mujoco.mj_step(sc.model, sc.data, nstep=p.check_every)
-        moved = float(np.linalg.norm(sc.data.xipos[sc.object_body] - start_pos))
-        turned = _angle(start_quat, sc.data.qpos[a + 3 : a + 7])
+        pos, quat = sc.data.xipos[sc.object_body].copy(), sc.data.qpos[a + 3 : a + 7].copy()
+        moved = float(np.linalg.norm(pos - start_pos))
+        turned = _angle(start_quat, quat)
         if moved >= p.max_translation or turned >= p.max_rotation or not np.isfinite(moved):
             break
         if diverged_count(sc) > warned:
             break
+        drift.append((float(np.linalg.norm(pos - last_pos)), _angle(last_quat, quat)))
+        last_pos, last_quat = pos, quat
+        if p.settle_checks and done >= 1 + p.settle_checks and _settled(moved, turned, drift, checks - done, p):
+            break  # it will stay well inside the limits (`Protocol.settle_checks`): held
     diverged = squeezed.diverged or diverged_count(sc) > warned
     held = bool(np.isfinite(moved) and moved < p.max_translation and turned < p.max_rotation) and not diverged
     return Trial(name, moved if np.isfinite(moved) else float("inf"), turned, held), diverged
+
+
+def _settled(moved: float, turned: float, drift: list[tuple[float, float]], left: int, p: Protocol) -> bool:
+    """Whether the object, drifting no faster than over the last ``settle_checks`` checks for twice the ``left``
+    checks, stays within half of the limits (``drift``: its motion (m, deg) in each check so far)."""
+    recent = drift[-p.settle_checks :]
+    speed = max(d for d, _ in recent)
+    spin = max(r for _, r in recent)
+    return bool(moved + 2 * left * speed < p.max_translation / 2 and turned + 2 * left * spin < p.max_rotation / 2)
 
 
 def _angle(q1: np.ndarray, q2: np.ndarray) -> float:
