@@ -13,9 +13,11 @@ Torch-free and light: the body processes import it (`manifoundation.server.api.b
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import os
 import shutil
 import tempfile
+import time
 import uuid
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -33,14 +35,60 @@ def request_payload(request: JobRequest) -> bytes:
     return pack(request.model_dump(mode="python", exclude_none=True))
 
 
+PREFIX = "mani-spool-"
+LOCK = ".lock"
+_held: dict[str, int] = {}  # spool directory -> the descriptor of its lock, held while the spool is in use
+
+
 def new_spool() -> str:
-    """A fresh, private spool directory (removed by `remove_spool`)."""
-    return tempfile.mkdtemp(prefix=f"mani-spool-{os.getpid()}-")
+    """A fresh, private spool directory, locked while in use (removed by `remove_spool`); first the spools that
+    processes which ended without removing theirs (killed) left behind are removed (`stale_spools`)."""
+    for stale in stale_spools():
+        shutil.rmtree(stale, ignore_errors=True)
+    directory = tempfile.mkdtemp(prefix=PREFIX)
+    fd = os.open(os.path.join(directory, LOCK), os.O_CREAT | os.O_RDWR, 0o600)
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    _held[directory] = fd
+    return directory
 
 
 def remove_spool(directory: str) -> None:
-    """The spool directory and every payload left in it."""
+    """The spool directory and every payload left in it; its lock let go."""
     shutil.rmtree(directory, ignore_errors=True)
+    fd = _held.pop(directory, None)
+    if fd is not None:
+        os.close(fd)
+
+
+STALE_AFTER_S = 60.0
+"""A spool unchanged for less than this is never taken for stale (one being made has no lock held yet)."""
+
+
+def stale_spools(root: str | None = None, min_age_s: float = STALE_AFTER_S) -> list[str]:
+    """This user's spool directories in ``root`` (default: the temporary directory), unchanged for ``min_age_s``,
+    that no process holds: their lock can be taken (a process's locks go with it, however it ended; a live spool's
+    lock is held, seen from any process namespace sharing the directory)."""
+    out = []
+    now = time.time()
+    with contextlib.suppress(OSError):
+        for entry in os.scandir(root or tempfile.gettempdir()):
+            if not entry.name.startswith(PREFIX) or not entry.is_dir(follow_symlinks=False):
+                continue
+            info = entry.stat(follow_symlinks=False)
+            if info.st_uid != os.getuid() or entry.path in _held or now - info.st_mtime < min_age_s:
+                continue
+            try:
+                fd = os.open(os.path.join(entry.path, LOCK), os.O_RDWR)
+            except OSError:
+                continue  # no lock file (not a spool, or one being made): left alone
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+                out.append(entry.path)
+            except OSError:
+                pass  # held: in use
+            finally:
+                os.close(fd)
+    return out
 
 
 def write_payload(directory: str, payload: bytes) -> str:
