@@ -99,6 +99,11 @@ def write_payload(directory: str, payload: bytes) -> str:
     return path
 
 
+def payload_files(directory: str) -> list[str]:
+    """The names of the payloads in the spool ``directory`` (not its lock)."""
+    return [name for name in os.listdir(directory) if name.endswith(SUFFIX)]
+
+
 def open_payload(path: str) -> int:
     """A file descriptor of a spooled payload: still readable once the file is removed (a job cancelled while
     its payload is being sent)."""

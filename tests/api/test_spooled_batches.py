@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 
 import httpx
 
@@ -14,7 +15,7 @@ from manifoundation.server.api.app import create_app
 from manifoundation.server.api.bodies import SPOOL_BATCH
 from manifoundation.server.api.settings import Settings
 from manifoundation.server.queue import create_queue
-from manifoundation.server.spool import request_payload
+from manifoundation.server.spool import payload_files, request_payload
 
 from .helpers import request_body
 from .server import serving
@@ -43,17 +44,17 @@ def test_a_large_batch_is_packed_into_the_spool_by_a_body_process() -> None:
         assert spool is not None
         expected = {request_payload(r) for r in BatchCreate.model_validate(body).requests}
         stored = set()
-        for name in os.listdir(spool):
+        for name in payload_files(spool):
             with open(os.path.join(spool, name), "rb") as spooled:
                 stored.add(spooled.read())
-        assert stored == expected and len(os.listdir(spool)) == 3
+        assert stored == expected and len(payload_files(spool)) == 3
         full = httpx.post(f"{base}/v1/batches", content=data, headers=headers, timeout=60)  # room for 1, not 3
         assert full.status_code == 429, full.text
         invalid = json.loads(data)
         invalid["requests"][2]["object"]["normals"] = invalid["requests"][2]["object"]["normals"][:-1]
         refused = httpx.post(f"{base}/v1/batches", json=invalid, timeout=60)
         assert refused.status_code == 422 and "requests.2.object" in refused.text, refused.text
-        assert len(seen) == 3 and len(os.listdir(spool)) == 3  # spooled, refused and removed; invalid: never written
+        assert len(seen) == 3 and len(payload_files(spool)) == 3  # spooled, refused and removed; invalid: never written
 
 
 def test_a_spool_that_cannot_be_written_is_503_not_the_callers_fault() -> None:
@@ -63,7 +64,7 @@ def test_a_spool_that_cannot_be_written_is_503_not_the_callers_fault() -> None:
     app = create_app(Settings(rate_limit_per_s=0, parse_offload_bytes=1024), queue=queue)
     with serving(app) as base:
         assert queue.spool is not None
-        os.rmdir(queue.spool)
+        shutil.rmtree(queue.spool)
         batch = {"requests": [request_body("test_gripper", n=256)] * 2}
         answer = httpx.post(f"{base}/v1/batches", json=batch, timeout=60)
         assert answer.status_code == 503 and "spool" in answer.json()["error"], answer.text

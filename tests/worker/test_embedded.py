@@ -15,7 +15,7 @@ import pytest
 from manifoundation.contract import JobState, ObjectIn, RobotRegister, Stage, SynthesisRequest
 from manifoundation.server.queue import JobNotFound, QueueFull, RobotInvalid, create_queue
 from manifoundation.server.queue.embedded import EmbeddedQueue
-from manifoundation.server.spool import SpooledRequest, request_payload
+from manifoundation.server.spool import SpooledRequest, payload_files, request_payload
 
 from .helpers import STAGED, assert_only_the_poison_dead_lettered, logged, run, running, small_request, until
 
@@ -288,11 +288,11 @@ def test_large_payloads_wait_in_the_spool_not_in_memory() -> None:
         queue = embedded(concurrency=0, max_queue=3)
         await queue.start()
         spool = queue.spool
-        assert spool is not None and os.listdir(spool) == []
+        assert spool is not None and payload_files(spool) == []
         try:
             big = _cloud_request(100_000)
             big_id, small_id = await queue.submit([big, small_request()])
-            [name] = os.listdir(spool)
+            [name] = payload_files(spool)
             with open(os.path.join(spool, name), "rb") as spooled_file:
                 assert spooled_file.read() == request_payload(big)
             assert queue._jobs[big_id].payload == b"" and queue._jobs[big_id].spooled is not None
@@ -301,15 +301,15 @@ def test_large_payloads_wait_in_the_spool_not_in_memory() -> None:
             adopted = SpooledRequest.write(spool, _cloud_request(100_000, seed=1))
             batch = await queue.create_batch([adopted])
             [adopted_id] = await queue.batch_job_ids(batch)
-            assert queue._jobs[adopted_id].spooled == adopted.path and len(os.listdir(spool)) == 2
+            assert queue._jobs[adopted_id].spooled == adopted.path and len(payload_files(spool)) == 2
             theirs = SpooledRequest.write(spool, _cloud_request(100_000, seed=2))
             with pytest.raises(QueueFull):
                 await queue.submit([_cloud_request(100_000, seed=3), theirs])
             kept = sorted([name, os.path.basename(adopted.path), os.path.basename(theirs.path)])
-            assert sorted(os.listdir(spool)) == kept
+            assert sorted(payload_files(spool)) == kept
             os.unlink(theirs.path)
             await queue.cancel(big_id)
-            assert sorted(os.listdir(spool)) == [os.path.basename(adopted.path)]
+            assert sorted(payload_files(spool)) == [os.path.basename(adopted.path)]
         finally:
             await queue.close()
         assert not os.path.exists(spool)
@@ -330,7 +330,7 @@ def test_spooled_jobs_reach_the_worker_whole_and_their_files_go() -> None:
             ids = await queue.submit([_cloud_request(200_000), adopted, small_request()])
             done = await asyncio.gather(*(queue.wait(i, 30) for i in ids))
             assert [j.state for j in done] == [JobState.SUCCEEDED] * 3, [j.error for j in done]
-            assert os.listdir(queue.spool) == []
+            assert payload_files(queue.spool) == []
         finally:
             await queue.close()
 

@@ -18,7 +18,7 @@ import redis
 from manifoundation.contract import JobState, RobotRegister, Stage
 from manifoundation.server.queue import JobNotFound, QueueFull, RobotInvalid, create_queue
 from manifoundation.server.queue.redis import RedisQueue
-from manifoundation.server.spool import SpooledRequest, new_spool, remove_spool
+from manifoundation.server.spool import SpooledRequest, new_spool, payload_files, remove_spool
 
 from .helpers import live_workers, log_lines, logged, redis_workers, run, running, small_request, until
 
@@ -49,7 +49,7 @@ def test_round_trip_progress_robots(redis_url: str, redis_prefix: str) -> None:
                 spool = new_spool()  # a request a body process packed already: Redis takes its bytes and its file
                 spooled = SpooledRequest.write(spool, small_request(3, max_iterations=1))
                 batch = await queue.create_batch([*(small_request(i, max_iterations=1) for i in range(3)), spooled])
-                assert os.listdir(spool) == []
+                assert payload_files(spool) == []
                 remove_spool(spool)
                 ids = await queue.batch_job_ids(batch)
                 done = await asyncio.gather(*(queue.wait(i, 10) for i in ids))

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import time
 
 import grpc
@@ -13,6 +12,7 @@ import pytest
 from manifoundation.contract import JobPublic, SynthesisResult
 from manifoundation.contract.protos.convert import from_proto
 from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
+from manifoundation.server.spool import payload_files
 
 from .conftest import HAND, KEY, OTHER, Service, metrics_text, request, wait_terminal
 
@@ -193,7 +193,7 @@ def test_large_messages_are_decoded_in_a_body_process_and_their_memory_given_bac
     finally:
         bodies.run = run
     assert seen == [SPOOL_BATCH] * 2  # the small batch was parsed at once, as before
-    assert os.listdir(queue.spool) == []  # every payload's file went with its job (the broken batch wrote none)
+    assert payload_files(queue.spool) == []  # every payload's file went with its job (the broken batch wrote none)
     end = time.monotonic() + 10
     while queue._freed.trims == trims and time.monotonic() < end:
         time.sleep(0.1)

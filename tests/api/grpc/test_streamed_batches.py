@@ -7,7 +7,6 @@ body process. The same answer as `SubmitBatch`, the same errors, its own limit.
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Iterator
 
@@ -16,6 +15,7 @@ import pytest
 
 from manifoundation.contract.protos.v1 import manifoundation_pb2 as pb
 from manifoundation.sdk._grpc_core import PIECE_BYTES, message_pieces
+from manifoundation.server.spool import payload_files
 
 from .conftest import KEY, Service, calls_ok, request, wait_terminal
 
@@ -40,7 +40,7 @@ def test_a_batch_in_pieces_is_the_batch(service: Service) -> None:
     for item in created.items:
         assert wait_terminal(service, item.job_id, 60).state == "succeeded"
     assert calls_ok(service, "SubmitBatchStream") == before + 1
-    assert os.listdir(service.app.state.services.queue.spool) == []  # spooled by the body process, gone with the jobs
+    assert payload_files(service.app.state.services.queue.spool) == []  # spooled by a body process, gone with the jobs
 
 
 def test_the_errors_of_a_batch_in_pieces_are_submit_batchs(service: Service) -> None:
@@ -60,7 +60,7 @@ def test_the_errors_of_a_batch_in_pieces_are_submit_batchs(service: Service) -> 
     with pytest.raises(grpc.RpcError) as anonymous:
         service.stub.SubmitBatchStream(_pieces(pb.BatchCreate(requests=[request()])), timeout=30)
     assert anonymous.value.code() is grpc.StatusCode.UNAUTHENTICATED
-    assert os.listdir(service.app.state.services.queue.spool) == []  # a refused batch leaves no payload behind
+    assert payload_files(service.app.state.services.queue.spool) == []  # a refused batch leaves no payload behind
 
 
 def test_pieces_over_the_message_limit_are_refused(service: Service) -> None:
