@@ -23,7 +23,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 from manifoundation.contract import JobKind, JobRequest, kind_of
-from manifoundation.contract.codec import pack
+from manifoundation.contract.codec import MSGPACK, dump_model
 
 SPOOL_BYTES = 1 << 20
 """Payloads larger than this live in the embedded queue's spool, not in memory."""
@@ -32,7 +32,7 @@ SUFFIX = ".job"
 
 def request_payload(request: JobRequest) -> bytes:
     """A job's payload: ``request`` packed as the worker reads it."""
-    return pack(request.model_dump(mode="python", exclude_none=True))
+    return dump_model(request, MSGPACK)
 
 
 PREFIX = "mani-spool-"
@@ -126,20 +126,16 @@ def remove_payload(path: str) -> None:
 class SpooledRequest:
     """A validated request whose payload is already in a spool: what the queue needs of it without its arrays.
 
-    ``path``: its payload's file; ``nbytes``: the payload's size; ``robot``: the hand it names (None: none);
-    ``kind``: the job's kind."""
+    ``path``: its payload's file; ``robot``: the hand it names (None: none); ``kind``: the job's kind."""
 
     path: str
-    nbytes: int
     robot: str | None
     kind: JobKind = JobKind.SYNTHESIS
 
     @classmethod
     def write(cls, directory: str, request: JobRequest) -> SpooledRequest:
         """``request`` packed into the spool ``directory``."""
-        payload = request_payload(request)
-        robot = request.robot.name if request.robot is not None else None
-        return cls(write_payload(directory, payload), len(payload), robot, kind_of(request))
+        return cls(write_payload(directory, request_payload(request)), robot_of(request), kind_of(request))
 
 
 @dataclass(slots=True)

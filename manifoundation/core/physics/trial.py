@@ -265,7 +265,7 @@ def _push(sc: Scene, squeezed: Squeezed, direction: np.ndarray, name: str, p: Pr
     steps = round(p.hold_seconds / p.timestep)
     moved, turned = 0.0, 0.0
     checks = max(1, steps // p.check_every)
-    last_pos, last_quat, drift = start_pos, start_quat, [(np.inf, np.inf)]
+    last_pos, last_quat, drift = start_pos, start_quat, []
     for done in range(1, checks + 1):
         mujoco.mj_step(sc.model, sc.data, nstep=p.check_every)
         pos, quat = sc.data.xipos[sc.object_body].copy(), sc.data.qpos[a + 3 : a + 7].copy()

@@ -143,7 +143,8 @@ def _content_type(request: Request) -> str | None:
 
 
 def decoded(outcome: tuple[str, Any]) -> Any:
-    """The model of a `manifoundation.server.api.bodies.decode` outcome, or the error it names (400, 422)."""
+    """The model of a `manifoundation.server.api.bodies.decode` outcome, or the error it names (400, 422; 503 for a
+    spool that could not be written)."""
     kind, value = outcome
     if kind == "ok":
         return value

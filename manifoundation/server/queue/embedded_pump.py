@@ -324,4 +324,3 @@ class EmbeddedPump:
         self._finished[job.id] = None
         for loop, future in self._waiters.pop(job.id, []):
             loop.call_soon_threadsafe(settle, future, None)
-

@@ -54,8 +54,6 @@ LARGE_REQUESTS: dict[str, type[Any]] = {
 """The RPCs whose message may be large: parsed off the event loop when it is (`grpc.submit.LargeMessage`)."""
 
 
-
-
 class _Handlers:
     """Stands in for a server to receive the generated code's method handlers."""
 

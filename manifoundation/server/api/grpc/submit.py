@@ -139,12 +139,10 @@ class Submission:
         spool, packed into it by the body process that decodes it. Returns the batch id."""
         submitter = self.submitter(caller, context)
         await submitter.admit()
-        spool, bodies = self.queue.spool, self.services.bodies
+        spool = self.queue.spool
         if spool is None or not isinstance(message, LargeMessage):
             return await submitter.submit_batch(await self.validate(message, BatchCreate))
-        async with bodies.slot():
-            outcome = await bodies.spool_batch(_pieces(message.take()), PROTOBUF, spool)
-        return await submitter.submit_batch(await self._batch_of(outcome))
+        return await submitter.submit_batch(await self._spooled(_pieces(message.take()), spool))
 
     async def batch_streamed(
         self, pieces: AsyncIterator[pb.MessagePiece], caller: Caller, context: grpc.aio.ServicerContext
@@ -153,15 +151,17 @@ class Submission:
         the queue's spool by the body process that decodes it where the queue has one. Returns the batch id."""
         submitter = self.submitter(caller, context)
         await submitter.admit()
-        spool, bodies = self.queue.spool, self.services.bodies
+        spool = self.queue.spool
         if spool is None:
             return await submitter.submit_batch(await self.streamed(pieces, pb.BatchCreate, BatchCreate))
-        async with bodies.slot():
-            outcome = await bodies.spool_batch(self._bounded(pieces), PROTOBUF, spool)
-        return await submitter.submit_batch(await self._batch_of(outcome))
+        return await submitter.submit_batch(await self._spooled(self._bounded(pieces), spool))
 
-    async def _batch_of(self, outcome: tuple[str, Any]) -> BatchCreate | SpooledBatch:
-        """The batch a body process's outcome holds, or its error (no piece at all: the empty message's)."""
+    async def _spooled(self, data: AsyncIterator[bytes], spool: str) -> BatchCreate | SpooledBatch:
+        """A ``BatchCreate`` message's bytes decoded by a body process (while holding a large-body slot) and packed
+        into the queue's ``spool``; or its error (no byte at all: the empty message's)."""
+        bodies = self.services.bodies
+        async with bodies.slot():
+            outcome = await bodies.spool_batch(data, PROTOBUF, spool)
         if outcome[0] == "empty":
             return await self.validate(pb.BatchCreate(), BatchCreate)
         value: SpooledBatch = decoded(outcome)

@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from manifoundation.contract import FieldError, ObjectIn
-from manifoundation.contract.codec import pack, unpack
+from manifoundation.contract.codec import MSGPACK, dump_model, unpack
 from manifoundation.server.api.errors import Conflict, NotFound
 from manifoundation.server.spool import (
     SPOOL_BYTES,
@@ -100,7 +100,7 @@ class ObjectStore:
         if size > SPOOL_BYTES:
             if self._spool is None:
                 self._spool = new_spool()
-            stored.path = write_payload(self._spool, pack(obj.model_dump(mode="python", exclude_none=True)))
+            stored.path = write_payload(self._spool, dump_model(obj, MSGPACK))
             stored.object = None
         objects[stored.id] = stored
         return stored
@@ -111,17 +111,12 @@ class ObjectStore:
         Raises:
             NotFound: no such object for this tenant (never uploaded, expired, deleted, or another tenant's).
         """
-        stored = self._found(tenant, object_id)
-        if stored.path is not None:
-            data: dict[str, Any] = unpack(read_payload(open_payload(stored.path)))
-            return data
-        assert stored.object is not None
-        return stored.object.model_dump(mode="python", exclude_none=True)
+        return _fields_of(self._found(tenant, object_id))
 
     def get(self, tenant: str, object_id: str) -> ObjectIn:
         """The object (its time to live starts again). Raises `NotFound` as `fields`."""
         stored = self._found(tenant, object_id)
-        return stored.object if stored.object is not None else ObjectIn.model_validate(self.fields(tenant, object_id))
+        return stored.object if stored.object is not None else ObjectIn.model_validate(_fields_of(stored))
 
     def _found(self, tenant: str, object_id: str) -> StoredObject:
         stored = self._live(tenant).get(object_id)
@@ -151,6 +146,15 @@ class ObjectStore:
         if self._spool is not None:
             remove_spool(self._spool)
             self._spool = None
+
+
+def _fields_of(stored: StoredObject) -> dict[str, Any]:
+    """A stored object as the contract's plain data: read back from the spool, or dumped from memory."""
+    if stored.path is not None:
+        data: dict[str, Any] = unpack(read_payload(open_payload(stored.path)))
+        return data
+    assert stored.object is not None
+    return stored.object.model_dump(mode="python", exclude_none=True)
 
 
 def _forget(stored: StoredObject) -> None:
