@@ -30,6 +30,9 @@ from manifoundation.core.physics.protocol import Protocol
 CONVEX_RATIO = 0.9
 HULL_TOLERANCE = 1e-3
 """m: a point cloud whose points all lie within this of its convex hull's surface is built as that hull."""
+HULL_CHUNK = 256
+"""Points measured against the hull's facets at a time (`_hull_of`: 2 048 points × thousands of facets measured at
+once took 15 ms on average, most of it for clouds whose first chunk already fails)."""
 PATCHES = 24
 SAMPLES = 3000
 OBJECT = "object"
@@ -86,8 +89,16 @@ def _hull_of(points: np.ndarray) -> np.ndarray | None:
         hull = ConvexHull(points)
     except QhullError:  # flat or degenerate clouds
         return None
-    depth = -(points @ hull.equations[:, :3].T + hull.equations[:, 3]).max(axis=1)  # (N,) ≥ 0 inside
-    return points[hull.vertices] if float(depth.max()) <= HULL_TOLERANCE else None
+    inner = np.ones(len(points), dtype=bool)
+    inner[hull.vertices] = False  # a vertex lies on the surface: only the other points need measuring
+    rest = points[inner]
+    for start in range(0, len(rest), HULL_CHUNK):  # a non-convex cloud usually fails in its first chunk
+        chunk = rest[start : start + HULL_CHUNK]
+        depth = -(chunk @ hull.equations[:, :3].T + hull.equations[:, 3]).max(axis=1)  # (c,) ≥ 0 inside
+        if float(depth.max()) > HULL_TOLERANCE:
+            return None
+    vertices: np.ndarray = points[hull.vertices]
+    return vertices
 
 
 def _patches(points: np.ndarray, normals: np.ndarray, seed: int) -> list[np.ndarray]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import threading
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -81,14 +82,14 @@ def _rest_overlaps(hand: Hand) -> frozenset[tuple[str, str]]:
     return frozenset(overlapping_at_rest(physics_description(hand), list(hand.joint_names), hand.rest))
 
 
-def build_scene(
-    hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, shape: ObjectShape, protocol: Protocol,
-    moving: bool = False,
-) -> Scene:
-    """Compile the scene (palm pose wxyz in the world frame; the object's pieces in the world frame).
+_COPYING = threading.Lock()
 
-    ``moving`` (the target-motion trial): the palm gets a free joint welded to the mocap body ``palm_target``
-    (driven through ``data.mocap_pos`` / ``mocap_quat``) and the hand's bodies are gravity-compensated."""
+
+@functools.lru_cache(maxsize=32)
+def _hand_spec(hand: Hand, protocol: Protocol) -> tuple[mujoco.MjSpec, HandModel]:
+    """The protocol's options and the hand (its palm at the origin), built once per hand and protocol: a scene is a
+    copy with the palm placed and the object added (building the hand's bodies and 103 meshes anew cost LEAP 9 ms
+    a scene; the compiled model is the same, `tests/core/physics/test_scene_spec.py`). Never edited after."""
     spec = mujoco.MjSpec()
     spec.compiler.degree = False  # joint ranges in radians (MJCF's default is degrees)
     opt = spec.option
@@ -98,11 +99,24 @@ def build_scene(
     opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     opt.impratio = protocol.impratio
     opt.noslip_iterations = 2
-    desc = physics_description(hand)
-    hm = add_hand(
-        spec, desc, list(hand.joint_names), np.asarray(palm_position, float), np.asarray(palm_quaternion, float),
-        protocol, _rest_overlaps(hand),
-    )  # fmt: skip
+    hm = add_hand(spec, physics_description(hand), list(hand.joint_names), np.zeros(3), np.array([1.0, 0, 0, 0]),
+                  protocol, _rest_overlaps(hand))  # fmt: skip
+    return spec, hm
+
+
+def build_scene(
+    hand: Hand, palm_position: np.ndarray, palm_quaternion: np.ndarray, shape: ObjectShape, protocol: Protocol,
+    moving: bool = False,
+) -> Scene:
+    """Compile the scene (palm pose wxyz in the world frame; the object's pieces in the world frame).
+
+    ``moving`` (the target-motion trial): the palm gets a free joint welded to the mocap body ``palm_target``
+    (driven through ``data.mocap_pos`` / ``mocap_quat``) and the hand's bodies are gravity-compensated."""
+    base, hm = _hand_spec(hand, protocol)
+    with _COPYING:
+        spec = base.copy()
+    palm_body = spec.body(hm.bodies[0])
+    palm_body.pos, palm_body.quat = np.asarray(palm_position, float), np.asarray(palm_quaternion, float)
     if moving:  # a free palm welded to a mocap body, as DexGraspBench's base (see `motion`)
         palm = spec.body(hm.bodies[0])
         palm.add_freejoint(name=PREFIX + "palm/free")

@@ -76,7 +76,7 @@ def close_gaps(
     should_cancel: Callable[[], bool] | None = None,
 ) -> RefineResult:  # fmt: skip
     """The refinement continued from ``pose`` (verified) with `CLOSE_TIP_TOL` and `closing_standoff`."""
-    closing = replace(config, tip_tol=CLOSE_TIP_TOL, verify_within=CLOSE_TIP_TOL,
+    closing = replace(config, tip_tol=CLOSE_TIP_TOL, verify_within=CLOSE_TIP_TOL, contact_tol=config.tip_tol,
                       max_iterations=min(CLOSE_ITERATIONS, config.max_iterations))  # fmt: skip
     near = ClosingField(field, closing_standoff(field))
     return refine(hand, near, task, pose, mu, closing, tip_field=tip_field, deadline=deadline,

@@ -42,6 +42,11 @@ class RefineConfig:
         residual_tol: ‖r*‖ below this counts as producing the wrench (paper: 1e-6).
         tip_tol: every |Φ(p_i)| below this (m) at convergence. Tighter than verification's 5 mm: Φ is measured on
             the point cloud, which can differ from the exact mesh distance by a few mm on curved faces.
+        contact_tol: every contact sample's |Φ − standoff| below this (m) at convergence; None: ``tip_tol``. The
+            contact is a pad sample up to ``CONTACT_TIE`` (1.5 mm) farther than the pad's nearest one
+            (`manifoundation.core.refine.contact`), so a ``tip_tol`` under that tie (the closing stage's 0.3 mm)
+            can leave a pad whose nearest sample touches unconverged for good: the closing stage keeps the main
+            stage's 2 mm here.
         region_point_tol: with a region mask, every contact within this of an allowed sample (m); tighter than
             verification's 5 mm for the same reason (Φ^R measures to the samples' discs).
         penetration_tol: guard penetration / self-overlap allowed at convergence (m): half of verification's 1 mm.
@@ -70,6 +75,7 @@ class RefineConfig:
     max_iterations: int = 100
     residual_tol: float = 1e-6
     tip_tol: float = 2e-3
+    contact_tol: float | None = None
     region_point_tol: float = 4.5e-3
     penetration_tol: float = 5e-4
     max_normal_force: float = DEFAULT_MAX_NORMAL_FORCE
@@ -128,11 +134,12 @@ def _touching(lin: Linearisation, cfg: RefineConfig) -> bool:
 
 def _converged(lin: Linearisation, cfg: RefineConfig, tip_tol: float | None = None) -> bool:
     tip_tol = cfg.tip_tol if tip_tol is None else tip_tol
+    contact_tol = tip_tol if cfg.contact_tol is None else max(cfg.contact_tol, tip_tol)
     return bool(
         lin.residual_norm < cfg.residual_tol
         and np.max(np.abs(lin.tip_phi)) < tip_tol
         and (lin.region_point is None or np.max(lin.region_point) < cfg.region_point_tol)
-        and (lin.contact_gap is None or np.max(np.abs(lin.contact_gap)) < tip_tol)
+        and (lin.contact_gap is None or np.max(np.abs(lin.contact_gap)) < contact_tol)
         and lin.penetration().max(initial=0.0) <= cfg.penetration_tol
         and lin.self_overlap().max(initial=0.0) <= cfg.penetration_tol
     )
