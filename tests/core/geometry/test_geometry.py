@@ -219,3 +219,54 @@ def test_depth_inside_a_convex_part_by_chunks_of_half_spaces_is_the_depth_agains
         for x in (rng.uniform(-0.015, 0.015, size=(3000, 3)), rng.uniform(0.011, 0.02, size=(50, 3))):
             every = (planes[:, 3][None] + grow - x @ planes[:, :3].T).min(axis=1)
             assert _inside_depth(planes, x, None, grow) == pytest.approx(max(float(every.max()), 0.0), abs=1e-15)
+
+
+
+def test_field_penetration_measured_through_the_cover_is_every_samples() -> None:
+    """`hand_field_penetration` measures a body's samples only where their cube's representative allows them
+    inside (Φ bounded by the distance to it and the discs' radius): LEAP's bodies against a box's points, from deep
+    in it to grazing it to clear of it, give the depth every sample gives, and most samples are skipped."""
+    import torch
+
+    from manifoundation.core.geometry.collision import _bodies, hand_field_penetration, samples_depth
+    from manifoundation.core.geometry.link_poses import link_poses_at
+    from manifoundation.core.refine.field import PointCloudField
+
+    hand = get_hand("leap")
+    d = torch.float64
+    tips = hand.fingertips(torch.zeros(1, 3, dtype=d), torch.tensor([[1.0, 0, 0, 0]], dtype=d),
+                           torch.as_tensor(hand.rest[None]))[0].numpy()  # fmt: skip
+    box = trimesh.creation.box(extents=[0.03, 0.04, 0.05])
+    pts, face = trimesh.sample.sample_surface_even(box, 2048, seed=0)
+    quat = np.array([1.0, 0, 0, 0])
+    poses = link_poses_at(hand, np.zeros(3), quat, hand.rest)
+    shallow, deep, clear = 0, 0, 0
+    for shift in (0.0, *np.arange(0.015, 0.035, 0.002), 0.2):
+        field = PointCloudField(np.asarray(pts) + tips.mean(0) + [shift, 0, 0], box.face_normals[face])
+        inflate = field.resolution
+        for body in _bodies(hand):
+            T = poses[body.name]
+            world = body.samples @ T[:3, :3].T + T[:3, 3]
+            phi = field.signed_distance(world)[0]
+            behind = np.flatnonzero(phi < inflate)
+            every = float(max(inflate - field.robust_signed_distance(world[behind]).min(), 0.0)) if len(behind) else 0.0
+            assert samples_depth(field, world, body.cover, body.cover_reps, inflate) == every, (shift, body.name)
+            assert len(body.cover_reps) < len(world) / 2
+            shallow += 0 < every < 2e-3
+            deep += every > 5e-3
+        clear += hand_field_penetration(hand, field, np.zeros(3), quat, hand.rest, inflate=inflate) == 0.0
+    assert shallow and deep and clear  # the poses span all three
+
+
+def test_a_grid_cover_puts_every_sample_within_a_cube_diagonal_of_its_own_cubes_representative() -> None:
+    from manifoundation.core.geometry.sample_cover import SampleCover
+
+    x = np.random.default_rng(2).uniform(-0.05, 0.05, size=(5000, 3))
+    cell = 0.01
+    cover = SampleCover.grid(x, cell)
+    reps = np.unique(cover.rep)
+    assert np.array_equal(cover.rep[reps], reps)  # a representative is its own
+    assert cover.delta.max() <= np.sqrt(3) * cell and np.allclose(cover.delta, np.linalg.norm(x - x[cover.rep], axis=1))
+    cube = np.floor((x - x.min(0)) / cell).astype(int)
+    assert np.array_equal(cube, cube[cover.rep])  # a sample's representative lies in its cube
+    assert len(reps) == len(np.unique(cube, axis=0)) < len(x)
