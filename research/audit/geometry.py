@@ -3,7 +3,8 @@
 A link's geometry is the list of its pieces (one per ``<collision>``/``<visual>`` element or MJCF geom) in the
 link frame, with the source used: ``"collision"`` when the link has collision elements (URDF ``<collision>``;
 MJCF geoms with ``contype | conaffinity ≠ 0``), else ``"visual"`` (URDF ``<visual>``; MJCF visual-only geoms);
-``prefer="visual"`` reverses the preference (visual where the link has it, else collision). Primitives are
+``prefer="visual"`` reverses the preference (visual where the link has it, else collision); ``prefer="real"``
+takes a URDF link's visual meshes where its collision elements are only primitives drawn around it. Primitives are
 tessellated finely (spheres: icospheres of 5120 faces; cylinders and capsules: 96 sections), which puts their
 surfaces within about 0.05 mm of the exact shapes.
 
@@ -184,9 +185,10 @@ _Element = TypeVar("_Element")
 
 
 def _choose(collision: list[_Element], visual: list[_Element], prefer: str) -> tuple[str, list[_Element]]:
-    """The preferred source where the link has it, else the other one."""
-    if prefer not in ("auto", "collision", "visual"):
-        raise ValueError(f"prefer must be 'auto', 'collision' or 'visual', not {prefer!r}")
+    """The preferred source where the link has it, else the other one (``"real"`` is ``"auto"`` here: a URDF
+    link's choice of it is `urdf_link_geometry`'s)."""
+    if prefer not in ("auto", "collision", "visual", "real"):
+        raise ValueError(f"prefer must be 'auto', 'collision', 'visual' or 'real', not {prefer!r}")
     if prefer == "visual":
         return ("visual", visual) if visual else ("collision", collision)
     return ("collision", collision) if collision else ("visual", visual)
@@ -201,13 +203,18 @@ def urdf_link_geometry(
         model: the parsed URDF.
         link: the link.
         resolve: mesh ``filename`` as written in the URDF → file path.
-        prefer: ``"auto"`` or ``"collision"`` (collision elements if any, else visual), or ``"visual"``
-            (visual elements if any, else collision).
+        prefer: ``"auto"`` or ``"collision"`` (collision elements if any, else visual), ``"visual"``
+            (visual elements if any, else collision), or ``"real"``: the visual meshes where every collision
+            element is a primitive (a box or sphere drawn around the real part, as Allegro's), else as ``"auto"``.
 
     Returns:
         The link's geometry, or ``None`` when the chosen source has no element.
     """
-    source, elements = _choose(model.collisions.get(link, []), model.visuals.get(link, []), prefer)
+    collision, visual = model.collisions.get(link, []), model.visuals.get(link, [])
+    if prefer == "real":
+        covers = bool(collision) and all(e.kind != "mesh" for e in collision)
+        prefer = "visual" if covers and any(e.kind == "mesh" for e in visual) else "auto"
+    source, elements = _choose(collision, visual, prefer)
     pieces = [_element_mesh(e, resolve) for e in elements]
     return LinkGeometry(link, source, pieces) if pieces else None
 

@@ -3,20 +3,21 @@
 ================  ===========================================================  ==================  ============
 name              description file                                             palm                geometry
 ================  ===========================================================  ==================  ============
-``allegro``       example-robot-data ``allegro_hand_description/urdf/``        ``palm_link``       collision
+``allegro``       example-robot-data ``allegro_hand_description/urdf/``        ``palm_link``       visual†
                   ``allegro_right_hand.urdf``
 ``leap``          ghand ``assets/models/urdf/ghand_right.urdf``                ``root``            visual (PLY)
 ``shadow``        gymnasium-robotics ``envs/assets/hand/reach.xml`` (MJCF)     ``robot0:palm``     collision*
-``panda_gripper`` example-robot-data ``panda_description/urdf/panda.urdf``     ``panda_hand``      collision
+``panda_gripper`` example-robot-data ``panda_description/urdf/panda.urdf``     ``panda_hand``      collision†
 ``barrett``       ``manifoundation/core/robots/descriptions/barrett_bh8.urdf``              ``bh_palm``
 collision ``kinova3f``      ``manifoundation/core/robots/descriptions/kinova_3f.urdf``                ``k3f_palm``
 collision
 ================  ===========================================================  ==================  ============
 
-"geometry" is what ``prefer="auto"`` picks: per link, collision elements where the file has them, else visual
-meshes (*Shadow: capsules and boxes; its knuckle bodies have visual meshes only). The barrett and kinova3f URDFs
-are files of this repository (data, read as files, not imported). Fingertip links (index, middle, ring,
-(little,) thumb) are the same facts as the service's; they are plain names here.
+"geometry" is what ``prefer="real"`` (the default) picks: per link, collision elements where the file has them,
+else visual meshes, except († Allegro; the Panda's fingers) a URDF link that collides only through primitives drawn
+around it: its visual meshes, the real finger (*Shadow: capsules and boxes; its knuckle bodies have visual meshes
+only). The barrett and kinova3f URDFs are files of this repository (data, read as files, not imported). Fingertip
+links (index, middle, ring, (little,) thumb) are the same facts as the service's; they are plain names here.
 """
 
 from __future__ import annotations
@@ -119,13 +120,14 @@ class AuditHand:
         links: link → geometry (links without geometry in the chosen source are absent).
     """
 
-    def __init__(self, spec: HandSpec, prefer: str = "auto") -> None:
+    def __init__(self, spec: HandSpec, prefer: str = "real") -> None:
         """Load the description and every link's geometry.
 
         Args:
             spec: the hand.
-            prefer: geometry source, ``"auto"``/``"collision"`` (collision where the link has it, else visual)
-                or ``"visual"`` (visual where the link has it, else collision).
+            prefer: geometry source, ``"auto"``/``"collision"`` (collision where the link has it, else visual),
+                ``"visual"`` (visual where the link has it, else collision) or ``"real"`` (as ``"auto"``, but a
+                URDF link colliding only through primitives takes its visual meshes).
         """
         self.spec = spec
         self.kinematics: Kinematics
@@ -192,7 +194,7 @@ class AuditHand:
 
 
 @functools.cache
-def load_hand(name: str, prefer: str = "auto") -> AuditHand:
+def load_hand(name: str, prefer: str = "real") -> AuditHand:
     """The built-in hand ``name`` (built once per process and geometry source).
 
     Raises:

@@ -14,6 +14,9 @@ Depth = the larger of the two. Its error is bounded by the sample spacing (a few
 e.g. a sphere of radius r pushed d into a box face reads d within ~s²/(2r) (test: < 0.5 mm).
 Self-collision: body pairs on different branches or more than ``ADJACENT_HOPS`` apart, not already touching at
 the rest pose; depth = the larger depth of either body's samples inside the other's convex hull.
+
+Why one module: the three depth tests (on a mesh, on oriented points, between the hand's own bodies) share each
+body's cached samples, their cover, convex parts and BVH (`_bodies`); apart, each would reach into the others'.
 """
 
 from __future__ import annotations

@@ -1,4 +1,9 @@
-"""The test itself: pregrasp / squeeze targets, the start checks, and the six pushes (see `protocol`)."""
+"""The test itself: pregrasp / squeeze targets, the start checks, and the six pushes (see `protocol`).
+
+Why one module: the targets, the start checks and the pushes all work on one scene's MuJoCo state through the same
+few steps (`_reset`, `_posed`, the squeezed state restored for each push); apart, they would hand that state
+between modules.
+"""
 
 from __future__ import annotations
 

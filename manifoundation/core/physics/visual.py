@@ -11,36 +11,14 @@ MuJoCo collides each mesh as its convex hull.
 from __future__ import annotations
 
 import functools
-import xml.etree.ElementTree as ET
 from typing import TYPE_CHECKING
 
-from defusedxml.ElementTree import fromstring
-
 from manifoundation.core.robots.description import RobotDescription
+from manifoundation.core.robots.real_surfaces import prefer_visual
 from manifoundation.core.robots.urdf import parse_urdf
 
 if TYPE_CHECKING:
     from manifoundation.core.robots.hand import Hand
-
-PRIMITIVES = ("box", "sphere", "cylinder", "capsule")
-
-
-def prefer_visual(urdf: bytes) -> bytes:
-    """The URDF with the collision elements dropped from every link that collides only through primitives and
-    has a visual mesh (read with ``use_visual`` the link then takes its visual meshes)."""
-    root = fromstring(urdf, forbid_dtd=True, forbid_entities=True, forbid_external=True)
-    for link in root.findall("link"):
-        cols = link.findall("collision")
-        visual_mesh = any(v.find("geometry/mesh") is not None for v in link.findall("visual"))
-        primitive = all(
-            (g := c.find("geometry")) is not None and len(g) > 0 and all(child.tag in PRIMITIVES for child in g)
-            for c in cols
-        )
-        if cols and visual_mesh and primitive:
-            for c in cols:
-                link.remove(c)
-    return bytes(ET.tostring(root))
-
 
 @functools.cache
 def _cached(name: str, palm: str) -> RobotDescription | None:

@@ -46,6 +46,7 @@ from manifoundation.core.errors import HandLoadError, UnknownHand
 from manifoundation.core.robots.hand import Hand
 from manifoundation.core.robots.meshcache import hull_loader
 from manifoundation.core.robots.mjcf import parse_mjcf
+from manifoundation.core.robots.real_surfaces import prefer_visual
 from manifoundation.core.robots.urdf import MAX_URDF_BYTES, MeshLoader, parse_urdf
 from manifoundation.core.robots.user_hand import HandSource, build_user_hand
 
@@ -75,6 +76,9 @@ def _package_loader(urdf_dir: Path, package_root: Path) -> MeshLoader:
             raise HandLoadError(f"mesh path {filename!r} leaves the package directory")
         mesh = trimesh.load(str(path), force="mesh")
         assert isinstance(mesh, trimesh.Trimesh)
+        # a COLLADA file's triangles come apart (each corner its own vertex, for its normal and texture: the
+        # Panda's finger read as 564 pieces): welded, the surface's connected parts are the real ones
+        mesh.merge_vertices(merge_tex=True, merge_norm=True)
         mesh.apply_scale(scale)
         return mesh
 
@@ -83,7 +87,10 @@ def _package_loader(urdf_dir: Path, package_root: Path) -> MeshLoader:
 
 def _allegro() -> Hand:
     path = _erd("allegro_hand_description", "urdf", "allegro_right_hand.urdf")
-    desc = parse_urdf(path.read_bytes())
+    # its links collide as boxes and 12 mm tip spheres around the real fingers (5-8 mm off them on the distal
+    # links): the hand is built from the visual meshes instead, the surfaces the physics test collides
+    desc = parse_urdf(prefer_visual(path.read_bytes()), mesh_loader=_package_loader(path.parent, _erd().parent),
+                      use_visual=True)  # fmt: skip
     tips = ["link_3.0_tip", "link_7.0_tip", "link_11.0_tip", "link_15.0_tip"]
     # tip spheres (r = 12 mm) sit on the tip link origins: contact on the pad side (+x after flexion about y)
     offsets = np.tile([0.012 * np.sqrt(0.5), 0.0, 0.012 * np.sqrt(0.5)], (4, 1))
@@ -93,8 +100,10 @@ def _allegro() -> Hand:
 
 def _panda_gripper() -> Hand:
     path = _erd("panda_description", "urdf", "panda.urdf")
-    desc = parse_urdf(path.read_bytes(), mesh_loader=_package_loader(path.parent, _erd().parent))
-    # rubber pads: 17.5 x 15.2 x 18.5 mm boxes centred 45.25 mm up the finger, inner face on the finger plane
+    # its fingers collide as four boxes drawn around the real finger: built from the visual meshes instead
+    desc = parse_urdf(prefer_visual(path.read_bytes()), mesh_loader=_package_loader(path.parent, _erd().parent),
+                      use_visual=True)  # fmt: skip
+    # rubber pads: centred 45.25 mm up the finger, inner face on the finger plane
     offsets = np.array([[0.0, 0.0, 0.04525], [0.0, 0.0, 0.04525]])
     return Hand(
         desc, name="panda_gripper", palm="panda_hand", fingertips=["panda_leftfinger", "panda_rightfinger"],

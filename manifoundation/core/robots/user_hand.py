@@ -14,7 +14,11 @@ The procedure (every step the same for URDF and MJCF):
    pulled a quarter of the way back to the mesh's centroid (so the pad is the last 20 mm of the finger, both
    sides). The approach axis defaults to the direction from the palm origin to the fingertips' centroid at rest.
 5. :class:`.hand.Hand` then generates the collision spheres, the fingertip pads and the network's
-   surface point cloud from those meshes, exactly as for the built-in hands.
+   surface point cloud from those meshes, exactly as for the built-in hands. A URDF link that collides only
+   through primitives drawn around a visual mesh takes the mesh (:mod:`.real_surfaces`), as Allegro does.
+
+Why one module: the five steps share the archive, its mesh loader and the palm's sub-tree; each step is a few
+lines of this one procedure.
 """
 
 from __future__ import annotations
@@ -37,6 +41,7 @@ from manifoundation.core.robots.kinematics import KinematicTree
 from manifoundation.core.robots.mjcf import description_from_model
 from manifoundation.core.robots.mjcf_archive import compile_mjcf
 from manifoundation.core.robots.pads import PAD_RADIUS
+from manifoundation.core.robots.real_surfaces import prefer_visual
 from manifoundation.core.robots.urdf import parse_urdf
 
 if TYPE_CHECKING:
@@ -160,7 +165,8 @@ def _parse(
     keep = set(_cut(skeleton, palm, []).links)
     base = member.rsplit("/", 1)[0] if "/" in member else ""
     loader = meshes.loader(base) if meshes is not None else None
-    desc = parse_urdf(data, mesh_loader=loader, use_visual=meshes is not None, only_links=keep)
+    surfaces = prefer_visual(data) if meshes is not None else data  # primitive covers → their real meshes
+    desc = parse_urdf(surfaces, mesh_loader=loader, use_visual=meshes is not None, only_links=keep)
     if meshes is None and b"<mesh" in data:
         notes.append("urdf: mesh files of an inline URDF are not read (send an archive with the meshes)")
     return _cut(desc, palm, notes), "urdf", member, meshes, notes, palm, {}

@@ -13,8 +13,9 @@ import pytest
 import trimesh
 
 from manifoundation.core.physics import PhysicsResult, Protocol, from_mesh, from_points, simulate_grasp, simulate_motion
-from manifoundation.core.physics.visual import physics_description, prefer_visual
+from manifoundation.core.physics.visual import physics_description
 from manifoundation.core.robots import get_hand
+from manifoundation.core.robots.real_surfaces import prefer_visual
 
 PALM_POS, PALM_QUAT = np.zeros(3), np.array([1.0, 0.0, 0.0, 0.0])
 PAD_Z = 0.1  # the Panda's pads span z 0.0585-0.112 in the palm frame; at joint value q they sit at y = ±q

@@ -39,9 +39,9 @@ def _audited(out: object, mesh: object, points: np.ndarray, normals: np.ndarray)
 
 
 def test_a_convergence_the_mesh_contradicts_goes_on_to_a_verified_grasp(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A lemon whose first attempt converged on the points' surface in 2 iterations while the mesh's contacts
-    left a wrench residual of 0.026 (verification refused it)."""
-    inp, mesh, points, normals = _allegro_lift("lemon", 2)
+    """A block whose refinement converged on the points' surface while the mesh's contacts could not produce the
+    wrench (verification refused it)."""
+    inp, mesh, points, normals = _allegro_lift("block", 2)
     out = run_pipeline(inp).proposals[0]
     assert out.quality.success and out.quality.reason in ("converged", "verified")
     assert _audited(out, mesh, points, normals)
@@ -69,9 +69,9 @@ def test_a_nearly_converged_pose_that_verifies_ends_the_attempt(monkeypatch: pyt
 
 
 def test_a_stalled_attempt_that_verifies_ends_the_search(monkeypatch: pytest.MonkeyPatch) -> None:
-    """A microwave handle whose first attempt stalls with its fingertips 2-4 mm off: verification accepts that
-    pose, so no restart runs, and the outside audit passes the grasp."""
-    inp, mesh, points, normals = _allegro_lift("micro_handle", 0)
+    """A Tiago antenna whose first attempt stalls short of the SCP's own tests: verification accepts that pose, so
+    no restart runs, and the outside audit passes the grasp."""
+    inp, mesh, points, normals = _allegro_lift("tiago_antenna", 0)
     restarts: list[int] = []
     run = importlib.import_module("manifoundation.core.pipeline.run")
     original = run.refine_from_start

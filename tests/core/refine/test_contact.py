@@ -120,7 +120,8 @@ def test_object_points_inside_a_fingertip_are_guarded():
     hand = get_hand("panda_gripper")
     pose = _rest(hand)
     body = hand.fingertip_bodies[0]
-    mesh = hand.collision_meshes[body].split(only_watertight=False)[0].convex_hull
+    parts = hand.collision_meshes[body].split(only_watertight=False)
+    mesh = max(parts, key=lambda m: m.convex_hull.volume).convex_hull  # the finger's largest part
     with torch.no_grad():
         T = hand.link_poses(*pose.tensors())[body][0].numpy()
     face = int(np.argmax(mesh.area_faces))

@@ -14,6 +14,9 @@ PAD_FACE = OPENING + 7.58e-3 - 15.2e-3 / 2  # inner face of the left pad (|y|), 
 BOX_X, BOX_Z = 0.04, 0.04
 IDENTITY_Q = np.array([1.0, 0.0, 0.0, 0.0])
 LEFT_RIGHT = ["panda_leftfinger", "panda_rightfinger"]
+PADS = load_hand("panda_gripper", prefer="collision")
+"""The Panda with its URDF's collision boxes (the rubber pads' known faces) for these checks of the audit's logic;
+its default geometry is the real finger mesh (`test_visual_geometry_can_be_preferred`)."""
 
 
 def _box(half_y: float) -> trimesh.Trimesh:
@@ -31,7 +34,7 @@ def _panda_grasp(half_y: float, forces: np.ndarray | None = None, opening: float
 @pytest.mark.parametrize(("gap", "passes"), [(1e-3, True), (8e-3, False)])
 def test_contact_distance_to_the_finger_surface(gap: float, passes: bool) -> None:
     half = PAD_FACE - gap  # box faces `gap` inside the pads: contacts on the box, `gap` from the fingers
-    report = audit_grasp("panda_gripper", _panda_grasp(half), _box(half), mu=0.5)
+    report = audit_grasp(PADS, _panda_grasp(half), _box(half), mu=0.5)
     np.testing.assert_allclose(report.finger_distances, gap, atol=1e-6)
     np.testing.assert_allclose(report.object_distances, 0.0, atol=1e-9)
     assert report.penetration is not None and report.penetration.depth == 0.0
@@ -42,14 +45,14 @@ def test_contact_distance_to_the_finger_surface(gap: float, passes: bool) -> Non
 def test_contact_off_the_object_surface_fails() -> None:
     half = PAD_FACE - 1e-3
     grasp = _panda_grasp(half)
-    report = audit_grasp("panda_gripper", grasp, _box(half - 7e-3), mu=0.5)  # object 7 mm smaller each side
+    report = audit_grasp(PADS, grasp, _box(half - 7e-3), mu=0.5)  # object 7 mm smaller each side
     np.testing.assert_allclose(report.object_distances, 7e-3, atol=1e-9)
     assert any("from the object surface" in f for f in report.failures)
 
 
 def test_penetration_of_three_millimetres_is_found_and_located() -> None:
     half = PAD_FACE + 3e-3
-    report = audit_grasp("panda_gripper", _panda_grasp(half), _box(half), mu=0.5)
+    report = audit_grasp(PADS, _panda_grasp(half), _box(half), mu=0.5)
     pen = report.penetration
     assert pen is not None
     assert pen.depth == pytest.approx(3e-3, abs=2e-4)
@@ -58,7 +61,7 @@ def test_penetration_of_three_millimetres_is_found_and_located() -> None:
     assert not report.passed and any("overlap by 3.0" in f for f in report.failures)
     # 0.5 mm in: within the 1 mm tolerance
     half = PAD_FACE + 5e-4
-    report = audit_grasp("panda_gripper", _panda_grasp(half), _box(half), mu=0.5)
+    report = audit_grasp(PADS, _panda_grasp(half), _box(half), mu=0.5)
     assert report.penetration is not None and report.penetration.depth == pytest.approx(5e-4, abs=1e-4)
     assert report.passed, report.failures
 
@@ -67,7 +70,7 @@ def test_penetration_of_the_palm_body_is_found() -> None:
     half = PAD_FACE - 1e-3
     box = trimesh.creation.box(extents=[BOX_X, 2 * half, 0.06])
     box.apply_translation([0.0, 0.0, PAD_Z - 0.01])  # reaches down to z = 0.0736: into the hand body's mesh
-    report = audit_grasp("panda_gripper", _panda_grasp(half), box, mu=0.5)
+    report = audit_grasp(PADS, _panda_grasp(half), box, mu=0.5)
     assert report.penetration is not None and report.penetration.link == "panda_hand"
     assert report.penetration.depth > 1e-3 and not report.passed
 
@@ -77,14 +80,14 @@ def test_friction_cone_pulling_and_sliding_forces() -> None:
     inside = np.array([[0.3, -1.0, 0.2], [0.0, 1.0, 0.0]])
     outside = np.array([[0.8, -1.0, 0.0], [0.0, 1.0, 0.0]])
     pulling = np.array([[0.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
-    ok = audit_grasp("panda_gripper", _panda_grasp(half, inside), _box(half), mu=0.5)
+    ok = audit_grasp(PADS, _panda_grasp(half, inside), _box(half), mu=0.5)
     assert ok.passed, ok.failures
     np.testing.assert_allclose(ok.friction_ratios, [np.hypot(0.3, 0.2), 0.0], atol=1e-12)
     np.testing.assert_allclose(ok.normal_forces, [1.0, 1.0], atol=1e-12)
-    slide = audit_grasp("panda_gripper", _panda_grasp(half, outside), _box(half), mu=0.5)
+    slide = audit_grasp(PADS, _panda_grasp(half, outside), _box(half), mu=0.5)
     assert slide.friction_ratios[0] == pytest.approx(0.8)
     assert any("contact 0 leaves its friction cone" in f for f in slide.failures)
-    pull = audit_grasp("panda_gripper", _panda_grasp(half, pulling), _box(half), mu=0.5)
+    pull = audit_grasp(PADS, _panda_grasp(half, pulling), _box(half), mu=0.5)
     assert pull.normal_forces[0] == pytest.approx(-1.0) and pull.normal_forces[1] == pytest.approx(1.0)
     assert [f for f in pull.failures if "pulls" in f] == ["contact 0 pulls the object (normal force -1 N)"]
 
@@ -94,7 +97,7 @@ def test_caller_normals_replace_the_mesh_normals() -> None:
     box = _box(half)
     points = np.array([[0.0, half, PAD_Z], [0.0, -half, PAD_Z]])
     flipped = np.array([[0.0, -1.0, 0.0], [0.0, 1.0, 0.0]])  # inward normals: the pushing forces now pull
-    report = audit_grasp("panda_gripper", _panda_grasp(half), box, points, flipped, mu=0.5)
+    report = audit_grasp(PADS, _panda_grasp(half), box, points, flipped, mu=0.5)
     np.testing.assert_allclose(report.normal_forces, [-1.0, -1.0])
     assert sum("pulls" in f for f in report.failures) == 2
 
@@ -102,15 +105,15 @@ def test_caller_normals_replace_the_mesh_normals() -> None:
 def test_wrench_cosine_of_antipodal_forces() -> None:
     half, t = PAD_FACE, 0.3
     lift = np.array([[0.0, -1.0, t], [0.0, 1.0, t]])  # squeeze + lift: net force 2t along z, no torque
-    up = audit_grasp("panda_gripper", _panda_grasp(half, lift), _box(half), mu=0.5, target_wrench=[0, 0, 1, 0, 0, 0])
+    up = audit_grasp(PADS, _panda_grasp(half, lift), _box(half), mu=0.5, target_wrench=[0, 0, 1, 0, 0, 0])
     assert up.target_cosine == pytest.approx(1.0) and up.passed and up.wrench is not None
     np.testing.assert_allclose(up.wrench, np.array([0, 0, 2 * t, 0, 0, 0]), atol=1e-12)
-    side = audit_grasp("panda_gripper", _panda_grasp(half, lift), _box(half), mu=0.5, target_wrench=[1, 0, 0, 0, 0, 0])
+    side = audit_grasp(PADS, _panda_grasp(half, lift), _box(half), mu=0.5, target_wrench=[1, 0, 0, 0, 0, 0])
     assert side.target_cosine == pytest.approx(0.0, abs=1e-12)
     assert any("wrench cosine" in f for f in side.failures)
     twist = np.array([[0.0, -1.0, t], [0.0, 1.0, -t]])  # torque 2·half·t about x
     report = audit_grasp(
-        "panda_gripper", _panda_grasp(half, twist), _box(half), mu=0.5, target_wrench=[0, 0, 1, 1, 0, 0]
+        PADS, _panda_grasp(half, twist), _box(half), mu=0.5, target_wrench=[0, 0, 1, 1, 0, 0]
     )
     L = np.linalg.norm([BOX_X / 2, half, BOX_Z / 2])  # bounding-sphere radius about the box centre
     assert report.length == pytest.approx(L) and report.wrench is not None
@@ -134,7 +137,7 @@ def test_force_closure_needs_more_than_two_point_contacts() -> None:
 
 def test_closure_criterion_in_the_audit() -> None:
     half = PAD_FACE
-    report = audit_grasp("panda_gripper", _panda_grasp(half), _box(half), mu=0.8, closure=True)
+    report = audit_grasp(PADS, _panda_grasp(half), _box(half), mu=0.8, closure=True)
     assert report.closure_epsilon == 0.0
     assert any("force closure" in f for f in report.failures)
 
@@ -145,11 +148,11 @@ def test_joint_problems_are_reported() -> None:
     grasp = _panda_grasp(half)
     bad = AuditedGrasp(**{**grasp.__dict__, "joint_names": ["panda_finger_joint1", "panda_finger_joint2"]})
     bad.joint_values = np.array([OPENING, OPENING - 0.01])
-    assert any("coupling gives" in f for f in audit_grasp("panda_gripper", bad, box, mu=0.5).failures)
-    wide = audit_grasp("panda_gripper", _panda_grasp(half, opening=0.05), box, mu=0.5)
+    assert any("coupling gives" in f for f in audit_grasp(PADS, bad, box, mu=0.5).failures)
+    wide = audit_grasp(PADS, _panda_grasp(half, opening=0.05), box, mu=0.5)
     assert any("outside its limits" in f for f in wide.failures)
     unknown = AuditedGrasp(**{**grasp.__dict__, "joint_names": ["finger"]})
-    assert not audit_grasp("panda_gripper", unknown, box, mu=0.5).passed
+    assert not audit_grasp(PADS, unknown, box, mu=0.5).passed
     shadow = AuditedGrasp(
         grasp.contact_points, grasp.forces, ["robot0:ffdistal"] * 2, np.zeros(3), IDENTITY_Q, [], np.zeros(0)
     )
@@ -160,7 +163,7 @@ def test_joint_problems_are_reported() -> None:
 def test_the_audit_does_not_depend_on_the_world_frame() -> None:
     half = PAD_FACE + 2e-3
     grasp, box = _panda_grasp(half, np.array([[0.2, -1.0, 0.0], [0.0, 1.0, 0.1]])), _box(half)
-    base = audit_grasp("panda_gripper", grasp, box, mu=0.5, target_wrench=[0, 0, 1, 0, 0, 0])
+    base = audit_grasp(PADS, grasp, box, mu=0.5, target_wrench=[0, 0, 1, 0, 0, 0])
     quat = np.array([0.3, -0.5, 0.7, 0.2]) / np.linalg.norm([0.3, -0.5, 0.7, 0.2])
     W = pose_matrix([0.4, -0.1, 0.25], quat)
     R, p = W[:3, :3], W[:3, 3]
@@ -168,7 +171,7 @@ def test_the_audit_does_not_depend_on_the_world_frame() -> None:
         grasp.contact_points @ R.T + p, grasp.forces @ R.T, LEFT_RIGHT, p, quat, grasp.joint_names, grasp.joint_values
     )
     target = np.concatenate([R @ [0, 0, 1], np.zeros(3)])
-    other = audit_grasp("panda_gripper", moved, box.copy().apply_transform(W), mu=0.5, target_wrench=target)
+    other = audit_grasp(PADS, moved, box.copy().apply_transform(W), mu=0.5, target_wrench=target)
     np.testing.assert_allclose(other.finger_distances, base.finger_distances, atol=1e-9)
     np.testing.assert_allclose(other.friction_ratios, base.friction_ratios, atol=1e-9)
     assert other.target_cosine == pytest.approx(base.target_cosine)
@@ -236,19 +239,24 @@ def test_malformed_proposals_fail() -> None:
     half = PAD_FACE
     grasp = _panda_grasp(half)
     fields = {**grasp.__dict__, "palm_quaternion": [2.0, 0.0, 0.0, 0.0]}
-    report = audit_grasp("panda_gripper", AuditedGrasp.from_mapping(fields), _box(half), mu=0.5)
+    report = audit_grasp(PADS, AuditedGrasp.from_mapping(fields), _box(half), mu=0.5)
     assert any("not a unit quaternion" in f for f in report.failures)
     fields = {**grasp.__dict__, "forces": [[np.nan, 0, 0], [0, 1, 0]], "extra": 1}
-    report = audit_grasp("panda_gripper", AuditedGrasp.from_mapping(fields), _box(half), mu=0.5)
+    report = audit_grasp(PADS, AuditedGrasp.from_mapping(fields), _box(half), mu=0.5)
     assert not report.passed and "non-finite" in report.failures[0]
-    ok = audit_grasp("panda_gripper", AuditedGrasp.from_mapping(grasp.__dict__), _box(half), mu=0.5)
+    ok = audit_grasp(PADS, AuditedGrasp.from_mapping(grasp.__dict__), _box(half), mu=0.5)
     assert ok.passed, ok.failures
 
 
 def test_visual_geometry_can_be_preferred() -> None:
-    collision, visual = load_hand("allegro"), load_hand("allegro", prefer="visual")
+    collision, visual = load_hand("allegro", prefer="collision"), load_hand("allegro", prefer="visual")
     tip = "link_3.0_tip"
     assert collision.links[tip].source == "collision" and visual.links[tip].source == "visual"
+    # the default: a link drawn only through primitives around a visual mesh is judged on the mesh (Allegro's
+    # boxes and tip spheres, the Panda's finger boxes), a link colliding through meshes keeps them (the Panda's hand)
+    assert all(g.source == "visual" for g in load_hand("allegro").links.values())
+    panda = load_hand("panda_gripper")
+    assert panda.links["panda_leftfinger"].source == "visual" and panda.links["panda_hand"].source == "collision"
     assert len(collision.links[tip].pieces) == 1 and len(visual.links[tip].mesh.faces) == 1438  # link_3.0_tip.STL
     # the URDF's collision sphere (r 12 mm, on the link origin) and the STL (its base is cut flat at z = -11 mm)
     point = np.array([[0.0, 0.0, -0.0125]])
