@@ -136,3 +136,29 @@ def test_fingertips_and_palm_are_checked() -> None:
         build_user_hand(HandSource(name="c", mjcf=COUPLED, fingertips=["ghost"]))
     # the caller's fingertips override the leaves
     assert build_user_hand(HandSource(name="c", mjcf=COUPLED, fingertips=["a"])).fingertips == ["a"]
+
+
+def test_a_urdf_link_drawn_only_through_primitives_takes_its_visual_mesh() -> None:
+    """A finger that collides through a box drawn around it but ships its real shape as a visual mesh is built from
+    the mesh (the surface the robot touches with, as the physics test judges it); a link whose collision is a mesh
+    keeps that mesh."""
+    import trimesh
+
+    finger = trimesh.creation.cylinder(radius=0.008, height=0.04, sections=24)
+    finger.apply_translation([0, 0, 0.02])
+    stl = trimesh.exchange.stl.export_stl(finger)
+    palm = trimesh.creation.box(extents=[0.06, 0.06, 0.02])
+    palm_stl = trimesh.exchange.stl.export_stl(palm)
+    urdf = """<robot name="r">
+      <link name="palm"><collision><geometry><mesh filename="palm.stl"/></geometry></collision>
+        <visual><geometry><box size="0.2 0.2 0.2"/></geometry></visual></link>
+      <link name="tip"><collision><origin xyz="0 0 0.02"/><geometry><box size="0.03 0.03 0.05"/></geometry></collision>
+        <visual><geometry><mesh filename="tip.stl"/></geometry></visual></link>
+      <joint name="j" type="revolute"><parent link="palm"/><child link="tip"/><origin xyz="0 0 0.01"/>
+        <axis xyz="1 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>
+    </robot>"""
+    built = build_user_hand(HandSource(name="u", archive=_zip({"hand.urdf": urdf, "tip.stl": stl,
+                                                                "palm.stl": palm_stl})))  # fmt: skip
+    tip, base = built.hand.collision_meshes["tip"], built.hand.collision_meshes["palm"]
+    assert len(tip.vertices) == len(finger.vertices) and np.allclose(tip.extents, finger.extents)  # not the box
+    assert np.allclose(base.extents, palm.extents)  # its collision mesh, not the 20 cm visual box
