@@ -98,6 +98,9 @@ def _mesh_file(path: str) -> trimesh.Trimesh:
     mesh = trimesh.load(path, force="mesh")
     if not isinstance(mesh, trimesh.Trimesh):
         raise ValueError(f"{path} is not a triangle mesh")
+    # COLLADA gives each triangle corner its own vertex (for its normal and texture): welded, a closed part is
+    # watertight and its own solid, not its convex hull (the Panda's finger: 564 loose triangles, then 4 closed parts)
+    mesh.merge_vertices(merge_tex=True, merge_norm=True)
     return mesh
 
 

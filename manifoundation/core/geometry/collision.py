@@ -5,7 +5,9 @@ gives no depth). We use it as the narrow-phase test per hand body, then measure 
 
 - hand → object: the largest depth of the hand body's surface samples (its vertices + ``BODY_SAMPLES`` area
   samples, seed 0) inside the object's watertight mesh (exact mesh signed distance, `closest.mesh_signed_distance`,
-  evaluated only on the ``EXACT_CANDIDATES`` samples per body that the KD-tree Φ ranks deepest, if below ``PREFILTER``);
+  on every sample of a body fcl finds intersecting the object: a cheaper ranking by the nearest mesh vertex, exact
+  on its 48 deepest, missed a distal link 1.09 mm inside a cabinet's large flat face, whose few vertices lie far
+  from the finger);
 - object → hand: the largest depth of object points (cloud + mesh vertices + points along its sharp edges) inside
   the convex hulls of the body's connected parts (half-space distance, exact for convex parts, an over-estimate
   for a non-convex one).
@@ -21,7 +23,6 @@ body's cached samples, their cover, convex parts and BVH (`_bodies`); apart, eac
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -56,10 +57,6 @@ BODY_SAMPLES = 600
 COVER_CELL = 4e-3
 """m: `hand_field_penetration` measures a body's samples (cubes of this side, each with a representative) only
 where the representative's Φ allows them to lie inside (LEAP's bodies: 44 505 samples, most of them far out)."""
-PREFILTER = 0.01
-"""Only hand samples with KD-tree Φ below this (m) get the exact (slow) mesh signed distance ..."""
-EXACT_CANDIDATES = 48
-"""... and of those only the ``EXACT_CANDIDATES`` deepest by the KD-tree estimate, per body."""
 
 
 @dataclass
@@ -135,17 +132,15 @@ def hand_object_penetration(
     hand: Hand, geometry: ObjectGeometry, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray,
 ) -> float:  # fmt: skip
     """Penetration depth (m, ≥ 0) between the hand's collision meshes and the object's watertight mesh, hand
-    samples ranked for the exact test by the KD-tree Φ of the oriented points."""
-    rank = lambda x: geometry.signed_distance(x)[0]  # noqa: E731
-    return _mesh_depth(hand, geometry.mesh, geometry.points, rank, palm_pos, palm_quat, q)
+    samples measured exactly where a body intersects it."""
+    return _mesh_depth(hand, geometry.mesh, geometry.points, palm_pos, palm_quat, q)
 
 
 def _mesh_depth(
-    hand: Hand, mesh: trimesh.Trimesh, points: np.ndarray, rank: Callable[[np.ndarray], np.ndarray],
-    palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray,
+    hand: Hand, mesh: trimesh.Trimesh, points: np.ndarray, palm_pos: np.ndarray, palm_quat: np.ndarray, q: np.ndarray,
 ) -> float:  # fmt: skip
-    """The depth test of the module doc against a watertight ``mesh``; ``rank`` orders hand samples by estimated
-    depth (the exact signed distance is taken on the deepest), ``points`` (N, 3) are tested inside the hand."""
+    """The depth test of the module doc against a watertight ``mesh``: the exact signed distance of every sample of
+    a body whose mesh intersects it; ``points`` (N, 3) are tested inside the hand."""
     poses = link_poses_at(hand, palm_pos, palm_quat, q)
     obj = _obj(per_mesh(mesh, "bvh", lambda: _bvh(mesh)), np.eye(4))
     obj_pts = np.vstack([np.asarray(points, dtype=np.float64), np.asarray(mesh.vertices), sharp_edge_points(mesh)])
@@ -155,12 +150,8 @@ def _mesh_depth(
         if not _hits(_obj(body.bvh, T), obj):
             continue
         world = body.samples @ T[:3, :3].T + T[:3, 3]
-        phi = rank(world)  # cheap estimate ...
-        order = np.argsort(phi)[:EXACT_CANDIDATES]
-        near = world[order[phi[order] < PREFILTER]]  # ... then exact distances for the deepest candidates
-        if len(near):
-            sd = mesh_signed_distance(mesh, near)  # exact, positive inside
-            depth = max(depth, float(max(sd.max(), 0.0)))
+        sd = mesh_signed_distance(mesh, world)  # exact, positive inside
+        depth = max(depth, float(max(sd.max(), 0.0)))
         local = (obj_pts - T[:3, 3]) @ T[:3, :3]
         depth = max(depth, _parts_depth(body.parts, local))
     return depth
@@ -190,8 +181,8 @@ def hand_mesh_penetration(
     q: np.ndarray,
 ) -> float:  # fmt: skip
     """Penetration depth (m, ≥ 0) between the hand's collision meshes and a watertight object ``mesh`` (exact; the
-    object's points (N, 3) are tested inside the hand bodies too), hand samples ranked by `_mesh_rank`."""
-    return _mesh_depth(hand, mesh, points, _mesh_rank(mesh), palm_pos, palm_quat, q)
+    object's points (N, 3) are tested inside the hand bodies too)."""
+    return _mesh_depth(hand, mesh, points, palm_pos, palm_quat, q)
 
 
 def hand_field_penetration(
@@ -236,24 +227,6 @@ def samples_depth(field: SignedDistance, world: np.ndarray, cover: SampleCover, 
     if not len(behind):
         return 0.0
     return float(max(inflate - field.robust_signed_distance(world[behind]).min(), 0.0))
-
-
-def _mesh_rank(mesh: trimesh.Trimesh) -> Callable[[np.ndarray], np.ndarray]:
-    """A cheap ranking of hand samples by depth in ``mesh``: the distance to the nearest vertex, signed by the
-    vertex normal (the exact signed distance is then taken on the deepest)."""
-    from scipy.spatial import cKDTree
-
-    verts = np.asarray(mesh.vertices)
-    vnorm = np.asarray(mesh.vertex_normals)
-    tree = per_mesh(mesh, "vertex_tree", lambda: cKDTree(verts))
-
-    def rank(x: np.ndarray) -> np.ndarray:
-        dist, idx = tree.query(x)
-        side = np.einsum("ij,ij->i", x - verts[idx], vnorm[idx])
-        signed: np.ndarray = np.where(side < 0, -dist, dist)
-        return signed
-
-    return rank
 
 
 def self_collision_body_pairs(hand: Hand) -> list[tuple[int, int]]:

@@ -1,8 +1,9 @@
 """A client built from the proto alone gets a real grasp over gRPC, and the outside check accepts it.
 
 The service runs the real science (`manifoundation.server.worker.models_pipeline.ModelsPipeline`, the Allegro hand)
-behind gRPC; the client is a subprocess that knows only the `.proto` file (no SDK, no generated code of ours); the grasp
-it gets is judged by the independent audit (`research.audit`: its own kinematics, the hand's meshes, the object's exact
+behind gRPC; the client is a subprocess that knows only the `.proto` file (no SDK, no generated code of ours) and asks
+the service to search for grasps that hold in its simulated test (`simulate`); the grasp it gets is judged by the
+independent audit (`research.audit`: its own kinematics, the hand's meshes, the object's exact
 mesh), which shares no code with the service's verification.
 """
 
@@ -43,7 +44,7 @@ request = protos.SynthesisRequest(
                            properties=protos.PhysicalProperties(friction=0.8)),
     task=protos.TaskIn(delta_pose=protos.DeltaPoseTask(translation=[0, 0, 0.05], rotation=[1, 0, 0, 0])),
     robot=protos.RobotIn(name=sys.argv[3]),
-    options=protos.SynthesisOptions(method="random_contacts", num_proposals=2, seed=0, timeout=120),
+    options=protos.SynthesisOptions(method="random_contacts", num_proposals=2, seed=0, timeout=120, simulate=True),
 )
 rows = lambda a: np.frombuffer(a.data, dtype=a.dtype).reshape(tuple(a.shape)).tolist()
 with grpc.insecure_channel(sys.argv[1]) as channel:
