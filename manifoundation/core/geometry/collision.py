@@ -66,7 +66,6 @@ class _BodyGeom:
     samples: np.ndarray  # (k, 3) body frame
     parts: list[tuple[np.ndarray, np.ndarray]]  # per convex part: hull half-spaces (f, 4) n·x <= d, bounds (2, 3)
     cover: SampleCover  # of ``samples`` (`COVER_CELL`)
-    cover_reps: np.ndarray  # (c,) the representatives' indices
 
 
 def _bvh(mesh: trimesh.Trimesh) -> fcl.BVHModel:
@@ -113,8 +112,7 @@ def _bodies(hand: Hand) -> list[_BodyGeom]:
                 continue
             samples, _ = trimesh.sample.sample_surface(mesh, BODY_SAMPLES, seed=0)
             pts = np.vstack([np.asarray(mesh.vertices), samples])
-            cover = SampleCover.grid(pts, COVER_CELL)
-            out.append(_BodyGeom(name, _bvh(mesh), pts, convex_parts(mesh), cover, np.unique(cover.rep)))
+            out.append(_BodyGeom(name, _bvh(mesh), pts, convex_parts(mesh), SampleCover.grid(pts, COVER_CELL)))
         cache["bodies"] = out
     bodies: list[_BodyGeom] = cache["bodies"]
     return bodies
@@ -204,20 +202,20 @@ def hand_field_penetration(
         reach = float(np.linalg.norm(world - centre, axis=1).max())
         if field.signed_distance(centre[None])[0][0] > reach + margin:
             continue
-        depth = max(depth, samples_depth(field, world, body.cover, body.cover_reps, inflate))
+        depth = max(depth, samples_depth(field, world, body.cover, inflate))
         local = (obj_pts - T[:3, 3]) @ T[:3, :3]
         inside = _parts_depth(body.parts, local, inflate)
         depth = max(depth, inside)
     return depth
 
 
-def samples_depth(field: SignedDistance, world: np.ndarray, cover: SampleCover, reps: np.ndarray,
-                  inflate: float) -> float:  # fmt: skip
+def samples_depth(field: SignedDistance, world: np.ndarray, cover: SampleCover, inflate: float) -> float:
     """The deepest of a body's samples (K, 3) behind the points' surface grown by ``inflate`` (m, ≥ 0), measured
-    where their cube's representative (``reps`` (C,), `SampleCover`) allows: Φ at a representative bounds every
+    where their cube's representative (`SampleCover`) allows: Φ at a representative bounds every
     sample of its cube (1-Lipschitz, plus the discs' radius), so only samples that may lie less than ``inflate``
     out are measured; those behind by the discs' side are confirmed by the winding number (the discs' side errs
     beside sharp edges)."""
+    reps = cover.representatives
     phi_r = np.full(len(world), np.inf)
     phi_r[reps] = field.signed_distance(world[reps])[0]
     slack = float(getattr(field, "resolution", 0.0))

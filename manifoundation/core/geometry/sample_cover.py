@@ -6,6 +6,7 @@ of the body (`manifoundation.core.refine.cover` for the refinement's contact mod
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -17,6 +18,11 @@ class SampleCover:
 
     rep: np.ndarray
     delta: np.ndarray
+
+    @cached_property
+    def representatives(self) -> np.ndarray:
+        """(C,) the representatives' indices, ascending."""
+        return np.unique(self.rep)
 
     @classmethod
     def build(cls, local: np.ndarray, body: np.ndarray, radius: float) -> SampleCover:

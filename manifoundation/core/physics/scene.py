@@ -115,10 +115,9 @@ def build_scene(
     base, hm = _hand_spec(hand, protocol)
     with _COPYING:
         spec = base.copy()
-    palm_body = spec.body(hm.bodies[0])
-    palm_body.pos, palm_body.quat = np.asarray(palm_position, float), np.asarray(palm_quaternion, float)
+    palm = spec.body(hm.bodies[0])
+    palm.pos, palm.quat = np.asarray(palm_position, float), np.asarray(palm_quaternion, float)
     if moving:  # a free palm welded to a mocap body, as DexGraspBench's base (see `motion`)
-        palm = spec.body(hm.bodies[0])
         palm.add_freejoint(name=PREFIX + "palm/free")
         palm.mass = PALM_MASS
         target = spec.worldbody.add_body(name=PALM_TARGET, pos=palm.pos, quat=palm.quat, mocap=True)

@@ -180,9 +180,8 @@ def tip_gaps(sc: Scene, fingertips: list[str]) -> list[float]:
 
 
 def _reset(sc: Scene, q: np.ndarray) -> None:
-    mujoco.mj_resetData(sc.model, sc.data)
-    sc.set_joints(q)
-    sc.data.ctrl[:] = q
+    """Fresh data at the hand's joints q (D,), its targets there, and everything ``mj_forward`` computes."""
+    _at(sc, q)
     mujoco.mj_forward(sc.model, sc.data)
 
 
@@ -190,11 +189,15 @@ def _posed(sc: Scene, q: np.ndarray) -> None:
     """`_reset` without the collision detection and dynamics of ``mj_forward``: the body poses and what
     ``mj_jac`` reads (``mj_kinematics``, ``mj_comPos``), all the pregrasp's iterations need (a third of their
     time went to colliding the hand's convex pieces with the object)."""
+    _at(sc, q)
+    mujoco.mj_kinematics(sc.model, sc.data)
+    mujoco.mj_comPos(sc.model, sc.data)
+
+
+def _at(sc: Scene, q: np.ndarray) -> None:
     mujoco.mj_resetData(sc.model, sc.data)
     sc.set_joints(q)
     sc.data.ctrl[:] = q
-    mujoco.mj_kinematics(sc.model, sc.data)
-    mujoco.mj_comPos(sc.model, sc.data)
 
 
 def _penetration(sc: Scene) -> float:

@@ -14,21 +14,19 @@ import functools
 from typing import TYPE_CHECKING
 
 from manifoundation.core.robots.description import RobotDescription
-from manifoundation.core.robots.real_surfaces import prefer_visual
-from manifoundation.core.robots.urdf import parse_urdf
 
 if TYPE_CHECKING:
     from manifoundation.core.robots.hand import Hand
 
+
+
 @functools.cache
 def _cached(name: str, palm: str) -> RobotDescription | None:
-    from manifoundation.core.robots.registry import urdf_source
+    from manifoundation.core.robots.registry import real_surface_description
 
-    src = urdf_source(name)
-    if src is None:
+    full = real_surface_description(name)
+    if full is None:
         return None
-    data, loader = src
-    full = parse_urdf(prefer_visual(data), mesh_loader=loader, use_visual=True, only_links=None)
     return full.subtree(palm) if palm in full.links else full
 
 

@@ -43,6 +43,7 @@ import numpy as np
 import trimesh
 
 from manifoundation.core.errors import HandLoadError, UnknownHand
+from manifoundation.core.robots.description import RobotDescription
 from manifoundation.core.robots.hand import Hand
 from manifoundation.core.robots.meshcache import hull_loader
 from manifoundation.core.robots.mjcf import parse_mjcf
@@ -86,11 +87,7 @@ def _package_loader(urdf_dir: Path, package_root: Path) -> MeshLoader:
 
 
 def _allegro() -> Hand:
-    path = _erd("allegro_hand_description", "urdf", "allegro_right_hand.urdf")
-    # its links collide as boxes and 12 mm tip spheres around the real fingers (5-8 mm off them on the distal
-    # links): the hand is built from the visual meshes instead, the surfaces the physics test collides
-    desc = parse_urdf(prefer_visual(path.read_bytes()), mesh_loader=_package_loader(path.parent, _erd().parent),
-                      use_visual=True)  # fmt: skip
+    desc = _real_surfaces("allegro")
     tips = ["link_3.0_tip", "link_7.0_tip", "link_11.0_tip", "link_15.0_tip"]
     # tip spheres (r = 12 mm) sit on the tip link origins: contact on the pad side (+x after flexion about y)
     offsets = np.tile([0.012 * np.sqrt(0.5), 0.0, 0.012 * np.sqrt(0.5)], (4, 1))
@@ -99,10 +96,7 @@ def _allegro() -> Hand:
 
 
 def _panda_gripper() -> Hand:
-    path = _erd("panda_description", "urdf", "panda.urdf")
-    # its fingers collide as four boxes drawn around the real finger: built from the visual meshes instead
-    desc = parse_urdf(prefer_visual(path.read_bytes()), mesh_loader=_package_loader(path.parent, _erd().parent),
-                      use_visual=True)  # fmt: skip
+    desc = _real_surfaces("panda_gripper")
     # rubber pads: centred 45.25 mm up the finger, inner face on the finger plane
     offsets = np.array([[0.0, 0.0, 0.04525], [0.0, 0.0, 0.04525]])
     return Hand(
@@ -170,9 +164,27 @@ def _kinova3f() -> Hand:
     return Hand(desc, name="kinova3f", fingertips=tips, tip_offsets=offsets, rest=rest, approach_axis=[0, 0, 1.0])
 
 
+def real_surface_description(name: str) -> RobotDescription | None:
+    """A URDF built-in (`urdf_source`) read from its real surfaces: links that collide only through primitives drawn
+    around them (Allegro's boxes and 12 mm tip spheres, 5-8 mm off its distal links; the Panda's finger boxes) take
+    their visual meshes (`manifoundation.core.robots.real_surfaces`); None for the other hands. The hand is built
+    from it, and the physics test reads it (`manifoundation.core.physics.visual`)."""
+    source = urdf_source(name)
+    if source is None:
+        return None
+    data, loader = source
+    return parse_urdf(prefer_visual(data), mesh_loader=loader, use_visual=True)
+
+
+def _real_surfaces(name: str) -> RobotDescription:
+    desc = real_surface_description(name)
+    assert desc is not None, name
+    return desc
+
+
 def urdf_source(name: str) -> tuple[bytes, MeshLoader] | None:
-    """The URDF document and its mesh loader of a built-in hand described by a URDF with mesh files (a physics
-    model reads its visual meshes from it); None for the other hands."""
+    """The URDF document and its mesh loader of a built-in hand described by a URDF with mesh files (the hand is
+    built from its real surfaces in it, `_real_surfaces`); None for the other hands."""
     name = ALIASES.get(name, name)
     if name == "allegro":
         path = _erd("allegro_hand_description", "urdf", "allegro_right_hand.urdf")

@@ -250,8 +250,8 @@ def test_field_penetration_measured_through_the_cover_is_every_samples() -> None
             phi = field.signed_distance(world)[0]
             behind = np.flatnonzero(phi < inflate)
             every = float(max(inflate - field.robust_signed_distance(world[behind]).min(), 0.0)) if len(behind) else 0.0
-            assert samples_depth(field, world, body.cover, body.cover_reps, inflate) == every, (shift, body.name)
-            assert len(body.cover_reps) < len(world) / 2
+            assert samples_depth(field, world, body.cover, inflate) == every, (shift, body.name)
+            assert len(body.cover.representatives) < len(world) / 2
             shallow += 0 < every < 2e-3
             deep += every > 5e-3
         clear += hand_field_penetration(hand, field, np.zeros(3), quat, hand.rest, inflate=inflate) == 0.0
